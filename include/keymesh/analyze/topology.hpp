@@ -1,0 +1,26 @@
+#pragma once
+// Topology check of a polygon surface: is it a closed 2-manifold?
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh::analyze {
+
+struct TopologyReport {
+  Id points = 0;               // points in the mesh
+  Id cells = 0;                // polygons
+  Id edges = 0;                // distinct undirected edges
+  Id boundary_edges = 0;       // edges used by exactly one cell
+  Id nonmanifold_edges = 0;    // edges used by three or more cells
+  Id nonmanifold_vertices = 0; // vertices whose incident cells do not form a single fan/disk
+  Id duplicate_points = 0;     // points whose position equals an earlier point's exactly
+  Id unused_points = 0;        // points no cell refers to
+  Id degenerate_cells = 0;     // cells that repeat a point id
+  Id components = 0;           // connected components of cells (through shared points)
+  Id euler_characteristic = 0; // V - E + F over used points
+  bool closed_manifold = false;// no boundary, no non-manifold edge or vertex, no degenerate cell
+};
+
+// Deterministic, threaded where it pays. Throws InputError when a cell refers
+// to a point id out of range.
+TopologyReport check_topology(const SurfaceMesh& mesh);
+
+}  // namespace keymesh::analyze

@@ -1,0 +1,62 @@
+#pragma once
+// ImageGrid: a uniform voxel grid (VTK's vtkImageData), one scalar per point,
+// x varying fastest. The scalar array keeps its native type; algorithms
+// dispatch on it with visit_scalars().
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/core/types.hpp"
+
+namespace keymesh {
+
+enum class ScalarType : std::uint8_t { UInt8, Int8, UInt16, Int16, Int32, Float32, Float64 };
+
+// Size in bytes of one sample.
+std::size_t scalar_size(ScalarType type);
+// "uint8", "int8", "uint16", "int16", "int32", "float32", "float64".
+const char* scalar_type_name(ScalarType type);
+// Parses the names above and common aliases ("uchar", "float", "double", ...);
+// throws InputError naming the text when unknown.
+ScalarType parse_scalar_type(const std::string& text);
+
+struct ImageGrid {
+  std::array<Id, 3> dims{0, 0, 0};           // number of points along x, y, z
+  std::array<double, 3> origin{0.0, 0.0, 0.0};
+  std::array<double, 3> spacing{1.0, 1.0, 1.0};
+  ScalarType type = ScalarType::Float32;
+  std::string name = "scalars";              // the point field's name
+  std::vector<std::byte> bytes;              // dims[0]*dims[1]*dims[2] samples, native endian
+
+  Id num_points() const { return dims[0] * dims[1] * dims[2]; }
+  const void* data() const { return bytes.data(); }
+  void* data() { return bytes.data(); }
+
+  // Allocates bytes for dims and type after checking every product for
+  // overflow; throws LimitError naming the dims otherwise.
+  void allocate(std::array<Id, 3> new_dims, ScalarType new_type);
+};
+
+// Calls f(const T* samples) with T the grid's C++ sample type.
+template <class F>
+decltype(auto) visit_scalars(const ImageGrid& grid, F&& f) {
+  switch (grid.type) {
+    case ScalarType::UInt8: return f(reinterpret_cast<const std::uint8_t*>(grid.data()));
+    case ScalarType::Int8: return f(reinterpret_cast<const std::int8_t*>(grid.data()));
+    case ScalarType::UInt16: return f(reinterpret_cast<const std::uint16_t*>(grid.data()));
+    case ScalarType::Int16: return f(reinterpret_cast<const std::int16_t*>(grid.data()));
+    case ScalarType::Int32: return f(reinterpret_cast<const std::int32_t*>(grid.data()));
+    case ScalarType::Float32: return f(reinterpret_cast<const float*>(grid.data()));
+    case ScalarType::Float64: return f(reinterpret_cast<const double*>(grid.data()));
+  }
+  throw InputError("unknown scalar type");
+}
+
+// Minimum and maximum of the finite samples (NaN and Inf skipped); {0,0} when
+// there are none.
+std::array<double, 2> scalar_range(const ImageGrid& grid);
+
+}  // namespace keymesh

@@ -1,0 +1,43 @@
+#pragma once
+// SurfaceMesh: points and polygonal cells (triangles unless offsets say
+// otherwise) with named point fields, structure-of-arrays like VTK's vtkPolyData.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "keymesh/core/types.hpp"
+
+namespace keymesh {
+
+// A named array of `components` floats per element.
+struct Field {
+  std::string name;
+  int components = 1;
+  std::vector<float> values;
+};
+
+struct SurfaceMesh {
+  std::vector<float> points;                 // x,y,z per point
+  std::vector<PointIndex> connectivity;      // point ids of every cell, cell after cell
+  // Cell c spans connectivity[offsets[c], offsets[c+1]). Empty means every
+  // cell is a triangle (the common case: no offsets array is stored).
+  std::vector<std::uint64_t> offsets;
+  std::vector<Field> point_fields;
+
+  Id num_points() const { return static_cast<Id>(points.size() / 3); }
+  Id num_cells() const {
+    return offsets.empty() ? static_cast<Id>(connectivity.size() / 3)
+                           : static_cast<Id>(offsets.size()) - 1;
+  }
+  bool all_triangles() const { return offsets.empty(); }
+  std::uint64_t cell_begin(Id c) const { return offsets.empty() ? 3 * std::uint64_t(c) : offsets[c]; }
+  std::uint64_t cell_end(Id c) const { return offsets.empty() ? 3 * std::uint64_t(c) + 3 : offsets[c + 1]; }
+
+  const Field* find_point_field(const std::string& name) const {
+    for (const auto& f : point_fields)
+      if (f.name == name) return &f;
+    return nullptr;
+  }
+};
+
+}  // namespace keymesh

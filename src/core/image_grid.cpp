@@ -1,0 +1,84 @@
+#include "keymesh/mesh/image_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace keymesh {
+
+std::size_t scalar_size(ScalarType type) {
+  switch (type) {
+    case ScalarType::UInt8:
+    case ScalarType::Int8: return 1;
+    case ScalarType::UInt16:
+    case ScalarType::Int16: return 2;
+    case ScalarType::Int32:
+    case ScalarType::Float32: return 4;
+    case ScalarType::Float64: return 8;
+  }
+  return 0;
+}
+
+const char* scalar_type_name(ScalarType type) {
+  switch (type) {
+    case ScalarType::UInt8: return "uint8";
+    case ScalarType::Int8: return "int8";
+    case ScalarType::UInt16: return "uint16";
+    case ScalarType::Int16: return "int16";
+    case ScalarType::Int32: return "int32";
+    case ScalarType::Float32: return "float32";
+    case ScalarType::Float64: return "float64";
+  }
+  return "unknown";
+}
+
+ScalarType parse_scalar_type(const std::string& raw) {
+  std::string t = raw;
+  std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (t == "uint8" || t == "uchar" || t == "unsigned char" || t == "u8") return ScalarType::UInt8;
+  if (t == "int8" || t == "char" || t == "signed char" || t == "i8") return ScalarType::Int8;
+  if (t == "uint16" || t == "ushort" || t == "unsigned short" || t == "u16") return ScalarType::UInt16;
+  if (t == "int16" || t == "short" || t == "i16") return ScalarType::Int16;
+  if (t == "int32" || t == "int" || t == "i32") return ScalarType::Int32;
+  if (t == "float32" || t == "float" || t == "f32") return ScalarType::Float32;
+  if (t == "float64" || t == "double" || t == "f64") return ScalarType::Float64;
+  throw InputError("unknown scalar type '" + raw +
+                   "' (expected uint8, int8, uint16, int16, int32, float32 or float64)");
+}
+
+void ImageGrid::allocate(std::array<Id, 3> new_dims, ScalarType new_type) {
+  constexpr Id kMax = std::numeric_limits<Id>::max();
+  Id count = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (new_dims[a] <= 0)
+      throw InputError("grid dimension " + std::to_string(a) + " is " + std::to_string(new_dims[a]) +
+                       " (must be positive)");
+    if (count > kMax / new_dims[a])
+      throw LimitError("grid dimensions " + std::to_string(new_dims[0]) + "x" + std::to_string(new_dims[1]) +
+                       "x" + std::to_string(new_dims[2]) + " overflow a 64-bit point count");
+    count *= new_dims[a];
+  }
+  const Id size = static_cast<Id>(scalar_size(new_type));
+  if (count > kMax / size / 4)
+    throw LimitError("grid of " + std::to_string(count) + " points is too large");
+  dims = new_dims;
+  type = new_type;
+  bytes.assign(static_cast<std::size_t>(count * size), std::byte{0});
+}
+
+std::array<double, 2> scalar_range(const ImageGrid& grid) {
+  return visit_scalars(grid, [&](const auto* s) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    const Id n = grid.num_points();
+    for (Id i = 0; i < n; ++i) {
+      const double v = static_cast<double>(s[i]);
+      if (!std::isfinite(v)) continue;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    if (lo > hi) return std::array<double, 2>{0.0, 0.0};
+    return std::array<double, 2>{lo, hi};
+  });
+}
+
+}  // namespace keymesh
