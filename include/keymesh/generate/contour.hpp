@@ -1,0 +1,55 @@
+#pragma once
+// Marching cubes on a uniform voxel grid, welded by history (paper, Section 4.2).
+//
+// Every triangle corner is generated independently as a key: the implicit id
+// of the grid edge it lies on, 3 * point_id + axis (plus iso_index * 3 * N when
+// several isovalues are contoured at once). KEY-REDUCE groups the corners by
+// key with the dense plan (the key range is known, so no sort), its index map
+// is the connected triangle list, and every point's position and fields are
+// computed once per unique edge from the edge's two samples.
+//
+// Guarantees:
+//  - inside means value >= iso; NaN samples are outside. A point is created
+//    for every grid edge whose end samples straddle the isovalue, and only
+//    those (the same count as VTK's marching cubes and flying edges); no two
+//    output points share a key.
+//  - triangles come from a consistent case table (see marching_cubes_table.hpp):
+//    a closed isosurface inside the grid is a closed 2-manifold, triangles
+//    wound so that their normals point to lower values (outside).
+//  - output is bit-identical for any thread count.
+//  - Weld::VertexWeld welds the same triangle soup by coordinates instead (the
+//    paper's baseline); its mesh equals the KEY-REDUCE mesh up to point order.
+#include <string>
+#include <vector>
+
+#include "keymesh/mesh/image_grid.hpp"
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh::generate {
+
+enum class ContourNormals { None, Gradient, Average };
+enum class ContourWeld { KeyReduce, VertexWeld };
+
+struct ContourOptions {
+  std::vector<double> isovalues;        // at least one, all finite
+  ContourNormals normals = ContourNormals::None;
+  ContourWeld weld = ContourWeld::KeyReduce;
+  bool scalars = true;                  // carry the interpolated input scalar as a point field
+};
+
+// Where the time went, in seconds, and the sizes involved.
+struct ContourStats {
+  double classify = 0;    // inside/outside bits and per-row triangle counts
+  double generate = 0;    // triangle soup: edge keys per corner
+  double weld = 0;        // KEY-REDUCE partition (or VERTEX-WELD)
+  double fields = 0;      // positions, scalars, normals per unique point
+  Id soup_points = 0;     // triangle corners before welding
+  int key_bits = 0;       // width of the keys used (32 or 64)
+};
+
+// Throws InputError for an empty isovalue list, a non-finite isovalue or a
+// grid with fewer than 2 points along an axis; LimitError when the output
+// would exceed 2^32 - 1 points or triangle corners.
+SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats = nullptr);
+
+}  // namespace keymesh::generate

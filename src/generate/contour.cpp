@@ -1,0 +1,392 @@
+#include "keymesh/generate/contour.hpp"
+
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <type_traits>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/marching_cubes_table.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/keyreduce/reduce.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/scan.hpp"
+#include "keymesh/weld/vertex_weld.hpp"
+
+namespace keymesh::generate {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The inside test `value >= iso` in the sample's own type, so the hot loop
+// compares samples without converting them: for floats the threshold is the
+// smallest float >= iso, for integers ceil(iso) clamped to the type's range.
+template <class T>
+struct InsideTest {
+  T threshold{};
+  bool none = false;  // no sample can be inside
+  bool all = false;   // every sample is inside
+
+  explicit InsideTest(double iso) {
+    if constexpr (std::is_same_v<T, double>) {
+      threshold = iso;
+    } else if constexpr (std::is_same_v<T, float>) {
+      float f = static_cast<float>(iso);
+      if (static_cast<double>(f) < iso) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+      threshold = f;
+    } else {
+      const double c = std::ceil(iso);
+      if (c > static_cast<double>(std::numeric_limits<T>::max())) none = true;
+      else if (c <= static_cast<double>(std::numeric_limits<T>::lowest())) all = true;
+      else threshold = static_cast<T>(c);
+    }
+  }
+};
+
+// Geometry of the grid as the functors need it (plain values: device-friendly).
+struct GridShape {
+  Id nx, ny, nz, nxy, n;
+  double origin[3], spacing[3];
+  Id stride[3];
+};
+
+GridShape shape_of(const ImageGrid& g) {
+  GridShape s{};
+  s.nx = g.dims[0];
+  s.ny = g.dims[1];
+  s.nz = g.dims[2];
+  s.nxy = s.nx * s.ny;
+  s.n = s.nxy * s.nz;
+  for (int a = 0; a < 3; ++a) {
+    s.origin[a] = g.origin[a];
+    s.spacing[a] = g.spacing[a];
+  }
+  s.stride[0] = 1;
+  s.stride[1] = s.nx;
+  s.stride[2] = s.nxy;
+  return s;
+}
+
+// Inside bits of every grid row (j, k), one bit per sample, plus one zero
+// word of padding so that "bit i + 1" can always be read.
+struct InsideBits {
+  Id words_per_row = 0;
+  std::vector<std::uint64_t> words;
+  const std::uint64_t* row(Id j, Id k, Id ny) const { return words.data() + (k * ny + j) * words_per_row; }
+};
+
+template <class T>
+void classify(const T* samples, const GridShape& s, const InsideTest<T>& test, InsideBits& bits) {
+  bits.words_per_row = (s.nx + 63) / 64 + 1;
+  bits.words.assign(static_cast<std::size_t>(bits.words_per_row * s.ny * s.nz), 0);
+  const Id rows = s.ny * s.nz;
+  const Id full = s.nx / 64;
+  const Id wpr = bits.words_per_row;
+  parallel::for_each(rows, [&](Id r) {
+    const T* in = samples + r * s.nx;
+    std::uint64_t* out = bits.words.data() + r * wpr;
+    if (test.none) return;
+    if (test.all) {
+      for (Id i = 0; i < s.nx; ++i) out[i >> 6] |= std::uint64_t{1} << (i & 63);
+      return;
+    }
+    const T thr = test.threshold;
+    for (Id q = 0; q < full; ++q) {
+      const T* v = in + 64 * q;
+      std::uint64_t w = 0;
+      for (int b = 0; b < 64; ++b) w |= static_cast<std::uint64_t>(v[b] >= thr) << b;
+      out[q] = w;
+    }
+    std::uint64_t w = 0;
+    for (Id i = 64 * full; i < s.nx; ++i) w |= static_cast<std::uint64_t>(in[i] >= thr) << (i & 63);
+    if (s.nx % 64) out[full] = w;
+  }, 64);
+}
+
+// Visits every voxel of voxel row (j, k) whose corners are not all on one
+// side, in increasing i, calling f(i, cube_case). Whole 64-voxel words with
+// no sign change are skipped with a few bit operations.
+template <class F>
+void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, F&& f) {
+  const std::uint64_t* r00 = bits.row(j, k, s.ny);
+  const std::uint64_t* r10 = bits.row(j + 1, k, s.ny);
+  const std::uint64_t* r01 = bits.row(j, k + 1, s.ny);
+  const std::uint64_t* r11 = bits.row(j + 1, k + 1, s.ny);
+  const Id voxels = s.nx - 1;
+  const Id words = (voxels + 63) / 64;
+  for (Id q = 0; q < words; ++q) {
+    const std::uint64_t a = r00[q], b = r10[q], c = r01[q], d = r11[q];
+    // Bits of corner i + 1: shift the next word in.
+    const std::uint64_t a1 = (a >> 1) | (r00[q + 1] << 63);
+    const std::uint64_t b1 = (b >> 1) | (r10[q + 1] << 63);
+    const std::uint64_t c1 = (c >> 1) | (r01[q + 1] << 63);
+    const std::uint64_t d1 = (d >> 1) | (r11[q + 1] << 63);
+    std::uint64_t active = (a ^ b) | (a ^ c) | (a ^ d) | (a ^ a1) | (a ^ b1) | (a ^ c1) | (a ^ d1);
+    const Id left = voxels - 64 * q;
+    if (left < 64) active &= (std::uint64_t{1} << left) - 1;
+    while (active) {
+      const int bit = std::countr_zero(active);
+      active &= active - 1;
+      const unsigned cube_case = static_cast<unsigned>(((a >> bit) & 1) | (((a1 >> bit) & 1) << 1) |
+                                                       (((b >> bit) & 1) << 2) | (((b1 >> bit) & 1) << 3) |
+                                                       (((c >> bit) & 1) << 4) | (((c1 >> bit) & 1) << 5) |
+                                                       (((d >> bit) & 1) << 6) | (((d1 >> bit) & 1) << 7));
+      f(64 * q + bit, cube_case);
+    }
+  }
+}
+
+// One isovalue's triangle soup as edge keys, appended to `keys` with
+// `key_offset` added (the isovalue's index times 3N).
+template <class K>
+Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::vector<K>& keys, ContourStats& st) {
+  const auto& table = marching_cubes_table();
+  const Id rows = (s.ny - 1) * (s.nz - 1);
+  auto t0 = Clock::now();
+  std::vector<Id> row_offsets(rows + 1, 0);
+  parallel::for_each_dynamic(rows, [&](Id r) {
+    const Id j = r % (s.ny - 1), k = r / (s.ny - 1);
+    Id count = 0;
+    for_each_cut_voxel(bits, s, j, k, [&](Id, unsigned cube_case) { count += table.triangle_count[cube_case]; });
+    row_offsets[r] = count;
+  }, 8);
+  const Id triangles = parallel::exclusive_scan(row_offsets.data(), row_offsets.data(), rows + 1);
+  st.classify += seconds_since(t0);
+  t0 = Clock::now();
+  const Id base = static_cast<Id>(keys.size());
+  if (base + 3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("contour: " + std::to_string(base / 3 + triangles) +
+                     " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
+  keys.resize(static_cast<std::size_t>(base + 3 * triangles));
+  // Key of each cube edge relative to the voxel's first corner.
+  K edge_delta[12];
+  for (int e = 0; e < 12; ++e) {
+    const auto& ce = table.edges[e];
+    edge_delta[e] = static_cast<K>(3 * (ce.dx + ce.dy * s.nx + ce.dz * s.nxy) + ce.axis);
+  }
+  K* out = keys.data() + base;
+  parallel::for_each_dynamic(rows, [&](Id r) {
+    const Id j = r % (s.ny - 1), k = r / (s.ny - 1);
+    K* o = out + 3 * row_offsets[r];
+    const K row_key = key_offset + static_cast<K>(3 * (j * s.nx + k * s.nxy));
+    for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
+      const K voxel_key = row_key + static_cast<K>(3 * i);
+      const int corners = 3 * table.triangle_count[cube_case];
+      const auto& edges = table.triangle_edges[cube_case];
+      for (int c = 0; c < corners; ++c) *o++ = voxel_key + edge_delta[edges[c]];
+    });
+  }, 8);
+  st.generate += seconds_since(t0);
+  return triangles;
+}
+
+// Position, scalar and gradient of the point on the edge named by a key.
+template <class T>
+struct EdgeInterpolator {
+  const T* samples;
+  GridShape s;
+  const double* isovalues;
+  Id keys_per_iso;  // 3N
+
+  struct Point {
+    Id p0;
+    int axis;
+    double t, iso;
+  };
+
+  Point locate(std::uint64_t key) const {
+    const Id iso_index = static_cast<Id>(key / static_cast<std::uint64_t>(keys_per_iso));
+    const Id edge = static_cast<Id>(key % static_cast<std::uint64_t>(keys_per_iso));
+    Point p{edge / 3, static_cast<int>(edge % 3), 0.5, isovalues[iso_index]};
+    const double v0 = static_cast<double>(samples[p.p0]);
+    const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
+    const double t = (p.iso - v0) / (v1 - v0);
+    // A NaN end sample (outside by definition) gives no crossing to
+    // interpolate: place the point midway rather than emit NaN.
+    if (std::isfinite(t)) p.t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    return p;
+  }
+
+  void position(const Point& p, float* xyz) const {
+    Id ijk[3] = {p.p0 % s.nx, (p.p0 / s.nx) % s.ny, p.p0 / s.nxy};
+    for (int a = 0; a < 3; ++a) {
+      const double u = static_cast<double>(ijk[a]) + (a == p.axis ? p.t : 0.0);
+      xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u);
+    }
+  }
+
+  float scalar(const Point& p) const {
+    const double v0 = static_cast<double>(samples[p.p0]);
+    const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
+    const double v = v0 + p.t * (v1 - v0);
+    return static_cast<float>(std::isfinite(v) ? v : p.iso);
+  }
+
+  // Central-difference gradient at grid point `id` (one-sided at the border).
+  void gradient_at(Id id, double g[3]) const {
+    const Id ijk[3] = {id % s.nx, (id / s.nx) % s.ny, id / s.nxy};
+    const Id dims[3] = {s.nx, s.ny, s.nz};
+    for (int a = 0; a < 3; ++a) {
+      const Id lo = ijk[a] > 0 ? id - s.stride[a] : id;
+      const Id hi = ijk[a] + 1 < dims[a] ? id + s.stride[a] : id;
+      const double span = static_cast<double>((hi - id) / s.stride[a] + (id - lo) / s.stride[a]) * s.spacing[a];
+      const double dv = static_cast<double>(samples[hi]) - static_cast<double>(samples[lo]);
+      g[a] = span > 0 && std::isfinite(dv) ? dv / span : 0.0;
+    }
+  }
+
+  // Outward unit normal: minus the interpolated gradient (values fall outward).
+  void gradient_normal(const Point& p, float* n) const {
+    double g0[3], g1[3];
+    gradient_at(p.p0, g0);
+    gradient_at(p.p0 + s.stride[p.axis], g1);
+    double g[3], len2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      g[a] = -(g0[a] + p.t * (g1[a] - g0[a]));
+      len2 += g[a] * g[a];
+    }
+    const double inv = len2 > 0 ? 1.0 / std::sqrt(len2) : 0.0;
+    for (int a = 0; a < 3; ++a) n[a] = static_cast<float>(g[a] * inv);
+  }
+};
+
+struct Vec3f {
+  float x, y, z;
+};
+
+// Sum of the area-weighted normals of the triangles around each point,
+// merged by KEY-REDUCE over the groups, then normalised (the transform).
+template <class K>
+void average_normals(const keyreduce::Groups<K>& groups, const SurfaceMesh& mesh, std::vector<float>& normals) {
+  const Id triangles = mesh.num_cells();
+  std::vector<Vec3f> face(triangles);
+  const float* P = mesh.points.data();
+  const PointIndex* C = mesh.connectivity.data();
+  parallel::for_each(triangles, [&](Id t) {
+    const float* a = P + 3 * Id{C[3 * t]};
+    const float* b = P + 3 * Id{C[3 * t + 1]};
+    const float* c = P + 3 * Id{C[3 * t + 2]};
+    const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const float v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    face[t] = Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  });
+  normals.resize(3 * groups.num_groups());
+  auto* out = reinterpret_cast<Vec3f*>(normals.data());
+  keyreduce::reduce(
+      groups, [&](Id pair) { return face[pair / 3]; },
+      [](Vec3f a, Vec3f b) { return Vec3f{a.x + b.x, a.y + b.y, a.z + b.z}; },
+      [](Vec3f sum, Id) {
+        const float len = std::sqrt(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z);
+        return len > 0 ? Vec3f{sum.x / len, sum.y / len, sum.z / len} : Vec3f{0, 0, 0};
+      },
+      out);
+}
+
+template <class K, class T>
+SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st) {
+  const GridShape s = shape_of(grid);
+  const Id n_iso = static_cast<Id>(opt.isovalues.size());
+  const K keys_per_iso = static_cast<K>(3 * s.n);
+  std::vector<K> soup;
+  InsideBits bits;
+  for (Id iso_index = 0; iso_index < n_iso; ++iso_index) {
+    auto t0 = Clock::now();
+    classify(samples, s, InsideTest<T>(opt.isovalues[iso_index]), bits);
+    st.classify += seconds_since(t0);
+    generate_soup<K>(bits, s, static_cast<K>(iso_index) * keys_per_iso, soup, st);
+  }
+  bits.words = {};
+  const Id corners = static_cast<Id>(soup.size());
+  st.soup_points = corners;
+  st.key_bits = static_cast<int>(sizeof(K) * 8);
+  const EdgeInterpolator<T> interp{samples, s, opt.isovalues.data(), static_cast<Id>(keys_per_iso)};
+
+  SurfaceMesh mesh;
+  auto t0 = Clock::now();
+  // Group the soup's corners: by key (history) or by coordinates (baseline).
+  // rep_key[p] is the key of output point p.
+  std::vector<K> rep_key;
+  keyreduce::Groups<K> groups;
+  if (opt.weld == ContourWeld::KeyReduce) {
+    const auto order = opt.normals == ContourNormals::Average ? keyreduce::Order::Build : keyreduce::Order::Skip;
+    groups = keyreduce::partition_dense(soup.data(), corners, static_cast<K>(n_iso) * keys_per_iso, order);
+    st.weld += seconds_since(t0);
+    t0 = Clock::now();
+    const Id points = groups.num_groups();
+    mesh.points.resize(3 * points);
+    parallel::for_each(points, [&](Id p) {
+      interp.position(interp.locate(groups.unique_keys[p]), &mesh.points[3 * p]);
+    });
+    mesh.connectivity = std::move(groups.index_map);
+    st.fields += seconds_since(t0);
+  } else {
+    // The soup a plain marching cubes writes: a position per corner.
+    std::vector<float> soup_xyz(3 * corners);
+    parallel::for_each(corners, [&](Id c) { interp.position(interp.locate(soup[c]), &soup_xyz[3 * c]); });
+    weld::WeldResult welded = weld::vertex_weld(soup_xyz.data(), corners);
+    st.weld += seconds_since(t0);
+    mesh.points = std::move(welded.points);
+    mesh.connectivity = std::move(welded.index_map);
+    if (opt.scalars || opt.normals != ContourNormals::None) {
+      rep_key.resize(welded.first.size());
+      parallel::for_each(static_cast<Id>(rep_key.size()), [&](Id p) { rep_key[p] = soup[welded.first[p]]; });
+    }
+    if (opt.normals == ContourNormals::Average) {
+      // Reuse KEY-REDUCE's reduction over the coordinate-welded groups.
+      groups.unique_keys = rep_key;
+      groups.index_map = mesh.connectivity;
+      keyreduce::build_order(groups);
+    }
+  }
+  t0 = Clock::now();
+  const Id points = mesh.num_points();
+  const K* point_key = opt.weld == ContourWeld::KeyReduce ? groups.unique_keys.data() : rep_key.data();
+  if (opt.scalars) {
+    Field f{grid.name, 1, std::vector<float>(points)};
+    parallel::for_each(points, [&](Id p) { f.values[p] = interp.scalar(interp.locate(point_key[p])); });
+    mesh.point_fields.push_back(std::move(f));
+  }
+  if (opt.normals == ContourNormals::Gradient) {
+    Field f{"Normals", 3, std::vector<float>(3 * points)};
+    parallel::for_each(points, [&](Id p) { interp.gradient_normal(interp.locate(point_key[p]), &f.values[3 * p]); });
+    mesh.point_fields.push_back(std::move(f));
+  } else if (opt.normals == ContourNormals::Average) {
+    Field f{"Normals", 3, {}};
+    average_normals(groups, mesh, f.values);
+    mesh.point_fields.push_back(std::move(f));
+  }
+  st.fields += seconds_since(t0);
+  return mesh;
+}
+
+}  // namespace
+
+SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats) {
+  if (options.isovalues.empty()) throw InputError("contour: no isovalue given");
+  for (double iso : options.isovalues)
+    if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
+  for (int a = 0; a < 3; ++a)
+    if (grid.dims[a] < 2)
+      throw InputError("contour: grid has " + std::to_string(grid.dims[a]) + " point(s) along axis " +
+                       "xyz"[a] + std::string(" (need at least 2)"));
+  if (static_cast<Id>(grid.bytes.size()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
+    throw InputError("contour: grid holds " + std::to_string(grid.bytes.size()) + " bytes, dims need " +
+                     std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
+  ContourStats local;
+  ContourStats& st = stats ? *stats : local;
+  st = ContourStats{};
+  const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * options.isovalues.size();
+  return visit_scalars(grid, [&](const auto* samples) {
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
+    if (key_range <= std::numeric_limits<std::uint32_t>::max())
+      return contour_typed<std::uint32_t, T>(grid, samples, options, st);
+    return contour_typed<std::uint64_t, T>(grid, samples, options, st);
+  });
+}
+
+}  // namespace keymesh::generate

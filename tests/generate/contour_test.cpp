@@ -1,0 +1,279 @@
+#include "keymesh/generate/contour.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <tuple>
+
+#include "keymesh/generate/marching_cubes_table.hpp"
+#include "keymesh/generate/spherical_distance.hpp"
+#include "keymesh/parallel/threads.hpp"
+
+using namespace keymesh;
+using generate::ContourNormals;
+using generate::ContourOptions;
+using generate::ContourWeld;
+
+namespace {
+
+// Independent reference for the point count: grid edges whose end samples
+// straddle the isovalue (inside means value >= iso), counted by brute force.
+Id straddling_edges(const ImageGrid& g, double iso) {
+  const float* v = static_cast<const float*>(g.data());
+  const Id nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  Id count = 0;
+  for (Id k = 0; k < nz; ++k)
+    for (Id j = 0; j < ny; ++j)
+      for (Id i = 0; i < nx; ++i) {
+        const Id id = i + nx * (j + ny * k);
+        const bool in = v[id] >= iso;
+        if (i + 1 < nx && in != (v[id + 1] >= iso)) ++count;
+        if (j + 1 < ny && in != (v[id + nx] >= iso)) ++count;
+        if (k + 1 < nz && in != (v[id + nx * ny] >= iso)) ++count;
+      }
+  return count;
+}
+
+// Edges of a triangle mesh with the number of triangles using each.
+std::map<std::pair<PointIndex, PointIndex>, int> edge_use(const SurfaceMesh& m) {
+  std::map<std::pair<PointIndex, PointIndex>, int> use;
+  for (Id t = 0; t < m.num_cells(); ++t)
+    for (int e = 0; e < 3; ++e) {
+      PointIndex a = m.connectivity[3 * t + e], b = m.connectivity[3 * t + (e + 1) % 3];
+      ++use[{std::min(a, b), std::max(a, b)}];
+    }
+  return use;
+}
+
+std::vector<std::array<float, 3>> sorted_points(const SurfaceMesh& m) {
+  std::vector<std::array<float, 3>> p(m.num_points());
+  for (Id i = 0; i < m.num_points(); ++i) p[i] = {m.points[3 * i], m.points[3 * i + 1], m.points[3 * i + 2]};
+  std::sort(p.begin(), p.end());
+  return p;
+}
+
+// Triangles as sorted position triples, so meshes compare up to renumbering.
+std::vector<std::array<std::array<float, 3>, 3>> triangle_set(const SurfaceMesh& m) {
+  std::vector<std::array<std::array<float, 3>, 3>> tris(m.num_cells());
+  for (Id t = 0; t < m.num_cells(); ++t) {
+    for (int c = 0; c < 3; ++c) {
+      const Id p = m.connectivity[3 * t + c];
+      tris[t][c] = {m.points[3 * p], m.points[3 * p + 1], m.points[3 * p + 2]};
+    }
+    // rotate so the smallest corner comes first (keeps orientation)
+    auto it = std::min_element(tris[t].begin(), tris[t].end());
+    std::rotate(tris[t].begin(), it, tris[t].end());
+  }
+  std::sort(tris.begin(), tris.end());
+  return tris;
+}
+
+}  // namespace
+
+TEST(MarchingCubesTable, ComplementaryCasesAndCounts) {
+  const auto& t = generate::marching_cubes_table();
+  EXPECT_EQ(t.triangle_count[0], 0);
+  EXPECT_EQ(t.triangle_count[255], 0);
+  for (int c = 0; c < 8; ++c) EXPECT_EQ(t.triangle_count[1 << c], 1) << "single corner " << c;
+  // Every case: the triangles' edges are exactly the cut edges of the case.
+  for (int cs = 0; cs < 256; ++cs) {
+    std::set<int> cut, used;
+    for (int e = 0; e < 12; ++e)
+      if (((cs >> t.edges[e].corner0) & 1) != ((cs >> t.edges[e].corner1) & 1)) cut.insert(e);
+    for (int i = 0; i < 3 * t.triangle_count[cs]; ++i) used.insert(t.triangle_edges[cs][i]);
+    EXPECT_EQ(cut, used) << "case " << cs;
+  }
+}
+
+TEST(Contour, PointCountEqualsStraddlingEdges) {
+  for (Id n : {9, 16, 33}) {
+    const ImageGrid g = generate::spherical_distance(n);
+    for (double iso : {2.3, double(n) / 2 - 1.5, double(n) / 2 - 1 + 0.001}) {
+      ContourOptions opt;
+      opt.isovalues = {iso};
+      const SurfaceMesh m = generate::contour(g, opt);
+      EXPECT_EQ(m.num_points(), straddling_edges(g, iso)) << n << " " << iso;
+    }
+  }
+}
+
+TEST(Contour, ClosedSphereIsClosedManifoldWithEulerTwo) {
+  const Id n = 40;
+  const ImageGrid g = generate::spherical_distance(n);
+  ContourOptions opt;
+  opt.isovalues = {double(n) / 2 - 1.5};
+  const SurfaceMesh m = generate::contour(g, opt);
+  const auto use = edge_use(m);
+  for (const auto& [e, count] : use) ASSERT_EQ(count, 2) << "edge " << e.first << "-" << e.second;
+  const Id chi = m.num_points() - static_cast<Id>(use.size()) + m.num_cells();
+  EXPECT_EQ(chi, 2);
+  // No two points at the same position.
+  auto p = sorted_points(m);
+  EXPECT_EQ(std::adjacent_find(p.begin(), p.end()), p.end());
+}
+
+TEST(Contour, TrianglesFaceOutwardOnSphere) {
+  const Id n = 24;
+  const ImageGrid g = generate::spherical_distance(n);
+  ContourOptions opt;
+  opt.isovalues = {7.5};
+  // Inside is value >= iso: the far region. Lower values (the centre) are
+  // outside, so normals must point towards the centre.
+  const SurfaceMesh m = generate::contour(g, opt);
+  const double c = n / 2;
+  for (Id t = 0; t < m.num_cells(); ++t) {
+    const float* a = &m.points[3 * m.connectivity[3 * t]];
+    const float* b = &m.points[3 * m.connectivity[3 * t + 1]];
+    const float* d = &m.points[3 * m.connectivity[3 * t + 2]];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double v[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    const double nrm[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const double r[3] = {a[0] - c, a[1] - c, a[2] - c};
+    ASSERT_LT(nrm[0] * r[0] + nrm[1] * r[1] + nrm[2] * r[2], 0) << "triangle " << t;
+  }
+}
+
+TEST(Contour, PointsLieOnTheSphereAndScalarsEqualIso) {
+  const Id n = 48;
+  const ImageGrid g = generate::spherical_distance(n);
+  ContourOptions opt;
+  opt.isovalues = {17.25};
+  opt.normals = ContourNormals::Gradient;
+  const SurfaceMesh m = generate::contour(g, opt);
+  const Field* s = m.find_point_field("distance");
+  const Field* nr = m.find_point_field("Normals");
+  ASSERT_TRUE(s && nr);
+  for (Id p = 0; p < m.num_points(); ++p) {
+    const double r = std::hypot(m.points[3 * p] - 24.0, m.points[3 * p + 1] - 24.0, m.points[3 * p + 2] - 24.0);
+    // Linear interpolation of a distance field along a grid edge: error is
+    // at most the sagitta over one voxel, < 1/(2r) voxels.
+    ASSERT_NEAR(r, 17.25, 0.5 / 17.25 + 1e-4);
+    ASSERT_NEAR(s->values[p], 17.25, 1e-4);
+    // Outward normal points to lower values: towards the centre.
+    const double dot = (nr->values[3 * p] * (m.points[3 * p] - 24.0) + nr->values[3 * p + 1] * (m.points[3 * p + 1] - 24.0) +
+                        nr->values[3 * p + 2] * (m.points[3 * p + 2] - 24.0)) / r;
+    ASSERT_LT(dot, -0.95);
+  }
+}
+
+TEST(Contour, AveragedNormalsAreUnitAndPointInward) {
+  const Id n = 40;
+  const ImageGrid g = generate::spherical_distance(n);
+  ContourOptions opt;
+  opt.isovalues = {15.3};
+  opt.normals = ContourNormals::Average;
+  const SurfaceMesh m = generate::contour(g, opt);
+  const Field* nr = m.find_point_field("Normals");
+  ASSERT_TRUE(nr);
+  for (Id p = 0; p < m.num_points(); ++p) {
+    const float* v = &nr->values[3 * p];
+    ASSERT_NEAR(std::hypot(v[0], v[1], v[2]), 1.0, 1e-5);
+    const double r[3] = {m.points[3 * p] - 20.0, m.points[3 * p + 1] - 20.0, m.points[3 * p + 2] - 20.0};
+    const double len = std::hypot(r[0], r[1], r[2]);
+    ASSERT_LT((v[0] * r[0] + v[1] * r[1] + v[2] * r[2]) / len, -0.9);
+  }
+}
+
+TEST(Contour, VertexWeldGivesTheSameMeshUpToRenumbering) {
+  const ImageGrid g = generate::spherical_distance(30);
+  for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average}) {
+    ContourOptions a;
+    a.isovalues = {11.7, 6.2};
+    a.normals = normals;
+    ContourOptions b = a;
+    b.weld = ContourWeld::VertexWeld;
+    const SurfaceMesh ma = generate::contour(g, a), mb = generate::contour(g, b);
+    ASSERT_EQ(ma.num_points(), mb.num_points());
+    ASSERT_EQ(ma.num_cells(), mb.num_cells());
+    EXPECT_EQ(sorted_points(ma), sorted_points(mb));
+    EXPECT_EQ(triangle_set(ma), triangle_set(mb));
+  }
+}
+
+TEST(Contour, BitIdenticalAcrossThreadCounts) {
+  const ImageGrid g = generate::spherical_distance(70);
+  ContourOptions opt;
+  opt.isovalues = {30.1};
+  opt.normals = ContourNormals::Average;
+  std::vector<SurfaceMesh> meshes;
+  for (int threads : {1, 2, 3, 4}) {
+    parallel::set_thread_count(threads);
+    meshes.push_back(generate::contour(g, opt));
+  }
+  parallel::set_thread_count(0);
+  for (std::size_t i = 1; i < meshes.size(); ++i) {
+    EXPECT_EQ(meshes[i].points, meshes[0].points);
+    EXPECT_EQ(meshes[i].connectivity, meshes[0].connectivity);
+    ASSERT_EQ(meshes[i].point_fields.size(), meshes[0].point_fields.size());
+    for (std::size_t f = 0; f < meshes[0].point_fields.size(); ++f)
+      EXPECT_EQ(meshes[i].point_fields[f].values, meshes[0].point_fields[f].values);
+  }
+}
+
+TEST(Contour, EveryScalarTypeGivesTheSameSurface) {
+  // Integer-valued samples: each type holds them exactly, so all agree.
+  const Id n = 20;
+  ImageGrid f32 = generate::spherical_distance(n);
+  auto make = [&](ScalarType type) {
+    ImageGrid g;
+    g.allocate({n, n, n}, type);
+    const float* src = static_cast<const float*>(f32.data());
+    visit_scalars(g, [&](const auto* dst_const) {
+      using T = std::remove_cv_t<std::remove_pointer_t<decltype(dst_const)>>;
+      T* dst = const_cast<T*>(dst_const);
+      for (Id i = 0; i < g.num_points(); ++i) dst[i] = static_cast<T>(std::floor(src[i]));
+      return 0;
+    });
+    return g;
+  };
+  ContourOptions opt;
+  opt.isovalues = {6.5};
+  opt.scalars = false;
+  const SurfaceMesh ref = generate::contour(make(ScalarType::Float64), opt);
+  EXPECT_GT(ref.num_cells(), 100);
+  for (auto type : {ScalarType::UInt8, ScalarType::Int8, ScalarType::UInt16, ScalarType::Int16, ScalarType::Int32,
+                    ScalarType::Float32}) {
+    const SurfaceMesh m = generate::contour(make(type), opt);
+    EXPECT_EQ(m.points, ref.points) << scalar_type_name(type);
+    EXPECT_EQ(m.connectivity, ref.connectivity) << scalar_type_name(type);
+  }
+}
+
+TEST(Contour, NaNSamplesAreOutsideAndNeverMakeNaNPoints) {
+  ImageGrid g = generate::spherical_distance(16);
+  float* v = static_cast<float*>(g.data());
+  for (Id i = 0; i < g.num_points(); i += 7) v[i] = std::numeric_limits<float>::quiet_NaN();
+  ContourOptions opt;
+  opt.isovalues = {5.5};
+  opt.normals = ContourNormals::Gradient;
+  const SurfaceMesh m = generate::contour(g, opt);
+  EXPECT_EQ(m.num_points(), straddling_edges(g, 5.5));
+  for (float x : m.points) ASSERT_TRUE(std::isfinite(x));
+  for (const auto& f : m.point_fields)
+    for (float x : f.values) ASSERT_TRUE(std::isfinite(x)) << f.name;
+}
+
+TEST(Contour, IsovalueOutsideRangeGivesEmptyMesh) {
+  const ImageGrid g = generate::spherical_distance(8);
+  ContourOptions opt;
+  opt.isovalues = {1000.0};
+  const SurfaceMesh m = generate::contour(g, opt);
+  EXPECT_EQ(m.num_points(), 0);
+  EXPECT_EQ(m.num_cells(), 0);
+}
+
+TEST(Contour, RefusesBadArguments) {
+  const ImageGrid g = generate::spherical_distance(8);
+  ContourOptions opt;
+  EXPECT_THROW(generate::contour(g, opt), InputError);
+  opt.isovalues = {std::numeric_limits<double>::quiet_NaN()};
+  EXPECT_THROW(generate::contour(g, opt), InputError);
+  ImageGrid flat;
+  flat.allocate({5, 5, 1}, ScalarType::Float32);
+  opt.isovalues = {0.5};
+  EXPECT_THROW(generate::contour(flat, opt), InputError);
+}
