@@ -1,0 +1,72 @@
+// Times marching cubes + weld on the Spherical Distance field in-process (no
+// file I/O), for the paper's Table 2 rows. Prints one JSON line per case:
+//   contour_bench --size 512 --threads 2 --reps 5 [--weld keyreduce|vertexweld]
+//                 [--normals none|gradient|average] [--iso V]
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "keymesh/core/huge_pages.hpp"
+#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/spherical_distance.hpp"
+#include "keymesh/parallel/threads.hpp"
+
+using namespace keymesh;
+
+int main(int argc, char** argv) {
+  reexec_with_huge_pages(argc, argv);
+  long long size = 256;
+  int threads = 0, reps = 5;
+  std::string weld = "keyreduce", normals = "none";
+  double iso = -1;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--size") size = std::atoll(argv[i + 1]);
+    else if (a == "--threads") threads = std::atoi(argv[i + 1]);
+    else if (a == "--reps") reps = std::atoi(argv[i + 1]);
+    else if (a == "--weld") weld = argv[i + 1];
+    else if (a == "--normals") normals = argv[i + 1];
+    else if (a == "--iso") iso = std::atof(argv[i + 1]);
+    else {
+      std::fprintf(stderr, "unknown option %s\n", a.c_str());
+      return 2;
+    }
+  }
+  if (iso < 0) iso = static_cast<double>(size / 2) - 1 + 0.001;
+  const int used = parallel::set_thread_count(threads);
+  const ImageGrid grid = generate::spherical_distance(size);
+  generate::ContourOptions opt;
+  opt.isovalues = {iso};
+  opt.weld = weld == "vertexweld" ? generate::ContourWeld::VertexWeld : generate::ContourWeld::KeyReduce;
+  opt.normals = normals == "average"    ? generate::ContourNormals::Average
+                : normals == "gradient" ? generate::ContourNormals::Gradient
+                                        : generate::ContourNormals::None;
+  opt.scalars = false;
+  std::vector<double> times;
+  generate::ContourStats stats;
+  Id points = 0, cells = 0;
+  for (int r = 0; r < reps; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const SurfaceMesh m = generate::contour(grid, opt, &stats);
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    points = m.num_points();
+    cells = m.num_cells();
+  }
+  std::sort(times.begin(), times.end());
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  std::printf(
+      "{\"bench\":\"contour\",\"size\":%lld,\"iso\":%.6f,\"weld\":\"%s\",\"normals\":\"%s\",\"threads\":%d,"
+      "\"points\":%lld,\"cells\":%lld,\"median\":%.6f,\"min\":%.6f,\"max\":%.6f,\"reps\":%d,"
+      "\"classify\":%.6f,\"generate\":%.6f,\"weld_s\":%.6f,\"fields\":%.6f,\"peak_rss_mib\":%.1f}\n",
+      size, iso, weld.c_str(), normals.c_str(), used, (long long)points, (long long)cells, times[times.size() / 2],
+      times.front(), times.back(), reps, stats.classify, stats.generate, stats.weld, stats.fields,
+      static_cast<double>(usage.ru_maxrss) / 1024.0);
+  return 0;
+}

@@ -1,0 +1,28 @@
+#include "keymesh/core/huge_pages.hpp"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+namespace keymesh {
+
+void reexec_with_huge_pages(int argc, char** argv) {
+  (void)argc;
+  const char* off = std::getenv("KEYMESH_HUGE_PAGES");
+  if (off && std::strcmp(off, "0") == 0) return;
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  std::string value = tunables ? tunables : "";
+  if (value.find("glibc.malloc.hugetlb") != std::string::npos) return;
+  // Mark the attempt so that a libc ignoring the tunable cannot loop us.
+  if (std::getenv("KEYMESH_HUGE_PAGES_REEXEC")) return;
+  value = value.empty() ? "glibc.malloc.hugetlb=1" : value + ":glibc.malloc.hugetlb=1";
+  if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  if (setenv("KEYMESH_HUGE_PAGES_REEXEC", "1", 1) != 0) return;
+  execv("/proc/self/exe", argv);
+  // execv only returns on failure: carry on with ordinary pages.
+  unsetenv("KEYMESH_HUGE_PAGES_REEXEC");
+}
+
+}  // namespace keymesh
