@@ -12,7 +12,7 @@ endif
 # Debian 12 packages the build, the tests and the demo need.
 DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev zlib1g-dev \
-  python3 python3-numpy python3-vtk9 libvolpack1-dev
+  python3 python3-numpy python3-vtk9 libvolpack1-dev mricron-data
 
 .PHONY: all deps build demo test bench clean
 

@@ -277,3 +277,24 @@ TEST(Contour, RefusesBadArguments) {
   opt.isovalues = {0.5};
   EXPECT_THROW(generate::contour(flat, opt), InputError);
 }
+
+// The paper's Table 1 (triangles) and the welded point counts, from an
+// edge-based marching cubes on the Spherical Distance field at N/2 - 1 + 0.001.
+// The point count is also checked against the brute-force straddling-edge count.
+TEST(Contour, PaperTable1) {
+  struct Row {
+    Id n, points, triangles;
+  };
+  for (const Row& row : {Row{128, 74715, 149420}, Row{256, 303699, 607388}, Row{512, 1225611, 2451212}}) {
+    const ImageGrid g = generate::spherical_distance(row.n);
+    ContourOptions opt;
+    opt.isovalues = {double(row.n) / 2 - 1 + 0.001};
+    opt.scalars = false;
+    const SurfaceMesh m = generate::contour(g, opt);
+    EXPECT_EQ(m.num_points(), row.points) << row.n;
+    EXPECT_EQ(m.num_cells(), row.triangles) << row.n;
+    if (row.n <= 256) {
+      EXPECT_EQ(m.num_points(), straddling_edges(g, opt.isovalues[0])) << row.n;
+    }
+  }
+}

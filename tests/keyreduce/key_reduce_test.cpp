@@ -1,0 +1,161 @@
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/keyreduce/reduce.hpp"
+#include "keymesh/parallel/scan.hpp"
+#include "keymesh/parallel/threads.hpp"
+
+using namespace keymesh;
+using keyreduce::Order;
+
+namespace {
+
+// Reference grouping with std::map: group = rank of the key among distinct keys.
+template <class K>
+void expect_matches_reference(const std::vector<K>& keys, const keyreduce::Groups<K>& g) {
+  std::map<K, std::vector<std::uint32_t>> ref;
+  for (std::size_t i = 0; i < keys.size(); ++i) ref[keys[i]].push_back(static_cast<std::uint32_t>(i));
+  ASSERT_EQ(g.num_groups(), static_cast<Id>(ref.size()));
+  ASSERT_EQ(g.num_pairs(), static_cast<Id>(keys.size()));
+  Id group = 0;
+  for (const auto& [key, pairs] : ref) {
+    ASSERT_EQ(g.unique_keys[group], key);
+    for (auto p : pairs) ASSERT_EQ(g.index_map[p], group);
+    if (g.has_order()) {
+      ASSERT_EQ(g.count(group), static_cast<Id>(pairs.size()));
+      for (std::size_t j = 0; j < pairs.size(); ++j) ASSERT_EQ(g.order[g.offsets[group] + j], pairs[j]);
+    }
+    ++group;
+  }
+}
+
+template <class K>
+void expect_both_plans(const std::vector<K>& keys, K range) {
+  const Id n = static_cast<Id>(keys.size());
+  expect_matches_reference(keys, keyreduce::partition_sort(keys.data(), n, int(sizeof(K) * 8)));
+  expect_matches_reference(keys, keyreduce::partition_dense(keys.data(), n, range));
+  expect_matches_reference(keys, keyreduce::partition_sort(keys.data(), n, int(sizeof(K) * 8), Order::Skip));
+  expect_matches_reference(keys, keyreduce::partition_dense(keys.data(), n, range, Order::Skip));
+}
+
+class KeyReduceThreads : public ::testing::TestWithParam<int> {
+ protected:
+  void SetUp() override { parallel::set_thread_count(GetParam()); }
+  void TearDown() override { parallel::set_thread_count(0); }
+};
+
+}  // namespace
+
+TEST_P(KeyReduceThreads, Empty) { expect_both_plans<std::uint64_t>({}, 10); }
+
+TEST_P(KeyReduceThreads, OneElement) { expect_both_plans<std::uint32_t>({5u}, 6u); }
+
+TEST_P(KeyReduceThreads, AllKeysEqual) { expect_both_plans<std::uint64_t>(std::vector<std::uint64_t>(200000, 3), 4); }
+
+TEST_P(KeyReduceThreads, KeysAtTopOfRange) {
+  // Sort plan: keys at the top of the 32- and 64-bit ranges.
+  std::vector<std::uint32_t> keys;
+  for (int i = 0; i < 100000; ++i) keys.push_back(0xFFFFFFFFu - static_cast<std::uint32_t>(i % 3));
+  expect_matches_reference(keys, keyreduce::partition_sort(keys.data(), Id(keys.size()), 32));
+  std::vector<std::uint64_t> wide;
+  for (int i = 0; i < 100000; ++i) wide.push_back(~std::uint64_t{0} - static_cast<std::uint64_t>(i % 5));
+  expect_matches_reference(wide, keyreduce::partition_sort(wide.data(), Id(wide.size()), 64));
+  // Dense plan: keys at the top of the declared range, including its last key
+  // and the last bit of a 64-bit word.
+  const std::uint32_t range = 1u << 20;
+  std::vector<std::uint32_t> top;
+  for (int i = 0; i < 100000; ++i) top.push_back(range - 1 - static_cast<std::uint32_t>(i % 70));
+  expect_both_plans<std::uint32_t>(top, range);
+}
+
+TEST_P(KeyReduceThreads, RandomKeysLikeAContour) {
+  std::mt19937_64 rng(7);
+  std::vector<std::uint64_t> keys(300000);
+  for (auto& k : keys) k = rng() % 90000;  // ~3.3 pairs per key
+  expect_both_plans<std::uint64_t>(keys, 90000);
+}
+
+TEST_P(KeyReduceThreads, ReduceAveragesInPairOrder) {
+  std::mt19937 rng(11);
+  std::vector<std::uint32_t> keys(100000);
+  std::vector<double> values(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    keys[i] = rng() % 1000;
+    values[i] = std::uniform_real_distribution<double>(-1, 1)(rng);
+  }
+  for (auto plan : {keyreduce::Plan::Sort, keyreduce::Plan::Dense}) {
+    const auto g = plan == keyreduce::Plan::Sort
+                       ? keyreduce::partition_sort(keys.data(), Id(keys.size()), 10)
+                       : keyreduce::partition_dense(keys.data(), Id(keys.size()), 1000u);
+    std::vector<double> mean(g.num_groups());
+    keyreduce::reduce_values(
+        g, values.data(), [](double a, double b) { return a + b; },
+        [](double sum, Id count) { return sum / double(count); }, mean.data());
+    // Reference: the same left-to-right sums over increasing pair index.
+    std::map<std::uint32_t, std::pair<double, int>> ref;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      auto& [s, c] = ref[keys[i]];
+      s = c == 0 ? values[i] : s + values[i];
+      ++c;
+    }
+    Id group = 0;
+    for (const auto& [key, sc] : ref) ASSERT_EQ(mean[group++], sc.first / sc.second) << "key " << key;
+  }
+}
+
+TEST_P(KeyReduceThreads, MergeCanRunInPieces) {
+  // merge is associative: reducing two halves and merging the partial
+  // results gives the same integer sums as one reduction (what distributed
+  // and streamed KEY-REDUCE rely on).
+  std::vector<std::uint64_t> keys, values;
+  for (int i = 0; i < 50000; ++i) {
+    keys.push_back(static_cast<std::uint64_t>((i * 7919) % 4001));
+    values.push_back(static_cast<std::uint64_t>(i));
+  }
+  auto sum_by_key = [](const std::vector<std::uint64_t>& k, const std::vector<std::uint64_t>& v) {
+    const auto g = keyreduce::partition_sort(k.data(), Id(k.size()), 64);
+    std::vector<std::uint64_t> out(g.num_groups());
+    keyreduce::reduce_values(g, v.data(), [](auto a, auto b) { return a + b; }, [](auto s, Id) { return s; }, out.data());
+    std::map<std::uint64_t, std::uint64_t> m;
+    for (Id i = 0; i < g.num_groups(); ++i) m[g.unique_keys[i]] = out[i];
+    return m;
+  };
+  const auto whole = sum_by_key(keys, values);
+  const std::size_t half = keys.size() / 2;
+  auto a = sum_by_key({keys.begin(), keys.begin() + half}, {values.begin(), values.begin() + half});
+  const auto b = sum_by_key({keys.begin() + half, keys.end()}, {values.begin() + half, values.end()});
+  for (const auto& [k, v] : b) a[k] += v;
+  EXPECT_EQ(a, whole);
+}
+
+TEST_P(KeyReduceThreads, DenseRefusesKeysOutsideRange) {
+  std::vector<std::uint32_t> keys{1, 2, 10};
+  EXPECT_THROW(keyreduce::partition_dense(keys.data(), 3, 10u), InputError);
+}
+
+INSTANTIATE_TEST_SUITE_P(Threads, KeyReduceThreads, ::testing::Values(1, 2, 4));
+
+TEST(ExclusiveScan, MatchesSerialAndReturnsTotal) {
+  for (int threads : {1, 2, 3}) {
+    parallel::set_thread_count(threads);
+    for (Id n : {0, 1, 7, 100000, 300001}) {
+      std::vector<std::uint32_t> in(n);
+      for (Id i = 0; i < n; ++i) in[i] = static_cast<std::uint32_t>((i * 31) % 7);
+      std::vector<std::uint64_t> out(n);
+      const auto total = parallel::exclusive_scan(in.data(), out.data(), n);
+      std::uint64_t s = 0;
+      for (Id i = 0; i < n; ++i) {
+        ASSERT_EQ(out[i], s);
+        s += in[i];
+      }
+      EXPECT_EQ(total, s);
+    }
+  }
+  parallel::set_thread_count(0);
+}

@@ -1,0 +1,128 @@
+"""Helpers shared by the end-to-end tests (run with Debian's /usr/bin/python3).
+
+Each test script is a plain program: it runs the `keymesh` binary given as
+argv[1], asserts, prints one line per check and a closing
+"N passed, N failed" line, and exits 0 only when everything passed
+(77 = skipped, e.g. when VTK is not importable).
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import traceback
+
+KEYMESH = sys.argv[1] if len(sys.argv) > 1 else os.environ.get("KEYMESH", "build/keymesh")
+SOURCE_DIR = os.environ.get("KEYMESH_SOURCE_DIR", os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+_results = {"passed": 0, "failed": 0}
+
+
+def run(*args, expect=0, env=None):
+    """Runs keymesh with args; asserts the exit code; returns the CompletedProcess."""
+    p = subprocess.run([KEYMESH, *map(str, args)], capture_output=True, text=True, stdin=subprocess.DEVNULL,
+                       timeout=600, env=env)
+    if expect is not None and p.returncode != expect:
+        raise AssertionError(f"keymesh {' '.join(map(str, args))}: exit {p.returncode}, expected {expect}\n"
+                             f"stdout: {p.stdout}\nstderr: {p.stderr}")
+    return p
+
+
+def report(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def check(name, fn):
+    try:
+        fn()
+        print(f"ok      {name}")
+        _results["passed"] += 1
+    except Exception:  # noqa: BLE001 - report every failure and go on
+        print(f"FAILED  {name}")
+        traceback.print_exc(file=sys.stdout)
+        _results["failed"] += 1
+
+
+def finish():
+    print(f"{_results['passed']} passed, {_results['failed']} failed")
+    sys.exit(0 if _results["failed"] == 0 else 1)
+
+
+def tempdir():
+    return tempfile.mkdtemp(prefix="keymesh-test-")
+
+
+def require_vtk():
+    try:
+        import vtk  # noqa: F401
+        from vtk.util import numpy_support  # noqa: F401
+        import numpy  # noqa: F401
+    except ImportError as e:
+        print(f"skipped: {e} (install python3-vtk9 and python3-numpy)")
+        sys.exit(77)
+
+
+def read_polydata(path):
+    """A mesh file read by VTK's own readers (not keymesh's)."""
+    import vtk
+    ext = os.path.splitext(path)[1].lower()
+    reader = {".vtp": vtk.vtkXMLPolyDataReader, ".ply": vtk.vtkPLYReader, ".stl": vtk.vtkSTLReader,
+              ".obj": vtk.vtkOBJReader}[ext]()
+    reader.SetFileName(path)
+    reader.Update()
+    return reader.GetOutput()
+
+
+def points_of(poly):
+    import numpy as np
+    from vtk.util import numpy_support as ns
+    if poly.GetNumberOfPoints() == 0:
+        return np.zeros((0, 3))
+    return ns.vtk_to_numpy(poly.GetPoints().GetData()).astype(np.float64)
+
+
+def triangles_of(poly):
+    import numpy as np
+    from vtk.util import numpy_support as ns
+    polys = poly.GetPolys()
+    if polys.GetNumberOfCells() == 0:
+        return np.zeros((0, 3), dtype=np.int64)
+    conn = ns.vtk_to_numpy(polys.GetConnectivityArray()).astype(np.int64)
+    offs = ns.vtk_to_numpy(polys.GetOffsetsArray()).astype(np.int64)
+    assert (np.diff(offs) == 3).all(), "not all cells are triangles"
+    return conn.reshape(-1, 3)
+
+
+def canonical_mesh(points, tris):
+    """Points sorted lexicographically and triangles renumbered accordingly,
+    each rotated to start at its smallest id and the list sorted: two meshes
+    equal up to renumbering have equal canonical forms."""
+    import numpy as np
+    order = np.lexsort((points[:, 2], points[:, 1], points[:, 0]))
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    t = rank[tris]
+    roll = np.argmin(t, axis=1)
+    t = np.stack([t[np.arange(len(t)), (roll + k) % 3] for k in range(3)], axis=1)
+    t = t[np.lexsort((t[:, 2], t[:, 1], t[:, 0]))]
+    return points[order], t
+
+
+def nearest_distances(a, b):
+    """For every point of a, the distance to the nearest point of b (VTK locator)."""
+    import numpy as np
+    import vtk
+    from vtk.util import numpy_support as ns
+    pts = vtk.vtkPoints()
+    pts.SetData(ns.numpy_to_vtk(np.ascontiguousarray(b, dtype=np.float64), deep=True))
+    pd = vtk.vtkPolyData()
+    pd.SetPoints(pts)
+    loc = vtk.vtkStaticPointLocator()
+    loc.SetDataSet(pd)
+    loc.BuildLocator()
+    d = np.empty(len(a))
+    for i, p in enumerate(a):
+        j = loc.FindClosestPoint(p)
+        d[i] = np.linalg.norm(b[j] - p)
+    return d
