@@ -194,28 +194,41 @@ struct EdgeInterpolator {
   Id keys_per_iso;  // 3N
 
   struct Point {
-    Id p0;
-    int axis;
+    Id p0;       // the edge's first grid point
+    Id ijk[3];   // its grid coordinates
+    int axis;    // the edge's direction
     double t, iso;
   };
 
+  // Divisions by run-time values are the cost here (a million points, a few
+  // each): single isovalue skips one, and i, j, k come from two.
   Point locate(std::uint64_t key) const {
-    const Id iso_index = static_cast<Id>(key / static_cast<std::uint64_t>(keys_per_iso));
-    const Id edge = static_cast<Id>(key % static_cast<std::uint64_t>(keys_per_iso));
-    Point p{edge / 3, static_cast<int>(edge % 3), 0.5, isovalues[iso_index]};
+    Id iso_index = 0;
+    Id edge = static_cast<Id>(key);
+    if (static_cast<std::uint64_t>(edge) >= static_cast<std::uint64_t>(keys_per_iso)) {
+      iso_index = edge / keys_per_iso;
+      edge -= iso_index * keys_per_iso;
+    }
+    Point p{};
+    p.p0 = edge / 3;
+    p.axis = static_cast<int>(edge - 3 * p.p0);
+    p.iso = isovalues[iso_index];
+    p.ijk[2] = p.p0 / s.nxy;
+    const Id rem = p.p0 - p.ijk[2] * s.nxy;
+    p.ijk[1] = rem / s.nx;
+    p.ijk[0] = rem - p.ijk[1] * s.nx;
     const double v0 = static_cast<double>(samples[p.p0]);
     const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
     const double t = (p.iso - v0) / (v1 - v0);
     // A NaN end sample (outside by definition) gives no crossing to
     // interpolate: place the point midway rather than emit NaN.
-    if (std::isfinite(t)) p.t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    p.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
     return p;
   }
 
   void position(const Point& p, float* xyz) const {
-    Id ijk[3] = {p.p0 % s.nx, (p.p0 / s.nx) % s.ny, p.p0 / s.nxy};
     for (int a = 0; a < 3; ++a) {
-      const double u = static_cast<double>(ijk[a]) + (a == p.axis ? p.t : 0.0);
+      const double u = static_cast<double>(p.ijk[a]) + (a == p.axis ? p.t : 0.0);
       xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u);
     }
   }
@@ -227,14 +240,14 @@ struct EdgeInterpolator {
     return static_cast<float>(std::isfinite(v) ? v : p.iso);
   }
 
-  // Central-difference gradient at grid point `id` (one-sided at the border).
-  void gradient_at(Id id, double g[3]) const {
-    const Id ijk[3] = {id % s.nx, (id / s.nx) % s.ny, id / s.nxy};
+  // Central-difference gradient at grid point `id` = (i, j, k), one-sided at the border.
+  void gradient_at(Id id, const Id ijk[3], double g[3]) const {
     const Id dims[3] = {s.nx, s.ny, s.nz};
     for (int a = 0; a < 3; ++a) {
-      const Id lo = ijk[a] > 0 ? id - s.stride[a] : id;
-      const Id hi = ijk[a] + 1 < dims[a] ? id + s.stride[a] : id;
-      const double span = static_cast<double>((hi - id) / s.stride[a] + (id - lo) / s.stride[a]) * s.spacing[a];
+      const bool has_lo = ijk[a] > 0, has_hi = ijk[a] + 1 < dims[a];
+      const Id lo = has_lo ? id - s.stride[a] : id;
+      const Id hi = has_hi ? id + s.stride[a] : id;
+      const double span = static_cast<double>(int(has_lo) + int(has_hi)) * s.spacing[a];
       const double dv = static_cast<double>(samples[hi]) - static_cast<double>(samples[lo]);
       g[a] = span > 0 && std::isfinite(dv) ? dv / span : 0.0;
     }
@@ -243,8 +256,10 @@ struct EdgeInterpolator {
   // Outward unit normal: minus the interpolated gradient (values fall outward).
   void gradient_normal(const Point& p, float* n) const {
     double g0[3], g1[3];
-    gradient_at(p.p0, g0);
-    gradient_at(p.p0 + s.stride[p.axis], g1);
+    Id ijk1[3] = {p.ijk[0], p.ijk[1], p.ijk[2]};
+    ++ijk1[p.axis];
+    gradient_at(p.p0, p.ijk, g0);
+    gradient_at(p.p0 + s.stride[p.axis], ijk1, g1);
     double g[3], len2 = 0;
     for (int a = 0; a < 3; ++a) {
       g[a] = -(g0[a] + p.t * (g1[a] - g0[a]));

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <bit>
 #include <limits>
+#include <memory>
 #include <string>
 
 #include "keymesh/core/error.hpp"
@@ -53,7 +54,10 @@ Groups<K> partition_dense(const K* keys, Id n, K key_range, Order order) {
   check_pair_count(n);
   Groups<K> groups;
   const Id words = static_cast<Id>((static_cast<std::uint64_t>(key_range) + 63) / 64);
-  std::vector<std::uint64_t> present(words, 0);
+  // One bit per possible key. Zeroed in parallel so that both the work and
+  // the first-touch page faults are shared by the threads.
+  std::unique_ptr<std::uint64_t[]> present(new std::uint64_t[static_cast<std::size_t>(words)]);
+  parallel::for_each(words, [&](Id w) { present[w] = 0; }, 1 << 16);
   // Mark present keys. Most keys repeat (a contour point is shared by ~6
   // triangles), so test before the atomic OR: only the first sighting writes.
   bool out_of_range = false;
@@ -70,29 +74,42 @@ Groups<K> partition_dense(const K* keys, Id n, K key_range, Order order) {
   if (out_of_range)
     throw InputError("KEY-REDUCE dense plan: a key is outside the declared range [0, " +
                      std::to_string(static_cast<std::uint64_t>(key_range)) + ")");
-  // Rank of the first key of every word: a prefix count of present keys.
-  // It fits 32 bits because there are no more groups than pairs.
-  std::vector<std::uint32_t> word_rank(words + 1);
-  parallel::for_each(words, [&](Id w) { word_rank[w] = static_cast<std::uint32_t>(std::popcount(present[w])); });
-  word_rank[words] = 0;
-  const Id g_count = static_cast<Id>(parallel::exclusive_scan(word_rank.data(), word_rank.data(), words + 1));
+  // Rank of the first key of every block of kBlockWords words: a prefix count
+  // of present keys (a rank per block rather than per word keeps this array
+  // small). It fits 32 bits because there are no more groups than pairs.
+  constexpr Id kBlockWords = 8;
+  const Id blocks = (words + kBlockWords - 1) / kBlockWords;
+  std::vector<std::uint32_t> block_rank(blocks + 1);
+  parallel::for_each(blocks, [&](Id b) {
+    std::uint32_t c = 0;
+    for (Id w = b * kBlockWords, e = std::min(words, w + kBlockWords); w < e; ++w)
+      c += static_cast<std::uint32_t>(std::popcount(present[w]));
+    block_rank[b] = c;
+  });
+  block_rank[blocks] = 0;
+  const Id g_count = static_cast<Id>(parallel::exclusive_scan(block_rank.data(), block_rank.data(), blocks + 1));
   groups.unique_keys.resize(g_count);
   auto* unique = groups.unique_keys.data();
-  parallel::for_each(words, [&](Id w) {
-    std::uint64_t bits = present[w];
-    std::uint32_t r = word_rank[w];
-    while (bits) {
-      const int b = std::countr_zero(bits);
-      unique[r++] = static_cast<K>(static_cast<std::uint64_t>(w) * 64 + static_cast<std::uint64_t>(b));
-      bits &= bits - 1;
+  parallel::for_each(blocks, [&](Id b) {
+    std::uint32_t r = block_rank[b];
+    for (Id w = b * kBlockWords, e = std::min(words, w + kBlockWords); w < e; ++w) {
+      std::uint64_t bits = present[w];
+      while (bits) {
+        const int bit = std::countr_zero(bits);
+        unique[r++] = static_cast<K>(static_cast<std::uint64_t>(w) * 64 + static_cast<std::uint64_t>(bit));
+        bits &= bits - 1;
+      }
     }
   });
   groups.index_map.resize(n);
   auto* index_map = groups.index_map.data();
   parallel::for_each(n, [&](Id i) {
     const K k = keys[i];
-    const std::uint64_t below = present[k >> 6] & ((std::uint64_t{1} << (k & 63)) - 1);
-    index_map[i] = word_rank[k >> 6] + static_cast<std::uint32_t>(std::popcount(below));
+    const Id w = static_cast<Id>(k >> 6);
+    std::uint32_t r = block_rank[w / kBlockWords];
+    for (Id v = w - w % kBlockWords; v < w; ++v) r += static_cast<std::uint32_t>(std::popcount(present[v]));
+    const std::uint64_t below = present[w] & ((std::uint64_t{1} << (k & 63)) - 1);
+    index_map[i] = r + static_cast<std::uint32_t>(std::popcount(below));
   });
   if (order == Order::Build) build_order(groups);
   return groups;
