@@ -1,12 +1,12 @@
 #pragma once
 // Marching cubes on a uniform voxel grid, welded by history (paper, Section 4.2).
 //
-// Every triangle corner is generated independently as a key: the implicit id
-// of the grid edge it lies on, 3 * point_id + axis (plus iso_index * 3 * N when
-// several isovalues are contoured at once). KEY-REDUCE groups the corners by
-// key with the dense plan (the key range is known, so no sort), its index map
-// is the connected triangle list, and every point's position and fields are
-// computed once per unique edge from the edge's two samples.
+// Every triangle corner is keyed by the implicit id of the grid edge it lies
+// on, 3 * point_id + axis (plus iso_index * 3 * N when several isovalues are
+// contoured at once). KEY-REDUCE groups the corners by key by direct
+// addressing (the key range is known, so no sort), its index map is the
+// connected triangle list, and every point's position and fields are computed
+// once per unique edge from the edge's two samples.
 //
 // Guarantees:
 //  - inside means value >= iso; NaN samples are outside. A point is created
@@ -17,8 +17,8 @@
 //    a closed isosurface inside the grid is a closed 2-manifold, triangles
 //    wound so that their normals point to lower values (outside).
 //  - output is bit-identical for any thread count.
-//  - Weld::VertexWeld welds the same triangle soup by coordinates instead (the
-//    paper's baseline); its mesh equals the KEY-REDUCE mesh up to point order.
+//  - ContourWeld::VertexWeld welds the same triangle soup by coordinates instead
+//    (the paper's baseline); its mesh equals the KEY-REDUCE mesh up to point order.
 #include <string>
 #include <vector>
 
@@ -28,7 +28,14 @@
 namespace keymesh::generate {
 
 enum class ContourNormals { None, Gradient, Average };
-enum class ContourWeld { KeyReduce, VertexWeld };
+// How the corners of the triangle soup become connected points:
+//  - KeyReduce:     KEY-REDUCE with direct addressing, the present keys read off
+//                   the classification (cut edges), so no soup is written (default);
+//  - KeyReduceSoup: the soup of edge keys, then the generic dense plan;
+//  - KeyReduceSort: the soup of edge keys, then the generic sort plan;
+//  - VertexWeld:    the soup of positions, welded by coordinates (the baseline).
+// All four give the same mesh; the three KEY-REDUCE ones the same point order.
+enum class ContourWeld { KeyReduce, KeyReduceSoup, KeyReduceSort, VertexWeld };
 
 struct ContourOptions {
   std::vector<double> isovalues;        // at least one, all finite
@@ -40,10 +47,10 @@ struct ContourOptions {
 // Where the time went, in seconds, and the sizes involved.
 struct ContourStats {
   double classify = 0;    // inside/outside bits and per-row triangle counts
-  double generate = 0;    // triangle soup: edge keys per corner
-  double weld = 0;        // KEY-REDUCE partition (or VERTEX-WELD)
+  double generate = 0;    // triangles: edge keys per corner, or their groups directly
+  double weld = 0;        // soup partition (or VERTEX-WELD) and the pair order for averaging
   double fields = 0;      // positions, scalars, normals per unique point
-  Id soup_points = 0;     // triangle corners before welding
+  Id soup_points = 0;     // triangle corners (pairs) before welding
   int key_bits = 0;       // width of the keys used (32 or 64)
 };
 
