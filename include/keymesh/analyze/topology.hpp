@@ -20,7 +20,11 @@ struct TopologyReport {
 };
 
 // Deterministic, threaded where it pays. Throws InputError when a cell refers
-// to a point id out of range.
+// to a point id out of range or the offsets are malformed, LimitError past
+// 2^32 - 1 points, cells or corners. Cells with fewer than three ids count as
+// degenerate; an edge from a point to itself (inside a degenerate cell) is
+// not an edge. Duplicate points compare positions with float == (so -0 == +0
+// and NaN never matches).
 TopologyReport check_topology(const SurfaceMesh& mesh);
 
 }  // namespace keymesh::analyze

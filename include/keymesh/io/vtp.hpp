@@ -1,0 +1,28 @@
+#pragma once
+// VTK XML PolyData (.vtp).
+// Write: version 1.0, header_type UInt64, LittleEndian, no compression,
+//        <AppendedData encoding="raw">; Points Float32; Polys connectivity and
+//        offsets Int64; each point field as a Float32 PointData array with its
+//        NumberOfComponents; "Normals" (3 components) marked Normals="Normals",
+//        the first 1-component field marked as Scalars.
+// Read:  files written by keymesh, VTK and ParaView: DataArray format ascii,
+//        binary (base64 inline) and appended (raw or base64), with or without
+//        vtkZLibDataCompressor, UInt32 or UInt64 headers, either byte order;
+//        Points Float32/Float64 (any numeric type); Polys connectivity and
+//        offsets of any integer type; triangle Strips are split into
+//        triangles; Verts and Lines are ignored; every numeric PointData
+//        array becomes a float field (the array marked as Normals
+//        is renamed "Normals"); several Pieces are concatenated, keeping
+//        the fields every piece has.
+#include <string>
+#include <string_view>
+
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh::io {
+
+SurfaceMesh read_vtp(const std::string& path);
+SurfaceMesh parse_vtp(std::string_view data, const std::string& path);
+void write_vtp(const SurfaceMesh& mesh, const std::string& path);
+
+}  // namespace keymesh::io

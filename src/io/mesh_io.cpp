@@ -1,0 +1,38 @@
+#include "keymesh/io/mesh_io.hpp"
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/io/mesh_bytes.hpp"
+#include "keymesh/io/obj.hpp"
+#include "keymesh/io/ply.hpp"
+#include "keymesh/io/stl.hpp"
+#include "keymesh/io/vtp.hpp"
+
+namespace keymesh::io {
+
+namespace {
+constexpr const char* kAccepted = ".ply, .obj, .stl, .vtp";
+
+[[noreturn]] void unknown_extension(const std::string& path, const std::string& ext) {
+  throw InputError(path + ": unknown mesh file extension '" + ext + "' (accepted: " + kAccepted + ")");
+}
+}  // namespace
+
+SurfaceMesh read_mesh(const std::string& path) {
+  const std::string ext = mesh_bytes::lower_extension(path);
+  if (ext == ".ply") return read_ply(path);
+  if (ext == ".obj") return read_obj(path);
+  if (ext == ".stl") return read_stl(path);
+  if (ext == ".vtp") return read_vtp(path);
+  unknown_extension(path, ext);
+}
+
+void write_mesh(const SurfaceMesh& mesh, const std::string& path) {
+  const std::string ext = mesh_bytes::lower_extension(path);
+  if (ext == ".ply") return write_ply(mesh, path);
+  if (ext == ".obj") return write_obj(mesh, path);
+  if (ext == ".stl") return write_stl(mesh, path);
+  if (ext == ".vtp") return write_vtp(mesh, path);
+  unknown_extension(path, ext);
+}
+
+}  // namespace keymesh::io

@@ -1,0 +1,170 @@
+#include "keymesh/io/obj.hpp"
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/io/atomic_file.hpp"
+#include "keymesh/io/mesh_bytes.hpp"
+
+namespace keymesh::io {
+
+using namespace mesh_bytes;
+
+namespace {
+
+// Resolves a 1-based or negative (relative to the current count) OBJ index
+// to 0-based; returns false when it is 0 or out of range.
+bool resolve_index(std::string_view token, std::int64_t count, std::int64_t& out) {
+  std::int64_t v = 0;
+  if (!parse_int64(token, v) || v == 0) return false;
+  out = v > 0 ? v - 1 : count + v;
+  return out >= 0 && out < count;
+}
+
+}  // namespace
+
+SurfaceMesh read_obj(const std::string& path) {
+  const std::string data = read_whole_file(path);
+  return parse_obj(data, path);
+}
+
+SurfaceMesh parse_obj(std::string_view data, const std::string& path) {
+  SurfaceMesh mesh;
+  std::vector<float> normals;                 // vn lines, 3 per normal
+  std::vector<std::int64_t> corner_normal;    // per connectivity entry, -1 when absent
+  bool normals_usable = true;
+  mesh.offsets.push_back(0);
+
+  std::size_t pos = 0;
+  std::size_t line_no = 0;
+  auto fail = [&](const std::string& what) -> InputError {
+    return InputError(path + ": line " + std::to_string(line_no) + ": " + what);
+  };
+  while (pos < data.size()) {
+    ++line_no;
+    std::size_t end = data.find('\n', pos);
+    if (end == std::string_view::npos) end = data.size();
+    std::string_view line = data.substr(pos, end - pos);
+    pos = end + 1;
+    if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+    TokenCursor tok(line);
+    const std::string_view key = tok.next();
+    if (key == "v") {
+      double xyz[3];
+      for (double& c : xyz)
+        if (!parse_double(tok.next(), c)) throw fail("bad vertex coordinate");
+      if (mesh.points.size() / 3 >= std::numeric_limits<PointIndex>::max())
+        throw LimitError(path + ": more than 2^32 - 1 vertices");
+      for (double c : xyz) mesh.points.push_back(static_cast<float>(c));
+    } else if (key == "vn") {
+      double xyz[3];
+      for (double& c : xyz)
+        if (!parse_double(tok.next(), c)) throw fail("bad normal");
+      for (double c : xyz) normals.push_back(static_cast<float>(c));
+    } else if (key == "f") {
+      const auto nv = static_cast<std::int64_t>(mesh.points.size() / 3);
+      const auto nn = static_cast<std::int64_t>(normals.size() / 3);
+      std::size_t corners = 0;
+      for (std::string_view t = tok.next(); !t.empty(); t = tok.next(), ++corners) {
+        // a, a/t, a//n, a/t/n
+        const std::size_t s1 = t.find('/');
+        const std::string_view vpart = t.substr(0, s1);
+        std::int64_t v = 0;
+        if (!resolve_index(vpart, nv, v))
+          throw fail("face vertex index '" + std::string(vpart.substr(0, 30)) + "' out of range (" +
+                     std::to_string(nv) + " vertices so far)");
+        mesh.connectivity.push_back(static_cast<PointIndex>(v));
+        std::int64_t n = -1;
+        if (s1 != std::string_view::npos) {
+          const std::size_t s2 = t.find('/', s1 + 1);
+          if (s2 != std::string_view::npos && s2 + 1 < t.size()) {
+            if (!resolve_index(t.substr(s2 + 1), nn, n)) throw fail("face normal index out of range");
+          }
+        }
+        if (n < 0) normals_usable = false;
+        if (normals_usable) corner_normal.push_back(n);
+      }
+      if (corners < 3) throw fail("face with " + std::to_string(corners) + " vertices (at least 3 needed)");
+      mesh.offsets.push_back(mesh.connectivity.size());
+    }
+    // Everything else (vt, g, o, s, usemtl, mtllib, l, p, ...) carries no surface geometry.
+  }
+  if (mesh.offsets.size() == 1) mesh.offsets.clear();
+  compact_offsets(mesh);
+
+  // Normals become a point field only when each point gets exactly one normal.
+  if (normals_usable && !normals.empty() && !mesh.connectivity.empty()) {
+    const std::size_t np = mesh.points.size() / 3;
+    std::vector<std::int64_t> of_point(np, -1);
+    bool consistent = true;
+    for (std::size_t i = 0; i < mesh.connectivity.size() && consistent; ++i) {
+      std::int64_t& slot = of_point[mesh.connectivity[i]];
+      if (slot < 0) slot = corner_normal[i];
+      else if (slot != corner_normal[i]) consistent = false;
+    }
+    for (std::size_t p = 0; p < np && consistent; ++p)
+      if (of_point[p] < 0) consistent = false;  // unused point: no normal to give it
+    if (consistent) {
+      Field f{"Normals", 3, std::vector<float>(3 * np)};
+      for (std::size_t p = 0; p < np; ++p)
+        for (int a = 0; a < 3; ++a) f.values[3 * p + a] = normals[3 * of_point[p] + a];
+      mesh.point_fields.push_back(std::move(f));
+    }
+  }
+  return mesh;
+}
+
+void write_obj(const SurfaceMesh& mesh, const std::string& path) {
+  validate_mesh(mesh, path);
+  const Field* normals = normals_field(mesh);
+  const Id n = mesh.num_points();
+  const Id cells = mesh.num_cells();
+  AtomicFile file(path);
+  std::string buf = "# written by keymesh\n";
+  constexpr std::size_t kFlush = 1 << 20;
+  auto flush = [&] {
+    if (buf.size() >= kFlush) {
+      file.write(buf);
+      buf.clear();
+    }
+  };
+  for (Id i = 0; i < n; ++i) {
+    buf += 'v';
+    for (int a = 0; a < 3; ++a) {
+      buf += ' ';
+      append_float_text(buf, mesh.points[3 * i + a]);
+    }
+    buf += '\n';
+    flush();
+  }
+  if (normals)
+    for (Id i = 0; i < n; ++i) {
+      buf += "vn";
+      for (int a = 0; a < 3; ++a) {
+        buf += ' ';
+        append_float_text(buf, normals->values[3 * i + a]);
+      }
+      buf += '\n';
+      flush();
+    }
+  for (Id c = 0; c < cells; ++c) {
+    buf += 'f';
+    for (std::uint64_t k = mesh.cell_begin(c); k < mesh.cell_end(c); ++k) {
+      buf += ' ';
+      const std::uint64_t id = std::uint64_t(mesh.connectivity[k]) + 1;
+      append_uint_text(buf, id);
+      if (normals) {
+        buf += "//";
+        append_uint_text(buf, id);
+      }
+    }
+    buf += '\n';
+    flush();
+  }
+  file.write(buf);
+  file.commit();
+}
+
+}  // namespace keymesh::io

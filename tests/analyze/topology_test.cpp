@@ -1,0 +1,227 @@
+#include "keymesh/analyze/topology.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/parallel/threads.hpp"
+
+using namespace keymesh;
+using analyze::check_topology;
+using analyze::TopologyReport;
+
+namespace {
+
+SurfaceMesh make_mesh(std::vector<float> pts, std::vector<PointIndex> conn, std::vector<std::uint64_t> offsets = {}) {
+  SurfaceMesh m;
+  m.points = std::move(pts);
+  m.connectivity = std::move(conn);
+  m.offsets = std::move(offsets);
+  return m;
+}
+
+SurfaceMesh tetrahedron() {
+  return make_mesh({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
+}
+
+SurfaceMesh octahedron() {
+  // +x -x +y -y +z -z
+  SurfaceMesh m = make_mesh({1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1}, {});
+  const PointIndex xs[2] = {0, 1}, ys[2] = {2, 3}, zs[2] = {4, 5};
+  for (PointIndex x : xs)
+    for (PointIndex y : ys)
+      for (PointIndex z : zs) m.connectivity.insert(m.connectivity.end(), {x, y, z});
+  return m;
+}
+
+std::vector<float> cube_points() {
+  std::vector<float> p;
+  for (int i = 0; i < 8; ++i) p.insert(p.end(), {float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
+  return p;
+}
+
+// The six faces of the unit cube as quads (point i = (i&1, i>>1&1, i>>2&1)).
+const std::vector<PointIndex> kCubeQuads = {0, 2, 3, 1, 4, 5, 7, 6, 0, 1, 5, 4, 2, 6, 7, 3, 0, 4, 6, 2, 1, 3, 7, 5};
+
+SurfaceMesh cube_triangles() {
+  SurfaceMesh m = make_mesh(cube_points(), {});
+  for (int f = 0; f < 6; ++f) {
+    const PointIndex* q = &kCubeQuads[4 * f];
+    m.connectivity.insert(m.connectivity.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  }
+  return m;
+}
+
+SurfaceMesh torus(int nu, int nv) {
+  SurfaceMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * std::numbers::pi * i / nu, v = 2 * std::numbers::pi * j / nv;
+      m.points.insert(m.points.end(), {float((3 + std::cos(v)) * std::cos(u)), float((3 + std::cos(v)) * std::sin(u)),
+                                       float(std::sin(v))});
+    }
+  auto id = [&](int i, int j) { return PointIndex((i % nu) * nv + (j % nv)); };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j)
+      m.connectivity.insert(m.connectivity.end(),
+                            {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+  return m;
+}
+
+void expect_closed(const TopologyReport& r, Id chi) {
+  EXPECT_TRUE(r.closed_manifold);
+  EXPECT_EQ(r.boundary_edges, 0);
+  EXPECT_EQ(r.nonmanifold_edges, 0);
+  EXPECT_EQ(r.nonmanifold_vertices, 0);
+  EXPECT_EQ(r.degenerate_cells, 0);
+  EXPECT_EQ(r.euler_characteristic, chi);
+  EXPECT_EQ(r.components, 1);
+}
+
+}  // namespace
+
+TEST(TopologyTest, Tetrahedron) {
+  const auto r = check_topology(tetrahedron());
+  EXPECT_EQ(r.points, 4);
+  EXPECT_EQ(r.cells, 4);
+  EXPECT_EQ(r.edges, 6);
+  expect_closed(r, 2);
+}
+
+TEST(TopologyTest, Octahedron) {
+  const auto r = check_topology(octahedron());
+  EXPECT_EQ(r.edges, 12);
+  expect_closed(r, 2);
+}
+
+TEST(TopologyTest, CubeOfTwelveTriangles) {
+  const auto r = check_topology(cube_triangles());
+  EXPECT_EQ(r.cells, 12);
+  EXPECT_EQ(r.edges, 18);
+  expect_closed(r, 2);
+}
+
+TEST(TopologyTest, CubeOfSixQuads) {
+  const auto r = check_topology(make_mesh(cube_points(), kCubeQuads, {0, 4, 8, 12, 16, 20, 24}));
+  EXPECT_EQ(r.cells, 6);
+  EXPECT_EQ(r.edges, 12);
+  expect_closed(r, 2);
+}
+
+TEST(TopologyTest, Torus) {
+  const auto r = check_topology(torus(12, 8));
+  EXPECT_EQ(r.points, 96);
+  EXPECT_EQ(r.edges, 3 * 96);
+  EXPECT_EQ(r.duplicate_points, 0);
+  expect_closed(r, 0);
+}
+
+TEST(TopologyTest, SingleTriangle) {
+  const auto r = check_topology(make_mesh({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2}));
+  EXPECT_EQ(r.edges, 3);
+  EXPECT_EQ(r.boundary_edges, 3);
+  EXPECT_EQ(r.nonmanifold_vertices, 0);  // a single open fan at each corner is manifold
+  EXPECT_EQ(r.euler_characteristic, 1);
+  EXPECT_EQ(r.components, 1);
+  EXPECT_FALSE(r.closed_manifold);
+}
+
+TEST(TopologyTest, TwoTetrahedraSharingOneVertex) {
+  SurfaceMesh m = tetrahedron();
+  // Second tetrahedron: point 0 shared, points 4..6 new, mirrored through the origin.
+  m.points.insert(m.points.end(), {-1, 0, 0, 0, -1, 0, 0, 0, -1});
+  m.connectivity.insert(m.connectivity.end(), {0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5});
+  const auto r = check_topology(m);
+  EXPECT_EQ(r.points, 7);
+  EXPECT_EQ(r.edges, 12);
+  EXPECT_EQ(r.boundary_edges, 0);
+  EXPECT_EQ(r.nonmanifold_edges, 0);
+  EXPECT_EQ(r.nonmanifold_vertices, 1);
+  EXPECT_EQ(r.components, 1);
+  EXPECT_EQ(r.euler_characteristic, 7 - 12 + 8);
+  EXPECT_FALSE(r.closed_manifold);
+}
+
+TEST(TopologyTest, ThreeTrianglesOnOneEdge) {
+  const auto r = check_topology(
+      make_mesh({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1}, {0, 1, 2, 1, 0, 3, 0, 1, 4}));
+  EXPECT_EQ(r.edges, 7);
+  EXPECT_EQ(r.nonmanifold_edges, 1);
+  EXPECT_EQ(r.boundary_edges, 6);
+  EXPECT_EQ(r.nonmanifold_vertices, 0);  // the fans are joined through the shared edge
+  EXPECT_EQ(r.euler_characteristic, 5 - 7 + 3);
+  EXPECT_FALSE(r.closed_manifold);
+}
+
+TEST(TopologyTest, DuplicateAndUnusedPoints) {
+  SurfaceMesh m = tetrahedron();
+  m.points.insert(m.points.end(), {0, 0, 0});       // same position as point 0, unused
+  m.points.insert(m.points.end(), {5, 5, 5});       // unused
+  m.points.insert(m.points.end(), {-0.0f, 0, 0});   // -0 == +0: another duplicate of point 0
+  const auto r = check_topology(m);
+  EXPECT_EQ(r.points, 7);
+  EXPECT_EQ(r.duplicate_points, 2);
+  EXPECT_EQ(r.unused_points, 3);
+  expect_closed(r, 2);  // unused points do not count in V
+}
+
+TEST(TopologyTest, DegenerateCell) {
+  SurfaceMesh m = make_mesh({0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5, 6, 5, 5}, {0, 1, 2, 3, 3, 4});
+  const auto r = check_topology(m);
+  EXPECT_EQ(r.degenerate_cells, 1);
+  EXPECT_EQ(r.components, 2);
+  EXPECT_FALSE(r.closed_manifold);
+  // A polygon that revisits a point is degenerate too.
+  SurfaceMesh p = make_mesh({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 0, 2}, {0, 4});
+  EXPECT_EQ(check_topology(p).degenerate_cells, 1);
+}
+
+TEST(TopologyTest, OutOfRangeIdThrows) {
+  SurfaceMesh m = tetrahedron();
+  m.connectivity[5] = 4;
+  EXPECT_THROW(check_topology(m), InputError);
+  SurfaceMesh bad_offsets = make_mesh(cube_points(), kCubeQuads, {0, 4, 8, 12, 16, 20, 25});
+  EXPECT_THROW(check_topology(bad_offsets), InputError);
+}
+
+TEST(TopologyTest, EmptyMesh) {
+  const auto r = check_topology(SurfaceMesh{});
+  EXPECT_EQ(r.cells, 0);
+  EXPECT_EQ(r.components, 0);
+  EXPECT_FALSE(r.closed_manifold);
+}
+
+TEST(TopologyTest, TwoComponentsOpenBoundary) {
+  SurfaceMesh m = torus(6, 5);
+  const Id tris = m.num_cells();
+  m.connectivity.resize(3 * (tris - 1));  // punch one hole: 3 boundary edges
+  SurfaceMesh t = tetrahedron();
+  const auto base = PointIndex(m.num_points());
+  m.points.insert(m.points.end(), t.points.begin(), t.points.end());
+  for (PointIndex id : t.connectivity) m.connectivity.push_back(id + base);
+  const auto r = check_topology(m);
+  EXPECT_EQ(r.components, 2);
+  EXPECT_EQ(r.boundary_edges, 3);
+  EXPECT_EQ(r.nonmanifold_vertices, 0);
+  EXPECT_EQ(r.euler_characteristic, (0 - 1) + 2);
+}
+
+// Performance is measured by benchmarks, not here: this checks a large mesh
+// gives exact counts and the same report at 1 and N threads.
+TEST(TopologyTest, LargeTorusIsExactAndDeterministic) {
+  const SurfaceMesh m = torus(1000, 1500);  // 3 million triangles
+  const int saved = parallel::thread_count();
+  const auto r = check_topology(m);
+  EXPECT_EQ(r.edges, 3 * 1000 * 1500);
+  expect_closed(r, 0);
+  parallel::set_thread_count(1);
+  const auto r1 = check_topology(m);
+  parallel::set_thread_count(saved);
+  EXPECT_EQ(r1.edges, r.edges);
+  EXPECT_EQ(r1.components, r.components);
+  EXPECT_EQ(r1.duplicate_points, r.duplicate_points);
+  EXPECT_EQ(r1.nonmanifold_vertices, r.nonmanifold_vertices);
+}
