@@ -1,6 +1,7 @@
 // Times marching cubes + weld on the Spherical Distance field in-process (no
 // file I/O), for the paper's Table 2 rows. Prints one JSON line per case:
-//   contour_bench --size 512 --threads 2 --reps 5 [--weld keyreduce|vertexweld]
+//   contour_bench --size 512 --threads 2 --reps 5
+//                 [--weld keyreduce|keyreduce-sort|vertexweld]
 //                 [--normals none|gradient|average] [--iso V]
 #include <sys/resource.h>
 
@@ -43,7 +44,9 @@ int main(int argc, char** argv) {
   const ImageGrid grid = generate::spherical_distance(size);
   generate::ContourOptions opt;
   opt.isovalues = {iso};
-  opt.weld = weld == "vertexweld" ? generate::ContourWeld::VertexWeld : generate::ContourWeld::KeyReduce;
+  opt.weld = weld == "vertexweld"       ? generate::ContourWeld::VertexWeld
+             : weld == "keyreduce-sort" ? generate::ContourWeld::KeyReduceSort
+                                        : generate::ContourWeld::KeyReduce;
   opt.normals = normals == "average"    ? generate::ContourNormals::Average
                 : normals == "gradient" ? generate::ContourNormals::Gradient
                                         : generate::ContourNormals::None;

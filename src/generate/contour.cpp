@@ -195,160 +195,6 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::
   return triangles;
 }
 
-// ---------------------------------------------------------------------------
-// KEY-REDUCE by direct addressing with the occupancy read off the
-// classification (the default weld). An edge key 3 * point_id + axis is
-// present exactly when the edge is cut, i.e. when its two inside bits differ,
-// so the set of present keys needs no marking pass: each grid row of points
-// counts the cut edges it owns, an exclusive scan gives every row's first
-// group, and a key's group is its row's first group plus its rank among the
-// row's cut edges (popcounts of the cut masks below it). Groups come out in
-// increasing key order, exactly as partition_dense() numbers them, so the mesh
-// is identical to the generic path's (tests check it) without writing,
-// marking or re-reading a soup of keys.
-
-// Cut edges owned by the points of word q of point row (j, k).
-struct CutMasks {
-  std::uint64_t x, y, z;
-};
-
-inline CutMasks cut_masks(const InsideBits& bits, const GridShape& s, Id j, Id k, Id q) {
-  const std::uint64_t* r = bits.row(j, k, s.ny);
-  const std::uint64_t a = r[q];
-  const std::uint64_t a1 = (a >> 1) | (r[q + 1] << 63);
-  const Id valid_x = s.nx - 1 - 64 * q;  // x-edges start at i < nx - 1
-  const std::uint64_t mx = valid_x >= 64 ? ~std::uint64_t{0} : (valid_x <= 0 ? 0 : (std::uint64_t{1} << valid_x) - 1);
-  CutMasks c;
-  c.x = (a ^ a1) & mx;
-  c.y = j + 1 < s.ny ? a ^ bits.row(j + 1, k, s.ny)[q] : 0;  // bits past nx are zero in every row
-  c.z = k + 1 < s.nz ? a ^ bits.row(j, k + 1, s.ny)[q] : 0;
-  return c;
-}
-
-// Walks one point row in increasing i, answering "group of edge (i, axis)".
-// A voxel asks about points i and i + 1, so the word before the current one
-// stays cached too.
-struct RowRanker {
-  const InsideBits* bits;
-  const GridShape* s;
-  Id j, k;
-  std::uint32_t base;           // group of the row's first cut edge
-  Id word = -1;                 // word whose masks are cached in m
-  std::uint32_t prefix = 0;     // cut edges in words before `word`
-  CutMasks m{0, 0, 0};
-  std::uint32_t prev_prefix = 0;// the same for word - 1
-  CutMasks prev{0, 0, 0};
-
-  std::uint32_t group(Id i, int axis) {
-    const Id w = i >> 6;
-    while (word < w) {
-      prev_prefix = prefix;
-      prev = m;
-      if (word >= 0) prefix += static_cast<std::uint32_t>(std::popcount(m.x) + std::popcount(m.y) + std::popcount(m.z));
-      ++word;
-      m = cut_masks(*bits, *s, j, k, word);
-    }
-    const bool is_prev = w < word;  // only ever word - 1
-    const CutMasks& c = is_prev ? prev : m;
-    const int b = static_cast<int>(i & 63);
-    const std::uint64_t below = (std::uint64_t{1} << b) - 1;
-    std::uint32_t r = (is_prev ? prev_prefix : prefix) +
-                      static_cast<std::uint32_t>(std::popcount(c.x & below) + std::popcount(c.y & below) +
-                                                 std::popcount(c.z & below));
-    if (axis >= 1) r += static_cast<std::uint32_t>((c.x >> b) & 1);
-    if (axis >= 2) r += static_cast<std::uint32_t>((c.y >> b) & 1);
-    return base + r;
-  }
-};
-
-// One isovalue: appends its triangles (as group indices, offset by the
-// points of earlier isovalues) to `connectivity` and its points' keys, in
-// increasing order, to `point_keys`.
-template <class K>
-void weld_by_grid_ranks(const InsideBits& bits, const GridShape& s, K key_offset, std::vector<K>& point_keys,
-                        std::vector<PointIndex>& connectivity, ContourStats& st) {
-  const auto& table = marching_cubes_table();
-  const Id point_rows = s.ny * s.nz;
-  const Id voxel_rows = (s.ny - 1) * (s.nz - 1);
-  const Id words = (s.nx + 63) / 64;
-  auto t0 = Clock::now();
-  std::vector<Id> row_points(point_rows + 1, 0), row_triangles(voxel_rows + 1, 0);
-  parallel::for_each_dynamic(point_rows, [&](Id r) {
-    const Id j = r % s.ny, k = r / s.ny;
-    Id cut = 0;
-    for (Id q = 0; q < words; ++q) {
-      const CutMasks m = cut_masks(bits, s, j, k, q);
-      cut += std::popcount(m.x) + std::popcount(m.y) + std::popcount(m.z);
-    }
-    row_points[r] = cut;
-    if (j + 1 < s.ny && k + 1 < s.nz) {
-      Id count = 0;
-      for_each_cut_voxel(bits, s, j, k, [&](Id, unsigned cube_case) { count += table.triangle_count[cube_case]; });
-      row_triangles[j + k * (s.ny - 1)] = count;
-    }
-  }, 8);
-  const Id first_point = static_cast<Id>(point_keys.size());
-  const Id points = parallel::exclusive_scan(row_points.data(), row_points.data(), point_rows + 1);
-  const Id triangles = parallel::exclusive_scan(row_triangles.data(), row_triangles.data(), voxel_rows + 1);
-  const Id first_corner = static_cast<Id>(connectivity.size());
-  if (first_point + points > Id{std::numeric_limits<PointIndex>::max()} ||
-      first_corner + 3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
-    throw LimitError("contour: " + std::to_string(first_point + points) + " points and " +
-                     std::to_string(first_corner / 3 + triangles) +
-                     " triangles exceed the supported 2^32 - 1 points and corners");
-  st.classify += seconds_since(t0);
-
-  t0 = Clock::now();
-  point_keys.resize(static_cast<std::size_t>(first_point + points));
-  connectivity.resize(static_cast<std::size_t>(first_corner + 3 * triangles));
-  K* keys_out = point_keys.data() + first_point;
-  parallel::for_each_dynamic(point_rows, [&](Id r) {
-    const Id j = r % s.ny, k = r / s.ny;
-    K* o = keys_out + row_points[r];
-    const K row_key = key_offset + static_cast<K>(3 * (j * s.nx + k * s.nxy));
-    for (Id q = 0; q < words; ++q) {
-      const CutMasks m = cut_masks(bits, s, j, k, q);
-      std::uint64_t any = m.x | m.y | m.z;
-      while (any) {
-        const int b = std::countr_zero(any);
-        any &= any - 1;
-        const K key = row_key + static_cast<K>(3 * (64 * q + b));
-        if ((m.x >> b) & 1) *o++ = key;
-        if ((m.y >> b) & 1) *o++ = key + 1;
-        if ((m.z >> b) & 1) *o++ = key + 2;
-      }
-    }
-  }, 8);
-  PointIndex* tri_out = connectivity.data() + first_corner;
-  parallel::for_each_dynamic(voxel_rows, [&](Id v) {
-    const Id j = v % (s.ny - 1), k = v / (s.ny - 1);
-    const auto base = [&](Id jj, Id kk) {
-      return static_cast<std::uint32_t>(first_point + row_points[kk * s.ny + jj]);
-    };
-    RowRanker rows[4] = {{&bits, &s, j, k, base(j, k)},
-                         {&bits, &s, j + 1, k, base(j + 1, k)},
-                         {&bits, &s, j, k + 1, base(j, k + 1)},
-                         {&bits, &s, j + 1, k + 1, base(j + 1, k + 1)}};
-    PointIndex* o = tri_out + 3 * row_triangles[v];
-    for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
-      const int corners = 3 * table.triangle_count[cube_case];
-      const auto& edges = table.triangle_edges[cube_case];
-      std::uint32_t group[12];
-      unsigned known = 0;
-      for (int c = 0; c < corners; ++c) {
-        const int e = edges[c];
-        if (!((known >> e) & 1)) {
-          const CubeEdge& ce = table.edges[e];
-          group[e] = rows[ce.dy + 2 * ce.dz].group(i + ce.dx, ce.axis);
-          known |= 1u << e;
-        }
-        *o++ = group[e];
-      }
-    });
-  }, 8);
-  st.generate += seconds_since(t0);
-}
-
 // Position, scalar and gradient of the point on the edge named by a key.
 template <class T>
 struct EdgeInterpolator {
@@ -477,25 +323,11 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
   const bool average = opt.normals == ContourNormals::Average;
 
   SurfaceMesh mesh;
-  std::vector<K> point_key;        // the key of every output point
-  keyreduce::Groups<K> groups;     // with the pair order when normals are averaged
+  // One group per output point; groups.unique_keys[p] is the key of point p.
+  // The pair order is built only when normals are averaged.
+  keyreduce::Groups<K> groups;
   InsideBits bits;
-  if (opt.weld == ContourWeld::KeyReduce) {
-    for (Id iso_index = 0; iso_index < n_iso; ++iso_index) {
-      auto t0 = Clock::now();
-      classify(samples, s, InsideTest<T>(opt.isovalues[iso_index]), bits);
-      st.classify += seconds_since(t0);
-      weld_by_grid_ranks<K>(bits, s, static_cast<K>(iso_index) * keys_per_iso, point_key, mesh.connectivity, st);
-    }
-    st.soup_points = static_cast<Id>(mesh.connectivity.size());
-    if (average) {
-      auto t0 = Clock::now();
-      groups.unique_keys = point_key;
-      groups.index_map = mesh.connectivity;
-      keyreduce::build_order(groups);
-      st.weld += seconds_since(t0);
-    }
-  } else {
+  {
     // The triangle soup: one key per triangle corner.
     std::vector<K> soup;
     for (Id iso_index = 0; iso_index < n_iso; ++iso_index) {
@@ -508,12 +340,11 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
     st.soup_points = corners;
     auto t0 = Clock::now();
     const auto order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
-    if (opt.weld == ContourWeld::KeyReduceSoup || opt.weld == ContourWeld::KeyReduceSort) {
-      groups = opt.weld == ContourWeld::KeyReduceSoup
+    if (opt.weld == ContourWeld::KeyReduce || opt.weld == ContourWeld::KeyReduceSort) {
+      groups = opt.weld == ContourWeld::KeyReduce
                    ? keyreduce::partition_dense(soup.data(), corners, key_range, order)
                    : keyreduce::partition_sort(soup.data(), corners, parallel::bits_needed<K>(key_range - 1), order);
-      point_key = groups.unique_keys;
-      mesh.connectivity = groups.index_map;
+      mesh.connectivity = std::move(groups.index_map);  // the index map is the triangle list
     } else {
       // VERTEX-WELD: the soup a plain marching cubes writes, a position per
       // corner, welded by coordinates.
@@ -522,11 +353,10 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
       weld::WeldResult welded = weld::vertex_weld(soup_xyz.data(), corners);
       mesh.points = std::move(welded.points);
       mesh.connectivity = std::move(welded.index_map);
-      point_key.resize(welded.first.size());
-      parallel::for_each(static_cast<Id>(point_key.size()), [&](Id p) { point_key[p] = soup[welded.first[p]]; });
+      groups.unique_keys.resize(welded.first.size());
+      parallel::for_each(groups.num_groups(), [&](Id p) { groups.unique_keys[p] = soup[welded.first[p]]; });
       if (average) {
         // Average over the coordinate-welded groups with KEY-REDUCE's reduction.
-        groups.unique_keys = point_key;
         groups.index_map = mesh.connectivity;
         keyreduce::build_order(groups);
       }
@@ -536,7 +366,8 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
   bits.words = {};
 
   auto t0 = Clock::now();
-  const Id points = static_cast<Id>(point_key.size());
+  const Id points = groups.num_groups();
+  const K* point_key = groups.unique_keys.data();
   if (mesh.points.empty()) {
     mesh.points.resize(3 * points);
     parallel::for_each(points, [&](Id p) { interp.position(interp.locate(point_key[p]), &mesh.points[3 * p]); });

@@ -29,13 +29,12 @@ namespace keymesh::generate {
 
 enum class ContourNormals { None, Gradient, Average };
 // How the corners of the triangle soup become connected points:
-//  - KeyReduce:     KEY-REDUCE with direct addressing, the present keys read off
-//                   the classification (cut edges), so no soup is written (default);
-//  - KeyReduceSoup: the soup of edge keys, then the generic dense plan;
-//  - KeyReduceSort: the soup of edge keys, then the generic sort plan;
+//  - KeyReduce:     KEY-REDUCE, dense plan: the key range is known, so groups
+//                   are found by direct addressing, no sort (default);
+//  - KeyReduceSort: KEY-REDUCE, sort plan (radix sort of the significant key bits);
 //  - VertexWeld:    the soup of positions, welded by coordinates (the baseline).
-// All four give the same mesh; the three KEY-REDUCE ones the same point order.
-enum class ContourWeld { KeyReduce, KeyReduceSoup, KeyReduceSort, VertexWeld };
+// All three give the same mesh; the two KEY-REDUCE plans the same point order.
+enum class ContourWeld { KeyReduce, KeyReduceSort, VertexWeld };
 
 struct ContourOptions {
   std::vector<double> isovalues;        // at least one, all finite
@@ -47,8 +46,8 @@ struct ContourOptions {
 // Where the time went, in seconds, and the sizes involved.
 struct ContourStats {
   double classify = 0;    // inside/outside bits and per-row triangle counts
-  double generate = 0;    // triangles: edge keys per corner, or their groups directly
-  double weld = 0;        // soup partition (or VERTEX-WELD) and the pair order for averaging
+  double generate = 0;    // triangle soup: an edge key per corner
+  double weld = 0;        // KEY-REDUCE partition (or VERTEX-WELD), with the pair order when averaging
   double fields = 0;      // positions, scalars, normals per unique point
   Id soup_points = 0;     // triangle corners (pairs) before welding
   int key_bits = 0;       // width of the keys used (32 or 64)
