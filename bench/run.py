@@ -1,0 +1,172 @@
+#!/usr/bin/env python3
+"""`make bench`: marching cubes + weld on the paper's Spherical Distance field,
+keymesh beside its peers in one run (the paper's Table 2, structured rows).
+
+Writes bench/results/latest.jsonl (one JSON object per case) and prints a
+table of medians with ratios. `make bench QUICK=1` runs 128^3 and 256^3 only.
+
+Every process (keymesh and the VTK peer) runs with glibc.malloc.hugetlb=1 in
+GLIBC_TUNABLES, the setting keymesh gives itself, so that neither side is
+measured paying 4 KiB page faults that the other does not.
+"""
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SYSTEM_PYTHON = "/usr/bin/python3"
+
+
+def env_hugepages():
+    env = dict(os.environ)
+    t = env.get("GLIBC_TUNABLES", "")
+    if "glibc.malloc.hugetlb" not in t:
+        env["GLIBC_TUNABLES"] = (t + ":" if t else "") + "glibc.malloc.hugetlb=1"
+    return env
+
+
+def run_json(cmd):
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env_hugepages())
+    if p.returncode != 0:
+        sys.stderr.write(p.stderr)
+        raise SystemExit(f"bench: {' '.join(cmd)} failed")
+    return [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]
+
+
+def machine():
+    cpu = "unknown"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
+    cxx = subprocess.run(["c++", "--version"], capture_output=True, text=True).stdout.splitlines()[0]
+    return {"cpu": cpu, "cores": os.cpu_count(), "memory_gib": round(mem, 1), "compiler": cxx,
+            "date": time.strftime("%Y-%m-%d"), "kernel": platform.release()}
+
+
+def cli_cold(keymesh, size, iso, threads, reps, workdir):
+    """`keymesh contour` as a user runs it: a fresh process per run; seconds.contour from --report."""
+    vti = os.path.join(workdir, f"sphere{size}.vti")
+    if not os.path.exists(vti):
+        subprocess.run([keymesh, "generate", "sphere", "--size", str(size), "-o", vti, "--quiet"], check=True)
+    times, rss = [], 0
+    for _ in range(reps):
+        rep = os.path.join(workdir, "r.json")
+        subprocess.run([keymesh, "contour", vti, "-o", os.path.join(workdir, "o.vtp"), "--iso", str(iso),
+                        "--threads", str(threads), "--no-scalars", "--report", rep, "--quiet"], check=True)
+        r = json.load(open(rep))
+        times.append(r["seconds"]["contour"])
+        rss = max(rss, r["peak_rss_mib"])
+        points, cells = r["points"], r["cells"]
+    return {"bench": "contour", "tool": "keymesh-cli", "size": size, "iso": iso, "threads": threads,
+            "weld": "keyreduce", "normals": "none", "points": points, "cells": cells,
+            "median": statistics.median(times), "min": min(times), "max": max(times), "reps": reps,
+            "peak_rss_mib": rss}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default="build")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--reps", type=int, default=0)
+    ap.add_argument("--out", default=os.path.join(HERE, "results", "latest.jsonl"))
+    a = ap.parse_args()
+    sizes = [128, 256] if a.quick else [128, 256, 512]
+    reps = a.reps or (5 if a.quick else 7)
+    threads_all = os.cpu_count() or 1
+    bench = os.path.join(a.build, "contour_bench")
+    keymesh = os.path.join(a.build, "keymesh")
+    rows = []
+    info = machine()
+    print(f"keymesh bench on {info['cpu']}, {info['cores']} cores, {info['memory_gib']} GiB, {info['date']}")
+    print(f"sizes {sizes}, {reps} repetitions per case; expect about {2 if a.quick else 6} minutes", flush=True)
+    with tempfile.TemporaryDirectory(prefix="keymesh-bench-") as work:
+        for n in sizes:
+            iso = n / 2 - 1 + 0.001
+            for threads in sorted({1, threads_all}):
+                for weld, normals in (("vertexweld", "none"), ("keyreduce-sort", "none"),
+                                      ("keyreduce", "none"), ("keyreduce", "average")):
+                    print(f"  {n}^3 keymesh {weld} normals={normals} threads={threads}", flush=True)
+                    r = run_json([bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps),
+                                  "--weld", weld, "--normals", normals])[0]
+                    r["tool"] = "keymesh"
+                    rows.append(r)
+            print(f"  {n}^3 keymesh CLI (fresh process per run)", flush=True)
+            rows.append(cli_cold(keymesh, n, iso, threads_all, reps, work))
+            print(f"  {n}^3 VTK", flush=True)
+            try:
+                rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
+                                  "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps)])
+            except SystemExit as e:
+                print(f"  VTK peer unavailable: {e}")
+    for r in rows:
+        r["machine"] = info
+    os.makedirs(os.path.dirname(a.out), exist_ok=True)
+    with open(a.out, "w") as f:
+        for r in rows:
+            f.write(json.dumps(r) + "\n")
+    summarize(rows, sizes, threads_all)
+    print(f"\nresults: {a.out}")
+
+
+def find(rows, **kw):
+    for r in rows:
+        if all(r.get(k) == v for k, v in kw.items()):
+            return r
+    return None
+
+
+def summarize(rows, sizes, threads):
+    print("\nMarching cubes + weld, Spherical Distance at N/2 - 1 + 0.001 (medians, ms; min-max)")
+    print(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in sizes))
+
+    def line(label, **kw):
+        cells = []
+        for n in sizes:
+            r = find(rows, size=n, **kw)
+            cells.append(f"{r['median'] * 1e3:8.1f} ({r['min'] * 1e3:.0f}-{r['max'] * 1e3:.0f})" if r else " " * 18)
+        print(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+
+    for t in sorted({1, threads}):
+        line(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", weld="vertexweld", threads=t)
+        line(f"keymesh KEY-REDUCE sort plan, {t} thr", tool="keymesh", weld="keyreduce-sort", threads=t)
+        line(f"keymesh KEY-REDUCE dense plan, no merge, {t} thr", tool="keymesh", weld="keyreduce", normals="none", threads=t)
+        line(f"keymesh KEY-REDUCE averaging, {t} thr", tool="keymesh", weld="keyreduce", normals="average", threads=t)
+    line(f"keymesh CLI seconds.contour, {threads} thr", tool="keymesh-cli")
+    line(f"vtkFlyingEdges3D, {threads} thr", tool="vtkFlyingEdges3D")
+    line("vtkMarchingCubes, 1 thr", tool="vtkMarchingCubes")
+    print("\nRatios (higher is better for keymesh)")
+    for n in sizes:
+        kr = find(rows, size=n, tool="keymesh", weld="keyreduce", normals="none", threads=threads)
+        av = find(rows, size=n, tool="keymesh", weld="keyreduce", normals="average", threads=threads)
+        vw = find(rows, size=n, tool="keymesh", weld="vertexweld", threads=threads)
+        cli = find(rows, size=n, tool="keymesh-cli")
+        fe = find(rows, size=n, tool="vtkFlyingEdges3D")
+        parts = []
+        if kr and fe:
+            parts.append(f"vtkFlyingEdges3D / keymesh {fe['median'] / kr['median']:.2f}x")
+        if cli and fe:
+            parts.append(f"vtkFlyingEdges3D / keymesh CLI {fe['median'] / cli['median']:.2f}x")
+        if kr and vw:
+            parts.append(f"VERTEX-WELD / KEY-REDUCE {vw['median'] / kr['median']:.2f}x")
+        if kr and av:
+            parts.append(f"averaging overhead {100 * (av['median'] / kr['median'] - 1):+.0f}%")
+        print(f"  {n}^3, {threads} threads: " + "; ".join(parts))
+    peak = [r for r in rows if r.get("size") == sizes[-1]]
+    print(f"\nPeak RSS at {sizes[-1]}^3 (MiB): " +
+          ", ".join(f"{r['tool']} {r.get('weld', '')} {r.get('normals', '')} {r['peak_rss_mib']:.0f}".replace("  ", " ")
+                    for r in peak if r.get("threads") == threads or r["tool"] == "vtkMarchingCubes"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,90 @@
+#pragma once
+// The parts of VTK's XML file formats (.vtp, .vti, .vtu) every reader shares:
+// a minimal XML parser and the DataArray decoder (ascii, base64 binary,
+// appended raw or base64; vtkZLibDataCompressor; UInt32/UInt64 headers;
+// either byte order), with every size checked against the bytes present.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "keymesh/io/mesh_bytes.hpp"
+
+namespace keymesh::io::vtk_xml {
+
+using mesh_bytes::Scalar;
+
+struct XmlNode {
+  std::string name;
+  std::vector<std::pair<std::string, std::string>> attrs;
+  std::string text;  // direct text content (not that of children)
+  std::vector<std::unique_ptr<XmlNode>> children;
+
+  const std::string* attr(std::string_view key) const {
+    for (const auto& [k, v] : attrs)
+      if (k == key) return &v;
+    return nullptr;
+  }
+  const XmlNode* child(std::string_view n) const {
+    for (const auto& c : children)
+      if (c->name == n) return c.get();
+    return nullptr;
+  }
+};
+
+std::string xml_escape(std::string_view s);
+
+struct ParsedXml {
+  std::unique_ptr<XmlNode> root;
+  std::optional<std::string> appended_encoding;  // set when <AppendedData> exists
+  std::string_view appended;                       // bytes after the '_' marker
+};
+
+// Enough for VTK's XML files: elements, attributes, direct text; the
+// <AppendedData> section is cut off before parsing because raw appended
+// bytes may contain anything, including '<'.
+ParsedXml parse_xml(std::string_view doc, const std::string& path);
+
+std::optional<Scalar> vtk_scalar(std::string_view t);
+
+struct Context {
+  const std::string& path;
+  bool big_endian = false;
+  Scalar header = Scalar::UInt32;
+  std::string compressor;  // "" or the compressor's class name
+  std::optional<std::string> appended_encoding;
+  std::string_view appended;
+};
+
+// Reads byte_order, header_type and compressor of the <VTKFile> root and the
+// appended section into a Context; checks the root is a VTKFile of `type`.
+Context file_context(const ParsedXml& xml, const std::string& path, std::string_view type);
+
+// A decoded array: values in `bytes` of `type`, byte order `big`.
+struct Array {
+  Scalar type = Scalar::Float64;
+  bool big = false;
+  int components = 1;
+  std::string bytes;
+  std::size_t count() const { return bytes.size() / mesh_bytes::scalar_size(type); }
+  double as_double(std::size_t i) const {
+    return mesh_bytes::load_as_double(bytes.data() + i * mesh_bytes::scalar_size(type), type, big);
+  }
+  bool as_int(std::size_t i, std::int64_t& v) const {
+    return mesh_bytes::load_as_int64(bytes.data() + i * mesh_bytes::scalar_size(type), type, big, v);
+  }
+};
+
+// Decodes a <DataArray>. `expected` is the value count when known (-1 when not).
+Array decode_array(const XmlNode& node, const Context& ctx, const std::string& what_in, std::int64_t expected);
+
+// A non-negative count attribute (0 when absent); InputError when malformed.
+std::int64_t count_attr(const XmlNode& node, std::string_view key, const std::string& path);
+
+// The <DataArray Name="name"> child of a section, or null.
+const XmlNode* named_array(const XmlNode* section, std::string_view name);
+
+}  // namespace keymesh::io::vtk_xml

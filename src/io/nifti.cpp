@@ -1,0 +1,151 @@
+// NIfTI-1 single files (.nii, .nii.gz): a 348-byte header, data at
+// vox_offset. Voxel sizes from pixdim; scl_slope/scl_inter applied.
+#include <zlib.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "keymesh/io/volume_formats.hpp"
+
+namespace keymesh::io {
+
+namespace {
+
+// A gzip or plain stream read with zlib (gzread passes plain files through),
+// never further than the caller asks.
+class Stream {
+ public:
+  explicit Stream(const std::string& path) : path_(path), gz_(gzopen(path.c_str(), "rb")) {
+    if (!gz_) throw InputError(path + ": cannot open");
+    gzbuffer(gz_, 1 << 20);
+  }
+  ~Stream() { gzclose(gz_); }
+  Stream(const Stream&) = delete;
+  Stream& operator=(const Stream&) = delete;
+  void read(void* dst, std::uint64_t size, const char* what) {
+    auto* out = static_cast<unsigned char*>(dst);
+    std::uint64_t done = 0;
+    while (done < size) {
+      const unsigned chunk = static_cast<unsigned>(std::min<std::uint64_t>(size - done, 1u << 30));
+      const int got = gzread(gz_, out + done, chunk);
+      if (got <= 0)
+        throw InputError(path_ + ": truncated (" + what + ": " + std::to_string(done) + " of " + std::to_string(size) +
+                         " bytes)");
+      done += static_cast<std::uint64_t>(got);
+    }
+  }
+
+ private:
+  std::string path_;
+  gzFile gz_;
+};
+
+template <class T>
+T get(const unsigned char* h, std::size_t offset, bool swap) {
+  T v;
+  std::memcpy(&v, h + offset, sizeof v);
+  if (swap) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof v);
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+    std::memcpy(&v, b, sizeof v);
+  }
+  return v;
+}
+
+}  // namespace
+
+ImageGrid read_nifti(const std::string& path) {
+  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+  Stream in(path);
+  unsigned char h[348];
+  in.read(h, sizeof h, "header");
+  bool swap = false;
+  if (get<std::int32_t>(h, 0, false) != 348) {
+    if (get<std::int32_t>(h, 0, true) != 348) throw InputError(path + ": not a NIfTI-1 file (sizeof_hdr is not 348)");
+    swap = true;
+  }
+  if (std::memcmp(h + 344, "n+1\0", 4) != 0) {
+    if (std::memcmp(h + 344, "ni1\0", 4) == 0)
+      throw InputError(path + ": two-file NIfTI (.hdr/.img) is not supported; convert to .nii");
+    throw InputError(path + ": not a NIfTI-1 file (bad magic)");
+  }
+  std::int16_t dim[8];
+  for (int i = 0; i < 8; ++i) dim[i] = get<std::int16_t>(h, 40 + 2 * i, swap);
+  if (dim[0] < 3 || dim[0] > 7) throw InputError(path + ": NIfTI dim[0] = " + std::to_string(dim[0]) + " (need 3)");
+  for (int i = 4; i <= dim[0]; ++i)
+    if (dim[i] != 1) throw InputError(path + ": NIfTI volume has " + std::to_string(dim[0]) + " dimensions with dim[" +
+                                      std::to_string(i) + "] = " + std::to_string(dim[i]) + " (only 3D scalar volumes)");
+  const std::int16_t datatype = get<std::int16_t>(h, 70, swap);
+  ScalarType type;
+  switch (datatype) {
+    case 2: type = ScalarType::UInt8; break;
+    case 4: type = ScalarType::Int16; break;
+    case 8: type = ScalarType::Int32; break;
+    case 16: type = ScalarType::Float32; break;
+    case 64: type = ScalarType::Float64; break;
+    case 256: type = ScalarType::Int8; break;
+    case 512: type = ScalarType::UInt16; break;
+    default:
+      throw InputError(path + ": NIfTI datatype " + std::to_string(datatype) +
+                       " is not supported (uint8, int8, int16, uint16, int32, float32, float64)");
+  }
+  const float vox_offset = get<float>(h, 108, swap);
+  if (!(vox_offset >= 348) || vox_offset > 1.0e9f || vox_offset != std::floor(vox_offset))
+    throw InputError(path + ": NIfTI vox_offset " + std::to_string(vox_offset) + " is invalid");
+  std::array<double, 3> spacing{};
+  for (int a = 0; a < 3; ++a) {
+    const double p = std::abs(static_cast<double>(get<float>(h, 76 + 4 * (a + 1), swap)));
+    spacing[a] = (p > 0 && std::isfinite(p)) ? p : 1.0;
+  }
+  const std::array<Id, 3> dims{dim[1], dim[2], dim[3]};
+  for (int a = 0; a < 3; ++a)
+    if (dims[a] <= 0) throw InputError(path + ": NIfTI dim[" + std::to_string(a + 1) + "] = " + std::to_string(dims[a]));
+  const long double need = static_cast<long double>(dims[0]) * static_cast<long double>(dims[1]) *
+                           static_cast<long double>(dims[2]) * static_cast<long double>(scalar_size(type));
+  const bool gz = path.size() > 3 && path.compare(path.size() - 3, 3, ".gz") == 0;
+  // A plain file must hold the data; gzip cannot expand by more than ~1032:1.
+  if (!gz && need + vox_offset > static_cast<long double>(file_bytes))
+    throw InputError(path + ": file holds " + std::to_string(file_bytes) + " bytes, the header declares " +
+                     std::to_string(static_cast<double>(need + vox_offset)));
+  if (gz && need > 1100.0L * static_cast<long double>(file_bytes) + 4096)
+    throw InputError(path + ": gzip file is too small for the declared " + std::to_string(dims[0]) + "x" +
+                     std::to_string(dims[1]) + "x" + std::to_string(dims[2]) + " volume");
+  ImageGrid grid;
+  detail::allocate_checked(grid, dims, type, path);
+  grid.spacing = spacing;
+  grid.name = "scalars";
+  // Skip to vox_offset, then read exactly the declared samples.
+  std::uint64_t skip = static_cast<std::uint64_t>(vox_offset) - 348;
+  unsigned char pad[4096];
+  while (skip > 0) {
+    const std::uint64_t n = std::min<std::uint64_t>(skip, sizeof pad);
+    in.read(pad, n, "extension");
+    skip -= n;
+  }
+  in.read(grid.data(), grid.bytes.size(), "voxel data");
+  if (swap) detail::swap_samples(grid);
+  const float slope = get<float>(h, 112, swap), inter = get<float>(h, 116, swap);
+  if (std::isfinite(slope) && std::isfinite(inter) && slope != 0 && !(slope == 1 && inter == 0)) {
+    // Scaled data: the real values are slope * stored + inter, as float
+    // (float64 input stays float64).
+    ImageGrid scaled;
+    scaled.allocate(dims, type == ScalarType::Float64 ? ScalarType::Float64 : ScalarType::Float32);
+    scaled.spacing = grid.spacing;
+    scaled.name = grid.name;
+    visit_scalars(grid, [&](const auto* s) {
+      visit_scalars(scaled, [&](const auto* d_const) {
+        using D = std::remove_cv_t<std::remove_pointer_t<decltype(d_const)>>;
+        D* d = const_cast<D*>(d_const);
+        for (Id i = 0; i < grid.num_points(); ++i)
+          d[i] = static_cast<D>(static_cast<double>(slope) * static_cast<double>(s[i]) + static_cast<double>(inter));
+        return 0;
+      });
+      return 0;
+    });
+    return scaled;
+  }
+  return grid;
+}
+
+}  // namespace keymesh::io

@@ -1,0 +1,289 @@
+// NRRD (teem's "nearly raw raster data"): a text header, then raw or gzip
+// samples, attached (.nrrd) or in a separate file (.nhdr "data file:").
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "keymesh/io/atomic_file.hpp"
+#include "keymesh/io/volume_formats.hpp"
+
+namespace keymesh::io {
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+ScalarType nrrd_type(const std::string& path, const std::string& raw) {
+  const std::string t = lower(raw);
+  if (t == "signed char" || t == "int8" || t == "int8_t") return ScalarType::Int8;
+  if (t == "uchar" || t == "unsigned char" || t == "uint8" || t == "uint8_t") return ScalarType::UInt8;
+  if (t == "short" || t == "short int" || t == "signed short" || t == "signed short int" || t == "int16" ||
+      t == "int16_t")
+    return ScalarType::Int16;
+  if (t == "ushort" || t == "unsigned short" || t == "unsigned short int" || t == "uint16" || t == "uint16_t")
+    return ScalarType::UInt16;
+  if (t == "int" || t == "signed int" || t == "int32" || t == "int32_t") return ScalarType::Int32;
+  if (t == "float") return ScalarType::Float32;
+  if (t == "double") return ScalarType::Float64;
+  throw InputError(path + ": NRRD type '" + raw +
+                   "' is not supported (int8, uint8, int16, uint16, int32, float, double)");
+}
+
+std::vector<std::string> words(const std::string& s) {
+  std::istringstream in(s);
+  std::vector<std::string> out;
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+double parse_number(const std::string& path, const std::string& field, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !std::isfinite(v))
+    throw InputError(path + ": NRRD field '" + field + "' has a bad number '" + text + "'");
+  return v;
+}
+
+// Parses "(x,y,z)" vectors of a "space directions"/"space origin" field.
+std::vector<std::vector<double>> vectors(const std::string& path, const std::string& field, const std::string& text) {
+  std::vector<std::vector<double>> out;
+  std::size_t pos = 0;
+  while ((pos = text.find_first_not_of(" \t", pos)) != std::string::npos) {
+    if (text.compare(pos, 4, "none") == 0) {
+      out.push_back({});
+      pos += 4;
+      continue;
+    }
+    if (text[pos] != '(') throw InputError(path + ": NRRD field '" + field + "' is malformed");
+    const auto close = text.find(')', pos);
+    if (close == std::string::npos) throw InputError(path + ": NRRD field '" + field + "' is malformed");
+    std::vector<double> v;
+    std::stringstream in(text.substr(pos + 1, close - pos - 1));
+    for (std::string c; std::getline(in, c, ',');) v.push_back(parse_number(path, field, trim(c)));
+    out.push_back(v);
+    pos = close + 1;
+  }
+  return out;
+}
+
+// Reads `size` gzip-compressed bytes from `path` at `offset` into dst, and no more.
+void read_gzip(const std::string& path, std::uint64_t offset, void* dst, std::uint64_t size) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InputError(path + ": cannot open");
+  if (fseeko(f, static_cast<off_t>(offset), SEEK_SET) != 0) {
+    std::fclose(f);
+    throw InputError(path + ": cannot seek to the data");
+  }
+  const int fd = dup(fileno(f));
+  std::fclose(f);
+  gzFile gz = gzdopen(fd, "rb");
+  if (!gz) throw InputError(path + ": cannot open gzip data");
+  auto* out = static_cast<unsigned char*>(dst);
+  std::uint64_t done = 0;
+  while (done < size) {
+    const unsigned chunk = static_cast<unsigned>(std::min<std::uint64_t>(size - done, 1u << 30));
+    const int got = gzread(gz, out + done, chunk);
+    if (got <= 0) {
+      gzclose(gz);
+      throw InputError(path + ": gzip data ends after " + std::to_string(done) + " of " + std::to_string(size) +
+                       " bytes");
+    }
+    done += static_cast<std::uint64_t>(got);
+  }
+  gzclose(gz);
+}
+
+}  // namespace
+
+ImageGrid read_nrrd(const std::string& path) {
+  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InputError(path + ": cannot open");
+  // The header: text lines up to an empty line (or the end of a .nhdr).
+  std::string magic_line;
+  std::map<std::string, std::string> field;
+  std::uint64_t data_offset = 0;
+  {
+    std::string line;
+    int c;
+    bool first = true;
+    std::uint64_t consumed = 0;
+    while (true) {
+      line.clear();
+      while ((c = std::fgetc(f)) != EOF && c != '\n') {
+        line.push_back(static_cast<char>(c));
+        if (line.size() > 65536) {
+          std::fclose(f);
+          throw InputError(path + ": NRRD header line too long");
+        }
+      }
+      consumed += line.size() + (c == '\n' ? 1 : 0);
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (first) {
+        first = false;
+        if (line.rfind("NRRD000", 0) != 0) {
+          std::fclose(f);
+          throw InputError(path + ": not a NRRD file (no NRRD000x magic)");
+        }
+        magic_line = line;
+        continue;
+      }
+      if (line.empty() || c == EOF) {
+        if (!line.empty() && line[0] != '#') {
+          const auto colon = line.find(':');
+          if (colon != std::string::npos) field[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 1));
+        }
+        break;
+      }
+      if (line[0] == '#') continue;
+      const auto sep = line.find(":=");  // key/value pairs: ignored
+      if (sep != std::string::npos && line.find(": ") == std::string::npos) continue;
+      const auto colon = line.find(':');
+      if (colon == std::string::npos) {
+        std::fclose(f);
+        throw InputError(path + ": malformed NRRD header line '" + line.substr(0, 60) + "'");
+      }
+      field[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 1));
+    }
+    data_offset = consumed;
+  }
+  std::fclose(f);
+  auto get = [&](const std::string& k) -> const std::string* {
+    const auto it = field.find(k);
+    return it == field.end() ? nullptr : &it->second;
+  };
+  const std::string* type = get("type");
+  const std::string* dimension = get("dimension");
+  const std::string* sizes = get("sizes");
+  if (!type || !dimension || !sizes) throw InputError(path + ": NRRD header lacks type, dimension or sizes");
+  const ScalarType st = nrrd_type(path, *type);
+  const auto size_words = words(*sizes);
+  const double dim_value = parse_number(path, "dimension", *dimension);
+  if (dim_value != static_cast<double>(size_words.size()))
+    throw InputError(path + ": NRRD dimension " + *dimension + " but " + std::to_string(size_words.size()) + " sizes");
+  std::vector<Id> sz;
+  for (const auto& w : size_words) {
+    const double v = parse_number(path, "sizes", w);
+    if (v < 1 || v != std::floor(v) || v > 9.0e15) throw InputError(path + ": NRRD size '" + w + "' is not a positive integer");
+    sz.push_back(static_cast<Id>(v));
+  }
+  int first_axis = 0;
+  if (sz.size() == 4 && sz[0] == 1) first_axis = 1;  // a leading 1-sample axis (e.g. one component)
+  else if (sz.size() != 3)
+    throw InputError(path + ": NRRD dimension " + std::to_string(sz.size()) + " (only 3D scalar volumes)");
+  const std::array<Id, 3> dims{sz[first_axis], sz[first_axis + 1], sz[first_axis + 2]};
+  bool big_endian = false;
+  if (const std::string* e = get("endian")) {
+    if (lower(*e) == "big") big_endian = true;
+    else if (lower(*e) != "little") throw InputError(path + ": NRRD endian '" + *e + "'");
+  }
+  std::string encoding = "raw";
+  if (const std::string* e = get("encoding")) encoding = lower(*e);
+  if (encoding == "gz") encoding = "gzip";
+  if (encoding != "raw" && encoding != "gzip")
+    throw InputError(path + ": NRRD encoding '" + encoding + "' is not supported (raw, gzip)");
+  std::array<double, 3> spacing{1, 1, 1}, origin{0, 0, 0};
+  if (const std::string* sp = get("spacings")) {
+    const auto w = words(*sp);
+    if (w.size() != sz.size()) throw InputError(path + ": NRRD spacings has " + std::to_string(w.size()) + " entries");
+    for (int a = 0; a < 3; ++a) {
+      if (lower(w[first_axis + a]) == "nan") continue;
+      spacing[a] = std::abs(parse_number(path, "spacings", w[first_axis + a]));
+    }
+  } else if (const std::string* sd = get("space directions")) {
+    const auto v = vectors(path, "space directions", *sd);
+    if (v.size() != sz.size()) throw InputError(path + ": NRRD space directions has " + std::to_string(v.size()) + " entries");
+    for (int a = 0; a < 3; ++a) {
+      double len2 = 0;
+      for (double x : v[first_axis + a]) len2 += x * x;
+      if (len2 > 0) spacing[a] = std::sqrt(len2);
+    }
+  }
+  if (const std::string* so = get("space origin")) {
+    const auto v = vectors(path, "space origin", *so);
+    if (v.size() == 1 && v[0].size() == 3) origin = {v[0][0], v[0][1], v[0][2]};
+  }
+  for (int a = 0; a < 3; ++a)
+    if (!(spacing[a] > 0)) throw InputError(path + ": NRRD spacing along axis " + std::to_string(a) + " is not positive");
+  // Where the samples are.
+  std::string data_path = path;
+  const std::string* data_file = get("data file");
+  if (!data_file) data_file = get("datafile");
+  if (data_file) {
+    if (data_file->rfind("LIST", 0) == 0 || data_file->find('%') != std::string::npos)
+      throw InputError(path + ": NRRD multi-file data is not supported");
+    std::filesystem::path p(*data_file);
+    if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
+    data_path = p.string();
+    data_offset = 0;
+  }
+  if (const std::string* skip = get("byte skip")) {
+    const double v = parse_number(path, "byte skip", *skip);
+    if (v < 0 || v != std::floor(v)) throw InputError(path + ": NRRD byte skip " + *skip + " is not supported");
+    data_offset += static_cast<std::uint64_t>(v);
+  }
+  ImageGrid grid;
+  // Refuse a raw body shorter than declared before allocating.
+  const std::uint64_t data_file_bytes = data_file ? detail::file_size_or_throw(data_path) : file_bytes;
+  {
+    long double need = static_cast<long double>(scalar_size(st));
+    for (Id d : dims) need *= static_cast<long double>(d);
+    if (encoding == "raw" && need + data_offset > static_cast<long double>(data_file_bytes))
+      throw InputError(data_path + ": NRRD data holds " + std::to_string(data_file_bytes - std::min(data_file_bytes, data_offset)) +
+                       " bytes, the header declares " + std::to_string(static_cast<double>(need)));
+    // zlib cannot expand more than ~1032:1.
+    if (encoding == "gzip" && need > 1100.0L * static_cast<long double>(data_file_bytes) + 1024)
+      throw InputError(data_path + ": NRRD gzip data is too small for the declared sizes");
+  }
+  detail::allocate_checked(grid, dims, st, path);
+  grid.spacing = spacing;
+  grid.origin = origin;
+  if (encoding == "raw") detail::read_exact(data_path, data_offset, grid.data(), grid.bytes.size(), "the samples");
+  else read_gzip(data_path, data_offset, grid.data(), grid.bytes.size());
+  if (big_endian) detail::swap_samples(grid);
+  return grid;
+}
+
+void write_nrrd(const ImageGrid& grid, const std::string& path) {
+  const char* type = "float";
+  switch (grid.type) {
+    case ScalarType::UInt8: type = "uint8"; break;
+    case ScalarType::Int8: type = "int8"; break;
+    case ScalarType::UInt16: type = "uint16"; break;
+    case ScalarType::Int16: type = "int16"; break;
+    case ScalarType::Int32: type = "int32"; break;
+    case ScalarType::Float32: type = "float"; break;
+    case ScalarType::Float64: type = "double"; break;
+  }
+  char header[1024];
+  std::snprintf(header, sizeof header,
+                "NRRD0004\n# written by keymesh\ntype: %s\ndimension: 3\nsizes: %lld %lld %lld\n"
+                "space dimension: 3\nspace directions: (%.17g,0,0) (0,%.17g,0) (0,0,%.17g)\n"
+                "space origin: (%.17g,%.17g,%.17g)\nendian: little\nencoding: raw\n\n",
+                type, static_cast<long long>(grid.dims[0]), static_cast<long long>(grid.dims[1]),
+                static_cast<long long>(grid.dims[2]), grid.spacing[0], grid.spacing[1], grid.spacing[2],
+                grid.origin[0], grid.origin[1], grid.origin[2]);
+  AtomicFile f(path);
+  f.write(std::string_view(header));
+  f.write(grid.data(), grid.bytes.size());
+  f.commit();
+}
+
+}  // namespace keymesh::io

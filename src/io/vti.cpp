@@ -1,0 +1,152 @@
+// VTK XML ImageData (.vti) as VTK 9 and ParaView write it; the XML and
+// DataArray decoding is shared with .vtp (io/vtk_xml.hpp).
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+
+#include "keymesh/io/atomic_file.hpp"
+#include "keymesh/io/volume_formats.hpp"
+#include "keymesh/io/vtk_xml.hpp"
+
+namespace keymesh::io {
+
+namespace {
+
+using namespace vtk_xml;
+using mesh_bytes::Scalar;
+
+std::vector<double> numbers(const std::string& path, const std::string& what, const std::string* text, std::size_t n) {
+  if (!text) throw InputError(path + ": <ImageData> has no " + what);
+  std::istringstream in(*text);
+  std::vector<double> v;
+  for (std::string w; in >> w;) {
+    char* end = nullptr;
+    const double x = std::strtod(w.c_str(), &end);
+    if (end == w.c_str() || *end != '\0' || !std::isfinite(x)) throw InputError(path + ": bad " + what + " '" + *text + "'");
+    v.push_back(x);
+  }
+  if (v.size() != n) throw InputError(path + ": " + what + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
+  return v;
+}
+
+ScalarType grid_type(const std::string& path, Scalar s, const std::string& declared) {
+  switch (s) {
+    case Scalar::Int8: return ScalarType::Int8;
+    case Scalar::UInt8: return ScalarType::UInt8;
+    case Scalar::Int16: return ScalarType::Int16;
+    case Scalar::UInt16: return ScalarType::UInt16;
+    case Scalar::Int32: return ScalarType::Int32;
+    case Scalar::Float32: return ScalarType::Float32;
+    case Scalar::Float64: return ScalarType::Float64;
+    default:
+      throw InputError(path + ": point array type " + declared +
+                       " is not supported (Int8, UInt8, Int16, UInt16, Int32, Float32, Float64)");
+  }
+}
+
+}  // namespace
+
+ImageGrid read_vti(const std::string& path) {
+  const std::string data = mesh_bytes::read_whole_file(path);
+  const ParsedXml xml = parse_xml(data, path);
+  const Context ctx = file_context(xml, path, "ImageData");
+  const XmlNode* image = xml.root->child("ImageData");
+  if (!image) throw InputError(path + ": VTK file has no <ImageData>");
+  const auto extent = numbers(path, "WholeExtent", image->attr("WholeExtent"), 6);
+  std::array<Id, 3> dims{};
+  for (int a = 0; a < 3; ++a) {
+    const double d = extent[2 * a + 1] - extent[2 * a] + 1;
+    if (d < 1 || d > 9.0e15 || extent[2 * a] != std::floor(extent[2 * a]))
+      throw InputError(path + ": bad WholeExtent '" + *image->attr("WholeExtent") + "'");
+    dims[a] = static_cast<Id>(d);
+  }
+  std::array<double, 3> origin{0, 0, 0}, spacing{1, 1, 1};
+  if (image->attr("Origin")) {
+    const auto o = numbers(path, "Origin", image->attr("Origin"), 3);
+    origin = {o[0], o[1], o[2]};
+  }
+  if (image->attr("Spacing")) {
+    const auto s = numbers(path, "Spacing", image->attr("Spacing"), 3);
+    for (int a = 0; a < 3; ++a) {
+      if (!(s[a] != 0)) throw InputError(path + ": Spacing must not be zero");
+      spacing[a] = std::abs(s[a]);
+    }
+  }
+  const XmlNode* piece = image->child("Piece");
+  if (!piece) throw InputError(path + ": <ImageData> has no <Piece>");
+  if (piece->attr("Extent")) {
+    const auto pe = numbers(path, "Piece Extent", piece->attr("Extent"), 6);
+    if (pe != extent) throw InputError(path + ": multi-piece .vti files are not supported");
+  }
+  const XmlNode* point_data = piece->child("PointData");
+  const XmlNode* array = nullptr;
+  if (point_data) {
+    if (const std::string* active = point_data->attr("Scalars")) array = named_array(point_data, *active);
+    if (!array) array = point_data->child("DataArray");
+  }
+  if (!array) throw InputError(path + ": no point data array to contour");
+  if (const std::string* nc = array->attr("NumberOfComponents"); nc && *nc != "1")
+    throw InputError(path + ": point array has " + *nc + " components (a scalar field is needed)");
+  const std::string* declared = array->attr("type");
+  const auto declared_scalar = declared ? vtk_scalar(*declared) : std::nullopt;
+  if (!declared_scalar) throw InputError(path + ": point array has no supported type");
+  const ScalarType type = grid_type(path, *declared_scalar, *declared);
+  ImageGrid grid;
+  detail::allocate_checked(grid, dims, type, path);  // checks dims before the array is decoded
+  const Array a = decode_array(*array, ctx, "point array", grid.num_points());
+  grid.origin = origin;
+  grid.spacing = spacing;
+  if (const std::string* name = array->attr("Name")) grid.name = *name;
+  if (a.type == *declared_scalar) {
+    std::memcpy(grid.data(), a.bytes.data(), grid.bytes.size());
+    if (a.big) detail::swap_samples(grid);
+  } else {
+    // ascii arrays decode as doubles: convert back to the declared type.
+    visit_scalars(grid, [&](const auto* samples) {
+      using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
+      T* out = const_cast<T*>(samples);
+      for (Id i = 0; i < grid.num_points(); ++i) out[i] = static_cast<T>(a.as_double(static_cast<std::size_t>(i)));
+      return 0;
+    });
+  }
+  return grid;
+}
+
+void write_vti(const ImageGrid& grid, const std::string& path) {
+  const char* type = "Float32";
+  switch (grid.type) {
+    case ScalarType::UInt8: type = "UInt8"; break;
+    case ScalarType::Int8: type = "Int8"; break;
+    case ScalarType::UInt16: type = "UInt16"; break;
+    case ScalarType::Int16: type = "Int16"; break;
+    case ScalarType::Int32: type = "Int32"; break;
+    case ScalarType::Float32: type = "Float32"; break;
+    case ScalarType::Float64: type = "Float64"; break;
+  }
+  const std::string name = xml_escape(grid.name);
+  char extent[256], geometry[512];
+  std::snprintf(extent, sizeof extent, "0 %lld 0 %lld 0 %lld", static_cast<long long>(grid.dims[0] - 1),
+                static_cast<long long>(grid.dims[1] - 1), static_cast<long long>(grid.dims[2] - 1));
+  std::snprintf(geometry, sizeof geometry, "Origin=\"%.17g %.17g %.17g\" Spacing=\"%.17g %.17g %.17g\"", grid.origin[0],
+                grid.origin[1], grid.origin[2], grid.spacing[0], grid.spacing[1], grid.spacing[2]);
+  std::string head;
+  head += "<?xml version=\"1.0\"?>\n";
+  head += "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  head += std::string("  <ImageData WholeExtent=\"") + extent + "\" " + geometry + ">\n";
+  head += std::string("    <Piece Extent=\"") + extent + "\">\n";
+  head += "      <PointData Scalars=\"" + name + "\">\n";
+  head += std::string("        <DataArray type=\"") + type + "\" Name=\"" + name +
+          "\" NumberOfComponents=\"1\" format=\"appended\" offset=\"0\"/>\n";
+  head += "      </PointData>\n      <CellData/>\n    </Piece>\n  </ImageData>\n";
+  head += "  <AppendedData encoding=\"raw\">\n   _";
+  AtomicFile f(path);
+  f.write(head);
+  const std::uint64_t bytes = grid.bytes.size();
+  f.write(&bytes, sizeof bytes);
+  f.write(grid.data(), grid.bytes.size());
+  f.write(std::string_view("\n  </AppendedData>\n</VTKFile>\n"));
+  f.commit();
+}
+
+}  // namespace keymesh::io
