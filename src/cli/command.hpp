@@ -53,11 +53,13 @@ class StageTimer {
 // take over about a second and never with --quiet.
 class Progress {
  public:
-  Progress(bool quiet, bool large) : enabled_(!quiet && large) {}
+  Progress(bool quiet, bool large) : quiet_(quiet), enabled_(!quiet && large) {}
   void say(const std::string& line) const;
-  void enable_if(bool large) { enabled_ = enabled_ || large; }
+  // Turns progress on once the work is known to be large (never with --quiet).
+  void enable_if(bool large) { enabled_ = !quiet_ && (enabled_ || large); }
 
  private:
+  bool quiet_;
   bool enabled_;
 };
 

@@ -120,30 +120,42 @@ void build_order(Groups<K>& groups) {
   const Id n = groups.num_pairs();
   const Id g_count = groups.num_groups();
   const auto* index_map = groups.index_map.data();
-  // Counting sort by group: counts by atomic increments (the totals do not
-  // depend on the schedule), slots by atomic fetch-add, then each group's few
-  // pair indices sorted so the order is increasing, whatever the schedule.
   std::vector<Id> offsets(g_count + 1, 0);
-  parallel::for_each(n, [&](Id i) {
-    std::atomic_ref<Id>(offsets[index_map[i]]).fetch_add(1, std::memory_order_relaxed);
-  });
-  parallel::exclusive_scan(offsets.data(), offsets.data(), g_count + 1);
-  std::vector<Id> cursor(offsets.begin(), offsets.end() - 1);
   std::vector<std::uint32_t> order(n);
-  parallel::for_each(n, [&](Id i) {
-    const Id at = std::atomic_ref<Id>(cursor[index_map[i]]).fetch_add(1, std::memory_order_relaxed);
-    order[at] = static_cast<std::uint32_t>(i);
+  // Stable counting sort by group over fixed contiguous chunks of pairs: a
+  // histogram per chunk, then every (chunk, group) gets its slot range in
+  // chunk order, so each group lists its pairs in increasing index with no
+  // atomics and no per-group sorting. The per-chunk histograms cost
+  // chunks x groups counters: when that is large next to the pairs, fewer
+  // chunks are used (the result is the same for any chunk count).
+  int chunks = parallel::chunk_count(n, 1 << 16);
+  while (chunks > 1 && static_cast<Id>(chunks) * g_count > 2 * n) --chunks;
+  std::vector<std::uint32_t> hist(static_cast<std::size_t>(chunks) * static_cast<std::size_t>(g_count));
+  parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
+    std::uint32_t* h = hist.data() + static_cast<std::size_t>(c) * static_cast<std::size_t>(g_count);
+    std::fill(h, h + g_count, 0u);
+    for (Id i = b; i < e; ++i) ++h[index_map[i]];
   });
-  parallel::for_each_dynamic(g_count, [&](Id g) {
-    auto* b = order.data() + offsets[g];
-    auto* e = order.data() + offsets[g + 1];
-    if (e - b <= 32) {
-      for (auto* p = b + 1; p < e; ++p)  // insertion sort: groups are small
-        for (auto* q = p; q > b && q[-1] > q[0]; --q) std::swap(q[-1], q[0]);
-    } else {
-      std::sort(b, e);
+  // Per group: its total count, and each chunk's start within the group.
+  parallel::for_each(g_count, [&](Id g) {
+    std::uint32_t running = 0;
+    for (int c = 0; c < chunks; ++c) {
+      std::uint32_t& h = hist[static_cast<std::size_t>(c) * static_cast<std::size_t>(g_count) + static_cast<std::size_t>(g)];
+      const std::uint32_t count = h;
+      h = running;
+      running += count;
     }
-  }, 4096);
+    offsets[g] = running;
+  });
+  offsets[g_count] = 0;
+  parallel::exclusive_scan(offsets.data(), offsets.data(), g_count + 1);
+  parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
+    std::uint32_t* h = hist.data() + static_cast<std::size_t>(c) * static_cast<std::size_t>(g_count);
+    for (Id i = b; i < e; ++i) {
+      const std::uint32_t g = index_map[i];
+      order[static_cast<std::size_t>(offsets[g] + h[g]++)] = static_cast<std::uint32_t>(i);
+    }
+  });
   groups.offsets = std::move(offsets);
   groups.order = std::move(order);
 }
