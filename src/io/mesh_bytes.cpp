@@ -16,7 +16,13 @@ std::string read_whole_file(const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
   std::string data;
-  // Read in chunks rather than trusting a size from seek/tell, which fails on pipes.
+  // Reserve the size seek/tell reports (one allocation for a regular file),
+  // but read in chunks rather than trusting it, which fails on pipes.
+  if (std::fseek(f, 0, SEEK_END) == 0) {
+    const long size = std::ftell(f);
+    if (size > 0) data.reserve(static_cast<std::size_t>(size));
+    std::rewind(f);
+  }
   char buffer[1 << 16];
   for (;;) {
     const std::size_t got = std::fread(buffer, 1, sizeof(buffer), f);

@@ -1,5 +1,6 @@
 // VTK XML ImageData (.vti) as VTK 9 and ParaView write it; the XML and
 // DataArray decoding is shared with .vtp (io/vtk_xml.hpp).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -45,10 +46,28 @@ ScalarType grid_type(const std::string& path, Scalar s, const std::string& decla
   }
 }
 
+// The XML part of a file whose arrays are appended: everything up to the
+// AppendedData marker '_' (inclusive), or empty when the file has no
+// appended section within its first MiB (then the arrays are inline).
+std::string appended_head(const std::string& path, std::uint64_t file_bytes) {
+  std::string head(static_cast<std::size_t>(std::min<std::uint64_t>(file_bytes, 1 << 20)), '\0');
+  detail::read_exact(path, 0, head.data(), head.size(), "the XML header");
+  const auto tag = head.find("<AppendedData");
+  if (tag == std::string::npos) return {};
+  const auto marker = head.find('_', head.find('>', tag));
+  if (marker == std::string::npos) return {};
+  head.resize(marker + 1);
+  return head;
+}
+
 }  // namespace
 
 ImageGrid read_vti(const std::string& path) {
-  const std::string data = mesh_bytes::read_whole_file(path);
+  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+  // Large volumes are written with raw appended data: parse only the XML
+  // head and read the samples straight into the grid (no whole-file copy).
+  const std::string head = appended_head(path, file_bytes);
+  const std::string data = head.empty() ? mesh_bytes::read_whole_file(path) : head;
   const ParsedXml xml = parse_xml(data, path);
   const Context ctx = file_context(xml, path, "ImageData");
   const XmlNode* image = xml.root->child("ImageData");
@@ -94,10 +113,31 @@ ImageGrid read_vti(const std::string& path) {
   const ScalarType type = grid_type(path, *declared_scalar, *declared);
   ImageGrid grid;
   detail::allocate_checked(grid, dims, type, path);  // checks dims before the array is decoded
-  const Array a = decode_array(*array, ctx, "point array", grid.num_points());
   grid.origin = origin;
   grid.spacing = spacing;
   if (const std::string* name = array->attr("Name")) grid.name = *name;
+  const std::string* format = array->attr("format");
+  if (!head.empty() && format && *format == "appended" && ctx.compressor.empty() && ctx.appended_encoding &&
+      *ctx.appended_encoding == "raw") {
+    // Raw appended, uncompressed: [size header][samples] at head + offset.
+    std::int64_t offset = 0;
+    const std::string* off = array->attr("offset");
+    if (!off || !mesh_bytes::parse_int64(*off, offset) || offset < 0)
+      throw InputError(path + ": point array has a bad appended offset");
+    const std::uint64_t at = head.size() + static_cast<std::uint64_t>(offset);
+    const std::size_t hs = ctx.header == Scalar::UInt64 ? 8 : 4;
+    unsigned char h[8] = {};
+    detail::read_exact(path, at, h, hs, "the point array's size header");
+    const std::uint64_t array_bytes = hs == 8 ? mesh_bytes::load<std::uint64_t>(h, ctx.big_endian)
+                                              : mesh_bytes::load<std::uint32_t>(h, ctx.big_endian);
+    if (array_bytes != grid.bytes.size())
+      throw InputError(path + ": point array holds " + std::to_string(array_bytes) + " bytes, WholeExtent needs " +
+                       std::to_string(grid.bytes.size()));
+    detail::read_exact(path, at + hs, grid.data(), grid.bytes.size(), "the point array");
+    if (ctx.big_endian) detail::swap_samples(grid);
+    return grid;
+  }
+  const Array a = decode_array(*array, ctx, "point array", grid.num_points());
   if (a.type == *declared_scalar) {
     std::memcpy(grid.data(), a.bytes.data(), grid.bytes.size());
     if (a.big) detail::swap_samples(grid);
