@@ -56,7 +56,7 @@ def main():
         print(json.dumps({"bench": "contour", "tool": name, "size": a.size, "iso": a.iso,
                           "threads": a.threads if name == "vtkFlyingEdges3D" else 1,
                           "points": points, "cells": cells, "median": statistics.median(times),
-                          "min": min(times), "max": max(times), "reps": a.reps,
+                          "min": min(times), "max": max(times), "first": times[0], "reps": a.reps,
                           "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}), flush=True)
 
 
