@@ -74,6 +74,20 @@ def cli_cold(keymesh, size, iso, threads, reps, workdir):
             "peak_rss_mib": rss}
 
 
+def vtk_cold(size, iso, threads, reps, workdir):
+    """vtkFlyingEdges3D as a one-shot program: a fresh process reads the .vti and contours once, like the CLI."""
+    vti = os.path.join(workdir, f"sphere{size}.vti")
+    times, rss = [], 0
+    for _ in range(reps):
+        r = run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(size), "--file", vti,
+                      "--iso", str(iso), "--threads", str(threads), "--reps", "1", "--filters", "vtkFlyingEdges3D"])[0]
+        times.append(r["median"])
+        rss = max(rss, r["peak_rss_mib"])
+    r.update({"tool": "vtkFlyingEdges3D-cold", "median": statistics.median(times), "min": min(times),
+              "max": max(times), "reps": reps, "peak_rss_mib": rss})
+    return r
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--build", default="build")
@@ -107,6 +121,7 @@ def main():
             try:
                 rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
                                   "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps)])
+                rows.append(vtk_cold(n, iso, threads_all, reps, work))
             except SystemExit as e:
                 print(f"  VTK peer unavailable: {e}")
     for r in rows:
@@ -115,8 +130,13 @@ def main():
     with open(a.out, "w") as f:
         for r in rows:
             f.write(json.dumps(r) + "\n")
-    summarize(rows, sizes, threads_all)
-    print(f"\nresults: {a.out}")
+    text = summarize(rows, sizes, threads_all)
+    md = os.path.splitext(a.out)[0] + ".md"
+    with open(md, "w") as f:
+        f.write(f"# keymesh bench, {info['date']}\n\n{info['cpu']}, {info['cores']} cores, {info['memory_gib']} GiB, "
+                f"{info['compiler']}, Linux {info['kernel']}\n\nCommand: `make bench{' QUICK=1' if a.quick else ''}`"
+                f"\n\n```\n{text}\n```\n")
+    print(f"\nresults: {a.out} and {md}")
 
 
 def find(rows, **kw):
@@ -127,25 +147,49 @@ def find(rows, **kw):
 
 
 def summarize(rows, sizes, threads):
-    print("\nMarching cubes + weld, Spherical Distance at N/2 - 1 + 0.001 (medians, ms; min-max)")
-    print(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in sizes))
+    """Prints the tables and returns them as text (for bench/results/latest.md)."""
+    lines = []
+
+    def out(text=""):
+        out(text)
+        lines.append(text)
+
+    out("\nMarching cubes + weld, Spherical Distance field at iso N/2 - 1 + 0.001 (the paper's Table 1 surfaces)")
 
     def line(label, **kw):
         cells = []
         for n in sizes:
             r = find(rows, size=n, **kw)
             cells.append(f"{r['median'] * 1e3:8.1f} ({r['min'] * 1e3:.0f}-{r['max'] * 1e3:.0f})" if r else " " * 18)
-        print(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+        out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
 
+    out("\nWarm: medians of repetitions in one process (ms; min-max)")
+    out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in sizes))
     for t in sorted({1, threads}):
         line(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", weld="vertexweld", threads=t)
         line(f"keymesh KEY-REDUCE sort plan, {t} thr", tool="keymesh", weld="keyreduce-sort", threads=t)
         line(f"keymesh KEY-REDUCE dense plan, no merge, {t} thr", tool="keymesh", weld="keyreduce", normals="none", threads=t)
         line(f"keymesh KEY-REDUCE averaging, {t} thr", tool="keymesh", weld="keyreduce", normals="average", threads=t)
-    line(f"keymesh CLI seconds.contour, {threads} thr", tool="keymesh-cli")
     line(f"vtkFlyingEdges3D, {threads} thr", tool="vtkFlyingEdges3D")
     line("vtkMarchingCubes, 1 thr", tool="vtkMarchingCubes")
-    print("\nRatios (higher is better for keymesh)")
+
+    out("\nCold: the first run in a fresh process, touching fresh memory (ms)")
+    out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in sizes))
+
+    def cold(label, key, **kw):
+        cells = []
+        for n in sizes:
+            r = find(rows, size=n, **kw)
+            cells.append(f"{r[key] * 1e3:8.1f}" if r else "")
+        out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+
+    cold(f"keymesh KEY-REDUCE, first repetition, {threads} thr", "first", tool="keymesh", weld="keyreduce",
+         normals="none", threads=threads)
+    cold(f"keymesh CLI seconds.contour (median), {threads} thr", "median", tool="keymesh-cli")
+    cold(f"vtkFlyingEdges3D, first repetition, {threads} thr", "first", tool="vtkFlyingEdges3D")
+    cold(f"vtkFlyingEdges3D one-shot (median), {threads} thr", "median", tool="vtkFlyingEdges3D-cold")
+
+    out("\nRatios (higher is better for keymesh)")
     for n in sizes:
         kr = find(rows, size=n, tool="keymesh", weld="keyreduce", normals="none", threads=threads)
         av = find(rows, size=n, tool="keymesh", weld="keyreduce", normals="average", threads=threads)
@@ -154,18 +198,21 @@ def summarize(rows, sizes, threads):
         fe = find(rows, size=n, tool="vtkFlyingEdges3D")
         parts = []
         if kr and fe:
-            parts.append(f"vtkFlyingEdges3D / keymesh {fe['median'] / kr['median']:.2f}x")
-        if cli and fe:
-            parts.append(f"vtkFlyingEdges3D / keymesh CLI {fe['median'] / cli['median']:.2f}x")
+            parts.append(f"vtkFlyingEdges3D / keymesh, warm medians {fe['median'] / kr['median']:.2f}x")
+            parts.append(f"cold first runs {fe['first'] / kr['first']:.2f}x")
+        fe_cold = find(rows, size=n, tool="vtkFlyingEdges3D-cold")
+        if cli and fe_cold:
+            parts.append(f"one-shot: VTK / keymesh CLI seconds.contour {fe_cold['median'] / cli['median']:.2f}x")
         if kr and vw:
             parts.append(f"VERTEX-WELD / KEY-REDUCE {vw['median'] / kr['median']:.2f}x")
         if kr and av:
             parts.append(f"averaging overhead {100 * (av['median'] / kr['median'] - 1):+.0f}%")
-        print(f"  {n}^3, {threads} threads: " + "; ".join(parts))
+        out(f"  {n}^3, {threads} threads: " + "; ".join(parts))
     peak = [r for r in rows if r.get("size") == sizes[-1]]
-    print(f"\nPeak RSS at {sizes[-1]}^3 (MiB): " +
+    out(f"\nPeak RSS at {sizes[-1]}^3 (MiB): " +
           ", ".join(f"{r['tool']} {r.get('weld', '')} {r.get('normals', '')} {r['peak_rss_mib']:.0f}".replace("  ", " ")
                     for r in peak if r.get("threads") == threads or r["tool"] == "vtkMarchingCubes"))
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

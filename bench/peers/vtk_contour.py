@@ -24,19 +24,26 @@ def sphere(n):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--size", type=int, required=True)
+    ap.add_argument("--file", help="read this .vti (vtkXMLImageDataReader) instead of building the field in memory")
     ap.add_argument("--iso", type=float, required=True)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--filters", default="vtkFlyingEdges3D,vtkMarchingCubes")
     a = ap.parse_args()
     vtk.vtkSMPTools.Initialize(a.threads)
-    d = sphere(a.size)
-    img = vtk.vtkImageData()
-    img.SetDimensions(a.size, a.size, a.size)
-    arr = ns.numpy_to_vtk(d.ravel(), deep=True)
-    arr.SetName("distance")
-    img.GetPointData().SetScalars(arr)
-    del d
+    if a.file:
+        reader = vtk.vtkXMLImageDataReader()
+        reader.SetFileName(a.file)
+        reader.Update()
+        img = reader.GetOutput()
+    else:
+        d = sphere(a.size)
+        img = vtk.vtkImageData()
+        img.SetDimensions(a.size, a.size, a.size)
+        arr = ns.numpy_to_vtk(d.ravel(), deep=True)
+        arr.SetName("distance")
+        img.GetPointData().SetScalars(arr)
+        del d
     for name in a.filters.split(","):
         times = []
         points = cells = 0
