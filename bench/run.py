@@ -94,8 +94,15 @@ def main():
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--reps", type=int, default=0)
     ap.add_argument("--out", default=os.path.join(HERE, "results", "latest.jsonl"))
+    ap.add_argument("--summarize", action="store_true", help="only re-print the tables of --out")
     a = ap.parse_args()
     sizes = [128, 256] if a.quick else [128, 256, 512]
+    if a.summarize:
+        rows = [json.loads(line) for line in open(a.out)]
+        sizes = sorted({r["size"] for r in rows})
+        threads_all = max(r.get("threads", 1) for r in rows)
+        write_summary(rows, rows[0]["machine"], sizes, threads_all, a)
+        return
     reps = a.reps or (5 if a.quick else 7)
     threads_all = os.cpu_count() or 1
     bench = os.path.join(a.build, "contour_bench")
@@ -130,6 +137,10 @@ def main():
     with open(a.out, "w") as f:
         for r in rows:
             f.write(json.dumps(r) + "\n")
+    write_summary(rows, info, sizes, threads_all, a)
+
+
+def write_summary(rows, info, sizes, threads_all, a):
     text = summarize(rows, sizes, threads_all)
     md = os.path.splitext(a.out)[0] + ".md"
     with open(md, "w") as f:
@@ -151,7 +162,7 @@ def summarize(rows, sizes, threads):
     lines = []
 
     def out(text=""):
-        out(text)
+        print(text)
         lines.append(text)
 
     out("\nMarching cubes + weld, Spherical Distance field at iso N/2 - 1 + 0.001 (the paper's Table 1 surfaces)")
