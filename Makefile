@@ -12,7 +12,9 @@ endif
 # Debian 12 packages the build, the tests and the demo need.
 DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev zlib1g-dev \
-  python3 python3-numpy python3-vtk9 libvolpack1-dev mricron-data
+  python3 python3-numpy python3-vtk9 libvolpack1-dev mricron-data \
+  pybind11-dev python3-dev python3-pytest python3-skimage python3-meshio \
+  clang-14 libfuzzer-14-dev libclang-rt-14-dev
 
 .PHONY: all deps build demo test bench clean
 
