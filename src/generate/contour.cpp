@@ -151,10 +151,19 @@ void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, 
   }
 }
 
+// Voxel slabs per block of the soup handed to keyreduce::reduce_blocked: a
+// constant, so the blocks (and the merge order they imply) do not depend on
+// the thread count.
+constexpr Id kSlabsPerBlock = 4;
+
 // One isovalue's triangle soup as edge keys, appended to `keys` with
-// `key_offset` added (the isovalue's index times 3N).
+// `key_offset` added (the isovalue's index times 3N). Appends to `blocks`
+// the first pair of every kSlabsPerBlock voxel slabs: a point is shared only
+// by the slabs on either side of its plane, so a block shares points with
+// its two neighbours at most.
 template <class K>
-Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::vector<K>& keys, ContourStats& st) {
+Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::vector<K>& keys,
+                 std::vector<Id>& blocks, ContourStats& st) {
   const auto& table = marching_cubes_table();
   const Id rows = (s.ny - 1) * (s.nz - 1);
   auto t0 = Clock::now();
@@ -169,6 +178,7 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::
   st.classify += seconds_since(t0);
   t0 = Clock::now();
   const Id base = static_cast<Id>(keys.size());
+  for (Id k = 0; k < s.nz - 1; k += kSlabsPerBlock) blocks.push_back(base + 3 * row_offsets[k * (s.ny - 1)]);
   if (base + 3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("contour: " + std::to_string(base / 3 + triangles) +
                      " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
@@ -286,30 +296,43 @@ struct Vec3f {
 
 // Sum of the area-weighted normals of the triangles around each point,
 // merged by KEY-REDUCE over the groups, then normalised (the transform).
+// With `blocks` (slab blocks of the soup, see generate_soup) the sums are
+// scattered block by block (keyreduce::reduce_blocked), with no pair order;
+// otherwise (VERTEX-WELD's groups) reduced over the groups' pair order.
 template <class K>
-void average_normals(const keyreduce::Groups<K>& groups, const SurfaceMesh& mesh, std::vector<float>& normals) {
-  const Id triangles = mesh.num_cells();
-  std::vector<Vec3f> face(triangles);
+void average_normals(const keyreduce::Groups<K>& groups, const std::vector<Id>* blocks, const SurfaceMesh& mesh,
+                     std::vector<float>& normals) {
   const float* P = mesh.points.data();
   const PointIndex* C = mesh.connectivity.data();
-  parallel::for_each(triangles, [&](Id t) {
+  // Twice the area times the unit normal of triangle t.
+  auto face_normal = [P, C](Id t) {
     const float* a = P + 3 * Id{C[3 * t]};
     const float* b = P + 3 * Id{C[3 * t + 1]};
     const float* c = P + 3 * Id{C[3 * t + 2]};
     const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     const float v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    face[t] = Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  });
-  normals.resize(3 * groups.num_groups());
+    return Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  };
+  auto add = [](Vec3f a, Vec3f b) { return Vec3f{a.x + b.x, a.y + b.y, a.z + b.z}; };
+  auto unit = [](Vec3f sum) {
+    const float len = std::sqrt(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z);
+    return len > 0 ? Vec3f{sum.x / len, sum.y / len, sum.z / len} : Vec3f{0, 0, 0};
+  };
+  const Id points = mesh.num_points();
+  normals.resize(3 * points);
   auto* out = reinterpret_cast<Vec3f*>(normals.data());
+  if (blocks) {
+    // The face normal is recomputed for each of its three corners: cheaper
+    // than writing and reading back an array of them.
+    keyreduce::reduce_blocked(C, blocks->data(), static_cast<Id>(blocks->size()) - 1,
+                              [&](Id pair) { return face_normal(pair / 3); }, add, Vec3f{0, 0, 0}, out, points);
+    parallel::for_each(points, [&](Id p) { out[p] = unit(out[p]); });
+    return;
+  }
+  std::vector<Vec3f> face(mesh.num_cells());
+  parallel::for_each(mesh.num_cells(), [&](Id t) { face[t] = face_normal(t); });
   keyreduce::reduce(
-      groups, [&](Id pair) { return face[pair / 3]; },
-      [](Vec3f a, Vec3f b) { return Vec3f{a.x + b.x, a.y + b.y, a.z + b.z}; },
-      [](Vec3f sum, Id) {
-        const float len = std::sqrt(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z);
-        return len > 0 ? Vec3f{sum.x / len, sum.y / len, sum.z / len} : Vec3f{0, 0, 0};
-      },
-      out);
+      groups, [&](Id pair) { return face[pair / 3]; }, add, [&](Vec3f sum, Id) { return unit(sum); }, out);
 }
 
 template <class K, class T>
@@ -324,9 +347,10 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
 
   SurfaceMesh mesh;
   // One group per output point; groups.unique_keys[p] is the key of point p.
-  // The pair order is built only when normals are averaged.
+  // The pair order is built only for VERTEX-WELD with averaged normals.
   keyreduce::Groups<K> groups;
   InsideBits bits;
+  std::vector<Id> blocks;  // slab blocks of the soup, for averaging
   {
     // The triangle soup: one key per triangle corner.
     std::vector<K> soup;
@@ -334,12 +358,14 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
       auto t0 = Clock::now();
       classify(samples, s, InsideTest<T>(opt.isovalues[iso_index]), bits);
       st.classify += seconds_since(t0);
-      generate_soup<K>(bits, s, static_cast<K>(iso_index) * keys_per_iso, soup, st);
+      generate_soup<K>(bits, s, static_cast<K>(iso_index) * keys_per_iso, soup, blocks, st);
     }
     const Id corners = static_cast<Id>(soup.size());
+    blocks.push_back(corners);
     st.soup_points = corners;
     auto t0 = Clock::now();
-    const auto order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
+    // KEY-REDUCE's groups are averaged by slab blocks and need no pair order.
+    const auto order = keyreduce::Order::Skip;
     if (opt.weld == ContourWeld::KeyReduce || opt.weld == ContourWeld::KeyReduceSort) {
       groups = opt.weld == ContourWeld::KeyReduce
                    ? keyreduce::partition_dense(soup.data(), corners, key_range, order)
@@ -383,7 +409,7 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
     mesh.point_fields.push_back(std::move(f));
   } else if (average) {
     Field f{"Normals", 3, {}};
-    average_normals(groups, mesh, f.values);
+    average_normals(groups, opt.weld == ContourWeld::VertexWeld ? nullptr : &blocks, mesh, f.values);
     mesh.point_fields.push_back(std::move(f));
   }
   st.fields += seconds_since(t0);

@@ -38,4 +38,33 @@ void reduce_values(const Groups<K>& groups, const V* values, Merge&& merge, Tran
          std::forward<Transform>(transform), out);
 }
 
+// The reduce half by scattering, for pairs whose groups are local (no pair
+// order needed, so no counting sort). The pairs are cut into consecutive
+// blocks, block b spanning [block_begin[b], block_begin[b + 1]), such that
+// block b shares groups with blocks b - 1 and b + 1 at most. Blocks of one
+// parity then never share a group: the even blocks merge into `acc` in
+// parallel, then the odd ones. Each group's merge order (its pairs in
+// increasing index within a block, the even block before the odd one) is
+// fixed by the input alone, so floating-point results are bit-identical at
+// any thread count. `acc` holds `groups` values on return, merged from
+// `identity` (which must be merge's neutral element: 0 for a sum).
+//
+// Marching cubes gives such blocks for free: the soup is written voxel slab
+// after voxel slab, and an edge's point is shared only by the slabs on
+// either side of its plane.
+template <class Index, class ValueOf, class Merge, class Acc>
+void reduce_blocked(const Index* index_map, const Id* block_begin, Id blocks, ValueOf&& value, Merge&& merge,
+                    Acc identity, Acc* acc, Id groups) {
+  parallel::for_each(groups, [&](Id g) { acc[g] = identity; });
+  for (Id parity = 0; parity < 2; ++parity) {
+    parallel::for_each_dynamic((blocks + 1 - parity) / 2, [&](Id h) {
+      const Id b = 2 * h + parity;
+      for (Id i = block_begin[b]; i < block_begin[b + 1]; ++i) {
+        Acc& a = acc[static_cast<Id>(index_map[i])];
+        a = merge(a, value(i));
+      }
+    }, 1);
+  }
+}
+
 }  // namespace keymesh::keyreduce
