@@ -41,6 +41,9 @@ struct ContourOptions {
   ContourNormals normals = ContourNormals::None;
   ContourWeld weld = ContourWeld::KeyReduce;
   bool scalars = true;                  // carry the interpolated input scalar as a point field
+  // Unstructured grids only: the point field to contour (empty: the first
+  // one-component point field). Every point field is carried, interpolated.
+  std::string array;
 };
 
 // Where the time went, in seconds, and the sizes involved.

@@ -1,0 +1,33 @@
+#pragma once
+// Tetrahedralization of hexahedral cells (paper, Section 5.2, Table 1).
+//
+// Scheme 5: the minimal split of a hexahedron into 5 tetrahedra, a central
+// tet on four mutually non-adjacent corners and one tet cut off at each of
+// the other four corners. The two possible central tets (on the "even" or the
+// "odd" corners) alternate like a checkerboard, so the face diagonals of
+// neighbouring cells match and the mesh is conforming (no hanging edges).
+//
+// Every tet is positively oriented: det(p1 - p0, p2 - p0, p3 - p0) > 0.
+#include "keymesh/mesh/image_grid.hpp"
+#include "keymesh/mesh/unstructured_grid.hpp"
+
+namespace keymesh::generate {
+
+// A voxel grid of N = nx*ny*nz points becomes N points (same ids, x fastest)
+// and 5 (nx-1)(ny-1)(nz-1) tets; voxel (i, j, k) takes the even split when
+// i + j + k is even. The grid's scalars become the float point field of the
+// grid's name. Throws LimitError naming the sizes when they cannot be held.
+UnstructuredGrid tetrahedralize5(const ImageGrid& grid);
+
+// Hexahedral cells (VTK_HEXAHEDRON or VTK_VOXEL) of an unstructured grid
+// become 5 tets each, points and point fields unchanged, each tet carrying its
+// hexahedron's cell fields. The even/odd split of every cell is chosen so that
+// the diagonals agree across every shared face (a 2-colouring of the cells
+// through their faces); throws InputError naming the cells when no such
+// choice exists (an odd cycle of cells) or a cell is not a hexahedron.
+UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes);
+
+// Signed volume of tet (a, b, c, d): det(b - a, c - a, d - a) / 6.
+double tet_volume(const float* a, const float* b, const float* c, const float* d);
+
+}  // namespace keymesh::generate

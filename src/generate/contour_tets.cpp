@@ -1,0 +1,315 @@
+#include "keymesh/generate/contour_tets.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/keyreduce/reduce.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
+#include "keymesh/parallel/scan.hpp"
+#include "keymesh/weld/vertex_weld.hpp"
+
+namespace keymesh::generate {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+int edge_of(int a, int b) {
+  for (int e = 0; e < 6; ++e)
+    if ((kTetEdges[e][0] == a && kTetEdges[e][1] == b) || (kTetEdges[e][0] == b && kTetEdges[e][1] == a)) return e;
+  return -1;
+}
+
+// Marching tetrahedra cases: bit v of the case is set when corner v is
+// inside. One corner apart from the others gives a triangle, two and two a
+// quad cut into two triangles along a diagonal inside the tet. Each triangle
+// is wound, on the positively oriented reference tet, so that its normal
+// points from the inside corners to the outside ones.
+struct TetTable {
+  std::uint8_t triangles[16];
+  std::uint8_t edges[16][6];
+
+  TetTable() {
+    const double ref[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int m = 0; m < 16; ++m) {
+      int in[4], out[4], ni = 0, no = 0;
+      for (int v = 0; v < 4; ++v) ((m >> v) & 1 ? in[ni++] : out[no++]) = v;
+      int tri[2][3];
+      int nt = 0;
+      if (ni == 1 || ni == 3) {
+        const int apex = ni == 1 ? in[0] : out[0];
+        int k = 0;
+        for (int v = 0; v < 4; ++v)
+          if (v != apex) tri[0][k++] = edge_of(apex, v);
+        nt = 1;
+      } else if (ni == 2) {
+        const int a = in[0], b = in[1], c = out[0], d = out[1];
+        const int ac = edge_of(a, c), ad = edge_of(a, d), bd = edge_of(b, d), bc = edge_of(b, c);
+        tri[0][0] = ac, tri[0][1] = ad, tri[0][2] = bd;
+        tri[1][0] = ac, tri[1][1] = bd, tri[1][2] = bc;
+        nt = 2;
+      }
+      triangles[m] = static_cast<std::uint8_t>(nt);
+      double dir[3] = {0, 0, 0};  // from the inside corners' centroid to the outside ones'
+      for (int v = 0; v < 4; ++v)
+        for (int a = 0; a < 3; ++a) dir[a] += ((m >> v) & 1 ? -1.0 / ni : 1.0 / no) * ref[v][a];
+      for (int t = 0; t < nt; ++t) {
+        double p[3][3];
+        for (int c = 0; c < 3; ++c)
+          for (int a = 0; a < 3; ++a)
+            p[c][a] = 0.5 * (ref[kTetEdges[tri[t][c]][0]][a] + ref[kTetEdges[tri[t][c]][1]][a]);
+        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        if (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2] < 0) std::swap(tri[t][1], tri[t][2]);
+        for (int c = 0; c < 3; ++c) edges[m][3 * t + c] = static_cast<std::uint8_t>(tri[t][c]);
+      }
+    }
+  }
+};
+
+const TetTable& tet_table() {
+  static const TetTable table;
+  return table;
+}
+
+// Tets per chunk of the counting pass: fixed, so the work split never
+// changes the output (which is in tet order anyway).
+constexpr Id kTetsPerChunk = Id{1} << 14;
+
+struct EdgeKeys {
+  int bits;  // bits of a point id
+  std::uint64_t key(std::uint64_t a, std::uint64_t b, std::uint64_t iso_index) const {
+    if (a > b) std::swap(a, b);
+    return (iso_index << (2 * bits)) | (a << bits) | b;
+  }
+  void decode(std::uint64_t key, std::uint64_t& a, std::uint64_t& b, std::uint64_t& iso_index) const {
+    const std::uint64_t mask = (std::uint64_t{1} << bits) - 1;
+    b = key & mask;
+    a = (key >> bits) & mask;
+    iso_index = key >> (2 * bits);
+  }
+};
+
+// Appends one isovalue's soup (an edge key per triangle corner) to `keys`.
+template <class I>
+void tet_soup(const I* conn, Id tets, const float* P, const float* scalars, double iso, std::uint64_t iso_index,
+              const EdgeKeys& ek, std::vector<std::uint8_t>& inside, std::vector<std::uint8_t>& cases,
+              std::vector<std::uint64_t>& keys, ContourStats& st) {
+  const auto& table = tet_table();
+  auto t0 = Clock::now();
+  const Id points = static_cast<Id>(inside.size());
+  parallel::for_each(points, [&](Id p) { inside[p] = static_cast<std::uint8_t>(scalars[p] >= iso); });
+  const Id chunks = (tets + kTetsPerChunk - 1) / kTetsPerChunk;
+  std::vector<Id> chunk_offset(static_cast<std::size_t>(chunks + 1), 0);
+  parallel::for_each_dynamic(chunks, [&](Id c) {
+    const Id end = std::min(tets, (c + 1) * kTetsPerChunk);
+    Id count = 0;
+    for (Id t = c * kTetsPerChunk; t < end; ++t) {
+      const I* v = conn + 4 * t;
+      const unsigned m = inside[v[0]] | (inside[v[1]] << 1) | (inside[v[2]] << 2) | (inside[v[3]] << 3);
+      cases[t] = static_cast<std::uint8_t>(m);
+      count += table.triangles[m];
+    }
+    chunk_offset[c] = count;
+  }, 4);
+  const Id triangles = parallel::exclusive_scan(chunk_offset.data(), chunk_offset.data(), chunks + 1);
+  st.classify += seconds_since(t0);
+  t0 = Clock::now();
+  const Id base = static_cast<Id>(keys.size());
+  if (base + 3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("contour: " + std::to_string(base / 3 + triangles) +
+                     " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
+  keys.resize(static_cast<std::size_t>(base + 3 * triangles));
+  std::uint64_t* out = keys.data() + base;
+  parallel::for_each_dynamic(chunks, [&](Id c) {
+    const Id end = std::min(tets, (c + 1) * kTetsPerChunk);
+    std::uint64_t* o = out + 3 * chunk_offset[c];
+    for (Id t = c * kTetsPerChunk; t < end; ++t) {
+      const unsigned m = cases[t];
+      if (m == 0 || m == 15) continue;
+      const I* v = conn + 4 * t;
+      // A left-handed tet would turn its triangles inside out: wind them back.
+      const bool flip =
+          tet_volume(P + 3 * std::uint64_t(v[0]), P + 3 * std::uint64_t(v[1]), P + 3 * std::uint64_t(v[2]),
+                     P + 3 * std::uint64_t(v[3])) < 0;
+      for (int tri = 0; tri < table.triangles[m]; ++tri)
+        for (int corner = 0; corner < 3; ++corner) {
+          const int e = table.edges[m][3 * tri + (flip && corner ? 3 - corner : corner)];
+          *o++ = ek.key(v[kTetEdges[e][0]], v[kTetEdges[e][1]], iso_index);
+        }
+    }
+  }, 4);
+  st.generate += seconds_since(t0);
+}
+
+struct Vec3f {
+  float x, y, z;
+};
+
+}  // namespace
+
+SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats) {
+  if (opt.isovalues.empty()) throw InputError("contour: no isovalue given");
+  for (double iso : opt.isovalues)
+    if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
+  if (opt.normals == ContourNormals::Gradient)
+    throw InputError("contour: --normals gradient needs a voxel grid; use --normals average on tetrahedra");
+  if (!tets.all_cells_are(CellType::Tetra))
+    throw InputError("contour: the grid has cells other than tetrahedra (tetrahedralize it first)");
+  tets.validate("contour input");
+  const Field* field = nullptr;
+  for (const Field& f : tets.point_fields)
+    if (opt.array.empty() ? f.components == 1 : f.name == opt.array) {
+      field = &f;
+      break;
+    }
+  if (!field)
+    throw InputError(opt.array.empty() ? "contour: the grid has no one-component point field to contour"
+                                       : "contour: the grid has no point field '" + opt.array + "'");
+  if (field->components != 1)
+    throw InputError("contour: point field '" + field->name + "' has " + std::to_string(field->components) +
+                     " components (need 1)");
+  ContourStats local;
+  ContourStats& st = stats ? *stats : local;
+  st = ContourStats{};
+  const Id points_in = tets.num_points();
+  const Id tet_count = tets.num_cells();
+  const EdgeKeys ek{std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(points_in) - 1))};
+  const int iso_bits = parallel::bits_needed<std::uint64_t>(opt.isovalues.size() - 1);
+  if (2 * ek.bits + iso_bits > 64)
+    throw LimitError("contour: edge keys of " + std::to_string(points_in) + " points and " +
+                     std::to_string(opt.isovalues.size()) + " isovalues need more than 64 bits");
+  st.key_bits = 64;
+  const float* P = tets.points.data();
+  const float* S = field->values.data();
+
+  std::vector<std::uint64_t> soup;
+  {
+    std::vector<std::uint8_t> inside(static_cast<std::size_t>(points_in));
+    std::vector<std::uint8_t> cases(static_cast<std::size_t>(tet_count));
+    tets.connectivity.visit([&](auto conn) {
+      for (std::size_t k = 0; k < opt.isovalues.size(); ++k)
+        tet_soup(conn.data(), tet_count, P, S, opt.isovalues[k], k, ek, inside, cases, soup, st);
+    });
+  }
+  const Id corners = static_cast<Id>(soup.size());
+  st.soup_points = corners;
+
+  // Where the point of edge key `key` lies: its end points a < b and the
+  // parameter t from a to b.
+  struct EdgePoint {
+    std::uint64_t a, b;
+    double t;
+  };
+  auto locate = [&](std::uint64_t key) {
+    EdgePoint e{};
+    std::uint64_t iso_index;
+    ek.decode(key, e.a, e.b, iso_index);
+    const double iso = opt.isovalues[iso_index];
+    const double t = (iso - double(S[e.a])) / (double(S[e.b]) - double(S[e.a]));
+    // A NaN end sample (outside by definition) has no crossing: midway.
+    e.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
+    return e;
+  };
+  auto position = [&](const EdgePoint& e, float* xyz) {
+    for (int a = 0; a < 3; ++a) {
+      const double pa = P[3 * e.a + a], pb = P[3 * e.b + a];
+      xyz[a] = static_cast<float>(pa + e.t * (pb - pa));
+    }
+  };
+
+  SurfaceMesh mesh;
+  keyreduce::Groups<std::uint64_t> groups;
+  const bool average = opt.normals == ContourNormals::Average;
+  auto t0 = Clock::now();
+  if (opt.weld == ContourWeld::VertexWeld) {
+    std::vector<float> soup_xyz(static_cast<std::size_t>(3 * corners));
+    parallel::for_each(corners, [&](Id c) { position(locate(soup[c]), &soup_xyz[3 * c]); });
+    weld::WeldResult welded = weld::vertex_weld(soup_xyz.data(), corners);
+    mesh.points = std::move(welded.points);
+    mesh.connectivity = std::move(welded.index_map);
+    groups.unique_keys.resize(welded.first.size());
+    parallel::for_each(groups.num_groups(), [&](Id p) { groups.unique_keys[p] = soup[welded.first[p]]; });
+    if (average) {
+      groups.index_map = mesh.connectivity;
+      keyreduce::build_order(groups);
+    }
+  } else {
+    // Both KEY-REDUCE plan names use the sort plan here: N^2 edge keys are
+    // too many to address directly.
+    groups = keyreduce::partition_sort(soup.data(), corners, 2 * ek.bits + iso_bits,
+                                       average ? keyreduce::Order::Build : keyreduce::Order::Skip);
+    mesh.connectivity = groups.index_map;
+  }
+  soup = {};
+  st.weld += seconds_since(t0);
+
+  t0 = Clock::now();
+  const Id points = groups.num_groups();
+  const std::uint64_t* point_key = groups.unique_keys.data();
+  if (mesh.points.empty()) {
+    mesh.points.resize(static_cast<std::size_t>(3 * points));
+    parallel::for_each(points, [&](Id p) { position(locate(point_key[p]), &mesh.points[3 * p]); });
+  }
+  for (const Field& f : tets.point_fields) {
+    if (&f == field && !opt.scalars) continue;
+    const int k = f.components;
+    Field g{f.name, k, std::vector<float>(static_cast<std::size_t>(points) * static_cast<std::size_t>(k))};
+    parallel::for_each(points, [&](Id p) {
+      const EdgePoint e = locate(point_key[p]);
+      for (int c = 0; c < k; ++c) {
+        const double va = f.values[e.a * k + c], vb = f.values[e.b * k + c];
+        const double v = va + e.t * (vb - va);
+        // The contoured field at a NaN end takes the isovalue; others keep a finite end.
+        g.values[p * k + c] = static_cast<float>(std::isfinite(v) ? v : (std::isfinite(va) ? va : vb));
+      }
+    });
+    if (&f == field)
+      parallel::for_each(points, [&](Id p) {
+        if (!std::isfinite(g.values[p])) {
+          std::uint64_t a, b, iso_index;
+          ek.decode(point_key[p], a, b, iso_index);
+          g.values[p] = static_cast<float>(opt.isovalues[iso_index]);
+        }
+      });
+    mesh.point_fields.push_back(std::move(g));
+  }
+  if (average) {
+    const PointIndex* C = mesh.connectivity.data();
+    const float* Q = mesh.points.data();
+    std::vector<Vec3f> face(static_cast<std::size_t>(mesh.num_cells()));
+    parallel::for_each(mesh.num_cells(), [&](Id t) {
+      const float* a = Q + 3 * Id{C[3 * t]};
+      const float* b = Q + 3 * Id{C[3 * t + 1]};
+      const float* c = Q + 3 * Id{C[3 * t + 2]};
+      const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      const float v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      face[t] = Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    });
+    Field n{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * points))};
+    keyreduce::reduce(
+        groups, [&](Id pair) { return face[pair / 3]; },
+        [](Vec3f a, Vec3f b) { return Vec3f{a.x + b.x, a.y + b.y, a.z + b.z}; },
+        [](Vec3f s, Id) {
+          const float len = std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
+          return len > 0 ? Vec3f{s.x / len, s.y / len, s.z / len} : Vec3f{0, 0, 0};
+        },
+        reinterpret_cast<Vec3f*>(n.values.data()));
+    mesh.point_fields.push_back(std::move(n));
+  }
+  st.fields += seconds_since(t0);
+  return mesh;
+}
+
+}  // namespace keymesh::generate
