@@ -122,7 +122,9 @@ struct UnstructuredGrid {
   // Checks the structural invariants (offsets monotone and in range, ids <
   // num_points, sizes of types/fields consistent, fixed-size cells have the
   // right corner count); throws InputError naming `what` and the fault.
-  void validate(const std::string& what) const;
+  // check_ids = false skips the id range check (a full read of the
+  // connectivity), for callers that check each id as they read it anyway.
+  void validate(const std::string& what, bool check_ids = true) const;
 };
 
 }  // namespace keymesh

@@ -1,11 +1,11 @@
 #pragma once
 // Stable LSD radix sort of (key, value) pairs with unsigned 32- or 64-bit
 // keys. `significant_bits` says how many low key bits can be non-zero, so a
-// key known to fit in 23 bits costs three 8-bit passes, not eight. Passes in
+// key known to fit in 23 bits costs three passes of 8 bits, not eight;
+// digits are at most 11 bits wide (48 bits: five passes of 10). Passes in
 // which every key has the same digit are skipped. Each pass histograms fixed
 // contiguous chunks and scatters them in chunk order: the result is the
 // stable order, independent of the thread count.
-#include <array>
 #include <cstdint>
 #include <type_traits>
 #include <utility>
@@ -26,51 +26,56 @@ int bits_needed(K max_key) {
 template <class K, class V>
 void sort_pairs(std::vector<K>& keys, std::vector<V>& values, int significant_bits = int(sizeof(K) * 8)) {
   static_assert(std::is_unsigned_v<K>, "radix sort keys are unsigned integers");
-  constexpr int kDigitBits = 8;
-  constexpr int kBuckets = 1 << kDigitBits;
   const Id n = static_cast<Id>(keys.size());
   if (n <= 1) return;
   if (significant_bits > int(sizeof(K) * 8)) significant_bits = int(sizeof(K) * 8);
-  const int passes = (significant_bits + kDigitBits - 1) / kDigitBits;
-  if (passes == 0) return;
+  if (significant_bits <= 0) return;
+  // Digits of at most kMaxDigitBits, as few passes as that allows, the bits
+  // spread evenly over them (48 bits: 5 passes of 10, not 6 of 8).
+  constexpr int kMaxDigitBits = 11;
+  const int passes = (significant_bits + kMaxDigitBits - 1) / kMaxDigitBits;
+  const int digit_bits = (significant_bits + passes - 1) / passes;
+  const Id buckets = Id{1} << digit_bits;
+  const K mask = static_cast<K>(buckets - 1);
 
   std::vector<K> keys_tmp(n);
   std::vector<V> values_tmp(n);
   const int chunks = chunk_count(n, 1 << 15);
-  std::vector<std::array<Id, kBuckets>> hist(chunks);
+  std::vector<Id> hist_store(static_cast<std::size_t>(chunks * buckets));
+  auto hist = [&](int c) { return hist_store.data() + c * buckets; };
 
   K* src_k = keys.data();
   V* src_v = values.data();
   K* dst_k = keys_tmp.data();
   V* dst_v = values_tmp.data();
   for (int pass = 0; pass < passes; ++pass) {
-    const int shift = pass * kDigitBits;
+    const int shift = pass * digit_bits;
     for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
-      auto& h = hist[c];
-      h.fill(0);
-      for (Id i = b; i < e; ++i) ++h[(src_k[i] >> shift) & (kBuckets - 1)];
+      Id* h = hist(c);
+      std::fill(h, h + buckets, Id{0});
+      for (Id i = b; i < e; ++i) ++h[(src_k[i] >> shift) & mask];
     });
     // Skip a pass whose digit is the same for every key.
     bool trivial = false;
-    for (int d = 0; d < kBuckets && !trivial; ++d) {
+    for (Id d = 0; d < buckets && !trivial; ++d) {
       Id total = 0;
-      for (int c = 0; c < chunks; ++c) total += hist[c][d];
+      for (int c = 0; c < chunks; ++c) total += hist(c)[d];
       if (total == n) trivial = true;
       if (total != 0) break;
     }
     if (trivial) continue;
     // Exclusive offsets, digit-major then chunk order (stability).
     Id running = 0;
-    for (int d = 0; d < kBuckets; ++d)
+    for (Id d = 0; d < buckets; ++d)
       for (int c = 0; c < chunks; ++c) {
-        const Id count = hist[c][d];
-        hist[c][d] = running;
+        const Id count = hist(c)[d];
+        hist(c)[d] = running;
         running += count;
       }
     for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
-      auto& pos = hist[c];
+      Id* pos = hist(c);
       for (Id i = b; i < e; ++i) {
-        const Id at = pos[(src_k[i] >> shift) & (kBuckets - 1)]++;
+        const Id at = pos[(src_k[i] >> shift) & mask]++;
         dst_k[at] = src_k[i];
         dst_v[at] = src_v[i];
       }
