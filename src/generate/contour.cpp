@@ -322,10 +322,9 @@ void average_normals(const keyreduce::Groups<K>& groups, const std::vector<Id>* 
   normals.resize(3 * points);
   auto* out = reinterpret_cast<Vec3f*>(normals.data());
   if (blocks) {
-    // The face normal is recomputed for each of its three corners: cheaper
-    // than writing and reading back an array of them.
-    keyreduce::reduce_blocked(C, blocks->data(), static_cast<Id>(blocks->size()) - 1,
-                              [&](Id pair) { return face_normal(pair / 3); }, add, Vec3f{0, 0, 0}, out, points);
+    // The three corners of a triangle share its face normal (arity 3).
+    keyreduce::reduce_blocked(C, blocks->data(), static_cast<Id>(blocks->size()) - 1, 3, face_normal, add,
+                              Vec3f{0, 0, 0}, out, points);
     parallel::for_each(points, [&](Id p) { out[p] = unit(out[p]); });
     return;
   }

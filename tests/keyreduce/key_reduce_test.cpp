@@ -153,7 +153,7 @@ TEST_P(KeyReduceThreads, ReduceBlockedScattersInAFixedOrder) {
   begin.push_back(Id(keys.size()));
   const auto g = keyreduce::partition_dense(keys.data(), Id(keys.size()), std::uint32_t(blocks * 100 + 50));
   std::vector<double> sum(g.num_groups());
-  keyreduce::reduce_blocked(g.index_map.data(), begin.data(), blocks, [&](Id i) { return values[i]; },
+  keyreduce::reduce_blocked(g.index_map.data(), begin.data(), blocks, 1, [&](Id i) { return values[i]; },
                             [](double a, double b) { return a + b; }, 0.0, sum.data(), g.num_groups());
   // Reference: per key, the even block's values in pair order, then the odd block's.
   std::map<std::uint32_t, double> ref;

@@ -52,16 +52,23 @@ void reduce_values(const Groups<K>& groups, const V* values, Merge&& merge, Tran
 // Marching cubes gives such blocks for free: the soup is written voxel slab
 // after voxel slab, and an edge's point is shared only by the slabs on
 // either side of its plane.
+//
+// `arity` pairs in a row share one value: pair i's value is value(i / arity)
+// (a triangle's three corners share its face normal, computed once). Block
+// bounds must be multiples of `arity`.
 template <class Index, class ValueOf, class Merge, class Acc>
-void reduce_blocked(const Index* index_map, const Id* block_begin, Id blocks, ValueOf&& value, Merge&& merge,
-                    Acc identity, Acc* acc, Id groups) {
+void reduce_blocked(const Index* index_map, const Id* block_begin, Id blocks, int arity, ValueOf&& value,
+                    Merge&& merge, Acc identity, Acc* acc, Id groups) {
   parallel::for_each(groups, [&](Id g) { acc[g] = identity; });
   for (Id parity = 0; parity < 2; ++parity) {
     parallel::for_each_dynamic((blocks + 1 - parity) / 2, [&](Id h) {
       const Id b = 2 * h + parity;
-      for (Id i = block_begin[b]; i < block_begin[b + 1]; ++i) {
-        Acc& a = acc[static_cast<Id>(index_map[i])];
-        a = merge(a, value(i));
+      for (Id item = block_begin[b] / arity; item < block_begin[b + 1] / arity; ++item) {
+        const auto v = value(item);
+        for (Id i = item * arity; i < (item + 1) * arity; ++i) {
+          Acc& a = acc[static_cast<Id>(index_map[i])];
+          a = merge(a, v);
+        }
       }
     }, 1);
   }
