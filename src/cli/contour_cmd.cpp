@@ -1,9 +1,13 @@
 // keymesh contour IN -o OUT --iso V [...]: marching cubes welded by KEY-REDUCE.
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 
 #include "command.hpp"
 #include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour_tets.hpp"
+#include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/volume_io.hpp"
 
@@ -17,6 +21,7 @@ struct ContourCli {
   std::string weld = "keyreduce";
   std::string normals = "none";
   bool no_scalars = false;
+  std::string array;  // tet grids: the point field to contour
   // Raw input description.
   std::vector<long long> dims;
   std::string type = "float32";
@@ -27,11 +32,14 @@ struct ContourCli {
 };
 
 Register reg{Command{
-    "contour", "isosurface of a volume by marching cubes, welded by edge keys",
+    "contour", "isosurface of a volume (marching cubes) or a tet grid (marching tetrahedra), welded by edge keys",
     [](CLI::App& cmd) -> std::function<int()> {
       auto o = std::make_shared<ContourCli>();
-      cmd.add_option("input", o->input, "volume: .vti .nrrd .nhdr .nii .nii.gz .den, or raw with --dims")
+      cmd.add_option("input", o->input,
+                     "volume: .vti .nrrd .nhdr .nii .nii.gz .den, or raw with --dims; "
+                     "or a tetrahedral grid: .vtu, .vtk (UNSTRUCTURED_GRID)")
           ->required();
+      cmd.add_option("--array", o->array, "tet grids: the point field to contour (default: the first scalar field)");
       cmd.add_option("-o,--output", o->output, "output mesh (.vtp .ply .obj .stl)")->required();
       cmd.add_option("--iso", o->isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
       cmd.add_option("--weld", o->weld,
@@ -72,15 +80,6 @@ Register reg{Command{
           raw.big_endian = o->endian == "big";
           raw.header_bytes = o->header_bytes;
         }
-        progress.say("reading " + o->input);
-        const ImageGrid grid = timer.run("read", [&] { return io::read_volume(o->input, is_raw ? &raw : nullptr); });
-        progress.enable_if(grid.num_points() > (1ll << 25));
-        const auto range = scalar_range(grid);
-        for (double iso : o->isovalues)
-          if (iso < range[0] || iso > range[1])
-            if (!o->common.quiet)
-              std::fprintf(stderr, "keymesh: warning: isovalue %g is outside the data range [%g, %g]\n", iso,
-                           range[0], range[1]);
         generate::ContourOptions opt;
         opt.isovalues = o->isovalues;
         opt.weld = o->weld == "vertexweld"       ? generate::ContourWeld::VertexWeld
@@ -90,21 +89,63 @@ Register reg{Command{
                       : o->normals == "average" ? generate::ContourNormals::Average
                                                 : generate::ContourNormals::None;
         opt.scalars = !o->no_scalars;
+        opt.array = o->array;
+        auto warn_outside = [&](std::array<double, 2> range) {
+          for (double iso : o->isovalues)
+            if ((iso < range[0] || iso > range[1]) && !o->common.quiet)
+              std::fprintf(stderr, "keymesh: warning: isovalue %g is outside the data range [%g, %g]\n", iso,
+                           range[0], range[1]);
+        };
         generate::ContourStats stats;
-        progress.say("contouring " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
-                     std::to_string(grid.dims[2]) + " " + scalar_type_name(grid.type));
-        const SurfaceMesh mesh = timer.run("contour", [&] { return generate::contour(grid, opt, &stats); });
+        SurfaceMesh mesh;
+        nlohmann::json r;
+        progress.say("reading " + o->input);
+        if (!is_raw && io::is_grid_file(o->input)) {
+          if (opt.normals == generate::ContourNormals::Gradient) {
+            std::fprintf(stderr, "keymesh contour: --normals gradient needs a voxel grid; use --normals average\n");
+            return 2;
+          }
+          const UnstructuredGrid grid = timer.run("read", [&] { return io::read_grid(o->input); });
+          progress.enable_if(grid.num_cells() > (1ll << 26));
+          for (const Field& f : grid.point_fields)
+            if (o->array.empty() ? f.components == 1 : f.name == o->array) {
+              std::array<double, 2> range{0, 0};
+              bool any = false;
+              for (float v : f.values)
+                if (std::isfinite(v)) {
+                  range = any ? std::array<double, 2>{std::min<double>(range[0], v), std::max<double>(range[1], v)}
+                              : std::array<double, 2>{v, v};
+                  any = true;
+                }
+              warn_outside(range);
+              r["array"] = f.name;
+              break;
+            }
+          progress.say("contouring " + std::to_string(grid.num_cells()) + " tetrahedra");
+          mesh = timer.run("contour", [&] { return generate::contour(grid, opt, &stats); });
+          r["input_points"] = grid.num_points();
+          r["input_cells"] = grid.num_cells();
+          r["grid"] = "tetrahedra";
+        } else {
+          const ImageGrid grid =
+              timer.run("read", [&] { return io::read_volume(o->input, is_raw ? &raw : nullptr); });
+          progress.enable_if(grid.num_points() > (1ll << 25));
+          warn_outside(scalar_range(grid));
+          progress.say("contouring " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
+                       std::to_string(grid.dims[2]) + " " + scalar_type_name(grid.type));
+          mesh = timer.run("contour", [&] { return generate::contour(grid, opt, &stats); });
+          r["dims"] = grid.dims;
+          r["scalar_type"] = scalar_type_name(grid.type);
+          r["grid"] = "voxels";
+        }
         progress.say("writing " + o->output);
         timer.run("write", [&] { io::write_mesh(mesh, o->output); });
         if (!o->common.quiet)
           std::fprintf(stderr, "keymesh: %lld points, %lld triangles -> %s\n", static_cast<long long>(mesh.num_points()),
                        static_cast<long long>(mesh.num_cells()), o->output.c_str());
         if (!o->common.report_path.empty()) {
-          nlohmann::json r;
           r["input"] = o->input;
           r["output"] = o->output;
-          r["dims"] = grid.dims;
-          r["scalar_type"] = scalar_type_name(grid.type);
           r["isovalues"] = o->isovalues;
           r["weld"] = o->weld;
           r["normals"] = o->normals;
