@@ -73,6 +73,8 @@ class Reader {
     std::int64_t v = 0;
     const std::string_view w = word();
     if (!parse_int64(w, v) || v < 0) fail(std::string("bad ") + what + " '" + std::string(w) + "'");
+    // No file holds 2^48 values; the cap keeps products with component counts from overflowing.
+    if (v > (std::int64_t{1} << 48)) fail(std::string(what) + " " + std::string(w) + " is larger than any file holds");
     return v;
   }
   // A METADATA block (INFORMATION, COMPONENT_NAMES, ...) ends at an empty line.
@@ -90,21 +92,27 @@ class Reader {
     while (pos_ < d_.size() && d_[pos_] != '\n') ++pos_;
     if (pos_ < d_.size()) ++pos_, ++line_;
   }
-  // n values of type s, as doubles (fields, points) via `put(i, value)`.
+  // Refuses a count the rest of the file cannot hold, before anything of
+  // that size is allocated: n binary values of type s, or n text numbers
+  // (each at least one digit and a separator).
+  void check_count(std::int64_t n, Scalar s, const char* what) const {
+    const std::uint64_t left = d_.size() - std::min(pos_, d_.size());
+    const std::uint64_t room = binary_ ? left / scalar_size(s) : left / 2 + 1;
+    if (n < 0 || static_cast<std::uint64_t>(n) > room)
+      fail(std::string(what) + ": " + std::to_string(n) + " values declared, the file ends first");
+  }
+  // n values of type s, each handed to `put(i, value)`.
   template <class Put>
   void values(std::int64_t n, Scalar s, const char* what, Put&& put) {
+    check_count(n, s, what);
     if (binary_) {
       rest_of_line();  // binary data starts after the keyword line
       const std::size_t size = scalar_size(s);
-      if (static_cast<std::uint64_t>(n) > (d_.size() - pos_) / size)
-        fail(std::string(what) + ": " + std::to_string(n) + " values declared, the file ends first");
+      check_count(n, s, what);
       for (std::int64_t i = 0; i < n; ++i) put(i, d_.data() + pos_ + std::size_t(i) * size, true);
       pos_ += std::size_t(n) * size;
       return;
     }
-    // A declared count larger than the text could hold is refused before any work.
-    if (static_cast<std::uint64_t>(n) > (d_.size() - pos_) / 2 + 1)
-      fail(std::string(what) + ": " + std::to_string(n) + " values declared, the file is too short");
     for (std::int64_t i = 0; i < n; ++i) {
       const std::string_view w = word();
       if (w.empty()) fail(std::string(what) + ": the file ends after " + std::to_string(i) + " values");
@@ -112,6 +120,7 @@ class Reader {
     }
   }
   std::vector<double> doubles(std::int64_t n, Scalar s, const char* what) {
+    check_count(n, s, what);
     std::vector<double> out(static_cast<std::size_t>(n));
     values(n, s, what, [&](std::int64_t i, auto src, bool) {
       if constexpr (std::is_same_v<decltype(src), std::string_view>) {
@@ -123,6 +132,7 @@ class Reader {
     return out;
   }
   std::vector<std::int64_t> ints(std::int64_t n, Scalar s, const char* what) {
+    check_count(n, s, what);
     std::vector<std::int64_t> out(static_cast<std::size_t>(n));
     values(n, s, what, [&](std::int64_t i, auto src, bool) {
       bool ok;

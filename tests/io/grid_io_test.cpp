@@ -136,7 +136,7 @@ void expect_input_error(const std::string& name, const std::string& text, const 
   } catch (const InputError& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find(path), std::string::npos) << m;
-    EXPECT_NE(m.find(needle), std::string::npos) << m;
+    EXPECT_NE(m.find(needle), std::string::npos) << name << ": " << m;
   }
   std::filesystem::remove(path);
 }
@@ -145,7 +145,7 @@ TEST(GridIo, MalformedFilesAreRefusedByName) {
   const std::string head = "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n";
   expect_input_error("poly.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 0 float\n",
                      "POLYDATA");
-  expect_input_error("trunc.vtk", head + "POINTS 4 float\n0 0 0 1 0 0\n", "ends");
+  expect_input_error("trunc.vtk", head + "POINTS 4 float\n0 0 0 1 0 0\n", "file ends");
   expect_input_error("range.vtk", head + "POINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 9\nCELL_TYPES 1\n10\n",
                      "out of range");
   expect_input_error("cells.vtk", head + "POINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n7 0 1 2 3\nCELL_TYPES 1\n10\n",
