@@ -131,6 +131,8 @@ def main():
                 rows.append(vtk_cold(n, iso, threads_all, reps, work))
             except SystemExit as e:
                 print(f"  VTK peer unavailable: {e}")
+            if n <= 256:
+                rows += tet_rows(bench, keymesh, n, iso, threads_all, reps, work)
     for r in rows:
         r["machine"] = info
     os.makedirs(os.path.dirname(a.out), exist_ok=True)
@@ -148,6 +150,39 @@ def write_summary(rows, info, sizes, threads_all, a):
                 f"{info['compiler']}, Linux {info['kernel']}\n\nCommand: `make bench{' QUICK=1' if a.quick else ''}`"
                 f"\n\n```\n{text}\n```\n")
     print(f"\nresults: {a.out} and {md}")
+
+
+def tet_rows(bench, keymesh, n, iso, threads_all, reps, work):
+    """Marching tetrahedra on the scheme-5 grid of the field (Table 2's
+    unstructured rows): keymesh in-process, the CLI's tetrahedralize, and
+    vtkContour3DLinearGrid on keymesh's .vtu."""
+    rows = []
+    for threads in sorted({1, threads_all}):
+        for weld in ("vertexweld", "keyreduce"):
+            print(f"  {n}^3 tets keymesh {weld} threads={threads}", flush=True)
+            r = run_json([bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps), "--grid", "tet5",
+                          "--weld", weld])[0]
+            r["tool"] = "keymesh"
+            rows.append(r)
+    vti, vtu = os.path.join(work, f"sphere{n}.vti"), os.path.join(work, f"tets{n}.vtu")
+    if not os.path.exists(vti):
+        subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
+    rep = os.path.join(work, "tet.json")
+    print(f"  {n}^3 keymesh tetrahedralize (CLI)", flush=True)
+    subprocess.run([keymesh, "tetrahedralize", vti, "-o", vtu, "-q", "--report", rep], check=True,
+                   env=env_hugepages())
+    tr = json.load(open(rep))
+    rows.append({"bench": "tetrahedralize", "tool": "keymesh-cli", "grid": "tet5", "size": n,
+                 "threads": tr["threads"], "median": tr["seconds"]["tetrahedralize"], "cells": tr["cells"],
+                 "peak_rss_mib": tr["peak_rss_mib"]})
+    print(f"  {n}^3 tets VTK", flush=True)
+    try:
+        rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_tet_contour.py"), "--vtu", vtu,
+                          "--size", str(n), "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps)])
+    except SystemExit as e:
+        print(f"  VTK peer unavailable: {e}")
+    os.remove(vtu)
+    return rows
 
 
 def find(rows, **kw):
@@ -177,10 +212,12 @@ def summarize(rows, sizes, threads):
     out("\nWarm: medians of repetitions in one process (ms; min-max)")
     out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in sizes))
     for t in sorted({1, threads}):
-        line(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", weld="vertexweld", threads=t)
-        line(f"keymesh KEY-REDUCE sort plan, {t} thr", tool="keymesh", weld="keyreduce-sort", threads=t)
-        line(f"keymesh KEY-REDUCE dense plan, no merge, {t} thr", tool="keymesh", weld="keyreduce", normals="none", threads=t)
-        line(f"keymesh KEY-REDUCE averaging, {t} thr", tool="keymesh", weld="keyreduce", normals="average", threads=t)
+        line(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", grid="voxel", weld="vertexweld", threads=t)
+        line(f"keymesh KEY-REDUCE sort plan, {t} thr", tool="keymesh", grid="voxel", weld="keyreduce-sort", threads=t)
+        line(f"keymesh KEY-REDUCE dense plan, no merge, {t} thr", tool="keymesh", grid="voxel", weld="keyreduce",
+             normals="none", threads=t)
+        line(f"keymesh KEY-REDUCE averaging, {t} thr", tool="keymesh", grid="voxel", weld="keyreduce",
+             normals="average", threads=t)
     line(f"vtkFlyingEdges3D, {threads} thr", tool="vtkFlyingEdges3D")
     line("vtkMarchingCubes, 1 thr", tool="vtkMarchingCubes")
 
@@ -194,17 +231,17 @@ def summarize(rows, sizes, threads):
             cells.append(f"{r[key] * 1e3:8.1f}" if r else "")
         out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
 
-    cold(f"keymesh KEY-REDUCE, first repetition, {threads} thr", "first", tool="keymesh", weld="keyreduce",
-         normals="none", threads=threads)
+    cold(f"keymesh KEY-REDUCE, first repetition, {threads} thr", "first", tool="keymesh", grid="voxel",
+         weld="keyreduce", normals="none", threads=threads)
     cold(f"keymesh CLI seconds.contour (median), {threads} thr", "median", tool="keymesh-cli")
     cold(f"vtkFlyingEdges3D, first repetition, {threads} thr", "first", tool="vtkFlyingEdges3D")
     cold(f"vtkFlyingEdges3D one-shot (median), {threads} thr", "median", tool="vtkFlyingEdges3D-cold")
 
     out("\nRatios (higher is better for keymesh)")
     for n in sizes:
-        kr = find(rows, size=n, tool="keymesh", weld="keyreduce", normals="none", threads=threads)
-        av = find(rows, size=n, tool="keymesh", weld="keyreduce", normals="average", threads=threads)
-        vw = find(rows, size=n, tool="keymesh", weld="vertexweld", threads=threads)
+        kr = find(rows, size=n, tool="keymesh", grid="voxel", weld="keyreduce", normals="none", threads=threads)
+        av = find(rows, size=n, tool="keymesh", grid="voxel", weld="keyreduce", normals="average", threads=threads)
+        vw = find(rows, size=n, tool="keymesh", grid="voxel", weld="vertexweld", threads=threads)
         cli = find(rows, size=n, tool="keymesh-cli")
         fe = find(rows, size=n, tool="vtkFlyingEdges3D")
         parts = []
@@ -220,7 +257,37 @@ def summarize(rows, sizes, threads):
             parts.append(f"averaging overhead {100 * (av['median'] / kr['median'] - 1):+.0f}% (medians), "
                          f"{100 * (av['min'] / kr['min'] - 1):+.0f}% (minima)")
         out(f"  {n}^3, {threads} threads: " + "; ".join(parts))
-    peak = [r for r in rows if r.get("size") == sizes[-1]]
+    tet_sizes = [n for n in sizes if find(rows, size=n, grid="tet5")]
+    if tet_sizes:
+        out("\nMarching tetrahedra on the scheme-5 grid (5 (N-1)^3 tets), warm medians (ms; min-max)")
+        out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in tet_sizes))
+
+        def tline(label, **kw):
+            cells = []
+            for n in tet_sizes:
+                r = find(rows, size=n, grid="tet5", **kw)
+                cells.append(f"{r['median'] * 1e3:8.1f} ({r.get('min', r['median']) * 1e3:.0f}-"
+                             f"{r.get('max', r['median']) * 1e3:.0f})" if r else "")
+            out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+        for t in sorted({1, threads}):
+            tline(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", weld="vertexweld", threads=t)
+            tline(f"keymesh KEY-REDUCE sort plan, {t} thr", tool="keymesh", weld="keyreduce", threads=t)
+        tline(f"vtkContour3DLinearGrid, {threads} thr", tool="vtkContour3DLinearGrid")
+        tline(f"keymesh tetrahedralize (CLI stage), {threads} thr", tool="keymesh-cli")
+        for n in tet_sizes:
+            kr = find(rows, size=n, grid="tet5", tool="keymesh", weld="keyreduce", threads=threads)
+            vw = find(rows, size=n, grid="tet5", tool="keymesh", weld="vertexweld", threads=threads)
+            vt = find(rows, size=n, grid="tet5", tool="vtkContour3DLinearGrid")
+            parts = []
+            if kr and vt:
+                parts.append(f"vtkContour3DLinearGrid / keymesh {vt['median'] / kr['median']:.2f}x "
+                             f"(triangles {kr['cells']} vs {vt['cells']})")
+            if kr and vw:
+                parts.append(f"VERTEX-WELD / KEY-REDUCE {vw['median'] / kr['median']:.2f}x")
+            if kr:
+                parts.append(f"keymesh peak RSS {kr['peak_rss_mib']:.0f} MiB")
+            out(f"  {n}^3 tets, {threads} threads: " + "; ".join(parts))
+    peak = [r for r in rows if r.get("size") == sizes[-1] and r.get("grid") != "tet5"]
     out(f"\nPeak RSS at {sizes[-1]}^3 (MiB): " +
           ", ".join(f"{r['tool']} {r.get('weld', '')} {r.get('normals', '')} {r['peak_rss_mib']:.0f}".replace("  ", " ")
                     for r in peak if r.get("threads") == threads or r["tool"] == "vtkMarchingCubes"))
