@@ -1,0 +1,85 @@
+#pragma once
+// Shared helpers of the Python module: numpy arrays that adopt std::vectors,
+// the thread-count scope, dtype mapping, and the registration functions of
+// each file (one file per concept).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "keymesh/mesh/image_grid.hpp"
+#include "keymesh/mesh/surface_mesh.hpp"
+#include "keymesh/parallel/threads.hpp"
+
+namespace keymesh::python {
+
+namespace py = pybind11;
+
+// A numpy array of `shape` that takes over v's buffer without copying: the
+// vector moves to the heap and a capsule, the array's base, deletes it when
+// the last view goes. `View` lets the bytes be read as another type of the
+// same size (uint64 keys shown as int64).
+template <class View = void, class T>
+py::array adopt(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
+  using V = std::conditional_t<std::is_void_v<View>, T, View>;
+  static_assert(sizeof(V) == sizeof(T));
+  auto* owned = new std::vector<T>(std::move(v));
+  py::capsule base(owned, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  return py::array_t<V>(std::move(shape), reinterpret_cast<const V*>(owned->data()), base);
+}
+
+// Sets the library's (process-wide) worker count for one call, restores it
+// after. threads: 0 = all cores; negative is refused before this is built.
+class ThreadScope {
+ public:
+  explicit ThreadScope(int threads) : previous_(parallel::thread_count()) { parallel::set_thread_count(threads); }
+  ~ThreadScope() { parallel::set_thread_count(previous_); }
+  ThreadScope(const ThreadScope&) = delete;
+  ThreadScope& operator=(const ThreadScope&) = delete;
+
+ private:
+  int previous_;
+};
+
+// ValueError unless threads >= 0.
+void check_threads(int threads);
+
+// The library's scalar type of a numpy dtype; TypeError naming the dtype
+// (and what is accepted) otherwise. `what` names the argument.
+ScalarType scalar_type_of(const py::dtype& dtype, const char* what);
+py::dtype dtype_of(ScalarType type);
+// "float32", ">f4", ...
+inline std::string dtype_name(const py::dtype& dtype) { return py::str(static_cast<py::handle>(dtype)); }
+
+// An ndarray view of the volume's samples: shape (nx, ny, nz), axis 0 = x,
+// Fortran order (x varies fastest, as in the grid). `owner` keeps the grid alive.
+py::array grid_view(const ImageGrid& grid, py::handle owner);
+
+// A sequence of 3 numbers (spacing, origin); TypeError / ValueError naming `what`.
+std::array<double, 3> triple(const py::handle& obj, const char* what);
+
+// SurfaceMesh <-> (points, cells, offsets, point_data) of a Python Mesh.
+// to_python moves every array into numpy without a copy; triangle meshes
+// give cells of shape (m, 3) and offsets None, polygon meshes a flat
+// connectivity array and offsets (m + 1).
+py::tuple mesh_to_python(SurfaceMesh&& mesh);
+// Copies (and converts) a Python Mesh's arrays; ValueError on bad shapes or ids.
+SurfaceMesh mesh_from_python(const py::handle& mesh);
+
+// A volume owned by the module (keymesh.Volume): contour reads it without a copy.
+struct Volume {
+  ImageGrid grid;
+};
+
+void register_errors(py::module_& m);
+void register_volume(py::module_& m);
+void register_contour(py::module_& m);
+void register_key_reduce(py::module_& m);
+void register_io(py::module_& m);
+void register_check(py::module_& m);
+
+}  // namespace keymesh::python

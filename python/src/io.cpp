@@ -1,0 +1,77 @@
+// keymesh.read / keymesh.write: the library's volume and surface mesh files.
+#include <algorithm>
+#include <cctype>
+
+#include "common.hpp"
+#include "keymesh/io/mesh_io.hpp"
+#include "keymesh/io/volume_io.hpp"
+
+namespace keymesh::python {
+
+namespace {
+
+bool is_volume_path(std::string path) {
+  std::transform(path.begin(), path.end(), path.begin(), [](unsigned char c) { return std::tolower(c); });
+  for (const char* ext : {".vti", ".nrrd", ".nhdr", ".nii", ".nii.gz", ".den", ".raw"}) {
+    const std::string e(ext);
+    if (path.size() >= e.size() && path.compare(path.size() - e.size(), e.size(), e) == 0) return true;
+  }
+  return false;
+}
+
+// Returns ("volume", Volume) or ("mesh", (points, cells, offsets, point_data)).
+py::tuple read(const std::string& path, const py::object& dims, const py::object& dtype, const py::object& spacing,
+               const py::object& origin, const std::string& endian, Id header_bytes) {
+  if (!is_volume_path(path)) {
+    SurfaceMesh mesh;
+    {
+      py::gil_scoped_release release;
+      mesh = io::read_mesh(path);
+    }
+    return py::make_tuple("mesh", mesh_to_python(std::move(mesh)));
+  }
+  io::RawOptions raw;
+  const bool is_raw = !dims.is_none() || !dtype.is_none();
+  if (is_raw) {
+    if (dims.is_none() || dtype.is_none())
+      throw py::value_error(path + ": a .raw volume needs dims=(nx, ny, nz) and dtype");
+    const auto d = dims.cast<std::vector<Id>>();
+    if (d.size() != 3) throw py::value_error("dims must have 3 entries (nx, ny, nz)");
+    raw.dims = {d[0], d[1], d[2]};
+    raw.type = scalar_type_of(py::dtype::from_args(dtype), "dtype");
+    if (!spacing.is_none()) raw.spacing = triple(spacing, "spacing");
+    if (!origin.is_none()) raw.origin = triple(origin, "origin");
+    if (endian != "little" && endian != "big") throw py::value_error("endian must be 'little' or 'big'");
+    raw.big_endian = endian == "big";
+    raw.header_bytes = header_bytes;
+  }
+  auto volume = std::make_shared<Volume>();
+  {
+    py::gil_scoped_release release;
+    volume->grid = io::read_volume(path, is_raw ? &raw : nullptr);
+  }
+  return py::make_tuple("volume", volume);
+}
+
+void write_mesh(const py::handle& mesh_obj, const std::string& path) {
+  const SurfaceMesh mesh = mesh_from_python(mesh_obj);
+  py::gil_scoped_release release;
+  io::write_mesh(mesh, path);
+}
+
+void write_volume(const Volume& volume, const std::string& path) {
+  py::gil_scoped_release release;
+  io::write_volume(volume.grid, path);
+}
+
+}  // namespace
+
+void register_io(py::module_& m) {
+  m.def("read", &read, py::arg("path"), py::arg("dims") = py::none(), py::arg("dtype") = py::none(),
+        py::arg("spacing") = py::none(), py::arg("origin") = py::none(), py::arg("endian") = "little",
+        py::arg("header_bytes") = 0, "Reads a volume or a surface mesh file. Use keymesh.read.");
+  m.def("write_mesh", &write_mesh, py::arg("mesh"), py::arg("path"), "Writes a Mesh (.vtp .ply .obj .stl).");
+  m.def("write_volume", &write_volume, py::arg("volume"), py::arg("path"), "Writes a Volume (.vti .nrrd .raw).");
+}
+
+}  // namespace keymesh::python

@@ -1,0 +1,103 @@
+// SurfaceMesh <-> the arrays of a Python keymesh.Mesh.
+#include <cstdint>
+#include <limits>
+
+#include "common.hpp"
+
+namespace keymesh::python {
+
+namespace {
+
+std::string shape_text(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t d = 0; d < a.ndim(); ++d) s += (d ? ", " : "") + std::to_string(a.shape(d));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+// An integer array as int64 (C order); TypeError for other kinds.
+py::array_t<std::int64_t, py::array::c_style> integers(const py::handle& obj, const char* what) {
+  py::array a = py::array::ensure(obj);
+  if (!a) throw py::type_error(std::string(what) + " must be an integer array");
+  if (a.size() > 0 && a.dtype().kind() != 'i' && a.dtype().kind() != 'u')
+    throw py::type_error(std::string(what) + " must hold integers, got dtype " + dtype_name(a.dtype()));
+  return py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+}
+
+}  // namespace
+
+py::tuple mesh_to_python(SurfaceMesh&& mesh) {
+  const py::ssize_t n = mesh.num_points();
+  const py::ssize_t m = mesh.num_cells();
+  py::dict point_data;
+  for (Field& f : mesh.point_fields) {
+    std::vector<py::ssize_t> shape{n};
+    if (f.components != 1) shape.push_back(f.components);
+    point_data[py::str(f.name)] = adopt(std::move(f.values), std::move(shape));
+  }
+  py::array points = adopt(std::move(mesh.points), {n, 3});
+  if (mesh.all_triangles())
+    return py::make_tuple(points, adopt(std::move(mesh.connectivity), {m, 3}), py::none(), point_data);
+  const auto corners = static_cast<py::ssize_t>(mesh.connectivity.size());
+  return py::make_tuple(points, adopt(std::move(mesh.connectivity), {corners}),
+                        adopt(std::move(mesh.offsets), {m + 1}), point_data);
+}
+
+SurfaceMesh mesh_from_python(const py::handle& obj) {
+  SurfaceMesh mesh;
+  auto points = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(obj.attr("points"));
+  if (!points || points.ndim() != 2 || points.shape(1) != 3)
+    throw py::value_error("mesh.points must be an (n, 3) array of numbers, got shape " +
+                          (points ? shape_text(points) : std::string("?")));
+  const py::ssize_t n = points.shape(0);
+  mesh.points.assign(points.data(), points.data() + 3 * n);
+
+  auto cells = integers(obj.attr("cells"), "mesh.cells");
+  const py::object offsets_obj = py::getattr(obj, "offsets", py::none());
+  const std::int64_t* ids = cells.data();
+  const auto corners = static_cast<std::size_t>(cells.size());
+  if (offsets_obj.is_none()) {
+    if (cells.ndim() != 2 || (cells.shape(1) < 3 && cells.size() > 0))
+      throw py::value_error("mesh.cells must be an (m, k) array with k >= 3 (or flat with mesh.offsets), got shape " +
+                            shape_text(cells));
+    const py::ssize_t m = cells.shape(0), k = cells.shape(1);
+    if (k != 3)
+      for (py::ssize_t c = 0; c <= m; ++c) mesh.offsets.push_back(static_cast<std::uint64_t>(c * k));
+  } else {
+    auto offsets = integers(offsets_obj, "mesh.offsets");
+    if (offsets.ndim() != 1 || offsets.size() < 1 || offsets.data()[0] != 0 ||
+        offsets.data()[offsets.size() - 1] != static_cast<std::int64_t>(corners))
+      throw py::value_error("mesh.offsets must be 1-D, start at 0 and end at len(mesh.cells) = " +
+                            std::to_string(corners));
+    for (py::ssize_t c = 0; c < offsets.size(); ++c) {
+      if (c > 0 && offsets.data()[c] < offsets.data()[c - 1])
+        throw py::value_error("mesh.offsets must not decrease (index " + std::to_string(c) + ")");
+      mesh.offsets.push_back(static_cast<std::uint64_t>(offsets.data()[c]));
+    }
+  }
+  mesh.connectivity.resize(corners);
+  for (std::size_t i = 0; i < corners; ++i) {
+    if (ids[i] < 0 || ids[i] >= n)
+      throw py::value_error("mesh.cells refers to point " + std::to_string(ids[i]) + " but the mesh has " +
+                            std::to_string(n) + " points");
+    mesh.connectivity[i] = static_cast<PointIndex>(ids[i]);
+  }
+
+  const py::object data = py::getattr(obj, "point_data", py::none());
+  if (!data.is_none()) {
+    for (auto item : data.cast<py::dict>()) {
+      const std::string name = py::str(item.first);
+      auto values = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(item.second);
+      if (!values || values.ndim() < 1 || values.ndim() > 2 || values.shape(0) != n)
+        throw py::value_error("mesh.point_data['" + name + "'] must have " + std::to_string(n) +
+                              " rows (one per point), 1 or 2 dimensions");
+      Field f;
+      f.name = name;
+      f.components = values.ndim() == 2 ? static_cast<int>(values.shape(1)) : 1;
+      f.values.assign(values.data(), values.data() + values.size());
+      mesh.point_fields.push_back(std::move(f));
+    }
+  }
+  return mesh;
+}
+
+}  // namespace keymesh::python

@@ -1,0 +1,66 @@
+// keymesh._keymesh: the compiled half of the Python package `keymesh`
+// (python/keymesh/__init__.py wraps it with Mesh and the conversions).
+#include "common.hpp"
+
+#include "keymesh/core/error.hpp"
+
+namespace keymesh::python {
+
+void check_threads(int threads) {
+  if (threads < 0) throw py::value_error("threads must be >= 0 (0 = all cores), got " + std::to_string(threads));
+}
+
+ScalarType scalar_type_of(const py::dtype& dtype, const char* what) {
+  const char kind = dtype.kind();
+  const auto size = dtype.itemsize();
+  if (kind == 'u' && size == 1) return ScalarType::UInt8;
+  if (kind == 'i' && size == 1) return ScalarType::Int8;
+  if (kind == 'u' && size == 2) return ScalarType::UInt16;
+  if (kind == 'i' && size == 2) return ScalarType::Int16;
+  if (kind == 'i' && size == 4) return ScalarType::Int32;
+  if (kind == 'f' && size == 4) return ScalarType::Float32;
+  if (kind == 'f' && size == 8) return ScalarType::Float64;
+  throw py::type_error(std::string(what) + " has dtype " + dtype_name(dtype) +
+                       "; keymesh supports uint8, int8, uint16, int16, int32, float32 and float64 "
+                       "(convert with .astype(numpy.float32) for example)");
+}
+
+py::dtype dtype_of(ScalarType type) { return py::dtype(scalar_type_name(type)); }
+
+py::array grid_view(const ImageGrid& grid, py::handle owner) {
+  const auto size = static_cast<py::ssize_t>(scalar_size(grid.type));
+  std::vector<py::ssize_t> shape{grid.dims[0], grid.dims[1], grid.dims[2]};
+  std::vector<py::ssize_t> strides{size, size * grid.dims[0], size * grid.dims[0] * grid.dims[1]};
+  return py::array(dtype_of(grid.type), std::move(shape), std::move(strides), grid.data(), owner);
+}
+
+void register_errors(py::module_& m) {
+  static py::exception<InputError> error(m, "Error", PyExc_ValueError);
+  static py::exception<LimitError> limit(m, "LimitError", error.ptr());
+  error.doc() = "Bad input for keymesh (a file, an array, an argument); a ValueError.";
+  limit.doc() = "A request past a keymesh limit (e.g. more than 2^32 - 1 output points); a keymesh.Error.";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const LimitError& e) {
+      limit(e.what());
+    } catch (const InputError& e) {
+      error(e.what());
+    }
+  });
+}
+
+}  // namespace keymesh::python
+
+PYBIND11_MODULE(_keymesh, m) {
+  namespace kp = keymesh::python;
+  m.doc() = "keymesh's compiled core (use the `keymesh` package, which wraps it).";
+  kp::register_errors(m);
+  kp::register_volume(m);
+  kp::register_contour(m);
+  kp::register_key_reduce(m);
+  kp::register_io(m);
+  kp::register_check(m);
+  m.def("thread_count", &keymesh::parallel::thread_count,
+        "Worker threads the library uses when a call passes threads=0 (all cores).");
+}
