@@ -1,4 +1,4 @@
-// keymesh tetrahedralize IN -o OUT.vtu --scheme 5: hexahedra (voxels of a
+// keymesh tetrahedralize IN -o OUT.vtu --scheme 5|24: hexahedra (voxels of a
 // volume, or hexahedral cells of a .vtu/.vtk) split into tetrahedra.
 #include <cstdio>
 
@@ -14,6 +14,7 @@ namespace {
 struct TetrahedralizeCli {
   std::string input, output;
   int scheme = 5;
+  std::string weld = "keyreduce";
   CommonOptions common;
 };
 
@@ -25,8 +26,13 @@ Register reg{Command{
           ->required();
       cmd.add_option("-o,--output", o->output, "output tetrahedral grid (.vtu or .vtk)")->required();
       cmd.add_option("--scheme", o->scheme,
-                     "5: five tets per hexahedron, alternating so neighbouring faces match (the minimal split)")
-          ->check(CLI::IsMember({5}));
+                     "5: five tets per hexahedron, alternating so neighbouring faces match (the minimal split); "
+                     "24: face-centred, 24 tets per hexahedron from its centre and its face centres")
+          ->check(CLI::IsMember({5, 24}));
+      cmd.add_option("--weld", o->weld,
+                     "scheme 24: face centres shared by KEY-REDUCE on face keys (keyreduce) or by coordinates "
+                     "(vertexweld, the baseline)")
+          ->check(CLI::IsMember({"keyreduce", "vertexweld"}));
       add_common_options(cmd, o->common);
       return [o]() {
         const int threads = apply_threads(o->common);
@@ -37,14 +43,20 @@ Register reg{Command{
         nlohmann::json r;
         if (io::is_grid_file(o->input)) {
           const UnstructuredGrid hexes = timer.run("read", [&] { return io::read_grid(o->input); });
-          tets = timer.run("tetrahedralize", [&] { return generate::tetrahedralize5(hexes); });
+          tets = timer.run("tetrahedralize", [&] {
+            return o->scheme == 24 ? generate::tetrahedralize24(hexes, o->weld == "vertexweld")
+                                   : generate::tetrahedralize5(hexes);
+          });
           r["input_cells"] = hexes.num_cells();
         } else {
           const ImageGrid grid = timer.run("read", [&] { return io::read_volume(o->input); });
           progress.enable_if(grid.num_points() > (1ll << 24));
           progress.say("tetrahedralizing " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
                        std::to_string(grid.dims[2]));
-          tets = timer.run("tetrahedralize", [&] { return generate::tetrahedralize5(grid); });
+          tets = timer.run("tetrahedralize", [&] {
+            return o->scheme == 24 ? generate::tetrahedralize24(grid, o->weld == "vertexweld")
+                                   : generate::tetrahedralize5(grid);
+          });
           r["dims"] = grid.dims;
         }
         progress.say("writing " + o->output);
@@ -56,6 +68,7 @@ Register reg{Command{
           r["input"] = o->input;
           r["output"] = o->output;
           r["scheme"] = o->scheme;
+          r["weld"] = o->weld;
           r["points"] = tets.num_points();
           r["cells"] = tets.num_cells();
           r["threads"] = threads;

@@ -81,20 +81,11 @@ double tet_volume(const float* a, const float* b, const float* c, const float* d
          6.0;
 }
 
-UnstructuredGrid tetrahedralize5(const ImageGrid& grid) {
+UnstructuredGrid grid_points(const ImageGrid& grid) {
   const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
-  for (int a = 0; a < 3; ++a)
-    if (grid.dims[a] < 2)
-      throw InputError("tetrahedralize: grid has " + std::to_string(grid.dims[a]) + " point(s) along axis " + "xyz"[a] +
-                       " (need at least 2)");
   const Id points = checked_mul(checked_mul(nx, ny, "point count"), nz, "point count");
-  const Id voxels = checked_mul(checked_mul(nx - 1, ny - 1, "voxel count"), nz - 1, "voxel count");
-  const Id corners = checked_mul(voxels, 20, "tet corner count");
   checked_mul(points, 3 * Id(sizeof(float)), "point coordinates");
-
   UnstructuredGrid out;
-  out.uniform_type = CellType::Tetra;
-  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(points), static_cast<std::size_t>(corners));
   out.points.resize(static_cast<std::size_t>(3 * points));
   const Id nxy = nx * ny;
   parallel::for_each(points, [&](Id p) {
@@ -108,7 +99,24 @@ UnstructuredGrid tetrahedralize5(const ImageGrid& grid) {
     parallel::for_each(points, [&](Id p) { f.values[p] = static_cast<float>(samples[p]); });
   });
   out.point_fields.push_back(std::move(f));
+  return out;
+}
 
+UnstructuredGrid tetrahedralize5(const ImageGrid& grid) {
+  const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  for (int a = 0; a < 3; ++a)
+    if (grid.dims[a] < 2)
+      throw InputError("tetrahedralize: grid has " + std::to_string(grid.dims[a]) + " point(s) along axis " + "xyz"[a] +
+                       " (need at least 2)");
+  const Id points = checked_mul(checked_mul(nx, ny, "point count"), nz, "point count");
+  const Id voxels = checked_mul(checked_mul(nx - 1, ny - 1, "voxel count"), nz - 1, "voxel count");
+  const Id corners = checked_mul(voxels, 20, "tet corner count");
+  checked_mul(points, 3 * Id(sizeof(float)), "point coordinates");
+
+  UnstructuredGrid out = grid_points(grid);
+  out.uniform_type = CellType::Tetra;
+  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(points), static_cast<std::size_t>(corners));
+  const Id nxy = nx * ny;
   // A mirrored grid (an odd number of negative spacings) turns every tet inside out.
   const bool mirrored = (grid.spacing[0] < 0) != ((grid.spacing[1] < 0) != (grid.spacing[2] < 0));
   Id corner_offset[8];

@@ -195,6 +195,47 @@ TEST(Tetrahedralize5, EvenRingSplitsOddRingIsRefused) {
   }
 }
 
+TEST(Tetrahedralize24, VoxelGridCountsVolumesConformityAndFields) {
+  for (auto dims : {std::array<Id, 3>{2, 2, 2}, std::array<Id, 3>{5, 5, 5}, std::array<Id, 3>{4, 6, 3}}) {
+    for (bool weld : {false, true}) {
+      const ImageGrid grid = ramp_grid(dims, {0.5, 2.0, 1.25}, {-3, 1, 7});
+      const UnstructuredGrid g = generate::tetrahedralize24(grid, weld);
+      const Id a = dims[0] - 1, b = dims[1] - 1, c = dims[2] - 1;
+      // Corners, one centre per distinct voxel face (counted per axis), one per voxel.
+      const Id faces = dims[0] * b * c + a * dims[1] * c + a * b * dims[2];
+      EXPECT_EQ(g.num_points(), dims[0] * dims[1] * dims[2] + faces + a * b * c);
+      EXPECT_EQ(g.num_cells(), 24 * a * b * c);
+      const double box = a * 0.5 * b * 2.0 * c * 1.25;
+      // Every boundary quad is cut into 4 triangles from its centre.
+      expect_conforming_box(g, box, 4 * (a * b + b * c + a * c) * 2);
+      // The carried scalar at a cell centre is the mean of its 8 corners.
+      const Field* f = g.find_point_field(grid.name);
+      ASSERT_NE(f, nullptr);
+      const auto* v = reinterpret_cast<const std::int16_t*>(grid.data());
+      double mean = 0;
+      for (int k = 0; k < 8; ++k) mean += v[(k & 1) + dims[0] * ((k >> 1) & 1) + dims[0] * dims[1] * ((k >> 2) & 1)];
+      EXPECT_FLOAT_EQ(f->values[g.num_points() - a * b * c], float(mean / 8));
+    }
+  }
+  const ImageGrid n4 = ramp_grid({4, 4, 4}, {1, 1, 1}, {0, 0, 0});
+  EXPECT_EQ(generate::tetrahedralize24(n4).num_points(), 64 + 3 * 4 * 9 + 27);  // N^3 + 3N(N-1)^2 + (N-1)^3
+}
+
+TEST(Tetrahedralize24, HexGridMatchesTheVoxelGrid) {
+  for (unsigned seed : {0u, 5u}) {
+    const UnstructuredGrid hexes = hex_box(3, 4, 2, seed);
+    for (bool weld : {false, true}) {
+      const UnstructuredGrid g = generate::tetrahedralize24(hexes, weld);
+      EXPECT_EQ(g.num_cells(), 24 * 24);
+      EXPECT_EQ(g.num_points(), 4 * 5 * 3 + (4 * 4 * 2 + 3 * 5 * 2 + 3 * 4 * 3) + 24);
+      expect_conforming_box(g, 24.0, 8 * (12 + 8 + 6));
+      const Field* id = g.find_cell_field("cell_id");
+      ASSERT_NE(id, nullptr);
+      for (Id t = 0; t < g.num_cells(); ++t) ASSERT_EQ(id->values[t], float(t / 24));
+    }
+  }
+}
+
 TEST(Tetrahedralize5, RefusesNonHexCellsAndBadGrids) {
   UnstructuredGrid g = hex_box(1, 1, 1, 0);
   g.uniform_type = CellType::Tetra;  // 8 ids read as two tets

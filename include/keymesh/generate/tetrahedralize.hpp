@@ -27,6 +27,24 @@ UnstructuredGrid tetrahedralize5(const ImageGrid& grid);
 // choice exists (an odd cycle of cells) or a cell is not a hexahedron.
 UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes);
 
+// Scheme 24, face-centred (paper, Section 5.2, Table 4): every hexahedron
+// becomes 24 tets, one per (face, face edge): the edge's two corners, the
+// face's centre and the cell's centre. Face-centre points are keyed by the
+// face (on a voxel grid its implicit id, 3 * lower corner + normal axis, so
+// KEY-REDUCE's dense plan groups them; on a hex grid the face's smallest
+// corner id and the corner diagonally opposite), so the two cells sharing a
+// face share its centre; cell centres are unique; corners pass through.
+// Point fields are averaged over the face's 4 or the cell's 8 corners, cell
+// fields copied to the children. On an N^3 grid: 24 (N-1)^3 tets and
+// N^3 + 3 N (N-1)^2 + (N-1)^3 points. Every tet positively oriented.
+// `vertex_weld` welds the face centres by coordinates instead (the baseline).
+UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld = false);
+UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_weld = false);
+
+// The points of a voxel grid (ids as in the grid, x fastest) with its
+// scalars as a float point field, and no cells.
+UnstructuredGrid grid_points(const ImageGrid& grid);
+
 // Signed volume of tet (a, b, c, d): det(b - a, c - a, d - a) / 6.
 double tet_volume(const float* a, const float* b, const float* c, const float* d);
 

@@ -1,0 +1,246 @@
+// Scheme 24: face-centred tetrahedralization of hexahedra (see tetrahedralize.hpp).
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
+#include "keymesh/weld/vertex_weld.hpp"
+
+namespace keymesh::generate {
+
+namespace {
+
+// Corners in bit order (corner c at (c & 1, (c >> 1) & 1, (c >> 2) & 1)).
+// The six faces -x, +x, -y, +y, -z, +z as corner cycles around the face.
+constexpr int kFaceCycle[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+constexpr int kHexToBits[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+
+// The face centres of the soup: for every (cell, face) pair its group (the
+// face-centre index) and for every group the first pair naming it.
+struct FaceGroups {
+  std::vector<std::uint32_t> index_map;
+  std::vector<std::uint32_t> first;
+};
+
+template <class K, class Position>
+FaceGroups group_faces(const std::vector<K>& keys, bool dense, K key_range, int key_bits, bool vertex_weld,
+                       Position&& position) {
+  FaceGroups out;
+  const Id n = static_cast<Id>(keys.size());
+  if (vertex_weld) {
+    std::vector<float> xyz(static_cast<std::size_t>(3 * n));
+    parallel::for_each(n, [&](Id i) { position(i, &xyz[3 * i]); });
+    weld::WeldResult w = weld::vertex_weld(xyz.data(), n);
+    out.index_map = std::move(w.index_map);
+    out.first = std::move(w.first);
+    return out;
+  }
+  auto g = dense ? keyreduce::partition_dense(keys.data(), n, key_range, keyreduce::Order::Skip)
+                 : keyreduce::partition_sort(keys.data(), n, key_bits, keyreduce::Order::Skip);
+  // The first pair of each group: the smallest pair index with that group.
+  out.first.assign(static_cast<std::size_t>(g.num_groups()), std::numeric_limits<std::uint32_t>::max());
+  for (Id i = n - 1; i >= 0; --i) out.first[g.index_map[i]] = static_cast<std::uint32_t>(i);
+  out.index_map = std::move(g.index_map);
+  return out;
+}
+
+// The 24 tets of a cell from its corner ids (bit order), its face-centre ids
+// and its centre id, oriented by their volume.
+template <class Out>
+void emit_cell(const std::uint64_t corner[8], const std::uint64_t face[6], std::uint64_t centre, const float* P,
+               Out&& out) {
+  int k = 0;
+  for (int f = 0; f < 6; ++f)
+    for (int e = 0; e < 4; ++e) {
+      std::uint64_t v[4] = {corner[kFaceCycle[f][e]], corner[kFaceCycle[f][(e + 1) % 4]], face[f], centre};
+      if (tet_volume(P + 3 * v[0], P + 3 * v[1], P + 3 * v[2], P + 3 * v[3]) < 0) std::swap(v[0], v[1]);
+      out(k++, v);
+    }
+}
+
+void average_fields(const std::vector<Field>& in, std::vector<Field>& out, Id point, const std::uint64_t* ids, int n) {
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const int k = in[i].components;
+    for (int c = 0; c < k; ++c) {
+      double s = 0;
+      for (int j = 0; j < n; ++j) s += in[i].values[ids[j] * k + c];
+      out[i].values[point * k + c] = static_cast<float>(s / n);
+    }
+  }
+}
+
+}  // namespace
+
+UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
+  for (int a = 0; a < 3; ++a)
+    if (grid.dims[a] < 2)
+      throw InputError("tetrahedralize: grid has " + std::to_string(grid.dims[a]) + " point(s) along axis " + "xyz"[a] +
+                       " (need at least 2)");
+  // The corners (points, scalars), then the voxels as hexahedra in bit
+  // order, their faces keyed by implicit face ids.
+  const UnstructuredGrid corners = grid_points(grid);
+  const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2], nxy = nx * ny, N = nxy * nz;
+  const Id cells = (nx - 1) * (ny - 1) * (nz - 1);
+  if (6 * cells > Id{std::numeric_limits<std::uint32_t>::max()} || N + 3 * N + cells > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " voxels exceed the supported size");
+  auto cell_corner = [&](Id v, int c) {
+    const Id i = v % (nx - 1), j = (v / (nx - 1)) % (ny - 1), k = v / ((nx - 1) * (ny - 1));
+    return static_cast<std::uint64_t>((i + (c & 1)) + nx * (j + ((c >> 1) & 1)) + nxy * (k + ((c >> 2) & 1)));
+  };
+  // Face f of voxel v: 3 * (its lower corner) + its normal axis.
+  std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
+  parallel::for_each(cells, [&](Id v) {
+    const std::uint64_t p0 = cell_corner(v, 0);
+    const std::uint64_t step[3] = {1, std::uint64_t(nx), std::uint64_t(nxy)};
+    for (int f = 0; f < 6; ++f) {
+      const int axis = f / 2;
+      keys[6 * v + f] = 3 * (p0 + (f & 1) * step[axis]) + std::uint64_t(axis);
+    }
+  });
+  const float* P = corners.points.data();
+  auto face_centre = [&](Id pair, float* xyz) {
+    const Id v = pair / 6;
+    const int f = static_cast<int>(pair % 6);
+    for (int x = 0; x < 3; ++x) {
+      double s = 0;
+      for (int c : kFaceCycle[f]) s += P[3 * cell_corner(v, c) + x];
+      xyz[x] = static_cast<float>(s / 4);
+    }
+  };
+  const FaceGroups g = group_faces<std::uint64_t>(keys, true, std::uint64_t(3 * N), 0, vertex_weld, face_centre);
+  keys = {};
+  const Id F = static_cast<Id>(g.first.size());
+  UnstructuredGrid out;
+  out.uniform_type = CellType::Tetra;
+  const Id total = N + F + cells;
+  out.points.resize(static_cast<std::size_t>(3 * total));
+  std::copy(corners.points.begin(), corners.points.end(), out.points.begin());
+  for (const Field& f : corners.point_fields) out.point_fields.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(total * f.components))});
+  for (std::size_t i = 0; i < corners.point_fields.size(); ++i)
+    std::copy(corners.point_fields[i].values.begin(), corners.point_fields[i].values.end(), out.point_fields[i].values.begin());
+  parallel::for_each(F, [&](Id face) {
+    const Id pair = g.first[face];
+    face_centre(pair, &out.points[3 * (N + face)]);
+    std::uint64_t ids[4];
+    for (int c = 0; c < 4; ++c) ids[c] = cell_corner(pair / 6, kFaceCycle[pair % 6][c]);
+    average_fields(corners.point_fields, out.point_fields, N + face, ids, 4);
+  });
+  parallel::for_each(cells, [&](Id v) {
+    std::uint64_t ids[8];
+    for (int c = 0; c < 8; ++c) ids[c] = cell_corner(v, c);
+    for (int x = 0; x < 3; ++x) {
+      double s = 0;
+      for (std::uint64_t id : ids) s += P[3 * id + x];
+      out.points[3 * (N + F + v) + x] = static_cast<float>(s / 8);
+    }
+    average_fields(corners.point_fields, out.point_fields, N + F + v, ids, 8);
+  });
+  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
+  const float* Q = out.points.data();
+  out.connectivity.visit_mut([&](auto conn) {
+    using I = typename decltype(conn)::value_type;
+    parallel::for_each(cells, [&](Id v) {
+      std::uint64_t c8[8], f6[6];
+      for (int c = 0; c < 8; ++c) c8[c] = cell_corner(v, c);
+      for (int f = 0; f < 6; ++f) f6[f] = static_cast<std::uint64_t>(N + g.index_map[6 * v + f]);
+      emit_cell(c8, f6, static_cast<std::uint64_t>(N + F + v), Q, [&](int k, const std::uint64_t* t) {
+        for (int x = 0; x < 4; ++x) conn[96 * v + 4 * k + x] = static_cast<I>(t[x]);
+      });
+    });
+  });
+  return out;
+}
+
+UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_weld) {
+  hexes.validate("tetrahedralize input");
+  const Id cells = hexes.num_cells(), N = hexes.num_points();
+  std::vector<std::array<std::uint64_t, 8>> corner(static_cast<std::size_t>(cells));
+  for (Id c = 0; c < cells; ++c) {
+    const std::uint8_t t = hexes.cell_type(c);
+    if (t != std::uint8_t(CellType::Hexahedron) && t != std::uint8_t(CellType::Voxel))
+      throw InputError("tetrahedralize --scheme 24: cell " + std::to_string(c) + " is a " + cell_type_name(t) +
+                       ", not a hexahedron");
+    const std::uint64_t b = hexes.cell_begin(c);
+    for (int h = 0; h < 8; ++h) corner[c][t == std::uint8_t(CellType::Voxel) ? h : kHexToBits[h]] = hexes.connectivity[b + h];
+  }
+  if (6 * cells > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " cells exceed the supported size");
+  // A quad face is named by its smallest corner and the corner diagonally
+  // opposite it: in a conforming mesh no two faces share a diagonal.
+  const int bits = std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(std::max<Id>(N, 2) - 1)));
+  if (2 * bits > 64) throw LimitError("tetrahedralize --scheme 24: face keys need more than 64 bits");
+  std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
+  parallel::for_each(cells, [&](Id c) {
+    for (int f = 0; f < 6; ++f) {
+      int m = 0;
+      for (int k = 1; k < 4; ++k)
+        if (corner[c][kFaceCycle[f][k]] < corner[c][kFaceCycle[f][m]]) m = k;
+      keys[6 * c + f] = (corner[c][kFaceCycle[f][m]] << bits) | corner[c][kFaceCycle[f][(m + 2) % 4]];
+    }
+  });
+  const float* P = hexes.points.data();
+  auto face_centre = [&](Id pair, float* xyz) {
+    for (int x = 0; x < 3; ++x) {
+      double s = 0;
+      for (int c : kFaceCycle[pair % 6]) s += P[3 * corner[pair / 6][c] + x];
+      xyz[x] = static_cast<float>(s / 4);
+    }
+  };
+  const FaceGroups g = group_faces<std::uint64_t>(keys, false, 0, 2 * bits, vertex_weld, face_centre);
+  keys = {};
+  const Id F = static_cast<Id>(g.first.size());
+  const Id total = N + F + cells;
+  if (total > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("tetrahedralize --scheme 24: " + std::to_string(total) + " points exceed 2^32 - 1");
+  UnstructuredGrid out;
+  out.uniform_type = CellType::Tetra;
+  out.points.resize(static_cast<std::size_t>(3 * total));
+  std::copy(hexes.points.begin(), hexes.points.end(), out.points.begin());
+  for (const Field& f : hexes.point_fields) {
+    out.point_fields.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(total * f.components))});
+    std::copy(f.values.begin(), f.values.end(), out.point_fields.back().values.begin());
+  }
+  parallel::for_each(F, [&](Id face) {
+    const Id pair = g.first[face];
+    face_centre(pair, &out.points[3 * (N + face)]);
+    std::uint64_t ids[4];
+    for (int c = 0; c < 4; ++c) ids[c] = corner[pair / 6][kFaceCycle[pair % 6][c]];
+    average_fields(hexes.point_fields, out.point_fields, N + face, ids, 4);
+  });
+  parallel::for_each(cells, [&](Id v) {
+    for (int x = 0; x < 3; ++x) {
+      double s = 0;
+      for (std::uint64_t id : corner[v]) s += P[3 * id + x];
+      out.points[3 * (N + F + v) + x] = static_cast<float>(s / 8);
+    }
+    average_fields(hexes.point_fields, out.point_fields, N + F + v, corner[v].data(), 8);
+  });
+  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
+  const float* Q = out.points.data();
+  parallel::for_each(cells, [&](Id v) {
+    std::uint64_t f6[6];
+    for (int f = 0; f < 6; ++f) f6[f] = static_cast<std::uint64_t>(N + g.index_map[6 * v + f]);
+    emit_cell(corner[v].data(), f6, static_cast<std::uint64_t>(N + F + v), Q, [&](int k, const std::uint64_t* t) {
+      for (int x = 0; x < 4; ++x) out.connectivity.set(static_cast<std::size_t>(96 * v + 4 * k + x), t[x]);
+    });
+  });
+  for (const Field& f : hexes.cell_fields) {
+    Field h{f.name, f.components, std::vector<float>(f.values.size() * 24)};
+    const auto k = static_cast<std::size_t>(f.components);
+    parallel::for_each(cells, [&](Id c) {
+      for (int t = 0; t < 24; ++t)
+        std::copy_n(f.values.begin() + static_cast<std::ptrdiff_t>(c * k), k,
+                    h.values.begin() + static_cast<std::ptrdiff_t>((24 * c + t) * k));
+    });
+    out.cell_fields.push_back(std::move(h));
+  }
+  return out;
+}
+
+}  // namespace keymesh::generate
