@@ -1,6 +1,8 @@
 #include "keymesh/generate/marching_cubes_table.hpp"
 
 #include <algorithm>
+#include <array>
+#include <functional>
 #include <vector>
 
 namespace keymesh::generate {
@@ -46,6 +48,45 @@ MarchingCubesTable build_table() {
     Vec3 p{double(coord(ce.corner0, 0)), double(coord(ce.corner0, 1)), double(coord(ce.corner0, 2))};
     (ce.axis == 0 ? p.x : ce.axis == 1 ? p.y : p.z) += 0.5;
     return p;
+  };
+
+  // Two cube edges on a common face. A diagonal between them inside a
+  // polygon would lie on that face, where the neighbouring cube may draw the
+  // same diagonal: the edge would then carry four triangles (non-manifold).
+  auto share_face = [&](int e1, int e2) {
+    for (int axis = 0; axis < 3; ++axis) {
+      if (t.edges[e1].axis == axis || t.edges[e2].axis == axis) continue;
+      const int c1 = coord(t.edges[e1].corner0, axis), c2 = coord(t.edges[e2].corner0, axis);
+      if (c1 == c2) return true;
+    }
+    return false;
+  };
+  // Triangulates a polygon (cut edges in order) without such diagonals:
+  // the triangle on edge (p0, p1) takes the first apex whose two sides are
+  // polygon edges or allowed diagonals, and the two remaining pieces are
+  // triangulated the same way (a fan when every diagonal is allowed).
+  std::function<bool(const std::vector<int>&, std::vector<std::array<int, 3>>&)> triangulate =
+      [&](const std::vector<int>& poly, std::vector<std::array<int, 3>>& out) -> bool {
+    const std::size_t m = poly.size();
+    if (m < 3) return true;
+    if (m == 3) {
+      out.push_back({poly[0], poly[1], poly[2]});
+      return true;
+    }
+    for (std::size_t k = 2; k < m; ++k) {
+      const bool side1 = k == 2 || !share_face(poly[1], poly[k]);      // (p1, pk)
+      const bool side2 = k == m - 1 || !share_face(poly[k], poly[0]);  // (pk, p0)
+      if (!side1 || !side2) continue;
+      std::vector<std::array<int, 3>> tris{{poly[0], poly[1], poly[k]}};
+      const std::vector<int> a(poly.begin() + 1, poly.begin() + static_cast<std::ptrdiff_t>(k) + 1);
+      std::vector<int> b(poly.begin() + static_cast<std::ptrdiff_t>(k), poly.end());
+      b.push_back(poly[0]);
+      if (triangulate(a, tris) && triangulate(b, tris)) {
+        out.insert(out.end(), tris.begin(), tris.end());
+        return true;
+      }
+    }
+    return false;
   };
 
   for (int cube_case = 0; cube_case < 256; ++cube_case) {
@@ -96,10 +137,15 @@ MarchingCubesTable build_table() {
         (ce.axis == 0 ? d.x : ce.axis == 1 ? d.y : d.z) += sgn;
       }
       if (n.x * d.x + n.y * d.y + n.z * d.z < 0) std::reverse(loop.begin(), loop.end());
-      for (std::size_t i = 1; i + 1 < loop.size(); ++i) {
-        t.triangle_edges[cube_case][3 * tri + 0] = static_cast<std::uint8_t>(loop[0]);
-        t.triangle_edges[cube_case][3 * tri + 1] = static_cast<std::uint8_t>(loop[i]);
-        t.triangle_edges[cube_case][3 * tri + 2] = static_cast<std::uint8_t>(loop[i + 1]);
+      std::vector<std::array<int, 3>> tris;
+      if (!triangulate(loop, tris)) {
+        // Not met by any of the 256 cases (the noise-volume test would see
+        // non-manifold edges); a fan keeps the table whole regardless.
+        tris.clear();
+        for (std::size_t i = 1; i + 1 < loop.size(); ++i) tris.push_back({loop[0], loop[i], loop[i + 1]});
+      }
+      for (const auto& tr : tris) {
+        for (int k = 0; k < 3; ++k) t.triangle_edges[cube_case][3 * tri + k] = static_cast<std::uint8_t>(tr[k]);
         ++tri;
       }
     }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <random>
 #include <set>
 #include <tuple>
 
@@ -319,4 +320,43 @@ TEST(Contour, PaperTable1) {
       EXPECT_EQ(m.num_points(), straddling_edges(g, opt.isovalues[0])) << row.n;
     }
   }
+}
+
+TEST(Contour, NoiseVolumeGivesAManifoldSurface) {
+  // Independent random samples make every cube case, ambiguous faces
+  // included, appear many times. Neighbouring cubes must never draw the same
+  // diagonal across their shared face (an edge with four triangles), and no
+  // edge may be open except on the grid's border.
+  ImageGrid g;
+  g.allocate({40, 37, 33}, ScalarType::Float32);
+  std::mt19937 rng(3);
+  auto* v = static_cast<float*>(g.data());
+  for (Id p = 0; p < g.num_points(); ++p) v[p] = std::uniform_real_distribution<float>(0, 1)(rng);
+  std::set<unsigned> cases;
+  for (Id k = 0; k + 1 < 33; ++k)
+    for (Id j = 0; j + 1 < 37; ++j)
+      for (Id i = 0; i + 1 < 40; ++i) {
+        unsigned c = 0;
+        for (int b = 0; b < 8; ++b)
+          c |= unsigned(v[(i + (b & 1)) + 40 * ((j + ((b >> 1) & 1)) + 37 * (k + ((b >> 2) & 1)))] >= 0.5f) << b;
+        cases.insert(c);
+      }
+  EXPECT_EQ(cases.size(), 256u);
+  ContourOptions opt;
+  opt.isovalues = {0.5};
+  const SurfaceMesh m = generate::contour(g, opt);
+  Id open_inside = 0, four = 0;
+  for (const auto& [edge, n] : edge_use(m)) {
+    four += n > 2;
+    if (n == 1) {
+      const float* a = &m.points[3 * edge.first];
+      const float* b = &m.points[3 * edge.second];
+      const float hi[3] = {39, 36, 32};
+      bool border = false;
+      for (int x = 0; x < 3; ++x) border = border || (a[x] == b[x] && (a[x] == 0 || a[x] == hi[x]));
+      open_inside += !border;
+    }
+  }
+  EXPECT_EQ(four, 0);
+  EXPECT_EQ(open_inside, 0);
 }
