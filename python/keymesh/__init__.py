@@ -217,12 +217,15 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         volume: a 3-D numpy array of uint8, int8, uint16, int16, int32,
             float32 or float64 (other dtypes: TypeError), or a keymesh.Volume.
             Axis 0 is x: ``volume[i, j, k]`` sits at
-            ``origin + (i, j, k) * spacing``, so the points equal those of
-            ``skimage.measure.marching_cubes(volume, iso, spacing=spacing)``
-            (plus origin). Any memory layout works: C- and Fortran-ordered
+            ``origin + (i, j, k) * spacing``: the points and counts are those
+            of ``skimage.measure.marching_cubes(volume, iso, spacing=spacing,
+            method="lorensen")`` (plus origin; skimage winds triangles the
+            other way and splits some cube polygons along the other
+            diagonal). Any memory layout works: C- and Fortran-ordered
             arrays are copied once into the library's grid (one memcpy,
-            about 0.1 s per GiB); other strides are made C-contiguous first.
-            A keymesh.Volume is read in place (no copy).
+            about 0.12 s per GiB); other strides are made C-contiguous first;
+            C and Fortran order give the same points, their triangulations
+            may differ in such diagonals. A keymesh.Volume is read in place.
         iso: an isovalue or a sequence of them (finite). Inside means
             ``value >= iso``; NaN samples are outside. One point per grid
             edge whose samples straddle the isovalue.

@@ -28,7 +28,7 @@ def _skimage(field, iso, method, **kw):
 
 @pytest.mark.parametrize("name,make,iso", CASES)
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
-def test_same_mesh_as_lorensen(name, make, iso, dtype):
+def test_same_counts_and_points_as_lorensen(name, make, iso, dtype):
     """skimage's method='lorensen' (the classic case table) has our counts
     and points, ambiguous configurations included (white noise)."""
     field = make().astype(dtype)
@@ -39,7 +39,7 @@ def test_same_mesh_as_lorensen(name, make, iso, dtype):
 
 
 @pytest.mark.parametrize("name,make,iso", CASES[:1])
-def test_same_mesh_as_lewiner_without_ambiguity(name, make, iso):
+def test_same_counts_and_points_as_lewiner_without_ambiguity(name, make, iso):
     """skimage's default method='lewiner' (Marching Cubes 33) agrees too
     where no cube is ambiguous enough for it to add an interior vertex."""
     field = make()
