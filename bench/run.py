@@ -110,7 +110,7 @@ def main():
     rows = []
     info = machine()
     print(f"keymesh bench on {info['cpu']}, {info['cores']} cores, {info['memory_gib']} GiB, {info['date']}")
-    print(f"sizes {sizes}, {reps} repetitions per case; expect about {2 if a.quick else 6} minutes", flush=True)
+    print(f"sizes {sizes}, {reps} repetitions per case; expect about {3 if a.quick else 10} minutes", flush=True)
     with tempfile.TemporaryDirectory(prefix="keymesh-bench-") as work:
         for n in sizes:
             iso = n / 2 - 1 + 0.001
@@ -133,6 +133,7 @@ def main():
                 print(f"  VTK peer unavailable: {e}")
             if n <= 256:
                 rows += tet_rows(bench, keymesh, n, iso, threads_all, reps, work)
+            rows += ops_rows(os.path.join(a.build, "ops_bench"), keymesh, n, iso, threads_all, reps, work)
     for r in rows:
         r["machine"] = info
     os.makedirs(os.path.dirname(a.out), exist_ok=True)
@@ -182,6 +183,37 @@ def tet_rows(bench, keymesh, n, iso, threads_all, reps, work):
     except SystemExit as e:
         print(f"  VTK peer unavailable: {e}")
     os.remove(vtu)
+    return rows
+
+
+def ops_rows(ops, keymesh, n, iso, threads_all, reps, work):
+    """The paper's Tables 3 and 4: triangle subdivision of the sphere contour
+    (KEY-REDUCE, VERTEX-WELD, vtkLinearSubdivisionFilter) and the face-centred
+    tetrahedralization (KEY-REDUCE, VERTEX-WELD; up to 128^3, 49 M tets)."""
+    rows = []
+    for threads in sorted({1, threads_all}):
+        for weld in ("vertexweld", "keyreduce"):
+            print(f"  {n}^3 subdivide {weld} threads={threads}", flush=True)
+            r = run_json([ops, "--op", "subdivide", "--size", str(n), "--threads", str(threads), "--reps", str(reps),
+                          "--weld", weld])[0]
+            r["tool"] = "keymesh"
+            rows.append(r)
+            if n <= 128:
+                print(f"  {n}^3 tet24 {weld} threads={threads}", flush=True)
+                r = run_json([ops, "--op", "tet24", "--size", str(n), "--threads", str(threads), "--reps",
+                              str(min(reps, 3)), "--weld", weld])[0]
+                r["tool"] = "keymesh"
+                rows.append(r)
+    vti, vtp = os.path.join(work, f"sphere{n}.vti"), os.path.join(work, f"contour{n}.vtp")
+    if not os.path.exists(vti):
+        subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
+    subprocess.run([keymesh, "contour", vti, "-o", vtp, "--iso", str(iso), "--normals", "average", "-q"], check=True)
+    print(f"  {n}^3 subdivide VTK", flush=True)
+    try:
+        rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_subdivide.py"), "--mesh", vtp,
+                          "--size", str(n), "--reps", str(reps)])
+    except SystemExit as e:
+        print(f"  VTK peer unavailable: {e}")
     return rows
 
 
@@ -287,7 +319,37 @@ def summarize(rows, sizes, threads):
             if kr:
                 parts.append(f"keymesh peak RSS {kr['peak_rss_mib']:.0f} MiB")
             out(f"  {n}^3 tets, {threads} threads: " + "; ".join(parts))
-    peak = [r for r in rows if r.get("size") == sizes[-1] and r.get("grid") != "tet5"]
+    for bench_name, title, peer in (("subdivide", "Triangle subdivision 1 -> 4 of the sphere contour (Table 3)",
+                                     "vtkLinearSubdivisionFilter"),
+                                    ("tet24", "Face-centred tetrahedralization, 24 tets per voxel (Table 4)", None)):
+        op_sizes = [n for n in sizes if find(rows, size=n, bench=bench_name)]
+        if not op_sizes:
+            continue
+        out(f"\n{title}, warm medians (ms; min-max)")
+        out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in op_sizes))
+
+        def oline(label, **kw):
+            cells = []
+            for n in op_sizes:
+                r = find(rows, size=n, bench=bench_name, **kw)
+                cells.append(f"{r['median'] * 1e3:8.1f} ({r['min'] * 1e3:.0f}-{r['max'] * 1e3:.0f})" if r else "")
+            out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+        for t in sorted({1, threads}):
+            oline(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", weld="vertexweld", threads=t)
+            oline(f"keymesh KEY-REDUCE, {t} thr", tool="keymesh", weld="keyreduce", threads=t)
+        if peer:
+            oline(f"{peer}, 1 thr", tool=peer)
+        for n in op_sizes:
+            kr = find(rows, size=n, bench=bench_name, tool="keymesh", weld="keyreduce", threads=threads)
+            vw = find(rows, size=n, bench=bench_name, tool="keymesh", weld="vertexweld", threads=threads)
+            pr = find(rows, size=n, bench=bench_name, tool=peer) if peer else None
+            parts = [f"{kr['cells']} cells"] if kr else []
+            if kr and vw:
+                parts.append(f"VERTEX-WELD / KEY-REDUCE {vw['median'] / kr['median']:.2f}x")
+            if kr and pr:
+                parts.append(f"{peer} / keymesh {pr['median'] / kr['median']:.2f}x")
+            out(f"  {n}^3, {threads} threads: " + "; ".join(parts))
+    peak = [r for r in rows if r.get("size") == sizes[-1] and r.get("grid") != "tet5" and r.get("bench") == "contour"]
     out(f"\nPeak RSS at {sizes[-1]}^3 (MiB): " +
           ", ".join(f"{r['tool']} {r.get('weld', '')} {r.get('normals', '')} {r['peak_rss_mib']:.0f}".replace("  ", " ")
                     for r in peak if r.get("threads") == threads or r["tool"] == "vtkMarchingCubes"))
