@@ -1,7 +1,9 @@
 // keymesh info FILE: what a volume or mesh file holds.
 #include <cstdio>
+#include <map>
 
 #include "command.hpp"
+#include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/volume_io.hpp"
 
@@ -23,7 +25,29 @@ Register reg{Command{
       return [o]() {
         nlohmann::json r;
         r["file"] = o->input;
-        if (is_mesh_path(o->input)) {
+        if (io::is_grid_file(o->input)) {
+          const UnstructuredGrid g = io::read_grid(o->input);
+          std::map<std::string, Id> by_type;
+          for (Id c = 0; c < g.num_cells(); ++c) ++by_type[cell_type_name(g.cell_type(c))];
+          std::printf("%s: unstructured grid\n  points %lld\n  cells %lld\n", o->input.c_str(),
+                      (long long)g.num_points(), (long long)g.num_cells());
+          r["kind"] = "grid";
+          r["points"] = g.num_points();
+          r["cells"] = g.num_cells();
+          r["cell_types"] = nlohmann::json::object();
+          for (const auto& [name, n] : by_type) {
+            std::printf("    %s %lld\n", name.c_str(), (long long)n);
+            r["cell_types"][name] = n;
+          }
+          r["fields"] = nlohmann::json::array();
+          for (const auto* fields : {&g.point_fields, &g.cell_fields})
+            for (const auto& f : *fields) {
+              const char* where = fields == &g.point_fields ? "point" : "cell";
+              std::printf("  %s field %s (%d component%s)\n", where, f.name.c_str(), f.components,
+                          f.components == 1 ? "" : "s");
+              r["fields"].push_back({{"name", f.name}, {"components", f.components}, {"association", where}});
+            }
+        } else if (is_mesh_path(o->input)) {
           const SurfaceMesh mesh = io::read_mesh(o->input);
           std::printf("%s: surface mesh\n  points %lld\n  cells %lld (%s)\n", o->input.c_str(),
                       (long long)mesh.num_points(), (long long)mesh.num_cells(),
