@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "command.hpp"
+#include "keymesh/analyze/topology.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/contour_tets.hpp"
 #include "keymesh/io/grid_io.hpp"
@@ -21,6 +22,7 @@ struct ContourCli {
   std::string weld = "keyreduce";
   std::string normals = "none";
   bool no_scalars = false;
+  bool coarsen = false;
   std::string array;  // tet grids: the point field to contour
   // Raw input description.
   std::vector<long long> dims;
@@ -52,6 +54,9 @@ Register reg{Command{
                      "(incident face normals merged by KEY-REDUCE)")
           ->check(CLI::IsMember({"none", "gradient", "average"}));
       cmd.add_flag("--no-scalars", o->no_scalars, "do not carry the interpolated scalar");
+      cmd.add_flag("--coarsen", o->coarsen,
+                   "merge the points nearest to one grid point (key = nearest input point on the edge), "
+                   "averaging positions and fields; drop collapsed triangles");
       auto* dims = cmd.add_option("--dims", o->dims, "raw input: points along x y z")->expected(3);
       cmd.add_option("--type", o->type, "raw input: uint8 int8 uint16 int16 int32 float32 float64")->needs(dims);
       cmd.add_option("--spacing", o->spacing, "raw input: voxel spacing x y z")->expected(3)->needs(dims);
@@ -90,6 +95,7 @@ Register reg{Command{
                                                 : generate::ContourNormals::None;
         opt.scalars = !o->no_scalars;
         opt.array = o->array;
+        opt.coarsen = o->coarsen;
         auto warn_outside = [&](std::array<double, 2> range) {
           for (double iso : o->isovalues)
             if ((iso < range[0] || iso > range[1]) && !o->common.quiet)
@@ -138,6 +144,18 @@ Register reg{Command{
           r["scalar_type"] = scalar_type_name(grid.type);
           r["grid"] = "voxels";
         }
+        if (o->coarsen) {
+          // What the collapse did to the topology (outside the contour's time).
+          const auto topo = timer.run("check", [&] { return analyze::check_topology(mesh); });
+          r["triangles_before"] = stats.triangles_before_coarsening;
+          r["triangles_after"] = mesh.num_cells();
+          r["nonmanifold_edges"] = topo.nonmanifold_edges;
+          r["nonmanifold_vertices"] = topo.nonmanifold_vertices;
+          r["boundary_edges"] = topo.boundary_edges;
+          if (!o->common.quiet && (topo.nonmanifold_edges || topo.nonmanifold_vertices))
+            std::fprintf(stderr, "keymesh: coarsening left %lld non-manifold edges and %lld non-manifold vertices\n",
+                         (long long)topo.nonmanifold_edges, (long long)topo.nonmanifold_vertices);
+        }
         progress.say("writing " + o->output);
         timer.run("write", [&] { io::write_mesh(mesh, o->output); });
         if (!o->common.quiet)
@@ -155,7 +173,9 @@ Register reg{Command{
           r["key_bits"] = stats.key_bits;
           r["threads"] = threads;
           r["seconds"] = timer.seconds();
-          r["contour_stages"] = {{"classify", stats.classify},
+          r["coarsen"] = o->coarsen;
+          r["contour_stages"] = {{"coarsen", stats.coarsen},
+                                 {"classify", stats.classify},
                                  {"generate", stats.generate},
                                  {"weld", stats.weld},
                                  {"fields", stats.fields}};

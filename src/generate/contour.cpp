@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
@@ -406,12 +407,27 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
     Field f{"Normals", 3, std::vector<float>(3 * points)};
     parallel::for_each(points, [&](Id p) { interp.gradient_normal(interp.locate(point_key[p]), &f.values[3 * p]); });
     mesh.point_fields.push_back(std::move(f));
-  } else if (average) {
+  } else if (average && !opt.coarsen) {
     Field f{"Normals", 3, {}};
     average_normals(groups, opt.weld == ContourWeld::VertexWeld ? nullptr : &blocks, mesh, f.values);
     mesh.point_fields.push_back(std::move(f));
   }
   st.fields += seconds_since(t0);
+  if (opt.coarsen) {
+    t0 = Clock::now();
+    // The coarse key: the edge's end point nearest to the crossing (the far
+    // end from t = 0.5 on), per isovalue.
+    std::vector<std::uint64_t> coarse(static_cast<std::size_t>(points));
+    parallel::for_each(points, [&](Id p) {
+      const auto e = interp.locate(point_key[p]);
+      const Id iso_index = static_cast<Id>(static_cast<std::uint64_t>(point_key[p]) / static_cast<std::uint64_t>(keys_per_iso));
+      coarse[p] = static_cast<std::uint64_t>(iso_index * s.n + e.p0 + (e.t >= 0.5 ? s.stride[e.axis] : 0));
+    });
+    st.triangles_before_coarsening = mesh.num_cells();
+    mesh = coarsen(mesh, coarse, static_cast<std::uint64_t>(n_iso * s.n));
+    if (average) generate::average_normals(mesh);
+    st.coarsen += seconds_since(t0);
+  }
   return mesh;
 }
 

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
@@ -313,7 +314,7 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
       });
     mesh.point_fields.push_back(std::move(g));
   }
-  if (average) {
+  if (average && !opt.coarsen) {
     const PointIndex* C = mesh.connectivity.data();
     const float* Q = mesh.points.data();
     std::vector<Vec3f> face(static_cast<std::size_t>(mesh.num_cells()));
@@ -337,6 +338,21 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     mesh.point_fields.push_back(std::move(n));
   }
   st.fields += seconds_since(t0);
+  if (opt.coarsen) {
+    t0 = Clock::now();
+    // The coarse key: the edge's end point nearest to the crossing, per isovalue.
+    std::vector<std::uint64_t> coarse(static_cast<std::size_t>(points));
+    parallel::for_each(points, [&](Id p) {
+      const EdgePoint e = locate(point_key[p]);
+      std::uint64_t a, b, iso_index;
+      ek.decode(point_key[p], a, b, iso_index);
+      coarse[p] = iso_index * static_cast<std::uint64_t>(points_in) + (e.t >= 0.5 ? e.b : e.a);
+    });
+    st.triangles_before_coarsening = mesh.num_cells();
+    mesh = coarsen(mesh, coarse, static_cast<std::uint64_t>(points_in) * opt.isovalues.size());
+    if (average) generate::average_normals(mesh);
+    st.coarsen += seconds_since(t0);
+  }
   return mesh;
 }
 

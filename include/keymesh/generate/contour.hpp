@@ -41,6 +41,11 @@ struct ContourOptions {
   ContourNormals normals = ContourNormals::None;
   ContourWeld weld = ContourWeld::KeyReduce;
   bool scalars = true;                  // carry the interpolated input scalar as a point field
+  // Coarsening (paper, Section 6.1): the key of a crossing becomes the input
+  // point nearest to it on its edge; points sharing one are merged (positions
+  // and fields averaged) and triangles left with fewer than three distinct
+  // points are dropped. Averaged normals are computed after the merge.
+  bool coarsen = false;
   // Unstructured grids only: the point field to contour (empty: the first
   // one-component point field). Every point field is carried, interpolated.
   std::string array;
@@ -52,6 +57,8 @@ struct ContourStats {
   double generate = 0;    // triangle soup: an edge key per corner
   double weld = 0;        // KEY-REDUCE partition (or VERTEX-WELD), with the pair order when averaging
   double fields = 0;      // positions, scalars, normals per unique point
+  double coarsen = 0;     // merging by nearest grid point (with --coarsen)
+  Id triangles_before_coarsening = 0;
   Id soup_points = 0;     // triangle corners (pairs) before welding
   int key_bits = 0;       // width of the keys used (32 or 64)
 };

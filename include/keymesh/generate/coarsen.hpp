@@ -1,0 +1,38 @@
+#pragma once
+// Coarsening by key (paper, Section 6.1, Table 5): every point of a surface
+// gets a coarser key (for a contour: the input grid point nearest to it on
+// its edge), KEY-REDUCE merges the points that share one, averaging their
+// positions and fields ("Normals" renormalised), the index map rewrites the
+// triangles, and triangles left with fewer than three distinct points are
+// dropped. Folds are removed too (remove_folds): two triangles on the same
+// three points facing opposite ways cancel. Deterministic: each group
+// averages its points in increasing index.
+#include <cstdint>
+#include <vector>
+
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh::generate {
+
+struct CoarsenStats {
+  Id points_before = 0, points_after = 0;
+  Id triangles_before = 0, triangles_after = 0;
+  Id folded = 0;  // triangles removed by remove_folds
+};
+
+// Removes triangles over the same three points: pairs facing opposite ways
+// cancel, repeats facing one way are kept once. Meshes past 2^21 points are
+// left unchanged (their sorted triples do not fit a 64-bit key). Returns the
+// number of triangles removed.
+Id remove_folds(SurfaceMesh& mesh);
+
+// `keys[p]` is point p's coarse key, every key < key_range (dense plan).
+SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                    CoarsenStats* stats = nullptr);
+
+// Area-weighted average of the incident face normals at every point, merged
+// by KEY-REDUCE over the triangles' corners in a fixed order; sets or replaces
+// the "Normals" point field.
+void average_normals(SurfaceMesh& mesh);
+
+}  // namespace keymesh::generate

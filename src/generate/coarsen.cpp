@@ -1,0 +1,156 @@
+#include "keymesh/generate/coarsen.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
+#include "keymesh/parallel/scan.hpp"
+
+namespace keymesh::generate {
+
+namespace {
+struct Vec3f {
+  float x, y, z;
+};
+}  // namespace
+
+// Collapses fold surfaces over themselves: two triangles on the same three
+// points facing opposite ways (a zero-volume fold) cancel, and repeated
+// triangles facing the same way are kept once. Triangles are grouped by their
+// sorted point ids with KEY-REDUCE (sort plan); each group keeps one triangle
+// when its orientations do not cancel. Returns how many were removed.
+Id remove_folds(SurfaceMesh& mesh) {
+  const Id t_count = mesh.num_cells();
+  if (t_count == 0) return 0;
+  const int bits = std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(mesh.num_points()) - 1));
+  if (3 * bits > 64) return 0;  // past 2^21 points: no 64-bit key; left as is (documented)
+  const PointIndex* C = mesh.connectivity.data();
+  std::vector<std::uint64_t> keys(static_cast<std::size_t>(t_count));
+  std::vector<std::int8_t> sign(static_cast<std::size_t>(t_count));
+  parallel::for_each(t_count, [&](Id t) {
+    std::uint64_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
+    // The rotation that puts the smallest id first keeps the orientation;
+    // then the order of the other two tells it.
+    const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
+    const std::uint64_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
+    sign[t] = b < c ? 1 : -1;
+    keys[t] = (a << (2 * bits)) | (std::min(b, c) << bits) | std::max(b, c);
+  });
+  const auto g = keyreduce::partition_sort(keys.data(), t_count, 3 * bits, keyreduce::Order::Build);
+  if (g.num_groups() == t_count) return 0;
+  // Keep the first triangle of a group whose orientations sum to non-zero,
+  // with that sign's winding (the first triangle of that sign).
+  std::vector<Id> keep(static_cast<std::size_t>(t_count + 1), 0);
+  parallel::for_each(g.num_groups(), [&](Id grp) {
+    int net = 0;
+    for (Id j = g.offsets[grp]; j < g.offsets[grp + 1]; ++j) net += sign[g.order[j]];
+    if (net == 0) return;
+    for (Id j = g.offsets[grp]; j < g.offsets[grp + 1]; ++j)
+      if ((sign[g.order[j]] > 0) == (net > 0)) {
+        keep[g.order[j]] = 1;
+        return;
+      }
+  });
+  const Id kept = parallel::exclusive_scan(keep.data(), keep.data(), t_count + 1);
+  std::vector<PointIndex> conn(static_cast<std::size_t>(3 * kept));
+  parallel::for_each(t_count, [&](Id t) {
+    if (keep[t + 1] != keep[t])
+      for (int k = 0; k < 3; ++k) conn[3 * keep[t] + k] = C[3 * t + k];
+  });
+  mesh.connectivity = std::move(conn);
+  return t_count - kept;
+}
+
+SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                    CoarsenStats* stats) {
+  if (!mesh.all_triangles()) throw InputError("coarsen: the mesh has polygons; only triangles are coarsened");
+  const Id n = mesh.num_points();
+  if (static_cast<Id>(keys.size()) != n) throw InputError("coarsen: one key per point is needed");
+  const auto groups = keyreduce::partition_dense(keys.data(), n, key_range, keyreduce::Order::Build);
+  const Id m = groups.num_groups();
+  SurfaceMesh out;
+  // Positions and every field: the mean over the group, in pair order.
+  auto average = [&](const std::vector<float>& in, int k, std::vector<float>& dst) {
+    dst.assign(static_cast<std::size_t>(m * k), 0.f);
+    parallel::for_each(m, [&](Id g) {
+      for (int c = 0; c < k; ++c) {
+        double s = 0;
+        for (Id j = groups.offsets[g]; j < groups.offsets[g + 1]; ++j) s += in[groups.order[j] * std::size_t(k) + c];
+        dst[g * k + c] = static_cast<float>(s / double(groups.count(g)));
+      }
+    });
+  };
+  average(mesh.points, 3, out.points);
+  for (const Field& f : mesh.point_fields) {
+    Field h{f.name, f.components, {}};
+    average(f.values, f.components, h.values);
+    if (f.name == "Normals" && f.components == 3)
+      parallel::for_each(m, [&](Id g) {
+        float* v = &h.values[3 * g];
+        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
+      });
+    out.point_fields.push_back(std::move(h));
+  }
+  // Rewrite the triangles through the index map; keep those with three distinct points.
+  const Id t_in = mesh.num_cells();
+  std::vector<Id> keep(static_cast<std::size_t>(t_in + 1), 0);
+  const PointIndex* C = mesh.connectivity.data();
+  const std::uint32_t* map = groups.index_map.data();
+  parallel::for_each(t_in, [&](Id t) {
+    const std::uint32_t a = map[C[3 * t]], b = map[C[3 * t + 1]], c = map[C[3 * t + 2]];
+    keep[t] = (a != b && b != c && a != c) ? 1 : 0;
+  });
+  const Id t_out = parallel::exclusive_scan(keep.data(), keep.data(), t_in + 1);
+  out.connectivity.resize(static_cast<std::size_t>(3 * t_out));
+  parallel::for_each(t_in, [&](Id t) {
+    if (keep[t + 1] == keep[t]) return;
+    for (int k = 0; k < 3; ++k) out.connectivity[3 * keep[t] + k] = map[C[3 * t + k]];
+  });
+  const Id folded = remove_folds(out);
+  if (stats) *stats = CoarsenStats{n, m, t_in, t_out - folded, folded};
+  return out;
+}
+
+void average_normals(SurfaceMesh& mesh) {
+  if (!mesh.all_triangles()) throw InputError("normals: the mesh has polygons; only triangles are averaged");
+  keyreduce::Groups<std::uint32_t> g;
+  // Groups by point id: the connectivity is the index map; unique keys are the points.
+  g.index_map = mesh.connectivity;
+  g.unique_keys.resize(static_cast<std::size_t>(mesh.num_points()));
+  keyreduce::build_order(g);
+  const float* P = mesh.points.data();
+  const PointIndex* C = mesh.connectivity.data();
+  std::vector<Vec3f> face(static_cast<std::size_t>(mesh.num_cells()));
+  parallel::for_each(mesh.num_cells(), [&](Id t) {
+    const float* a = P + 3 * Id{C[3 * t]};
+    const float* b = P + 3 * Id{C[3 * t + 1]};
+    const float* c = P + 3 * Id{C[3 * t + 2]};
+    const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const float v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    face[t] = Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  });
+  // The reduce half by hand: a point no triangle uses (an empty group) gets a zero normal.
+  Field n{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * mesh.num_points()))};
+  parallel::for_each(mesh.num_points(), [&](Id p) {
+    Vec3f s{0, 0, 0};
+    for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) {
+      const Vec3f f = face[g.order[j] / 3];
+      s = Vec3f{s.x + f.x, s.y + f.y, s.z + f.z};
+    }
+    const float len = std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
+    if (len > 0) n.values[3 * p] = s.x / len, n.values[3 * p + 1] = s.y / len, n.values[3 * p + 2] = s.z / len;
+  });
+  for (Field& f : mesh.point_fields)
+    if (f.name == "Normals") {
+      f = std::move(n);
+      return;
+    }
+  mesh.point_fields.push_back(std::move(n));
+}
+
+}  // namespace keymesh::generate
