@@ -23,6 +23,7 @@ struct ContourCli {
   std::string normals = "none";
   bool no_scalars = false;
   bool coarsen = false;
+  bool curvature = false;
   std::string array;  // tet grids: the point field to contour
   // Raw input description.
   std::vector<long long> dims;
@@ -54,6 +55,9 @@ Register reg{Command{
                      "(incident face normals merged by KEY-REDUCE)")
           ->check(CLI::IsMember({"none", "gradient", "average"}));
       cmd.add_flag("--no-scalars", o->no_scalars, "do not carry the interpolated scalar");
+      cmd.add_flag("--curvature", o->curvature,
+                   "mean curvature per point from the volume's gradient and Hessian (point field mean_curvature; "
+                   "1/r on a sphere of the distance field); voxel grids only");
       cmd.add_flag("--coarsen", o->coarsen,
                    "merge the points nearest to one grid point (key = nearest input point on the edge), "
                    "averaging positions and fields; drop collapsed triangles");
@@ -96,6 +100,7 @@ Register reg{Command{
         opt.scalars = !o->no_scalars;
         opt.array = o->array;
         opt.coarsen = o->coarsen;
+        opt.curvature = o->curvature;
         auto warn_outside = [&](std::array<double, 2> range) {
           for (double iso : o->isovalues)
             if ((iso < range[0] || iso > range[1]) && !o->common.quiet)
@@ -107,8 +112,10 @@ Register reg{Command{
         nlohmann::json r;
         progress.say("reading " + o->input);
         if (!is_raw && io::is_grid_file(o->input)) {
-          if (opt.normals == generate::ContourNormals::Gradient) {
-            std::fprintf(stderr, "keymesh contour: --normals gradient needs a voxel grid; use --normals average\n");
+          if (opt.normals == generate::ContourNormals::Gradient || opt.curvature) {
+            std::fprintf(stderr, "keymesh contour: %s needs a voxel grid%s\n",
+                         opt.curvature ? "--curvature" : "--normals gradient",
+                         opt.curvature ? "" : "; use --normals average");
             return 2;
           }
           const UnstructuredGrid grid = timer.run("read", [&] { return io::read_grid(o->input); });

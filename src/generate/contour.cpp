@@ -274,6 +274,52 @@ struct EdgeInterpolator {
     }
   }
 
+  // Gradient and Hessian (xx, yy, zz, xy, xz, yz) at grid point `id`, by
+  // central differences with indices clamped at the border.
+  void derivatives_at(Id id, const Id ijk[3], double g[3], double h[6]) const {
+    const Id dims[3] = {s.nx, s.ny, s.nz};
+    auto at = [&](int da, int db, int a, int b) {
+      Id q = id;
+      const int d[2] = {da, db};
+      const int ax[2] = {a, b};
+      for (int k = 0; k < 2; ++k) {
+        if (d[k] == 0) continue;
+        const Id c = ijk[ax[k]] + d[k];
+        if (c >= 0 && c < dims[ax[k]]) q += d[k] * s.stride[ax[k]];
+      }
+      const double v = static_cast<double>(samples[q]);
+      return std::isfinite(v) ? v : static_cast<double>(samples[id]);
+    };
+    const double f0 = static_cast<double>(samples[id]);
+    gradient_at(id, ijk, g);
+    for (int a = 0; a < 3; ++a) h[a] = (at(1, 0, a, a) - 2 * f0 + at(-1, 0, a, a)) / (s.spacing[a] * s.spacing[a]);
+    const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+    for (int k = 0; k < 3; ++k) {
+      const int a = pairs[k][0], b = pairs[k][1];
+      h[3 + k] = (at(1, 1, a, b) - at(1, -1, a, b) - at(-1, 1, a, b) + at(-1, -1, a, b)) /
+                 (4 * s.spacing[a] * s.spacing[b]);
+    }
+  }
+
+  // Mean curvature at the point: (|g|^2 tr H - g^T H g) / (2 |g|^3).
+  float mean_curvature(const Point& p) const {
+    double g0[3], g1[3], h0[6], h1[6];
+    Id ijk1[3] = {p.ijk[0], p.ijk[1], p.ijk[2]};
+    ++ijk1[p.axis];
+    derivatives_at(p.p0, p.ijk, g0, h0);
+    derivatives_at(p.p0 + s.stride[p.axis], ijk1, g1, h1);
+    double g[3], h[6];
+    for (int a = 0; a < 3; ++a) g[a] = g0[a] + p.t * (g1[a] - g0[a]);
+    for (int a = 0; a < 6; ++a) h[a] = h0[a] + p.t * (h1[a] - h0[a]);
+    const double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    if (!(gg > 0)) return 0.f;
+    const double hg[3] = {h[0] * g[0] + h[3] * g[1] + h[4] * g[2], h[3] * g[0] + h[1] * g[1] + h[5] * g[2],
+                          h[4] * g[0] + h[5] * g[1] + h[2] * g[2]};
+    const double ghg = g[0] * hg[0] + g[1] * hg[1] + g[2] * hg[2];
+    const double k = (gg * (h[0] + h[1] + h[2]) - ghg) / (2 * gg * std::sqrt(gg));
+    return std::isfinite(k) ? static_cast<float>(k) : 0.f;
+  }
+
   // Outward unit normal: minus the interpolated gradient (values fall outward).
   void gradient_normal(const Point& p, float* n) const {
     double g0[3], g1[3];
@@ -407,7 +453,13 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
     Field f{"Normals", 3, std::vector<float>(3 * points)};
     parallel::for_each(points, [&](Id p) { interp.gradient_normal(interp.locate(point_key[p]), &f.values[3 * p]); });
     mesh.point_fields.push_back(std::move(f));
-  } else if (average && !opt.coarsen) {
+  }
+  if (opt.curvature) {
+    Field f{"mean_curvature", 1, std::vector<float>(points)};
+    parallel::for_each(points, [&](Id p) { f.values[p] = interp.mean_curvature(interp.locate(point_key[p])); });
+    mesh.point_fields.push_back(std::move(f));
+  }
+  if (average && !opt.coarsen) {
     Field f{"Normals", 3, {}};
     average_normals(groups, opt.weld == ContourWeld::VertexWeld ? nullptr : &blocks, mesh, f.values);
     mesh.point_fields.push_back(std::move(f));

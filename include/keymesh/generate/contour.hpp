@@ -46,6 +46,13 @@ struct ContourOptions {
   // and fields averaged) and triangles left with fewer than three distinct
   // points are dropped. Averaged normals are computed after the merge.
   bool coarsen = false;
+  // Mean curvature per point from the volume's gradient g and Hessian H
+  // (central differences, interpolated along the edge; Kindlmann et al.
+  // 2003): kappa = (|g|^2 tr(H) - g^T H g) / (2 |g|^3), half the divergence
+  // of g / |g|. For the Spherical Distance field (values growing outward)
+  // a sphere of radius r has kappa = 1/r. Point field "mean_curvature".
+  // Voxel grids only.
+  bool curvature = false;
   // Unstructured grids only: the point field to contour (empty: the first
   // one-component point field). Every point field is carried, interpolated.
   std::string array;
