@@ -1,0 +1,65 @@
+// keymesh dual IN -o OUT: one polygon per input point through the centroids
+// of its cells, keyed by the point.
+#include <cstdio>
+
+#include "command.hpp"
+#include "keymesh/generate/dual.hpp"
+#include "keymesh/io/mesh_io.hpp"
+
+namespace keymesh::cli {
+
+namespace {
+
+struct DualCli {
+  std::string input, output;
+  CommonOptions common;
+};
+
+Register reg{Command{
+    "dual", "the dual of a polygon surface: a polygon per point through the centroids of its cells",
+    [](CLI::App& cmd) -> std::function<int()> {
+      auto o = std::make_shared<DualCli>();
+      cmd.add_option("input", o->input, "polygon surface (.vtp .ply .obj .stl)")->required();
+      cmd.add_option("-o,--output", o->output, "output polygons (.vtp .obj .ply)")->required();
+      add_common_options(cmd, o->common);
+      return [o]() {
+        if (!is_mesh_path(o->output) || o->output.size() < 4 ||
+            o->output.compare(o->output.size() - 4, 4, ".stl") == 0) {
+          std::fprintf(stderr, "keymesh dual: %s: write polygons as .vtp, .obj or .ply\n", o->output.c_str());
+          return 2;
+        }
+        const int threads = apply_threads(o->common);
+        StageTimer timer;
+        const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o->input); });
+        generate::DualStats st;
+        const SurfaceMesh d = timer.run("dual", [&] { return generate::dual(m, &st); });
+        timer.run("write", [&] { io::write_mesh(d, o->output); });
+        if (!o->common.quiet) {
+          std::fprintf(stderr, "keymesh: %lld points, %lld polygons -> %s\n", (long long)d.num_points(),
+                       (long long)d.num_cells(), o->output.c_str());
+          if (st.boundary_fans || st.nonmanifold_points || st.skipped_fans)
+            std::fprintf(stderr, "keymesh: %lld boundary fans, %lld non-manifold points, %lld fans skipped\n",
+                         (long long)st.boundary_fans, (long long)st.nonmanifold_points, (long long)st.skipped_fans);
+        }
+        if (!o->common.report_path.empty()) {
+          nlohmann::json r;
+          r["input"] = o->input;
+          r["output"] = o->output;
+          r["input_points"] = m.num_points();
+          r["input_cells"] = m.num_cells();
+          r["points"] = d.num_points();
+          r["cells"] = d.num_cells();
+          r["boundary_fans"] = st.boundary_fans;
+          r["nonmanifold_points"] = st.nonmanifold_points;
+          r["skipped_fans"] = st.skipped_fans;
+          r["threads"] = threads;
+          r["seconds"] = timer.seconds();
+          write_report(o->common.report_path, r);
+        }
+        return 0;
+      };
+    }}};
+
+}  // namespace
+
+}  // namespace keymesh::cli
