@@ -4,6 +4,9 @@
 //             [--scheme linear|bezier]      triangles 1->4 of the sphere contour (iso N/2 - 1 + 0.001)
 //   ops_bench --op tet24 --size 128 ...      face-centred tetrahedralization of the grid
 //   ops_bench --op tet5  --size 256 ...      the minimal 5-tet split
+//   ops_bench --op coarsen --size 256 ...    contour with coarsening (Table 5; compare --op contour)
+//   ops_bench --op contour --size 256 ...    the same contour without it
+//   ops_bench --op dual --size 256 ...       the dual of the sphere contour (Table 6)
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -15,6 +18,7 @@
 
 #include "keymesh/core/huge_pages.hpp"
 #include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/dual.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/generate/subdivide.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
@@ -40,14 +44,17 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (op != "subdivide" && op != "tet24" && op != "tet5") {
-    std::fprintf(stderr, "--op must be subdivide, tet24 or tet5\n");
+  if (op != "subdivide" && op != "tet24" && op != "tet5" && op != "coarsen" && op != "contour" && op != "dual") {
+    std::fprintf(stderr, "--op must be subdivide, tet24, tet5, coarsen, contour or dual\n");
     return 2;
   }
   const int used = parallel::set_thread_count(threads);
   const ImageGrid grid = generate::spherical_distance(size);
   SurfaceMesh surface;
-  if (op == "subdivide") {
+  generate::ContourOptions contour_opt;
+  contour_opt.isovalues = {static_cast<double>(size / 2) - 1 + 0.001};
+  contour_opt.coarsen = op == "coarsen";
+  if (op == "subdivide" || op == "dual") {
     generate::ContourOptions c;
     c.isovalues = {static_cast<double>(size / 2) - 1 + 0.001};
     c.normals = generate::ContourNormals::Average;
@@ -62,6 +69,12 @@ int main(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     if (op == "subdivide") {
       const SurfaceMesh m = generate::subdivide(surface, so);
+      points = m.num_points(), cells = m.num_cells();
+    } else if (op == "dual") {
+      const SurfaceMesh m = generate::dual(surface);
+      points = m.num_points(), cells = m.num_cells();
+    } else if (op == "coarsen" || op == "contour") {
+      const SurfaceMesh m = generate::contour(grid, contour_opt);
       points = m.num_points(), cells = m.num_cells();
     } else {
       const UnstructuredGrid g =

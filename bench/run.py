@@ -204,6 +204,12 @@ def ops_rows(ops, keymesh, n, iso, threads_all, reps, work):
                               str(min(reps, 3)), "--weld", weld])[0]
                 r["tool"] = "keymesh"
                 rows.append(r)
+    for threads in sorted({1, threads_all}):
+        for op in ("contour", "coarsen", "dual"):
+            print(f"  {n}^3 {op} threads={threads}", flush=True)
+            r = run_json([ops, "--op", op, "--size", str(n), "--threads", str(threads), "--reps", str(reps)])[0]
+            r["tool"] = "keymesh"
+            rows.append(r)
     vti, vtp = os.path.join(work, f"sphere{n}.vti"), os.path.join(work, f"contour{n}.vtp")
     if not os.path.exists(vti):
         subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
@@ -211,6 +217,12 @@ def ops_rows(ops, keymesh, n, iso, threads_all, reps, work):
     print(f"  {n}^3 subdivide VTK", flush=True)
     try:
         rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_subdivide.py"), "--mesh", vtp,
+                          "--size", str(n), "--reps", str(reps)])
+    except SystemExit as e:
+        print(f"  VTK peer unavailable: {e}")
+    print(f"  {n}^3 decimation VTK", flush=True)
+    try:
+        rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_decimate.py"), "--mesh", vtp,
                           "--size", str(n), "--reps", str(reps)])
     except SystemExit as e:
         print(f"  VTK peer unavailable: {e}")
@@ -349,7 +361,32 @@ def summarize(rows, sizes, threads):
             if kr and pr:
                 parts.append(f"{peer} / keymesh {pr['median'] / kr['median']:.2f}x")
             out(f"  {n}^3, {threads} threads: " + "; ".join(parts))
-    peak = [r for r in rows if r.get("size") == sizes[-1] and r.get("grid") != "tet5" and r.get("bench") == "contour"]
+    op_sizes = [n for n in sizes if find(rows, size=n, bench="coarsen", tool="keymesh")]
+    if op_sizes:
+        out("\nCoarsening during the contour (Table 5) and the dual (Table 6), warm medians (ms; min-max)")
+        out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in op_sizes))
+
+        def cline(label, bench_name, **kw):
+            cells = []
+            for n in op_sizes:
+                r = find(rows, size=n, bench=bench_name, **kw)
+                cells.append(f"{r['median'] * 1e3:8.1f} ({r['min'] * 1e3:.0f}-{r['max'] * 1e3:.0f})" if r else "")
+            out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+        for t in sorted({1, threads}):
+            cline(f"keymesh contour (ops_bench), {t} thr", "contour", tool="keymesh", threads=t, grid=None)
+            cline(f"keymesh contour + coarsening, {t} thr", "coarsen", tool="keymesh", threads=t)
+            cline(f"keymesh dual of the contour, {t} thr", "dual", tool="keymesh", threads=t)
+        cline("vtkBinnedDecimation (bins = voxels), 1 thr", "coarsen", tool="vtkBinnedDecimation")
+        cline("vtkQuadricClustering (bins = voxels), 1 thr", "coarsen", tool="vtkQuadricClustering")
+        for n in op_sizes:
+            c0 = find(rows, size=n, bench="contour", tool="keymesh", threads=threads, grid=None)
+            c1 = find(rows, size=n, bench="coarsen", tool="keymesh", threads=threads)
+            if c0 and c1:
+                out(f"  {n}^3, {threads} threads: triangles {c0['cells']} -> {c1['cells']} "
+                    f"({100 * (1 - c1['cells'] / c0['cells']):.0f}% removed); coarsening costs "
+                    f"{100 * (c1['median'] / c0['median'] - 1):+.0f}% over the contour")
+    peak = [r for r in rows if r.get("size") == sizes[-1] and r.get("grid") != "tet5" and r.get("bench") == "contour"
+            and "input_points" not in r]
     out(f"\nPeak RSS at {sizes[-1]}^3 (MiB): " +
           ", ".join(f"{r['tool']} {r.get('weld', '')} {r.get('normals', '')} {r['peak_rss_mib']:.0f}".replace("  ", " ")
                     for r in peak if r.get("threads") == threads or r["tool"] == "vtkMarchingCubes"))

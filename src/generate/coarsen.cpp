@@ -7,7 +7,6 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
-#include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 
 namespace keymesh::generate {
@@ -21,40 +20,58 @@ struct Vec3f {
 // Collapses fold surfaces over themselves: two triangles on the same three
 // points facing opposite ways (a zero-volume fold) cancel, and repeated
 // triangles facing the same way are kept once. Triangles are grouped by their
-// sorted point ids with KEY-REDUCE (sort plan); each group keeps one triangle
-// when its orientations do not cancel. Returns how many were removed.
+// smallest point id (KEY-REDUCE, dense plan: a counting sort over the
+// points), and each group's few triangles are compared with one another;
+// of every set of equal triangles the first of the winning orientation is
+// kept when the orientations do not cancel. Returns how many were removed.
 Id remove_folds(SurfaceMesh& mesh) {
   const Id t_count = mesh.num_cells();
   if (t_count == 0) return 0;
-  const int bits = std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(mesh.num_points()) - 1));
-  if (3 * bits > 64) return 0;  // past 2^21 points: no 64-bit key; left as is (documented)
   const PointIndex* C = mesh.connectivity.data();
-  std::vector<std::uint64_t> keys(static_cast<std::size_t>(t_count));
-  std::vector<std::int8_t> sign(static_cast<std::size_t>(t_count));
+  struct Tri {
+    std::uint32_t lo, mid, hi;
+    std::int8_t sign;
+  };
+  std::vector<Tri> tri(static_cast<std::size_t>(t_count));
+  std::vector<std::uint32_t> lo(static_cast<std::size_t>(t_count));
   parallel::for_each(t_count, [&](Id t) {
-    std::uint64_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
-    // The rotation that puts the smallest id first keeps the orientation;
-    // then the order of the other two tells it.
+    const std::uint32_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
+    // Rotating the smallest id to the front keeps the orientation; the order
+    // of the other two then tells it.
     const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
-    const std::uint64_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
-    sign[t] = b < c ? 1 : -1;
-    keys[t] = (a << (2 * bits)) | (std::min(b, c) << bits) | std::max(b, c);
+    const std::uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
+    tri[t] = Tri{a, std::min(b, c), std::max(b, c), static_cast<std::int8_t>(b < c ? 1 : -1)};
+    lo[t] = a;
   });
-  const auto g = keyreduce::partition_sort(keys.data(), t_count, 3 * bits, keyreduce::Order::Build);
-  if (g.num_groups() == t_count) return 0;
-  // Keep the first triangle of a group whose orientations sum to non-zero,
-  // with that sign's winding (the first triangle of that sign).
-  std::vector<Id> keep(static_cast<std::size_t>(t_count + 1), 0);
+  const auto g = keyreduce::partition_dense(lo.data(), t_count, static_cast<std::uint32_t>(mesh.num_points()),
+                                            keyreduce::Order::Build);
+  std::vector<Id> keep(static_cast<std::size_t>(t_count + 1), 1);
+  keep[t_count] = 0;
+  std::vector<std::uint8_t> folded_any(static_cast<std::size_t>(g.num_groups()), 0);
   parallel::for_each(g.num_groups(), [&](Id grp) {
-    int net = 0;
-    for (Id j = g.offsets[grp]; j < g.offsets[grp + 1]; ++j) net += sign[g.order[j]];
-    if (net == 0) return;
-    for (Id j = g.offsets[grp]; j < g.offsets[grp + 1]; ++j)
-      if ((sign[g.order[j]] > 0) == (net > 0)) {
-        keep[g.order[j]] = 1;
-        return;
+    const Id b = g.offsets[grp], e = g.offsets[grp + 1];
+    for (Id i = b; i < e; ++i) {
+      const Tri& ti = tri[g.order[i]];
+      bool first = true;
+      for (Id j = b; j < i && first; ++j)
+        first = !(tri[g.order[j]].mid == ti.mid && tri[g.order[j]].hi == ti.hi);
+      if (!first) continue;  // decided with the first of its set
+      int net = ti.sign, copies = 1;
+      for (Id j = i + 1; j < e; ++j)
+        if (tri[g.order[j]].mid == ti.mid && tri[g.order[j]].hi == ti.hi) net += tri[g.order[j]].sign, ++copies;
+      if (copies == 1) continue;
+      folded_any[grp] = 1;
+      bool kept = false;
+      for (Id j = i; j < e; ++j) {
+        const Tri& tj = tri[g.order[j]];
+        if (tj.mid != ti.mid || tj.hi != ti.hi) continue;
+        const bool winner = net != 0 && !kept && (tj.sign > 0) == (net > 0);
+        keep[g.order[j]] = winner ? 1 : 0;
+        kept = kept || winner;
       }
+    }
   });
+  if (std::find(folded_any.begin(), folded_any.end(), 1) == folded_any.end()) return 0;
   const Id kept = parallel::exclusive_scan(keep.data(), keep.data(), t_count + 1);
   std::vector<PointIndex> conn(static_cast<std::size_t>(3 * kept));
   parallel::for_each(t_count, [&](Id t) {

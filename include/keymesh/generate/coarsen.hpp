@@ -21,9 +21,7 @@ struct CoarsenStats {
 };
 
 // Removes triangles over the same three points: pairs facing opposite ways
-// cancel, repeats facing one way are kept once. Meshes past 2^21 points are
-// left unchanged (their sorted triples do not fit a 64-bit key). Returns the
-// number of triangles removed.
+// cancel, repeats facing one way are kept once. Returns the number removed.
 Id remove_folds(SurfaceMesh& mesh);
 
 // `keys[p]` is point p's coarse key, every key < key_range (dense plan).
