@@ -238,7 +238,12 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         weld: "keyreduce" (dense plan, default), "keyreduce-sort" or
             "vertexweld" (the paper's coordinate-sort baseline); all give
             the same mesh.
-        coarsen, curvature: not implemented yet (NotImplementedError).
+        coarsen: merge the points nearest to one grid point (the key of a
+            crossing becomes the input point nearest to it on its edge),
+            averaging positions and fields; collapsed triangles are dropped.
+        curvature: add point_data["mean_curvature"] from the volume's
+            gradient and Hessian: (|g|^2 tr H - g^T H g) / (2 |g|^3), 1/r on
+            a sphere of a distance field (values growing outward).
         threads: worker threads, 0 = all cores. Output is identical for any count.
 
     Returns:
@@ -253,10 +258,6 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             (keymesh.Error, a ValueError, for input the library refuses;
             keymesh.LimitError past 2^32 - 1 points or corners).
     """
-    if coarsen:
-        raise NotImplementedError("contour(coarsen=True): mesh coarsening is not implemented in keymesh yet")
-    if curvature:
-        raise NotImplementedError("contour(curvature=True): curvature fields are not implemented in keymesh yet")
     if normals is None:
         normals = "none"
     if not isinstance(normals, str):
@@ -269,7 +270,8 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             spacing = None
         if origin is not None and tuple(map(float, origin)) == (0.0, 0.0, 0.0):
             origin = None
-    parts, info = _ext.contour(volume, _isovalues(iso), spacing, origin, normals, weld, _threads(threads))
+    parts, info = _ext.contour(volume, _isovalues(iso), spacing, origin, normals, weld, bool(coarsen),
+                               bool(curvature), _threads(threads))
     last_contour_info.clear()
     last_contour_info.update(info)
     return _mesh(parts)

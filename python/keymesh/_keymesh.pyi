@@ -31,7 +31,7 @@ class Volume:
 _MeshParts = Tuple[np.ndarray, np.ndarray, Optional[np.ndarray], Dict[str, np.ndarray]]
 
 def contour(volume: Union[npt.ArrayLike, Volume], isovalues: List[float], spacing: Optional[Sequence[float]] = ...,
-            origin: Optional[Sequence[float]] = ..., normals: str = ..., weld: str = ...,
+            origin: Optional[Sequence[float]] = ..., normals: str = ..., weld: str = ..., coarsen: bool = ..., curvature: bool = ...,
             threads: int = ...) -> Tuple[_MeshParts, Dict[str, Any]]: ...
 def key_reduce(keys: np.ndarray, values: np.ndarray, op: str = ...,
                threads: int = ...) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...

@@ -71,7 +71,8 @@ void swap_x_z(SurfaceMesh& mesh) {
 }
 
 py::tuple contour(const py::object& volume, const std::vector<double>& isovalues, const py::object& spacing,
-                  const py::object& origin, const std::string& normals, const std::string& weld, int threads) {
+                  const py::object& origin, const std::string& normals, const std::string& weld, bool coarsen,
+                  bool curvature, int threads) {
   check_threads(threads);
   if (isovalues.empty()) throw py::value_error("iso: give at least one isovalue");
   for (double v : isovalues)
@@ -80,6 +81,8 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   opt.isovalues = isovalues;
   opt.normals = parse_normals(normals);
   opt.weld = parse_weld(weld);
+  opt.coarsen = coarsen;
+  opt.curvature = curvature;
 
   const ImageGrid* grid = nullptr;
   ImageGrid copy;
@@ -139,6 +142,8 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   info["generate"] = stats.generate;
   info["weld"] = stats.weld;
   info["fields"] = stats.fields;
+  info["coarsen"] = stats.coarsen;
+  info["triangles_before_coarsening"] = stats.triangles_before_coarsening;
   info["key_bits"] = stats.key_bits;
   info["zero_copy"] = grid != &copy;
   return py::make_tuple(mesh_to_python(std::move(mesh)), info);
@@ -149,7 +154,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
 void register_contour(py::module_& m) {
   m.def("contour", &contour, py::arg("volume"), py::arg("isovalues"), py::arg("spacing") = py::none(),
         py::arg("origin") = py::none(), py::arg("normals") = "average", py::arg("weld") = "keyreduce",
-        py::arg("threads") = 0,
+        py::arg("coarsen") = false, py::arg("curvature") = false, py::arg("threads") = 0,
         "Marching cubes welded by KEY-REDUCE; returns ((points, cells, offsets, point_data), timings). "
         "Use keymesh.contour, which wraps this in a Mesh.");
 }

@@ -121,9 +121,11 @@ def test_no_surface_gives_empty_arrays():
     assert m.points.shape == (0, 3) and m.cells.shape == (0, 3)
 
 
-def test_not_implemented_options():
+def test_coarsen_and_curvature():
     f = sphere_field()
-    with pytest.raises(NotImplementedError, match="coarsen"):
-        keymesh.contour(f, ISO, coarsen=True)
-    with pytest.raises(NotImplementedError, match="curvature"):
-        keymesh.contour(f, ISO, curvature=True)
+    fine = keymesh.contour(f, ISO)
+    coarse = keymesh.contour(f, ISO, coarsen=True)
+    assert 0 < len(coarse.cells) < len(fine.cells)
+    assert keymesh.check(coarse)["duplicate_points"] == 0
+    curved = keymesh.contour(f, ISO, curvature=True)
+    assert curved.point_data["mean_curvature"].shape == (len(curved.points),)
