@@ -222,8 +222,8 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             method="lorensen")`` (plus origin; skimage winds triangles the
             other way and splits some cube polygons along the other
             diagonal). Any memory layout works: C- and Fortran-ordered
-            arrays are copied once into the library's grid (one memcpy,
-            about 0.12 s per GiB); other strides are made C-contiguous first;
+            arrays are read in place (no copy); other strides and
+            non-native byte orders are made C-contiguous first;
             C and Fortran order give the same points, their triangulations
             may differ in such diagonals. A keymesh.Volume is read in place.
         iso: an isovalue or a sequence of them (finite). Inside means

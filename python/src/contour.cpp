@@ -17,7 +17,6 @@
 #include <cstring>
 #include <optional>
 
-#include <sys/mman.h>
 
 #include "common.hpp"
 #include "keymesh/generate/contour.hpp"
@@ -42,19 +41,6 @@ generate::ContourWeld parse_weld(const std::string& s) {
   if (s == "keyreduce-sort") return generate::ContourWeld::KeyReduceSort;
   if (s == "vertexweld") return generate::ContourWeld::VertexWeld;
   throw py::value_error("weld must be 'keyreduce', 'keyreduce-sort' or 'vertexweld', got '" + s + "'");
-}
-
-// Copies n bytes into the grid: one pass (no zero fill first), on 2 MiB pages
-// where the kernel allows it (a 512^3 float32 volume is 131072 page faults
-// with 4 KiB pages).
-void copy_samples(ImageGrid& grid, const void* src, std::size_t n) {
-  grid.bytes.reserve(n);
-  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
-  const auto begin = (reinterpret_cast<std::uintptr_t>(grid.bytes.data()) + kHuge - 1) & ~(kHuge - 1);
-  const auto end = (reinterpret_cast<std::uintptr_t>(grid.bytes.data()) + n) & ~(kHuge - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
-  const auto* bytes = static_cast<const std::byte*>(src);
-  grid.bytes.assign(bytes, bytes + n);
 }
 
 // Mirrors a mesh contoured over the reversed axes back: x <-> z.
@@ -124,8 +110,9 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
     py::gil_scoped_release release;
     ThreadScope scope(threads);
     auto t0 = Clock::now();
-    if (grid == &copy)
-      copy_samples(copy, array.data(), static_cast<std::size_t>(array.nbytes()));
+    // The array's memory is read in place (C- or Fortran-contiguous, native
+    // byte order by now); `array` keeps it alive until the call returns.
+    if (grid == &copy) copy.external = static_cast<const std::byte*>(array.data());
     copy_s = seconds_since(t0);
     t0 = Clock::now();
     mesh = generate::contour(*grid, opt, &stats);
@@ -145,7 +132,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   info["coarsen"] = stats.coarsen;
   info["triangles_before_coarsening"] = stats.triangles_before_coarsening;
   info["key_bits"] = stats.key_bits;
-  info["zero_copy"] = grid != &copy;
+  info["zero_copy"] = true;
   return py::make_tuple(mesh_to_python(std::move(mesh)), info);
 }
 

@@ -493,8 +493,8 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
     if (grid.dims[a] < 2)
       throw InputError("contour: grid has " + std::to_string(grid.dims[a]) + " point(s) along axis " +
                        "xyz"[a] + std::string(" (need at least 2)"));
-  if (static_cast<Id>(grid.bytes.size()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
-    throw InputError("contour: grid holds " + std::to_string(grid.bytes.size()) + " bytes, dims need " +
+  if (static_cast<Id>(grid.byte_count()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
+    throw InputError("contour: grid holds " + std::to_string(grid.byte_count()) + " bytes, dims need " +
                      std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
   ContourStats local;
   ContourStats& st = stats ? *stats : local;

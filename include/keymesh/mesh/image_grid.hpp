@@ -30,10 +30,18 @@ struct ImageGrid {
   ScalarType type = ScalarType::Float32;
   std::string name = "scalars";              // the point field's name
   std::vector<std::byte> bytes;              // dims[0]*dims[1]*dims[2] samples, native endian
+  // A non-owning view instead of `bytes` (e.g. a numpy array's memory, which
+  // must outlive every use of the grid): when set, algorithms read the
+  // samples from here and `bytes` stays empty.
+  const std::byte* external = nullptr;
 
   Id num_points() const { return dims[0] * dims[1] * dims[2]; }
-  const void* data() const { return bytes.data(); }
-  void* data() { return bytes.data(); }
+  const void* data() const { return external ? static_cast<const void*>(external) : bytes.data(); }
+  void* data() { return bytes.data(); }  // the owned samples (writers, readers)
+  // Bytes of samples the grid holds (owned or viewed).
+  std::size_t byte_count() const {
+    return external ? static_cast<std::size_t>(num_points()) * scalar_size(type) : bytes.size();
+  }
 
   // Allocates bytes for dims and type after checking every product for
   // overflow; throws LimitError naming the dims otherwise.
