@@ -1,0 +1,174 @@
+#pragma once
+// The per-element functors of marching cubes on a voxel grid, shared by the
+// CPU backend (src/generate/contour.cpp) and the CUDA backend
+// (src/cuda/contour_cuda.cu): plain values and KEYMESH_HD functions, no
+// allocation, so the same arithmetic (hence the same bits) runs on both.
+#include <cmath>
+#include <cstdint>
+
+#include "keymesh/core/device.hpp"
+#include "keymesh/core/types.hpp"
+
+namespace keymesh::generate {
+
+// Geometry of the grid as the functors need it (plain values: device-friendly).
+struct GridShape {
+  Id nx, ny, nz, nxy, n;
+  double origin[3], spacing[3];
+  Id stride[3];
+};
+
+// Position, scalar and gradient of the point on the edge named by a key.
+template <class T>
+struct EdgeInterpolator {
+  const T* samples;
+  GridShape s;
+  const double* isovalues;
+  Id keys_per_iso;  // 3N
+
+  struct Point {
+    Id p0;       // the edge's first grid point
+    Id ijk[3];   // its grid coordinates
+    int axis;    // the edge's direction
+    double t, iso;
+  };
+
+  // Divisions by run-time values are the cost here (a million points, a few
+  // each): single isovalue skips one, and i, j, k come from two.
+  KEYMESH_HD Point locate(std::uint64_t key) const {
+    Id iso_index = 0;
+    Id edge = static_cast<Id>(key);
+    if (static_cast<std::uint64_t>(edge) >= static_cast<std::uint64_t>(keys_per_iso)) {
+      iso_index = edge / keys_per_iso;
+      edge -= iso_index * keys_per_iso;
+    }
+    Point p{};
+    p.p0 = edge / 3;
+    p.axis = static_cast<int>(edge - 3 * p.p0);
+    p.iso = isovalues[iso_index];
+    p.ijk[2] = p.p0 / s.nxy;
+    const Id rem = p.p0 - p.ijk[2] * s.nxy;
+    p.ijk[1] = rem / s.nx;
+    p.ijk[0] = rem - p.ijk[1] * s.nx;
+    const double v0 = static_cast<double>(samples[p.p0]);
+    const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
+    const double t = (p.iso - v0) / (v1 - v0);
+    // A NaN end sample (outside by definition) gives no crossing to
+    // interpolate: place the point midway rather than emit NaN.
+    p.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
+    return p;
+  }
+
+  KEYMESH_HD void position(const Point& p, float* xyz) const {
+    for (int a = 0; a < 3; ++a) {
+      const double u = static_cast<double>(p.ijk[a]) + (a == p.axis ? p.t : 0.0);
+      xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u);
+    }
+  }
+
+  KEYMESH_HD float scalar(const Point& p) const {
+    const double v0 = static_cast<double>(samples[p.p0]);
+    const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
+    const double v = v0 + p.t * (v1 - v0);
+    return static_cast<float>(std::isfinite(v) ? v : p.iso);
+  }
+
+  // Central-difference gradient at grid point `id` = (i, j, k), one-sided at the border.
+  KEYMESH_HD void gradient_at(Id id, const Id ijk[3], double g[3]) const {
+    const Id dims[3] = {s.nx, s.ny, s.nz};
+    for (int a = 0; a < 3; ++a) {
+      const bool has_lo = ijk[a] > 0, has_hi = ijk[a] + 1 < dims[a];
+      const Id lo = has_lo ? id - s.stride[a] : id;
+      const Id hi = has_hi ? id + s.stride[a] : id;
+      const double span = static_cast<double>(int(has_lo) + int(has_hi)) * s.spacing[a];
+      const double dv = static_cast<double>(samples[hi]) - static_cast<double>(samples[lo]);
+      g[a] = span > 0 && std::isfinite(dv) ? dv / span : 0.0;
+    }
+  }
+
+  // Gradient and Hessian (xx, yy, zz, xy, xz, yz) at grid point `id`, by
+  // central differences with indices clamped at the border.
+  KEYMESH_HD void derivatives_at(Id id, const Id ijk[3], double g[3], double h[6]) const {
+    const Id dims[3] = {s.nx, s.ny, s.nz};
+    auto at = [&](int da, int db, int a, int b) {
+      Id q = id;
+      const int d[2] = {da, db};
+      const int ax[2] = {a, b};
+      for (int k = 0; k < 2; ++k) {
+        if (d[k] == 0) continue;
+        const Id c = ijk[ax[k]] + d[k];
+        if (c >= 0 && c < dims[ax[k]]) q += d[k] * s.stride[ax[k]];
+      }
+      const double v = static_cast<double>(samples[q]);
+      return std::isfinite(v) ? v : static_cast<double>(samples[id]);
+    };
+    const double f0 = static_cast<double>(samples[id]);
+    gradient_at(id, ijk, g);
+    for (int a = 0; a < 3; ++a) h[a] = (at(1, 0, a, a) - 2 * f0 + at(-1, 0, a, a)) / (s.spacing[a] * s.spacing[a]);
+    const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+    for (int k = 0; k < 3; ++k) {
+      const int a = pairs[k][0], b = pairs[k][1];
+      h[3 + k] = (at(1, 1, a, b) - at(1, -1, a, b) - at(-1, 1, a, b) + at(-1, -1, a, b)) /
+                 (4 * s.spacing[a] * s.spacing[b]);
+    }
+  }
+
+  // Mean curvature at the point: (|g|^2 tr H - g^T H g) / (2 |g|^3).
+  KEYMESH_HD float mean_curvature(const Point& p) const {
+    double g0[3], g1[3], h0[6], h1[6];
+    Id ijk1[3] = {p.ijk[0], p.ijk[1], p.ijk[2]};
+    ++ijk1[p.axis];
+    derivatives_at(p.p0, p.ijk, g0, h0);
+    derivatives_at(p.p0 + s.stride[p.axis], ijk1, g1, h1);
+    double g[3], h[6];
+    for (int a = 0; a < 3; ++a) g[a] = g0[a] + p.t * (g1[a] - g0[a]);
+    for (int a = 0; a < 6; ++a) h[a] = h0[a] + p.t * (h1[a] - h0[a]);
+    const double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    if (!(gg > 0)) return 0.f;
+    const double hg[3] = {h[0] * g[0] + h[3] * g[1] + h[4] * g[2], h[3] * g[0] + h[1] * g[1] + h[5] * g[2],
+                          h[4] * g[0] + h[5] * g[1] + h[2] * g[2]};
+    const double ghg = g[0] * hg[0] + g[1] * hg[1] + g[2] * hg[2];
+    const double k = (gg * (h[0] + h[1] + h[2]) - ghg) / (2 * gg * std::sqrt(gg));
+    return std::isfinite(k) ? static_cast<float>(k) : 0.f;
+  }
+
+  // Outward unit normal: minus the interpolated gradient (values fall outward).
+  KEYMESH_HD void gradient_normal(const Point& p, float* n) const {
+    double g0[3], g1[3];
+    Id ijk1[3] = {p.ijk[0], p.ijk[1], p.ijk[2]};
+    ++ijk1[p.axis];
+    gradient_at(p.p0, p.ijk, g0);
+    gradient_at(p.p0 + s.stride[p.axis], ijk1, g1);
+    double g[3], len2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      g[a] = -(g0[a] + p.t * (g1[a] - g0[a]));
+      len2 += g[a] * g[a];
+    }
+    const double inv = len2 > 0 ? 1.0 / std::sqrt(len2) : 0.0;
+    for (int a = 0; a < 3; ++a) n[a] = static_cast<float>(g[a] * inv);
+  }
+};
+
+struct Vec3f {
+  float x, y, z;
+};
+
+// Twice the area times the unit normal of triangle t (float arithmetic).
+KEYMESH_HD inline Vec3f triangle_normal(const float* P, const PointIndex* C, Id t) {
+  const float* a = P + 3 * Id{C[3 * t]};
+  const float* b = P + 3 * Id{C[3 * t + 1]};
+  const float* c = P + 3 * Id{C[3 * t + 2]};
+  const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const float v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  return Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+}
+
+KEYMESH_HD inline Vec3f add(Vec3f a, Vec3f b) { return Vec3f{a.x + b.x, a.y + b.y, a.z + b.z}; }
+
+// The unit vector of s, or zero.
+KEYMESH_HD inline Vec3f unit(Vec3f s) {
+  const float len = std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
+  return len > 0 ? Vec3f{s.x / len, s.y / len, s.z / len} : Vec3f{0, 0, 0};
+}
+
+}  // namespace keymesh::generate
