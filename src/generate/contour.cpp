@@ -26,31 +26,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// The inside test `value >= iso` in the sample's own type, so the hot loop
-// compares samples without converting them: for floats the threshold is the
-// smallest float >= iso, for integers ceil(iso) clamped to the type's range.
-template <class T>
-struct InsideTest {
-  T threshold{};
-  bool none = false;  // no sample can be inside
-  bool all = false;   // every sample is inside
-
-  explicit InsideTest(double iso) {
-    if constexpr (std::is_same_v<T, double>) {
-      threshold = iso;
-    } else if constexpr (std::is_same_v<T, float>) {
-      float f = static_cast<float>(iso);
-      if (static_cast<double>(f) < iso) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-      threshold = f;
-    } else {
-      const double c = std::ceil(iso);
-      if (c > static_cast<double>(std::numeric_limits<T>::max())) none = true;
-      else if (c <= static_cast<double>(std::numeric_limits<T>::lowest())) all = true;
-      else threshold = static_cast<T>(c);
-    }
-  }
-};
-
 GridShape shape_of(const ImageGrid& g) {
   GridShape s{};
   s.nx = g.dims[0];

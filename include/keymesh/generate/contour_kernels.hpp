@@ -5,11 +5,39 @@
 // allocation, so the same arithmetic (hence the same bits) runs on both.
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <type_traits>
 
 #include "keymesh/core/device.hpp"
 #include "keymesh/core/types.hpp"
 
 namespace keymesh::generate {
+
+// The inside test `value >= iso` in the sample's own type, so the hot loop
+// compares samples without converting them: for floats the threshold is the
+// smallest float >= iso, for integers ceil(iso) clamped to the type's range.
+template <class T>
+struct InsideTest {
+  T threshold{};
+  bool none = false;  // no sample can be inside
+  bool all = false;   // every sample is inside
+
+  explicit InsideTest(double iso) {
+    if constexpr (std::is_same_v<T, double>) {
+      threshold = iso;
+    } else if constexpr (std::is_same_v<T, float>) {
+      float f = static_cast<float>(iso);
+      if (static_cast<double>(f) < iso) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+      threshold = f;
+    } else {
+      const double c = std::ceil(iso);
+      if (c > static_cast<double>(std::numeric_limits<T>::max())) none = true;
+      else if (c <= static_cast<double>(std::numeric_limits<T>::lowest())) all = true;
+      else threshold = static_cast<T>(c);
+    }
+  }
+};
+
 
 // Geometry of the grid as the functors need it (plain values: device-friendly).
 struct GridShape {
