@@ -23,6 +23,7 @@ Register reg{Command{
       cmd.add_flag("--expect-closed", o->expect_closed, "exit 1 unless the mesh is a closed 2-manifold");
       add_common_options(cmd, o->common);
       return [o]() {
+        if (int rc = require_cpu_backend(o->common, "the topology check")) return rc;
         const int threads = apply_threads(o->common);
         StageTimer timer;
         const SurfaceMesh mesh = timer.run("read", [&] { return io::read_mesh(o->input); });

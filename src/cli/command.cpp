@@ -16,6 +16,14 @@ void add_common_options(CLI::App& cmd, CommonOptions& common) {
   cmd.add_option("--threads", common.threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
   cmd.add_option("--report", common.report_path, "write a JSON report of counts and per-stage seconds");
   cmd.add_flag("--quiet,-q", common.quiet, "no progress messages on stderr");
+  cmd.add_option("--backend", common.backend, "cpu (threads) or cuda (NVIDIA GPU; output identical to cpu)")
+      ->check(CLI::IsMember({"cpu", "cuda"}));
+}
+
+int require_cpu_backend(const CommonOptions& common, const char* what) {
+  if (common.backend == "cpu") return 0;
+  std::fprintf(stderr, "keymesh: --backend cuda: %s is not available on the GPU yet (use --backend cpu)\n", what);
+  return 1;
 }
 
 int apply_threads(const CommonOptions& common) { return parallel::set_thread_count(common.threads); }

@@ -16,7 +16,12 @@ struct CommonOptions {
   int threads = 0;          // 0 = all cores
   std::string report_path;  // --report
   bool quiet = false;       // --quiet
+  std::string backend = "cpu";  // --backend cpu|cuda
 };
+
+// For subcommands with no GPU path yet: 0 when --backend is cpu, otherwise
+// prints why and returns 1 (refused by name, as the backend contract says).
+int require_cpu_backend(const CommonOptions& common, const char* what);
 
 void add_common_options(CLI::App& cmd, CommonOptions& common);
 

@@ -101,6 +101,7 @@ Register reg{Command{
         opt.array = o->array;
         opt.coarsen = o->coarsen;
         opt.curvature = o->curvature;
+        opt.backend = o->common.backend == "cuda" ? generate::Backend::Cuda : generate::Backend::Cpu;
         auto warn_outside = [&](std::array<double, 2> range) {
           for (double iso : o->isovalues)
             if ((iso < range[0] || iso > range[1]) && !o->common.quiet)

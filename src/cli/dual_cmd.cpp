@@ -23,6 +23,7 @@ Register reg{Command{
       cmd.add_option("-o,--output", o->output, "output polygons (.vtp .obj .ply)")->required();
       add_common_options(cmd, o->common);
       return [o]() {
+        if (int rc = require_cpu_backend(o->common, "the dual")) return rc;
         if (!is_mesh_path(o->output) || o->output.size() < 4 ||
             o->output.compare(o->output.size() - 4, 4, ".stl") == 0) {
           std::fprintf(stderr, "keymesh dual: %s: write polygons as .vtp, .obj or .ply\n", o->output.c_str());

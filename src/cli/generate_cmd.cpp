@@ -23,6 +23,7 @@ Register reg{Command{
       cmd.add_option("-o,--output", o->output, "output volume (.vti, .nrrd or .raw)")->required();
       add_common_options(cmd, o->common);
       return [o]() {
+        if (int rc = require_cpu_backend(o->common, "generate")) return rc;
         const int threads = apply_threads(o->common);
         StageTimer timer;
         Progress progress(o->common.quiet, o->size >= 384);

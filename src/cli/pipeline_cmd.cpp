@@ -59,6 +59,9 @@ Register reg{Command{
         opt.isovalues = o->isovalues;
         opt.coarsen = o->coarsen;
         opt.curvature = o->curvature;
+        opt.backend = o->common.backend == "cuda" ? generate::Backend::Cuda : generate::Backend::Cpu;
+        if (opt.backend == generate::Backend::Cuda && (o->subdivide > 0 || o->dual))
+          if (int rc = require_cpu_backend(o->common, "subdivision and the dual")) return rc;
         opt.normals = o->normals == "gradient"  ? generate::ContourNormals::Gradient
                       : o->normals == "average" ? generate::ContourNormals::Average
                                                 : generate::ContourNormals::None;

@@ -22,6 +22,7 @@ Register reg{Command{
       cmd.add_option("mesh", o->input, "triangle mesh (.vtp .ply .obj .stl)")->required();
       add_common_options(cmd, o->common);
       return [o]() {
+        if (int rc = require_cpu_backend(o->common, "the quality measure")) return rc;
         const int threads = apply_threads(o->common);
         StageTimer timer;
         const SurfaceMesh mesh = timer.run("read", [&] { return io::read_mesh(o->input); });

@@ -34,6 +34,7 @@ Register reg{Command{
           ->check(CLI::IsMember({"keyreduce", "vertexweld"}));
       add_common_options(cmd, o->common);
       return [o]() {
+        if (int rc = require_cpu_backend(o->common, "subdivision")) return rc;
         const int threads = apply_threads(o->common);
         StageTimer timer;
         Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));

@@ -35,6 +35,7 @@ Register reg{Command{
           ->check(CLI::IsMember({"keyreduce", "vertexweld"}));
       add_common_options(cmd, o->common);
       return [o]() {
+        if (int rc = require_cpu_backend(o->common, "tetrahedralization")) return rc;
         const int threads = apply_threads(o->common);
         StageTimer timer;
         Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));

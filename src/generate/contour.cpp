@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
@@ -317,6 +318,7 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   if (static_cast<Id>(grid.byte_count()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
     throw InputError("contour: grid holds " + std::to_string(grid.byte_count()) + " bytes, dims need " +
                      std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
+  if (options.backend == Backend::Cuda) return cuda::contour(grid, options, stats);
   ContourStats local;
   ContourStats& st = stats ? *stats : local;
   st = ContourStats{};

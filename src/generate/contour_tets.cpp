@@ -191,6 +191,8 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
   if (opt.normals == ContourNormals::Gradient)
     throw InputError("contour: --normals gradient needs a voxel grid; use --normals average on tetrahedra");
+  if (opt.backend == Backend::Cuda)
+    throw InputError("--backend cuda: marching tetrahedra are not available on the GPU yet");
   if (opt.curvature)
     throw InputError("contour: --curvature needs a voxel grid (it reads the volume's Hessian)");
   if (!tets.all_cells_are(CellType::Tetra))

@@ -35,9 +35,13 @@ enum class ContourNormals { None, Gradient, Average };
 //  - VertexWeld:    the soup of positions, welded by coordinates (the baseline).
 // All three give the same mesh; the two KEY-REDUCE plans the same point order.
 enum class ContourWeld { KeyReduce, KeyReduceSort, VertexWeld };
+// Where the contour runs: CPU threads, or an NVIDIA GPU (keymesh/cuda/backend.hpp:
+// byte-identical output; what the GPU does not support yet is refused by name).
+enum class Backend { Cpu, Cuda };
 
 struct ContourOptions {
   std::vector<double> isovalues;        // at least one, all finite
+  Backend backend = Backend::Cpu;
   ContourNormals normals = ContourNormals::None;
   ContourWeld weld = ContourWeld::KeyReduce;
   bool scalars = true;                  // carry the interpolated input scalar as a point field

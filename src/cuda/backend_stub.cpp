@@ -1,0 +1,24 @@
+// The CUDA backend's entry points when keymesh is built without CUDA
+// (KEYMESH_CUDA=OFF or no nvcc): every call says so by name.
+#include "keymesh/cuda/backend.hpp"
+
+#if !defined(KEYMESH_HAVE_CUDA)
+
+#include "keymesh/core/error.hpp"
+
+namespace keymesh::cuda {
+
+bool compiled() { return false; }
+
+bool available(std::string* why) {
+  if (why) *why = "keymesh was built without the CUDA backend (KEYMESH_CUDA=OFF or no nvcc)";
+  return false;
+}
+
+SurfaceMesh contour(const ImageGrid&, const generate::ContourOptions&, generate::ContourStats*) {
+  throw InputError("--backend cuda: keymesh was built without the CUDA backend (KEYMESH_CUDA=OFF or no nvcc)");
+}
+
+}  // namespace keymesh::cuda
+
+#endif
