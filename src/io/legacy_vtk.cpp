@@ -1,12 +1,11 @@
 #include "keymesh/io/legacy_vtk.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cctype>
 #include <cstdint>
-#include <bit>
 #include <cstdio>
 #include <cstring>
-#include <type_traits>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -40,6 +39,12 @@ bool legacy_type(std::string_view name, Scalar& s) {
   else if (t == "UNSIGNED_INT" || t == "VTKTYPEUINT32") s = Scalar::UInt32;
   else if (t == "LONG" || t == "VTKTYPEINT64" || t == "VTKIDTYPE") s = Scalar::Int64;
   else if (t == "UNSIGNED_LONG" || t == "VTKTYPEUINT64") s = Scalar::UInt64;
+  else if (t == "VTKTYPEINT8") s = Scalar::Int8;
+  else if (t == "VTKTYPEUINT8") s = Scalar::UInt8;
+  else if (t == "VTKTYPEINT16") s = Scalar::Int16;
+  else if (t == "VTKTYPEUINT16") s = Scalar::UInt16;
+  else if (t == "VTKTYPEFLOAT32") s = Scalar::Float32;
+  else if (t == "VTKTYPEFLOAT64") s = Scalar::Float64;
   else return false;
   return true;
 }
@@ -72,7 +77,7 @@ class Reader {
   std::int64_t count(const char* what) {
     std::int64_t v = 0;
     const std::string_view w = word();
-    if (!parse_int64(w, v) || v < 0) fail(std::string("bad ") + what + " '" + std::string(w) + "'");
+    if (!parse_int64(w, v) || v < 0) fail(std::string("bad ") + what + " '" + std::string(w.substr(0, 40)) + "'");
     // No file holds 2^48 values; the cap keeps products with component counts from overflowing.
     if (v > (std::int64_t{1} << 48)) fail(std::string(what) + " " + std::string(w) + " is larger than any file holds");
     return v;
@@ -95,53 +100,62 @@ class Reader {
   // Refuses a count the rest of the file cannot hold, before anything of
   // that size is allocated: n binary values of type s, or n text numbers
   // (each at least one digit and a separator).
-  void check_count(std::int64_t n, Scalar s, const char* what) const {
+  void check_count(std::int64_t n, Scalar s, const std::string& what) const {
     const std::uint64_t left = d_.size() - std::min(pos_, d_.size());
     const std::uint64_t room = binary_ ? left / scalar_size(s) : left / 2 + 1;
     if (n < 0 || static_cast<std::uint64_t>(n) > room)
-      fail(std::string(what) + ": " + std::to_string(n) + " values declared, the file ends first");
+      fail(what + ": " + std::to_string(n) + " values declared, the file ends first");
   }
-  // n values of type s, each handed to `put(i, value)`.
-  template <class Put>
-  void values(std::int64_t n, Scalar s, const char* what, Put&& put) {
+  // n values of type s, each handed to put(i, text) in ASCII files or
+  // put(i, pointer to the big-endian value) in BINARY ones.
+  template <class Text, class Binary>
+  void values(std::int64_t n, Scalar s, const std::string& what, Text&& text, Binary&& bin) {
     check_count(n, s, what);
     if (binary_) {
       rest_of_line();  // binary data starts after the keyword line
-      const std::size_t size = scalar_size(s);
       check_count(n, s, what);
-      for (std::int64_t i = 0; i < n; ++i) put(i, d_.data() + pos_ + std::size_t(i) * size, true);
+      const std::size_t size = scalar_size(s);
+      for (std::int64_t i = 0; i < n; ++i) bin(i, d_.data() + pos_ + std::size_t(i) * size);
       pos_ += std::size_t(n) * size;
       return;
     }
     for (std::int64_t i = 0; i < n; ++i) {
       const std::string_view w = word();
-      if (w.empty()) fail(std::string(what) + ": the file ends after " + std::to_string(i) + " values");
-      put(i, w, false);
+      if (w.empty()) fail(what + ": the file ends after " + std::to_string(i) + " of " + std::to_string(n) + " values");
+      text(i, w);
     }
   }
-  std::vector<double> doubles(std::int64_t n, Scalar s, const char* what) {
+  // n numbers as floats.
+  std::vector<float> floats(std::int64_t n, Scalar s, const std::string& what) {
     check_count(n, s, what);
-    std::vector<double> out(static_cast<std::size_t>(n));
-    values(n, s, what, [&](std::int64_t i, auto src, bool) {
-      if constexpr (std::is_same_v<decltype(src), std::string_view>) {
-        if (!parse_double(src, out[i])) fail(std::string(what) + ": '" + std::string(src) + "' is not a number");
-      } else {
-        out[i] = load_as_double(src, s, true);
-      }
-    });
+    std::vector<float> out(static_cast<std::size_t>(n));
+    values(
+        n, s, what,
+        [&](std::int64_t i, std::string_view w) {
+          double v = 0;
+          if (!parse_double(w, v)) fail(what + ": '" + std::string(w.substr(0, 40)) + "' is not a number");
+          out[std::size_t(i)] = static_cast<float>(v);
+        },
+        [&](std::int64_t i, const char* p) { out[std::size_t(i)] = static_cast<float>(load_as_double(p, s, true)); });
     return out;
   }
-  std::vector<std::int64_t> ints(std::int64_t n, Scalar s, const char* what) {
-    check_count(n, s, what);
-    std::vector<std::int64_t> out(static_cast<std::size_t>(n));
-    values(n, s, what, [&](std::int64_t i, auto src, bool) {
-      bool ok;
-      if constexpr (std::is_same_v<decltype(src), std::string_view>) ok = parse_int64(src, out[i]);
-      else ok = load_as_int64(src, s, true, out[i]);
-      if (!ok) fail(std::string(what) + ": value " + std::to_string(i) + " is not an integer");
-    });
-    return out;
+  // n integers, each handed to put(i, value).
+  template <class Put>
+  void ints(std::int64_t n, Scalar s, const std::string& what, Put&& put) {
+    std::int64_t v = 0;
+    values(
+        n, s, what,
+        [&](std::int64_t i, std::string_view w) {
+          if (!parse_int64(w, v)) fail(what + ": '" + std::string(w.substr(0, 40)) + "' is not an integer");
+          put(i, v);
+        },
+        [&](std::int64_t i, const char* p) {
+          if (!load_as_int64(p, s, true, v)) fail(what + ": value " + std::to_string(i) + " is not an integer");
+          put(i, v);
+        });
   }
+  std::size_t& pos() { return pos_; }
+  std::size_t& line() { return line_; }
 
  private:
   std::string_view d_;
@@ -149,10 +163,6 @@ class Reader {
   bool binary_;
   std::size_t pos_ = 0;
   std::size_t line_ = 1;
-
- public:
-  std::size_t& pos() { return pos_; }
-  std::size_t& line() { return line_; }
 };
 
 std::string unescape_name(std::string_view n) {
@@ -169,69 +179,80 @@ std::string unescape_name(std::string_view n) {
   return out;
 }
 
+// The arrays of a "FIELD name n" block (the keyword already read); those
+// with `tuples` tuples (any count when tuples < 0 is not kept) go to fields.
+void read_field_block(Reader& r, std::int64_t tuples, std::vector<Field>& fields) {
+  r.word();  // the field data's name
+  const std::int64_t arrays = r.count("FIELD array count");
+  for (std::int64_t a = 0; a < arrays; ++a) {
+    const std::string name = unescape_name(r.word());
+    if (upper(name) == "METADATA") {  // 5.x: METADATA blocks may follow an array
+      r.skip_metadata();
+      --a;
+      continue;
+    }
+    const std::int64_t comps = r.count("component count");
+    const std::int64_t n = r.count("tuple count");
+    Scalar s;
+    const std::string_view t = r.word();
+    if (!legacy_type(t, s)) r.fail("unknown data type '" + std::string(t.substr(0, 40)) + "' of FIELD array " + name);
+    if (comps < 1 || comps > 4096) r.fail("FIELD array " + name + " has " + std::to_string(comps) + " components");
+    std::vector<float> v = r.floats(n * comps, s, "FIELD array " + name);
+    if (tuples >= 0 && n == tuples) fields.push_back(Field{name, int(comps), std::move(v)});
+  }
+}
+
 // Reads the attribute arrays of one POINT_DATA or CELL_DATA section into
 // `fields` until the next section keyword (returned, "" at the end).
 std::string read_attributes(Reader& r, std::int64_t tuples, std::vector<Field>& fields) {
   while (!r.at_end()) {
     const std::string key = upper(r.word());
-    if (key == "POINT_DATA" || key == "CELL_DATA") return key;
+    if (key == "POINT_DATA" || key == "CELL_DATA" || key == "POINTS" || key == "CELLS" || key == "CELL_TYPES")
+      return key;
     if (key == "METADATA") {
       r.skip_metadata();
       continue;
     }
     if (key == "SCALARS" || key == "VECTORS" || key == "NORMALS" || key == "TEXTURE_COORDINATES" ||
-        key == "TENSORS" || key == "COLOR_SCALARS") {
+        key == "TENSORS" || key == "TENSORS6" || key == "COLOR_SCALARS") {
       const std::string name = unescape_name(r.word());
-      int comps = key == "SCALARS" ? 1 : (key == "TENSORS" ? 9 : 3);
+      std::int64_t comps = key == "SCALARS" ? 1 : key == "TENSORS" ? 9 : key == "TENSORS6" ? 6 : 3;
       Scalar s = Scalar::Float32;
       if (key == "COLOR_SCALARS") {
-        comps = static_cast<int>(r.count("component count"));
+        comps = r.count("component count");
         s = Scalar::UInt8;  // BINARY color scalars are unsigned chars; ASCII are floats in [0, 1]
       } else {
         const std::string_view t = r.word();
-        if (!legacy_type(t, s)) r.fail("unknown data type '" + std::string(t) + "' of " + name);
-        if (key == "TEXTURE_COORDINATES") comps = static_cast<int>(r.count("component count"));
+        if (!legacy_type(t, s)) r.fail("unknown data type '" + std::string(t.substr(0, 40)) + "' of " + name);
+        if (key == "TEXTURE_COORDINATES") comps = r.count("component count");
       }
       if (key == "SCALARS") {
-        // Optional component count on the same line, then LOOKUP_TABLE.
+        // An optional component count on the same line, then an optional LOOKUP_TABLE line.
         std::size_t save = r.pos(), line = r.line();
-        std::string_view w = r.word();
+        const std::string_view w = r.word();
         std::int64_t c = 0;
-        if (parse_int64(w, c)) comps = static_cast<int>(c);
+        if (r.line() == line && parse_int64(w, c)) comps = c;
         else r.pos() = save, r.line() = line;
         save = r.pos(), line = r.line();
         if (upper(r.word()) == "LOOKUP_TABLE") r.word();
         else r.pos() = save, r.line() = line;
       }
-      if (comps < 1 || comps > 64) r.fail("array " + name + " has " + std::to_string(comps) + " components");
-      const auto v = r.doubles(tuples * comps, s, name.c_str());
-      fields.push_back(Field{key == "NORMALS" ? std::string("Normals") : name, comps,
-                             std::vector<float>(v.begin(), v.end())});
+      if (comps < 1 || comps > 4096) r.fail("array " + name + " has " + std::to_string(comps) + " components");
+      fields.push_back(Field{key == "NORMALS" ? std::string("Normals") : name, int(comps),
+                             r.floats(tuples * comps, s, name)});
       continue;
     }
     if (key == "LOOKUP_TABLE") {  // a table of colours given in the data section
       r.word();
       const std::int64_t n = r.count("lookup table size");
-      r.doubles(4 * n, Scalar::UInt8, "LOOKUP_TABLE");
+      r.floats(4 * n, Scalar::UInt8, "LOOKUP_TABLE");
       continue;
     }
     if (key == "FIELD") {
-      r.word();
-      const std::int64_t arrays = r.count("FIELD array count");
-      for (std::int64_t a = 0; a < arrays; ++a) {
-        const std::string name = unescape_name(r.word());
-        const std::int64_t comps = r.count("component count");
-        const std::int64_t n = r.count("tuple count");
-        Scalar s;
-        const std::string_view t = r.word();
-        if (!legacy_type(t, s)) r.fail("unknown data type '" + std::string(t) + "' of FIELD array " + name);
-        if (comps < 1 || comps > 64) r.fail("FIELD array " + name + " has " + std::to_string(comps) + " components");
-        const auto v = r.doubles(n * comps, s, name.c_str());
-        if (n == tuples) fields.push_back(Field{name, int(comps), std::vector<float>(v.begin(), v.end())});
-      }
+      read_field_block(r, tuples, fields);
       continue;
     }
-    r.fail("unexpected keyword '" + key + "'");
+    r.fail("unexpected keyword '" + key.substr(0, 40) + "'");
   }
   return "";
 }
@@ -241,8 +262,15 @@ std::string read_attributes(Reader& r, std::int64_t tuples, std::vector<Field>& 
 std::string legacy_vtk_dataset(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
-  if (!std::getline(in, line) || line.rfind("# vtk DataFile", 0) != 0) return "";
-  for (int i = 0; i < 3 && std::getline(in, line); ++i) {
+  auto get = [&] {
+    // Header lines are short: a file whose first bytes hold no newline is not legacy VTK.
+    line.clear();
+    char c = 0;
+    while (line.size() < 1024 && in.get(c) && c != '\n') line.push_back(c);
+    return bool(in) || !line.empty();
+  };
+  if (!get() || line.rfind("# vtk DataFile", 0) != 0) return "";
+  for (int i = 0; i < 3 && get(); ++i) {
     const std::string u = upper(line);
     if (u.rfind("DATASET", 0) == 0) {
       std::string t = u.substr(7);
@@ -270,106 +298,142 @@ UnstructuredGrid parse_legacy_vtk(std::string_view data, const std::string& path
   line();  // title
   const std::string mode = upper(line());
   const bool binary = mode.rfind("BINARY", 0) == 0;
-  if (!binary && mode.rfind("ASCII", 0) != 0) throw InputError(path + ": legacy VTK format is '" + mode + "', not ASCII or BINARY");
+  if (!binary && mode.rfind("ASCII", 0) != 0)
+    throw InputError(path + ": legacy VTK format is '" + mode.substr(0, 40) + "', not ASCII or BINARY");
   Reader r(data.substr(p), path, binary);
   r.line() = 4;
   if (upper(r.word()) != "DATASET") r.fail("expected DATASET");
   const std::string dataset = upper(r.word());
   if (dataset != "UNSTRUCTURED_GRID")
-    r.fail("dataset is " + dataset + ", not UNSTRUCTURED_GRID (keymesh reads unstructured grids from .vtk)");
+    r.fail("dataset is " + dataset.substr(0, 40) + ", not UNSTRUCTURED_GRID (keymesh reads unstructured grids from .vtk)");
 
   UnstructuredGrid g;
   std::int64_t npts = -1, ncells = -1;
-  std::vector<std::int64_t> ids, offsets;
-  std::vector<std::int64_t> types;
+  bool have_cells = false, have_types = false;
+  bool ids_unchecked = false;  // CELLS before POINTS: ids checked by validate() at the end
+  // Ids are checked against the point count as they are read when POINTS
+  // came first (as every writer puts it); otherwise validate() checks them.
+  auto id_limit = [&] { return npts >= 0 ? std::uint64_t(npts) : std::uint64_t{1} << 62; };
+  auto read_id = [&](std::int64_t v, std::int64_t i, const char* what) {
+    if (v < 0 || std::uint64_t(v) >= id_limit())
+      r.fail(std::string(what) + ": point id " + std::to_string(v) + " at connectivity[" + std::to_string(i) +
+             "] is out of range (" + std::to_string(npts) + " points)");
+    return std::uint64_t(v);
+  };
   std::string next;
-  while (!r.at_end() || !next.empty()) {
+  while (!next.empty() || !r.at_end()) {
     const std::string key = next.empty() ? upper(r.word()) : next;
     next.clear();
     if (key == "POINTS") {
+      if (npts >= 0) r.fail("a second POINTS section");
       npts = r.count("point count");
       Scalar s;
       const std::string_view t = r.word();
-      if (!legacy_type(t, s)) r.fail("unknown point type '" + std::string(t) + "'");
-      const auto v = r.doubles(3 * npts, s, "POINTS");
-      g.points.assign(v.begin(), v.end());
+      if (!legacy_type(t, s)) r.fail("unknown point type '" + std::string(t.substr(0, 40)) + "'");
+      g.points = r.floats(3 * npts, s, "POINTS");
     } else if (key == "CELLS") {
+      if (have_cells) r.fail("a second CELLS section");
+      have_cells = true;
+      ids_unchecked = npts < 0;
       const std::int64_t a = r.count("cell count"), b = r.count("CELLS size");
       // 5.x: "CELLS offsets_count connectivity_count" then OFFSETS and CONNECTIVITY arrays.
       const std::size_t save = r.pos(), save_line = r.line();
       if (upper(r.word()) == "OFFSETS") {
         Scalar s;
         if (!legacy_type(r.word(), s)) r.fail("bad OFFSETS type");
-        offsets = r.ints(a, s, "OFFSETS");
+        ncells = a > 0 ? a - 1 : 0;
+        r.check_count(a, s, "OFFSETS");
+        g.offsets.resize(std::size_t(a));
+        r.ints(a, s, "OFFSETS", [&](std::int64_t i, std::int64_t v) {
+          if (v < 0 || v > b) r.fail("OFFSETS: offset " + std::to_string(v) + " of cell " + std::to_string(i) +
+                                     " is outside the connectivity (" + std::to_string(b) + " ids)");
+          g.offsets[std::size_t(i)] = std::uint64_t(v);
+        });
         if (upper(r.word()) != "CONNECTIVITY") r.fail("expected CONNECTIVITY after OFFSETS");
         if (!legacy_type(r.word(), s)) r.fail("bad CONNECTIVITY type");
-        ids = r.ints(b, s, "CONNECTIVITY");
-        ncells = a > 0 ? a - 1 : 0;
+        r.check_count(b, s, "CONNECTIVITY");
+        g.connectivity = IndexArray::for_ids(id_limit(), std::size_t(b));
+        r.ints(b, s, "CONNECTIVITY", [&](std::int64_t i, std::int64_t v) {
+          g.connectivity.set(std::size_t(i), read_id(v, i, "CONNECTIVITY"));
+        });
+        if (a == 0) g.offsets.assign(1, 0);
       } else {
+        // Classic: "CELLS n size", then per cell its corner count and ids.
         r.pos() = save, r.line() = save_line;
         ncells = a;
-        const auto raw = r.ints(b, Scalar::Int32, "CELLS");
-        offsets.assign(1, 0);
-        std::size_t at = 0;
-        for (std::int64_t c = 0; c < ncells; ++c) {
-          if (at >= raw.size() || raw[at] < 0 || std::uint64_t(raw[at]) > raw.size() - at - 1)
-            r.fail("CELLS list is inconsistent at cell " + std::to_string(c));
-          ids.insert(ids.end(), raw.begin() + std::ptrdiff_t(at + 1), raw.begin() + std::ptrdiff_t(at + 1 + raw[at]));
-          at += std::size_t(raw[at]) + 1;
-          offsets.push_back(std::int64_t(ids.size()));
-        }
-        if (at != raw.size()) r.fail("CELLS size " + std::to_string(b) + " does not match the cells listed");
+        if (b < a) r.fail("CELLS size " + std::to_string(b) + " is smaller than the cell count " + std::to_string(a));
+        r.check_count(b, Scalar::Int32, "CELLS");
+        const std::uint64_t nids = std::uint64_t(b - a);
+        g.connectivity = IndexArray::for_ids(id_limit(), std::size_t(nids));
+        g.offsets.assign(std::size_t(a) + 1, 0);
+        std::uint64_t at = 0;       // ids stored so far
+        std::int64_t cell = 0;      // cells started so far
+        std::uint64_t left = 0;     // ids still due for the current cell
+        r.ints(b, Scalar::Int32, "CELLS", [&](std::int64_t i, std::int64_t v) {
+          if (left > 0) {
+            g.connectivity.set(std::size_t(at), read_id(v, std::int64_t(at), "CELLS"));
+            ++at, --left;
+            return;
+          }
+          if (cell >= a || v < 0 || std::uint64_t(v) > nids - at)
+            r.fail("CELLS list is inconsistent at cell " + std::to_string(cell) + " (entry " + std::to_string(i) +
+                   ": " + std::to_string(v) + ")");
+          left = std::uint64_t(v);
+          g.offsets[std::size_t(++cell)] = at + left;
+        });
+        if (cell != a || left != 0 || at != nids)
+          r.fail("CELLS size " + std::to_string(b) + " does not match the " + std::to_string(a) + " cells listed");
       }
     } else if (key == "CELL_TYPES") {
+      if (have_types) r.fail("a second CELL_TYPES section");
+      have_types = true;
       const std::int64_t n = r.count("cell type count");
-      types = r.ints(n, Scalar::Int32, "CELL_TYPES");
+      r.check_count(n, Scalar::Int32, "CELL_TYPES");
+      g.cell_types.resize(std::size_t(n));
+      r.ints(n, Scalar::Int32, "CELL_TYPES", [&](std::int64_t i, std::int64_t v) {
+        if (v < 0 || v > 255) r.fail("CELL_TYPES: cell " + std::to_string(i) + " has type " + std::to_string(v));
+        g.cell_types[std::size_t(i)] = static_cast<std::uint8_t>(v);
+      });
     } else if (key == "POINT_DATA" || key == "CELL_DATA") {
       const std::int64_t n = r.count("tuple count");
+      const std::int64_t expected = key == "POINT_DATA" ? npts : ncells;
+      if (expected >= 0 && n != expected)
+        r.fail(key + " " + std::to_string(n) + " does not match the " + std::to_string(expected) +
+               (key == "POINT_DATA" ? " points" : " cells"));
       next = read_attributes(r, n, key == "POINT_DATA" ? g.point_fields : g.cell_fields);
-    } else if (key == "METADATA" || key == "FIELD") {
-      std::vector<Field> ignored;  // dataset-level field data is not kept
-      next = key == "FIELD" ? (r.pos() -= 5, read_attributes(r, -1, ignored)) : (r.skip_metadata(), std::string());
+    } else if (key == "FIELD") {
+      std::vector<Field> ignored;  // dataset-level field data (time value, ...) is not kept
+      read_field_block(r, -1, ignored);
+    } else if (key == "METADATA") {
+      r.skip_metadata();
     } else {
-      r.fail("unexpected keyword '" + key + "'");
+      r.fail("unexpected keyword '" + key.substr(0, 40) + "'");
     }
   }
   if (npts < 0) throw InputError(path + ": legacy VTK file has no POINTS");
   if (ncells < 0) ncells = 0;
-  if (std::int64_t(types.size()) != ncells)
-    throw InputError(path + ": " + std::to_string(types.size()) + " CELL_TYPES for " + std::to_string(ncells) + " cells");
-  if (offsets.empty()) offsets.assign(1, 0);
-  if (std::int64_t(offsets.size()) != ncells + 1 || offsets.front() != 0 || offsets.back() != std::int64_t(ids.size()))
-    throw InputError(path + ": cell offsets do not match the connectivity");
-  g.connectivity = IndexArray::for_ids(std::uint64_t(npts), ids.size());
-  for (std::size_t k = 0; k < ids.size(); ++k) {
-    if (ids[k] < 0 || ids[k] >= npts)
-      throw InputError(path + ": cell connectivity refers to point " + std::to_string(ids[k]) + " out of range (" +
-                       std::to_string(npts) + " points)");
-    g.connectivity.set(k, std::uint64_t(ids[k]));
-  }
-  g.offsets.assign(offsets.begin(), offsets.end());
-  g.cell_types.resize(types.size());
-  for (std::size_t c = 0; c < types.size(); ++c) {
-    if (types[c] < 0 || types[c] > 255) throw InputError(path + ": cell " + std::to_string(c) + " has type " + std::to_string(types[c]));
-    g.cell_types[c] = static_cast<std::uint8_t>(types[c]);
-  }
-  // One fixed-size type throughout: store it uniformly.
-  if (!g.cell_types.empty() && std::all_of(g.cell_types.begin(), g.cell_types.end(), [&](std::uint8_t t) { return t == g.cell_types[0]; })) {
+  if (std::int64_t(g.cell_types.size()) != ncells)
+    throw InputError(path + ": " + std::to_string(g.cell_types.size()) + " CELL_TYPES for " + std::to_string(ncells) +
+                     " cells");
+  if (ncells == 0) {
+    g.offsets.clear();
+    g.cell_types.clear();
+  } else if (std::all_of(g.cell_types.begin(), g.cell_types.end(), [&](std::uint8_t t) { return t == g.cell_types[0]; })) {
+    // One fixed-size type throughout: store it uniformly.
     const int k = cell_type_size(static_cast<CellType>(g.cell_types[0]));
-    bool uniform = k > 0;
-    for (std::size_t c = 0; uniform && c + 1 < g.offsets.size(); ++c) uniform = g.offsets[c + 1] - g.offsets[c] == std::uint64_t(k);
-    if (uniform) {
+    bool uniform = k > 0 && g.offsets.size() == std::size_t(ncells) + 1 && g.offsets.front() == 0;
+    for (std::size_t c = 0; uniform && c + 1 < g.offsets.size(); ++c)
+      uniform = g.offsets[c + 1] >= g.offsets[c] && g.offsets[c + 1] - g.offsets[c] == std::uint64_t(k);
+    if (uniform && g.offsets.back() == g.connectivity.size()) {
       g.uniform_type = static_cast<CellType>(g.cell_types[0]);
       g.offsets.clear();
       g.cell_types.clear();
     }
-  } else if (g.cell_types.empty()) {
-    g.offsets.clear();
   }
-  for (auto* fields : {&g.point_fields, &g.cell_fields})
-    for (const Field& f : *fields)
-      if (f.components < 1) throw InputError(path + ": array " + f.name + " is empty");
-  g.validate(path);
+  if (!g.offsets.empty() && std::int64_t(g.offsets.size()) != ncells + 1)
+    throw InputError(path + ": " + std::to_string(g.offsets.size()) + " cell offsets for " + std::to_string(ncells) +
+                     " cells");
+  g.validate(path, ids_unchecked);
   return g;
 }
 

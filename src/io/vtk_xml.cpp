@@ -236,13 +236,19 @@ std::string read_binary_block(Source& src, const Context& ctx, const std::string
   const std::uint64_t block_size = header_value(h, 0, ctx);
   const std::uint64_t last_size = header_value(h, 1, ctx);
   std::uint64_t compressed_total = 0;
-  for (std::uint64_t b = 0; b < blocks; ++b) compressed_total += header_value(h, 2 + b, ctx);
+  for (std::uint64_t b = 0; b < blocks && compressed_total <= src.max_remaining(); ++b) {
+    const std::uint64_t c = header_value(h, 2 + b, ctx);
+    compressed_total = c > src.max_remaining() ? c : compressed_total + c;  // no wrap-around
+  }
   if (compressed_total > src.max_remaining())
     throw InputError(ctx.path + ": " + what + " declares " + std::to_string(compressed_total) +
                      " compressed bytes, more than the file holds");
   if (blocks == 0) return out;
   if (last_size > block_size) throw InputError(ctx.path + ": " + what + ": bad compression header");
   const std::uint64_t last = last_size == 0 ? block_size : last_size;
+  if (block_size > 0 && blocks - 1 > (std::numeric_limits<std::uint64_t>::max() - last) / block_size)
+    throw InputError(ctx.path + ": " + what + ": " + std::to_string(blocks) + " blocks of " + std::to_string(block_size) +
+                     " bytes overflow");
   const std::uint64_t total = (blocks - 1) * block_size + last;
   // zlib cannot expand by more than about 1032:1; anything beyond is a lie
   // that would otherwise make us allocate absurd buffers.
@@ -254,6 +260,11 @@ std::string read_binary_block(Source& src, const Context& ctx, const std::string
   for (std::uint64_t b = 0; b < blocks; ++b) {
     chunk.clear();
     src.read(static_cast<std::size_t>(header_value(h, 2 + b, ctx)), chunk, what);
+    // Each block on its own too: a block cannot inflate past ~1032:1.
+    const std::uint64_t expect = b + 1 == blocks ? last : block_size;
+    if (expect / 1032 > chunk.size() + 64)
+      throw InputError(ctx.path + ": " + what + " block " + std::to_string(b) + " declares " + std::to_string(expect) +
+                       " uncompressed bytes, impossible for its " + std::to_string(chunk.size()) + " compressed bytes");
     zlib_inflate(chunk.data(), chunk.size(), static_cast<std::size_t>(b + 1 == blocks ? last : block_size), out, ctx.path,
                  what);
   }

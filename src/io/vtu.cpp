@@ -2,15 +2,19 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/mesh_bytes.hpp"
 #include "keymesh/io/vtk_xml.hpp"
+#include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::io {
 
@@ -19,6 +23,90 @@ using namespace vtk_xml;
 
 namespace {
 
+// Calls f(T{}) with the C++ type of the file's scalar type s.
+template <class F>
+decltype(auto) with_type(Scalar s, F&& f) {
+  switch (s) {
+    case Scalar::Int8: return f(std::int8_t{});
+    case Scalar::UInt8: return f(std::uint8_t{});
+    case Scalar::Int16: return f(std::int16_t{});
+    case Scalar::UInt16: return f(std::uint16_t{});
+    case Scalar::Int32: return f(std::int32_t{});
+    case Scalar::UInt32: return f(std::uint32_t{});
+    case Scalar::Int64: return f(std::int64_t{});
+    case Scalar::UInt64: return f(std::uint64_t{});
+    case Scalar::Float32: return f(float{});
+    case Scalar::Float64: return f(double{});
+  }
+  return f(double{});
+}
+
+// Appends the values of `a`, converted to float, to out (in parallel: the
+// points of 256^3 are 50 M values).
+void append_floats(const Array& a, std::vector<float>& out) {
+  const std::size_t at = out.size();
+  out.resize(at + a.count());
+  float* dst = out.data() + at;
+  with_type(a.type, [&](auto tag) {
+    using T = decltype(tag);
+    const char* src = a.bytes.data();
+    const bool big = a.big;
+    parallel::for_each(static_cast<Id>(a.count()),
+                       [&](Id i) { dst[i] = static_cast<float>(load<T>(src + std::size_t(i) * sizeof(T), big)); });
+  });
+}
+
+// dst[i] = base + a[i] for every value of `a`, each required to be an
+// integer in [0, limit). Returns the index of the first value that is not,
+// or a.count() when all are.
+template <class D>
+std::size_t convert_ints(const Array& a, std::uint64_t limit, std::uint64_t base, D* dst) {
+  const Id n = static_cast<Id>(a.count());
+  const int chunks = parallel::chunk_count(n, 1 << 16);
+  std::vector<Id> first_bad(static_cast<std::size_t>(std::max(chunks, 1)), n);
+  with_type(a.type, [&](auto tag) {
+    using T = decltype(tag);
+    const char* src = a.bytes.data();
+    const bool big = a.big;
+    parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
+      for (Id i = b; i < e; ++i) {
+        const T v = load<T>(src + std::size_t(i) * sizeof(T), big);
+        std::uint64_t u = 0;
+        if constexpr (std::is_floating_point_v<T>) {
+          // Old writers store ids as floats: only exact integers pass.
+          if (!(v >= T(0) && v < static_cast<T>(limit)) || v != std::floor(v)) {
+            first_bad[std::size_t(c)] = i;
+            return;
+          }
+          u = static_cast<std::uint64_t>(v);
+        } else {
+          if constexpr (std::is_signed_v<T>) {
+            if (v < 0) {
+              first_bad[std::size_t(c)] = i;
+              return;
+            }
+          }
+          u = static_cast<std::uint64_t>(v);
+        }
+        if (u >= limit) {
+          first_bad[std::size_t(c)] = i;
+          return;
+        }
+        dst[i] = static_cast<D>(base + u);
+      }
+    });
+  });
+  return static_cast<std::size_t>(*std::min_element(first_bad.begin(), first_bad.end()));
+}
+
+std::string value_text(const Array& a, std::size_t i) {
+  std::int64_t v = 0;
+  if (a.as_int(i, v)) return std::to_string(v);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", a.as_double(i));
+  return buf;
+}
+
 // Every numeric array of a PointData / CellData section with `tuples` tuples.
 std::vector<Field> read_fields(const XmlNode* section, const Context& ctx, std::int64_t tuples, const char* what) {
   std::vector<Field> fields;
@@ -26,15 +114,16 @@ std::vector<Field> read_fields(const XmlNode* section, const Context& ctx, std::
   for (const auto& c : section->children) {
     if (c->name != "DataArray") continue;
     const std::string* t = c->attr("type");
-    if (!t || !vtk_scalar(*t)) continue;
+    if (!t || !vtk_scalar(*t)) continue;  // String arrays and the like are not fields
     const std::string* name = c->attr("Name");
-    const std::string label = std::string(what) + " array '" + (name ? *name : std::string()) + "'";
+    const std::string label = std::string(what) + " array";
     Array a = decode_array(*c, ctx, label, -1);
     if (a.count() != static_cast<std::uint64_t>(tuples) * static_cast<std::uint64_t>(a.components))
-      throw InputError(ctx.path + ": " + label + " holds " + std::to_string(a.count()) + " values for " +
-                       std::to_string(tuples) + " tuples x " + std::to_string(a.components) + " components");
-    Field f{name ? *name : std::string("array"), a.components, std::vector<float>(a.count())};
-    for (std::size_t i = 0; i < a.count(); ++i) f.values[i] = static_cast<float>(a.as_double(i));
+      throw InputError(ctx.path + ": " + label + " '" + (name ? *name : std::string()) + "' holds " +
+                       std::to_string(a.count()) + " values for " + std::to_string(tuples) + " tuples x " +
+                       std::to_string(a.components) + " components");
+    Field f{name ? *name : std::string("array"), a.components, {}};
+    append_floats(a, f.values);
     fields.push_back(std::move(f));
   }
   if (const std::string* marked = section->attr("Normals"); marked && *marked != "Normals") {
@@ -46,11 +135,14 @@ std::vector<Field> read_fields(const XmlNode* section, const Context& ctx, std::
   return fields;
 }
 
-// Appends the fields of a later piece to those kept so far: only fields
-// present (same name and components) in every piece survive.
-void merge_fields(std::vector<Field>& kept, std::vector<Field>&& piece, bool first) {
-  if (first) {
+// Adds the fields of one piece to those kept so far. The first piece that
+// has tuples sets the list; later pieces keep only the fields they share
+// (same name and components). Pieces without tuples change nothing.
+void merge_fields(std::vector<Field>& kept, bool& started, std::vector<Field>&& piece, std::int64_t tuples) {
+  if (tuples == 0) return;
+  if (!started) {
     kept = std::move(piece);
+    started = true;
     return;
   }
   std::vector<Field> out;
@@ -64,6 +156,13 @@ void merge_fields(std::vector<Field>& kept, std::vector<Field>&& piece, bool fir
   kept = std::move(out);
 }
 
+// Calls f(std::vector<uint32_t or uint64_t>&), the storage of the array's width.
+template <class F>
+void with_storage(IndexArray& a, F&& f) {
+  if (a.wide()) f(a.wide_values());
+  else f(a.narrow());
+}
+
 }  // namespace
 
 UnstructuredGrid read_vtu(const std::string& path) { return parse_vtu(read_whole_file(path), path); }
@@ -73,15 +172,26 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
   const Context ctx = file_context(xml, path, "UnstructuredGrid");
   const XmlNode* ug = xml.root->child("UnstructuredGrid");
   if (!ug) throw InputError(path + ": VTK file has no <UnstructuredGrid>");
+  std::vector<const XmlNode*> pieces;
+  std::int64_t total_points = 0;
+  for (const auto& p : ug->children)
+    if (p->name == "Piece") {
+      pieces.push_back(p.get());
+      total_points += count_attr(*p, "NumberOfPoints", path);
+      if (total_points > (std::int64_t{1} << 48)) throw InputError(path + ": the pieces declare too many points");
+    }
+  if (pieces.empty()) throw InputError(path + ": <UnstructuredGrid> has no <Piece>");
 
-  // Ids are gathered 64-bit, then narrowed once the point count is known.
-  std::vector<std::uint64_t> ids, offsets{0};
-  std::vector<std::uint8_t> types;
+  // Ids go straight into an IndexArray of the width the total point count
+  // needs: one copy from the decoded bytes, none through 64-bit temporaries.
   UnstructuredGrid g;
-  bool first = true;
-  for (const auto& piece_ptr : ug->children) {
-    if (piece_ptr->name != "Piece") continue;
-    const XmlNode& piece = *piece_ptr;
+  g.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total_points), 0);
+  std::vector<std::uint64_t> offsets{0};
+  std::vector<std::uint8_t> types;
+  bool point_fields_started = false, cell_fields_started = false;
+  for (std::size_t pi = 0; pi < pieces.size(); ++pi) {
+    const XmlNode& piece = *pieces[pi];
+    const std::string where = pieces.size() > 1 ? " (piece " + std::to_string(pi) + ")" : std::string();
     const std::int64_t npts = count_attr(piece, "NumberOfPoints", path);
     const std::int64_t ncells = count_attr(piece, "NumberOfCells", path);
     const std::uint64_t base = g.points.size() / 3;
@@ -89,9 +199,7 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
       const XmlNode* pts = piece.child("Points");
       const XmlNode* arr = pts ? pts->child("DataArray") : nullptr;
       if (!arr) throw InputError(path + ": piece with " + std::to_string(npts) + " points has no <Points> array");
-      const Array a = decode_array(*arr, ctx, "Points array", 3 * npts);
-      g.points.reserve(g.points.size() + a.count());
-      for (std::size_t i = 0; i < a.count(); ++i) g.points.push_back(static_cast<float>(a.as_double(i)));
+      append_floats(decode_array(*arr, ctx, "Points array" + where, 3 * npts), g.points);
     }
     if (ncells > 0) {
       const XmlNode* cells = piece.child("Cells");
@@ -99,44 +207,46 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
       const XmlNode* offs = named_array(cells, "offsets");
       const XmlNode* typ = named_array(cells, "types");
       if (!conn || !offs || !typ)
-        throw InputError(path + ": <Cells> lacks its connectivity, offsets or types array");
-      const Array o = decode_array(*offs, ctx, "Cells offsets array", ncells);
-      const Array t = decode_array(*typ, ctx, "Cells types array", ncells);
-      const Array c = decode_array(*conn, ctx, "Cells connectivity array", -1);
-      const std::uint64_t id_base = ids.size();
-      std::uint64_t prev = 0;
-      for (std::size_t k = 0; k < o.count(); ++k) {
-        std::int64_t v = 0;
-        if (!o.as_int(k, v) || v < 0 || static_cast<std::uint64_t>(v) < prev)
-          throw InputError(path + ": cell offsets are not non-decreasing at cell " + std::to_string(k));
-        prev = static_cast<std::uint64_t>(v);
-        offsets.push_back(id_base + prev);
+        throw InputError(path + ": <Cells>" + where + " lacks its connectivity, offsets or types array");
+      const std::uint64_t id_base = g.connectivity.size();
+      {
+        const Array o = decode_array(*offs, ctx, "Cells offsets array" + where, ncells);
+        const std::size_t at = offsets.size();
+        offsets.resize(at + o.count());
+        const std::size_t bad = convert_ints(o, std::uint64_t{1} << 62, id_base, offsets.data() + at);
+        if (bad < o.count())
+          throw InputError(path + ": cell offset " + value_text(o, bad) + " of cell " + std::to_string(bad) + where +
+                           " is not a valid offset");
+        for (std::size_t k = at; k < offsets.size(); ++k)
+          if (offsets[k] < offsets[k - 1])
+            throw InputError(path + ": cell offsets" + where + " decrease at cell " + std::to_string(k - at));
       }
-      if (prev != c.count())
-        throw InputError(path + ": cell offsets end at " + std::to_string(prev) + " but connectivity holds " +
-                         std::to_string(c.count()) + " ids");
-      ids.reserve(ids.size() + c.count());
-      for (std::size_t k = 0; k < c.count(); ++k) {
-        std::int64_t v = 0;
-        if (!c.as_int(k, v) || v < 0 || v >= npts)
-          throw InputError(path + ": cell connectivity refers to point " + std::to_string(v) + " out of range (" +
-                           std::to_string(npts) + " points in the piece)");
-        ids.push_back(base + static_cast<std::uint64_t>(v));
+      {
+        const Array t = decode_array(*typ, ctx, "Cells types array" + where, ncells);
+        const std::size_t at = types.size();
+        types.resize(at + t.count());
+        const std::size_t bad = convert_ints(t, 256, 0, types.data() + at);
+        if (bad < t.count())
+          throw InputError(path + ": cell " + std::to_string(bad) + where + " has cell type " + value_text(t, bad));
       }
-      for (std::size_t k = 0; k < t.count(); ++k) {
-        std::int64_t v = 0;
-        if (!t.as_int(k, v) || v < 0 || v > 255)
-          throw InputError(path + ": cell " + std::to_string(k) + " has cell type " + std::to_string(v));
-        types.push_back(static_cast<std::uint8_t>(v));
-      }
+      const Array c = decode_array(*conn, ctx, "Cells connectivity array" + where, -1);
+      if (offsets.back() - id_base != c.count())
+        throw InputError(path + ": cell offsets" + where + " end at " + std::to_string(offsets.back() - id_base) +
+                         " but the connectivity holds " + std::to_string(c.count()) + " ids");
+      with_storage(g.connectivity, [&](auto& ids) {
+        ids.resize(ids.size() + c.count());
+        const std::size_t bad = convert_ints(c, static_cast<std::uint64_t>(npts), base, ids.data() + id_base);
+        if (bad < c.count())
+          throw InputError(path + ": cell connectivity" + where + " refers to point " + value_text(c, bad) +
+                           " at connectivity[" + std::to_string(bad) + "], out of range (" + std::to_string(npts) +
+                           " points)");
+      });
     }
-    merge_fields(g.point_fields, read_fields(piece.child("PointData"), ctx, npts, "PointData"), first || npts == 0);
-    merge_fields(g.cell_fields, read_fields(piece.child("CellData"), ctx, ncells, "CellData"), first || ncells == 0);
-    first = false;
+    merge_fields(g.point_fields, point_fields_started, read_fields(piece.child("PointData"), ctx, npts, "PointData"),
+                 npts);
+    merge_fields(g.cell_fields, cell_fields_started, read_fields(piece.child("CellData"), ctx, ncells, "CellData"),
+                 ncells);
   }
-  g.connectivity = IndexArray::for_ids(g.points.size() / 3, ids.size());
-  for (std::size_t k = 0; k < ids.size(); ++k) g.connectivity.set(k, ids[k]);
-  ids = {};
   // One fixed-size type throughout: store it uniformly (no offsets or types).
   const bool one_type = !types.empty() && std::all_of(types.begin(), types.end(), [&](std::uint8_t t) {
     return t == types.front();
@@ -150,7 +260,7 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
     g.offsets = std::move(offsets);
     g.cell_types = std::move(types);
   }
-  g.validate(path);
+  g.validate(path, /*check_ids=*/false);  // every id was checked as it was read
   return g;
 }
 
@@ -158,9 +268,11 @@ void write_vtu(const UnstructuredGrid& g, const std::string& path) {
   g.validate(path);
   const Id n = g.num_points();
   const Id cells = g.num_cells();
-  const bool wide_ids = g.connectivity.wide();
+  constexpr std::uint64_t int32_max = std::uint64_t(std::numeric_limits<std::int32_t>::max());
+  // Int32 whenever every id fits (whatever the in-memory width), Int64 beyond.
+  const bool wide_ids = std::uint64_t(n) > int32_max + 1;
   const std::uint64_t id_bytes = wide_ids ? 8 : 4;
-  const bool wide_offsets = g.connectivity.size() > std::uint64_t(std::numeric_limits<std::int32_t>::max());
+  const bool wide_offsets = g.connectivity.size() > int32_max;
   const std::uint64_t offset_bytes = wide_offsets ? 8 : 4;
   auto first_scalar = [](const std::vector<Field>& fields) -> const Field* {
     for (const Field& f : fields)
@@ -208,6 +320,8 @@ void write_vtu(const UnstructuredGrid& g, const std::string& path) {
 
   AtomicFile file(path);
   file.write(x);
+  // Arrays already in the file's layout go out as they are; the others are
+  // converted through a 1 MiB buffer, never one string of the whole array.
   std::string buf;
   auto flush = [&](bool force) {
     if (force || buf.size() >= (1 << 20)) {
@@ -216,9 +330,12 @@ void write_vtu(const UnstructuredGrid& g, const std::string& path) {
     }
   };
   constexpr bool little = std::endian::native == std::endian::little;
-  auto write_floats = [&](const std::vector<float>& v) {
-    append_le(buf, static_cast<std::uint64_t>(4 * v.size()));
+  auto size_header = [&](std::uint64_t bytes) {
+    append_le(buf, bytes);
     flush(true);
+  };
+  auto write_floats = [&](const std::vector<float>& v) {
+    size_header(4 * v.size());
     if constexpr (little) {
       file.write(v.data(), 4 * v.size());
     } else {
@@ -231,29 +348,33 @@ void write_vtu(const UnstructuredGrid& g, const std::string& path) {
   for (const Field& f : g.point_fields) write_floats(f.values);
   for (const Field& f : g.cell_fields) write_floats(f.values);
   write_floats(g.points);
-  append_le(buf, static_cast<std::uint64_t>(id_bytes * g.connectivity.size()));
-  flush(true);
-  if (little && !wide_ids) {
-    file.write(g.connectivity.narrow().data(), 4 * g.connectivity.size());
-  } else if (little) {
-    file.write(g.connectivity.wide_values().data(), 8 * g.connectivity.size());
-  } else {
-    for (std::size_t i = 0; i < g.connectivity.size(); ++i) {
-      if (wide_ids) append_le(buf, static_cast<std::int64_t>(g.connectivity[i]));
-      else append_le(buf, static_cast<std::int32_t>(g.connectivity[i]));
+  size_header(id_bytes * g.connectivity.size());
+  g.connectivity.visit([&](auto ids) {
+    using T = typename decltype(ids)::value_type;
+    if (little && sizeof(T) == id_bytes) {
+      file.write(ids.data(), sizeof(T) * ids.size());
+      return;
+    }
+    for (const T id : ids) {
+      if (wide_ids) append_le(buf, static_cast<std::int64_t>(id));
+      else append_le(buf, static_cast<std::int32_t>(id));
       flush(false);
     }
-  }
-  append_le(buf, static_cast<std::uint64_t>(offset_bytes * std::uint64_t(cells)));
+  });
+  size_header(offset_bytes * std::uint64_t(cells));
   for (Id c = 0; c < cells; ++c) {
     if (wide_offsets) append_le(buf, static_cast<std::int64_t>(g.cell_end(c)));
     else append_le(buf, static_cast<std::int32_t>(g.cell_end(c)));
     flush(false);
   }
-  append_le(buf, static_cast<std::uint64_t>(cells));
-  for (Id c = 0; c < cells; ++c) {
-    buf.push_back(static_cast<char>(g.cell_type(c)));
-    flush(false);
+  size_header(std::uint64_t(cells));
+  if (!g.cell_types.empty()) {
+    file.write(g.cell_types.data(), g.cell_types.size());
+  } else {
+    for (Id c = 0; c < cells; ++c) {
+      buf.push_back(static_cast<char>(g.uniform_type));
+      flush(false);
+    }
   }
   buf += "\n  </AppendedData>\n</VTKFile>\n";
   flush(true);

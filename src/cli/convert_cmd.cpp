@@ -1,0 +1,112 @@
+// keymesh convert IN -o OUT: one file format to another of the same kind:
+// unstructured grids (.vtu .vtk), surface meshes (.ply .obj .stl .vtp) or
+// volumes (read: .vti .nrrd .nhdr .nii .nii.gz .den; written: .vti .nrrd .raw).
+#include <cstdio>
+
+#include "command.hpp"
+#include "keymesh/io/grid_io.hpp"
+#include "keymesh/io/mesh_bytes.hpp"
+#include "keymesh/io/mesh_io.hpp"
+#include "keymesh/io/volume_io.hpp"
+
+namespace keymesh::cli {
+
+namespace {
+
+enum class Kind { Grid, Surface, Volume, Unknown };
+
+const char* kind_name(Kind k) {
+  switch (k) {
+    case Kind::Grid: return "an unstructured grid";
+    case Kind::Surface: return "a surface mesh";
+    case Kind::Volume: return "a volume";
+    case Kind::Unknown: break;
+  }
+  return "an unknown format";
+}
+
+// The kind a file holds, by its name (a .vtk is always read as a grid: the
+// grid reader names any other dataset type it finds).
+Kind kind_of(const std::string& path, bool output) {
+  const std::string ext = io::mesh_bytes::lower_extension(path);
+  if (ext == ".vtu" || ext == ".vtk") return Kind::Grid;
+  if (is_mesh_path(path)) return Kind::Surface;
+  if (ext == ".vti" || ext == ".nrrd" || ext == ".raw") return Kind::Volume;
+  if (!output && (ext == ".nhdr" || ext == ".nii" || ext == ".gz" || ext == ".den")) return Kind::Volume;
+  return Kind::Unknown;
+}
+
+struct ConvertCli {
+  std::string input, output;
+  CommonOptions common;
+};
+
+Register reg{Command{
+    "convert", "rewrite a grid (.vtu .vtk), surface (.ply .obj .stl .vtp) or volume (.vti .nrrd .raw) in another format",
+    [](CLI::App& cmd) -> std::function<int()> {
+      auto o = std::make_shared<ConvertCli>();
+      cmd.add_option("input", o->input,
+                     "unstructured grid (.vtu .vtk), surface mesh (.ply .obj .stl .vtp) or volume "
+                     "(.vti .nrrd .nhdr .nii .nii.gz .den)")
+          ->required();
+      cmd.add_option("-o,--output", o->output, "output file of the same kind (volumes: .vti .nrrd .raw)")->required();
+      add_common_options(cmd, o->common);
+      return [o]() {
+        if (int rc = require_cpu_backend(o->common, "convert")) return rc;
+        const int threads = apply_threads(o->common);
+        const Kind in = kind_of(o->input, false), out = kind_of(o->output, true);
+        if (in == Kind::Unknown) {
+          std::fprintf(stderr, "keymesh: convert: %s: unknown input format\n", o->input.c_str());
+          return 2;
+        }
+        if (out == Kind::Unknown) {
+          std::fprintf(stderr, "keymesh: convert: %s: unknown output format\n", o->output.c_str());
+          return 2;
+        }
+        if (in != out) {
+          std::fprintf(stderr, "keymesh: convert: %s is %s and %s would be %s; convert keeps the kind of data\n",
+                       o->input.c_str(), kind_name(in), o->output.c_str(), kind_name(out));
+          return 2;
+        }
+        StageTimer timer;
+        Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
+        progress.say("reading " + o->input);
+        nlohmann::json r;
+        long long points = 0, cells = 0;
+        if (in == Kind::Grid) {
+          const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o->input); });
+          points = g.num_points(), cells = g.num_cells();
+          progress.say("writing " + o->output);
+          timer.run("write", [&] { io::write_grid(g, o->output); });
+        } else if (in == Kind::Surface) {
+          const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o->input); });
+          points = m.num_points(), cells = m.num_cells();
+          progress.say("writing " + o->output);
+          timer.run("write", [&] { io::write_mesh(m, o->output); });
+        } else {
+          const ImageGrid v = timer.run("read", [&] { return io::read_volume(o->input); });
+          points = v.num_points();
+          r["dims"] = v.dims;
+          progress.say("writing " + o->output);
+          timer.run("write", [&] { io::write_volume(v, o->output); });
+        }
+        if (!o->common.quiet)
+          std::fprintf(stderr, "keymesh: %lld points, %lld cells -> %s\n", points, cells, o->output.c_str());
+        if (!o->common.report_path.empty()) {
+          r.update({{"input", o->input},
+                    {"output", o->output},
+                    {"kind", in == Kind::Grid ? "grid" : in == Kind::Surface ? "mesh" : "volume"},
+                    {"points", points},
+                    {"cells", cells},
+                    {"threads", threads},
+                    {"seconds", timer.seconds()},
+                    {"peak_rss_mib", peak_rss_mib()}});
+          write_report(o->common.report_path, r);
+        }
+        return 0;
+      };
+    }}};
+
+}  // namespace
+
+}  // namespace keymesh::cli
