@@ -1,5 +1,6 @@
 #include "keymesh/io/atomic_file.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -17,6 +18,17 @@ std::string errno_text() { return std::strerror(errno); }
 }  // namespace
 
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
+  // A destination that exists and is not a regular file (a device such as
+  // /dev/null or /dev/full, a FIFO, /dev/stdout) is written in place: it
+  // cannot be half-written, and renaming over it would replace the device.
+  struct stat st {};
+  if (::stat(path_.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    if (S_ISDIR(st.st_mode)) throw InputError(path_ + ": cannot write: is a directory");
+    file_ = std::fopen(path_.c_str(), "wb");
+    if (!file_) throw InputError(path_ + ": cannot write: " + errno_text());
+    in_place_ = true;
+    return;
+  }
   temp_path_ = path_ + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter++);
   file_ = std::fopen(temp_path_.c_str(), "wb");
   if (!file_) throw InputError(path_ + ": cannot write: " + errno_text());
@@ -25,7 +37,7 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
 
 AtomicFile::~AtomicFile() {
   if (file_) std::fclose(file_);
-  if (!committed_) std::remove(temp_path_.c_str());
+  if (!committed_ && !in_place_) std::remove(temp_path_.c_str());
 }
 
 void AtomicFile::write(const void* data, std::size_t size) {
@@ -39,6 +51,10 @@ void AtomicFile::commit() {
   const int rc = std::fclose(file_);
   file_ = nullptr;
   if (rc != 0) throw InputError(path_ + ": write failed: " + errno_text());
+  if (in_place_) {
+    committed_ = true;
+    return;
+  }
   if (std::rename(temp_path_.c_str(), path_.c_str()) != 0)
     throw InputError(path_ + ": cannot rename temporary file into place: " + errno_text());
   committed_ = true;

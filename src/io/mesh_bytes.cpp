@@ -245,15 +245,46 @@ void Base64Reader::read(std::size_t n, std::string& out, std::string_view what) 
 
 void zlib_inflate(const char* src, std::size_t size, std::size_t expected, std::string& out,
                   const std::string& path, std::string_view what) {
+  // Streamed through a fixed buffer: `out` grows only by what the data
+  // really inflates to (a header may lie about `expected`), and inflation
+  // stops as soon as the stream would exceed `expected`.
+  auto fail = [&](const std::string& why) {
+    return InputError(path + ": corrupt zlib data in " + std::string(what) + " (" + why + ")");
+  };
+  z_stream z{};
+  if (inflateInit(&z) != Z_OK) throw fail("zlib cannot start");
   const std::size_t start = out.size();
-  out.resize(start + expected);
-  if (expected == 0) return;
-  uLongf dest_len = static_cast<uLongf>(expected);
-  const int rc = ::uncompress(reinterpret_cast<Bytef*>(out.data() + start), &dest_len,
-                              reinterpret_cast<const Bytef*>(src), static_cast<uLong>(size));
-  if (rc != Z_OK || dest_len != expected)
-    throw InputError(path + ": corrupt zlib data in " + std::string(what) + " (zlib code " + std::to_string(rc) +
-                     ", " + std::to_string(dest_len) + " of " + std::to_string(expected) + " bytes)");
+  char buffer[1 << 16];
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(src));
+  std::size_t fed = 0;
+  int rc = Z_OK;
+  while (rc != Z_STREAM_END) {
+    if (z.avail_in == 0 && fed < size) {
+      const std::size_t n = std::min<std::size_t>(size - fed, 1u << 30);
+      z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(src + fed));
+      z.avail_in = static_cast<uInt>(n);
+      fed += n;
+    }
+    z.next_out = reinterpret_cast<Bytef*>(buffer);
+    z.avail_out = sizeof buffer;
+    rc = inflate(&z, Z_NO_FLUSH);
+    const std::size_t got = sizeof buffer - z.avail_out;
+    if (rc != Z_OK && rc != Z_STREAM_END && !(rc == Z_BUF_ERROR && got > 0)) {
+      inflateEnd(&z);
+      throw fail(rc == Z_BUF_ERROR ? "the stream ends after " + std::to_string(out.size() - start) + " of " +
+                                         std::to_string(expected) + " bytes"
+                                   : "zlib code " + std::to_string(rc));
+    }
+    if (got > expected - (out.size() - start)) {
+      inflateEnd(&z);
+      throw fail("inflates to more than the " + std::to_string(expected) + " bytes declared");
+    }
+    out.append(buffer, got);
+  }
+  inflateEnd(&z);
+  if (out.size() - start != expected)
+    throw fail("inflates to " + std::to_string(out.size() - start) + " of the " + std::to_string(expected) +
+               " bytes declared");
 }
 
 void validate_mesh(const SurfaceMesh& mesh, const std::string& path) {

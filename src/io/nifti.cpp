@@ -34,6 +34,7 @@ class Stream {
       done += static_cast<std::uint64_t>(got);
     }
   }
+  gzFile handle() { return gz_; }
 
  private:
   std::string path_;
@@ -101,29 +102,34 @@ ImageGrid read_nifti(const std::string& path) {
   const std::array<Id, 3> dims{dim[1], dim[2], dim[3]};
   for (int a = 0; a < 3; ++a)
     if (dims[a] <= 0) throw InputError(path + ": NIfTI dim[" + std::to_string(a + 1) + "] = " + std::to_string(dims[a]));
-  const long double need = static_cast<long double>(dims[0]) * static_cast<long double>(dims[1]) *
-                           static_cast<long double>(dims[2]) * static_cast<long double>(scalar_size(type));
+  const std::uint64_t need = detail::checked_byte_count(dims, type, path);
   const bool gz = path.size() > 3 && path.compare(path.size() - 3, 3, ".gz") == 0;
+  const auto offset = static_cast<std::uint64_t>(vox_offset);
+  const std::string declared = std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) +
+                               " " + scalar_type_name(type) + " volume at vox_offset " + std::to_string(offset);
   // A plain file must hold the data; gzip cannot expand by more than ~1032:1.
-  if (!gz && need + vox_offset > static_cast<long double>(file_bytes))
-    throw InputError(path + ": file holds " + std::to_string(file_bytes) + " bytes, the header declares " +
-                     std::to_string(static_cast<double>(need + vox_offset)));
-  if (gz && need > 1100.0L * static_cast<long double>(file_bytes) + 4096)
-    throw InputError(path + ": gzip file is too small for the declared " + std::to_string(dims[0]) + "x" +
-                     std::to_string(dims[1]) + "x" + std::to_string(dims[2]) + " volume");
+  if (!gz && (offset > file_bytes || need > file_bytes - offset))
+    throw InputError(path + ": file holds " + std::to_string(file_bytes) + " bytes, the header declares a " + declared);
+  if (gz && need / 1032 > file_bytes + 64)
+    throw InputError(path + ": gzip file of " + std::to_string(file_bytes) + " bytes cannot hold the declared " +
+                     declared);
   ImageGrid grid;
-  detail::allocate_checked(grid, dims, type, path);
   grid.spacing = spacing;
   grid.name = "scalars";
   // Skip to vox_offset, then read exactly the declared samples.
-  std::uint64_t skip = static_cast<std::uint64_t>(vox_offset) - 348;
+  std::uint64_t skip = offset - 348;
   unsigned char pad[4096];
   while (skip > 0) {
     const std::uint64_t n = std::min<std::uint64_t>(skip, sizeof pad);
     in.read(pad, n, "extension");
     skip -= n;
   }
-  in.read(grid.data(), grid.bytes.size(), "voxel data");
+  if (gz) {
+    detail::adopt_samples(grid, dims, type, detail::read_gz_growing(in.handle(), need, file_bytes, path, "voxel data", true));
+  } else {
+    detail::allocate_checked(grid, dims, type, path);
+    in.read(grid.data(), grid.bytes.size(), "voxel data");
+  }
   if (swap) detail::swap_samples(grid);
   const float slope = get<float>(h, 112, swap), inter = get<float>(h, 116, swap);
   if (std::isfinite(slope) && std::isfinite(inter) && slope != 0 && !(slope == 1 && inter == 0)) {

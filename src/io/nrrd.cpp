@@ -83,8 +83,9 @@ std::vector<std::vector<double>> vectors(const std::string& path, const std::str
   return out;
 }
 
-// Reads `size` gzip-compressed bytes from `path` at `offset` into dst, and no more.
-void read_gzip(const std::string& path, std::uint64_t offset, void* dst, std::uint64_t size) {
+// Reads `size` bytes of gzip data from `path` at `offset` (and no more).
+std::vector<std::byte> read_gzip(const std::string& path, std::uint64_t offset, std::uint64_t file_bytes,
+                                 std::uint64_t size) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw InputError(path + ": cannot open");
   if (fseeko(f, static_cast<off_t>(offset), SEEK_SET) != 0) {
@@ -93,21 +94,20 @@ void read_gzip(const std::string& path, std::uint64_t offset, void* dst, std::ui
   }
   const int fd = dup(fileno(f));
   std::fclose(f);
-  gzFile gz = gzdopen(fd, "rb");
-  if (!gz) throw InputError(path + ": cannot open gzip data");
-  auto* out = static_cast<unsigned char*>(dst);
-  std::uint64_t done = 0;
-  while (done < size) {
-    const unsigned chunk = static_cast<unsigned>(std::min<std::uint64_t>(size - done, 1u << 30));
-    const int got = gzread(gz, out + done, chunk);
-    if (got <= 0) {
-      gzclose(gz);
-      throw InputError(path + ": gzip data ends after " + std::to_string(done) + " of " + std::to_string(size) +
-                       " bytes");
-    }
-    done += static_cast<std::uint64_t>(got);
+  gzFile gz = fd >= 0 ? gzdopen(fd, "rb") : nullptr;
+  if (!gz) {
+    if (fd >= 0) close(fd);
+    throw InputError(path + ": cannot open gzip data");
   }
-  gzclose(gz);
+  try {
+    auto out = detail::read_gz_growing(gz, size, file_bytes - std::min(file_bytes, offset), path, "NRRD gzip data",
+                                       false);
+    gzclose(gz);
+    return out;
+  } catch (...) {
+    gzclose(gz);
+    throw;
+  }
 }
 
 }  // namespace
@@ -233,6 +233,9 @@ ImageGrid read_nrrd(const std::string& path) {
     if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
     data_path = p.string();
     data_offset = 0;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(data_path, ec))
+      throw InputError(path + ": NRRD data file '" + data_path + "' is not a readable file");
   }
   if (const std::string* skip = get("byte skip")) {
     const double v = parse_number(path, "byte skip", *skip);
@@ -240,23 +243,25 @@ ImageGrid read_nrrd(const std::string& path) {
     data_offset += static_cast<std::uint64_t>(v);
   }
   ImageGrid grid;
-  // Refuse a raw body shorter than declared before allocating.
+  // Refuse a body shorter than declared before allocating.
   const std::uint64_t data_file_bytes = data_file ? detail::file_size_or_throw(data_path) : file_bytes;
-  {
-    long double need = static_cast<long double>(scalar_size(st));
-    for (Id d : dims) need *= static_cast<long double>(d);
-    if (encoding == "raw" && need + data_offset > static_cast<long double>(data_file_bytes))
-      throw InputError(data_path + ": NRRD data holds " + std::to_string(data_file_bytes - std::min(data_file_bytes, data_offset)) +
-                       " bytes, the header declares " + std::to_string(static_cast<double>(need)));
-    // zlib cannot expand more than ~1032:1.
-    if (encoding == "gzip" && need > 1100.0L * static_cast<long double>(data_file_bytes) + 1024)
-      throw InputError(data_path + ": NRRD gzip data is too small for the declared sizes");
-  }
-  detail::allocate_checked(grid, dims, st, path);
+  const std::uint64_t need = detail::checked_byte_count(dims, st, path);
+  const std::uint64_t body = data_file_bytes - std::min(data_file_bytes, data_offset);
+  if (encoding == "raw" && need > body)
+    throw InputError(data_path + ": NRRD data holds " + std::to_string(body) + " bytes, the header of " + path +
+                     " declares " + std::to_string(need) + " (sizes " + *sizes + ", type " + *type + ")");
+  // zlib cannot expand more than ~1032:1.
+  if (encoding == "gzip" && need / 1032 > body + 64)
+    throw InputError(data_path + ": NRRD gzip data of " + std::to_string(body) + " bytes cannot hold the " +
+                     std::to_string(need) + " bytes the header of " + path + " declares (sizes " + *sizes + ")");
   grid.spacing = spacing;
   grid.origin = origin;
-  if (encoding == "raw") detail::read_exact(data_path, data_offset, grid.data(), grid.bytes.size(), "the samples");
-  else read_gzip(data_path, data_offset, grid.data(), grid.bytes.size());
+  if (encoding == "raw") {
+    detail::allocate_checked(grid, dims, st, path);
+    detail::read_exact(data_path, data_offset, grid.data(), grid.bytes.size(), "the samples");
+  } else {
+    detail::adopt_samples(grid, dims, st, read_gzip(data_path, data_offset, data_file_bytes, need));
+  }
   if (big_endian) detail::swap_samples(grid);
   return grid;
 }

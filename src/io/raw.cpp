@@ -1,5 +1,9 @@
+#include <zlib.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <cstring>
 #include <filesystem>
 
@@ -12,7 +16,8 @@ namespace detail {
 
 std::uint64_t file_size_or_throw(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": no such file");
+  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": not a regular file");
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) throw InputError(path + ": cannot read: " + ec.message());
   return static_cast<std::uint64_t>(size);
@@ -50,30 +55,80 @@ void allocate_checked(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, 
   }
 }
 
+std::uint64_t checked_byte_count(std::array<Id, 3> dims, ScalarType type, const std::string& path) {
+  // The same rules as ImageGrid::allocate, without allocating.
+  constexpr Id kMax = std::numeric_limits<Id>::max();
+  Id count = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (dims[a] <= 0)
+      throw InputError(path + ": grid dimension " + std::to_string(a) + " is " + std::to_string(dims[a]) +
+                       " (must be positive)");
+    if (count > kMax / dims[a])
+      throw LimitError(path + ": grid dimensions " + std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
+                       std::to_string(dims[2]) + " overflow a 64-bit point count");
+    count *= dims[a];
+  }
+  const Id size = static_cast<Id>(scalar_size(type));
+  if (count > kMax / size / 4) throw LimitError(path + ": grid of " + std::to_string(count) + " points is too large");
+  return static_cast<std::uint64_t>(count * size);
+}
+
+std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
+                                       const std::string& path, const std::string& what, bool allow_plain) {
+  gzFile gz = static_cast<gzFile>(gz_file);
+  std::vector<std::byte> out;
+  // Typical volumes compress 2-10:1; a first guess of 4x (plus 4 MiB) takes
+  // one allocation for most, and doubling covers the rest.
+  const std::uint64_t guess = compressed_bytes > (std::uint64_t{1} << 60) / 4 ? size : 4 * compressed_bytes + (4u << 20);
+  std::uint64_t done = 0;
+  while (done < size) {
+    if (done == out.size()) {
+      const std::uint64_t grow = out.empty() ? guess : 2 * out.size();
+      out.resize(static_cast<std::size_t>(std::min<std::uint64_t>(size, grow)));
+    }
+    const unsigned chunk = static_cast<unsigned>(std::min<std::uint64_t>(out.size() - done, 1u << 30));
+    const int got = gzread(gz, out.data() + done, chunk);
+    if (got <= 0) {
+      int code = Z_OK;
+      const char* message = gzerror(gz, &code);
+      throw InputError(path + ": " + what + " ends after " + std::to_string(done) + " of " + std::to_string(size) +
+                       " bytes" + (code != Z_OK && message && *message ? std::string(" (") + message + ")" : ""));
+    }
+    if (done == 0 && !allow_plain && gzdirect(gz))
+      throw InputError(path + ": " + what + " is not gzip-compressed");
+    done += static_cast<std::uint64_t>(got);
+  }
+  return out;
+}
+
+void adopt_samples(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, std::vector<std::byte> samples) {
+  grid.dims = dims;
+  grid.type = type;
+  grid.bytes = std::move(samples);
+}
+
 }  // namespace detail
 
 ImageGrid read_raw(const std::string& path, const RawOptions& o) {
-  for (int a = 0; a < 3; ++a)
+  static const char* const kAxis[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
     if (!(o.spacing[a] > 0) || !std::isfinite(o.spacing[a]))
-      throw InputError(path + ": spacing " + std::to_string(o.spacing[a]) + " must be positive");
-  if (o.header_bytes < 0) throw InputError(path + ": negative header size");
+      throw InputError(path + ": spacing " + kAxis[a] + " = " + std::to_string(o.spacing[a]) +
+                       " must be a positive finite number");
+    if (!std::isfinite(o.origin[a]))
+      throw InputError(path + ": origin " + kAxis[a] + " = " + std::to_string(o.origin[a]) + " must be finite");
+    if (o.dims[a] <= 0)
+      throw InputError(path + ": --dims " + kAxis[a] + " = " + std::to_string(o.dims[a]) + " must be positive");
+  }
+  if (o.header_bytes < 0) throw InputError(path + ": --header-bytes " + std::to_string(o.header_bytes) + " is negative");
   // Check the size before allocating: a wrong --dims must not allocate gigabytes.
   const std::uint64_t have = detail::file_size_or_throw(path);
-  ImageGrid probe;
-  {
-    Id count = 1;
-    for (int a = 0; a < 3; ++a) {
-      if (o.dims[a] <= 0) throw InputError(path + ": --dims must be positive, got " + std::to_string(o.dims[a]));
-      if (count > (Id{1} << 56) / o.dims[a]) throw LimitError(path + ": --dims overflow");
-      count *= o.dims[a];
-    }
-    const std::uint64_t need = static_cast<std::uint64_t>(o.header_bytes) +
-                               static_cast<std::uint64_t>(count) * scalar_size(o.type);
-    if (need > have)
-      throw InputError(path + ": file holds " + std::to_string(have) + " bytes, expected " + std::to_string(need) +
-                       " for " + std::to_string(o.dims[0]) + "x" + std::to_string(o.dims[1]) + "x" +
-                       std::to_string(o.dims[2]) + " " + scalar_type_name(o.type));
-  }
+  const std::uint64_t need = static_cast<std::uint64_t>(o.header_bytes) + detail::checked_byte_count(o.dims, o.type, path);
+  if (need > have)
+    throw InputError(path + ": file holds " + std::to_string(have) + " bytes, expected " + std::to_string(need) +
+                     " for " + std::to_string(o.dims[0]) + "x" + std::to_string(o.dims[1]) + "x" +
+                     std::to_string(o.dims[2]) + " " + scalar_type_name(o.type) +
+                     (o.header_bytes ? " after " + std::to_string(o.header_bytes) + " header bytes" : std::string()));
   ImageGrid grid;
   detail::allocate_checked(grid, o.dims, o.type, path);
   grid.spacing = o.spacing;

@@ -4,7 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <optional>
 #include <sstream>
+#include <type_traits>
 
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/volume_formats.hpp"
@@ -62,12 +65,14 @@ std::string appended_head(const std::string& path, std::uint64_t file_bytes) {
 
 }  // namespace
 
-ImageGrid read_vti(const std::string& path) {
-  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
-  // Large volumes are written with raw appended data: parse only the XML
-  // head and read the samples straight into the grid (no whole-file copy).
-  const std::string head = appended_head(path, file_bytes);
-  const std::string data = head.empty() ? mesh_bytes::read_whole_file(path) : head;
+namespace {
+
+// Parses a .vti from `data`: the whole file, or (head_only) just its XML
+// head up to the AppendedData marker, in which case only an uncompressed
+// raw appended array can be read (straight from the file into the grid)
+// and anything else returns nullopt.
+std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& data, bool head_only,
+                                   std::uint64_t file_bytes) {
   const ParsedXml xml = parse_xml(data, path);
   const Context ctx = file_context(xml, path, "ImageData");
   const XmlNode* image = xml.root->child("ImageData");
@@ -76,7 +81,7 @@ ImageGrid read_vti(const std::string& path) {
   std::array<Id, 3> dims{};
   for (int a = 0; a < 3; ++a) {
     const double d = extent[2 * a + 1] - extent[2 * a] + 1;
-    if (d < 1 || d > 9.0e15 || extent[2 * a] != std::floor(extent[2 * a]))
+    if (d < 1 || d > 9.0e15 || extent[2 * a] != std::floor(extent[2 * a]) || d != std::floor(d))
       throw InputError(path + ": bad WholeExtent '" + *image->attr("WholeExtent") + "'");
     dims[a] = static_cast<Id>(d);
   }
@@ -92,6 +97,11 @@ ImageGrid read_vti(const std::string& path) {
       spacing[a] = std::abs(s[a]);
     }
   }
+  // Point (i, j, k) of the extent lies at Origin + (i, j, k) * Spacing: the
+  // grid's first point is the extent's lower corner.
+  for (int a = 0; a < 3; ++a) origin[a] += extent[2 * a] * spacing[a];
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(origin[a])) throw InputError(path + ": Origin + WholeExtent * Spacing is not finite");
   const XmlNode* piece = image->child("Piece");
   if (!piece) throw InputError(path + ": <ImageData> has no <Piece>");
   if (piece->attr("Extent")) {
@@ -111,46 +121,78 @@ ImageGrid read_vti(const std::string& path) {
   const auto declared_scalar = declared ? vtk_scalar(*declared) : std::nullopt;
   if (!declared_scalar) throw InputError(path + ": point array has no supported type");
   const ScalarType type = grid_type(path, *declared_scalar, *declared);
+  // Checks dims (and the product's overflow) before anything is allocated;
+  // the samples are allocated only once the file is known to hold them.
+  const std::uint64_t need = detail::checked_byte_count(dims, type, path);
   ImageGrid grid;
-  detail::allocate_checked(grid, dims, type, path);  // checks dims before the array is decoded
   grid.origin = origin;
   grid.spacing = spacing;
   if (const std::string* name = array->attr("Name")) grid.name = *name;
   const std::string* format = array->attr("format");
-  if (!head.empty() && format && *format == "appended" && ctx.compressor.empty() && ctx.appended_encoding &&
+  if (head_only && format && *format == "appended" && ctx.compressor.empty() && ctx.appended_encoding &&
       *ctx.appended_encoding == "raw") {
     // Raw appended, uncompressed: [size header][samples] at head + offset.
     std::int64_t offset = 0;
     const std::string* off = array->attr("offset");
     if (!off || !mesh_bytes::parse_int64(*off, offset) || offset < 0)
       throw InputError(path + ": point array has a bad appended offset");
-    const std::uint64_t at = head.size() + static_cast<std::uint64_t>(offset);
+    const std::uint64_t at = data.size() + static_cast<std::uint64_t>(offset);
     const std::size_t hs = ctx.header == Scalar::UInt64 ? 8 : 4;
     unsigned char h[8] = {};
     detail::read_exact(path, at, h, hs, "the point array's size header");
     const std::uint64_t array_bytes = hs == 8 ? mesh_bytes::load<std::uint64_t>(h, ctx.big_endian)
                                               : mesh_bytes::load<std::uint32_t>(h, ctx.big_endian);
-    if (array_bytes != grid.bytes.size())
+    if (array_bytes != need)
       throw InputError(path + ": point array holds " + std::to_string(array_bytes) + " bytes, WholeExtent needs " +
-                       std::to_string(grid.bytes.size()));
+                       std::to_string(need));
+    if (at + hs > file_bytes || need > file_bytes - at - hs)
+      throw InputError(path + ": file holds " + std::to_string(file_bytes) + " bytes, the point array needs " +
+                       std::to_string(need) + " at offset " + std::to_string(at + hs));
+    detail::allocate_checked(grid, dims, type, path);
     detail::read_exact(path, at + hs, grid.data(), grid.bytes.size(), "the point array");
     if (ctx.big_endian) detail::swap_samples(grid);
     return grid;
   }
-  const Array a = decode_array(*array, ctx, "point array", grid.num_points());
+  if (head_only) return std::nullopt;  // appended but compressed or base64: needs the whole file
+  // Decoding checks every size against the bytes present, so the grid is
+  // allocated only for data the file really holds.
+  const Array a = decode_array(*array, ctx, "point array", static_cast<std::int64_t>(need / scalar_size(type)));
+  detail::allocate_checked(grid, dims, type, path);
   if (a.type == *declared_scalar) {
     std::memcpy(grid.data(), a.bytes.data(), grid.bytes.size());
     if (a.big) detail::swap_samples(grid);
   } else {
-    // ascii arrays decode as doubles: convert back to the declared type.
+    // ascii arrays decode as doubles: convert back to the declared type,
+    // refusing values the type cannot hold (and NaN in an integer array).
     visit_scalars(grid, [&](const auto* samples) {
       using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
       T* out = const_cast<T*>(samples);
-      for (Id i = 0; i < grid.num_points(); ++i) out[i] = static_cast<T>(a.as_double(static_cast<std::size_t>(i)));
+      for (Id i = 0; i < grid.num_points(); ++i) {
+        const double v = a.as_double(static_cast<std::size_t>(i));
+        if constexpr (std::is_integral_v<T>) {
+          if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
+                v <= static_cast<double>(std::numeric_limits<T>::max())))
+            throw InputError(path + ": point array value " + std::to_string(v) + " at index " + std::to_string(i) +
+                             " does not fit its type " + *declared);
+        }
+        out[i] = static_cast<T>(v);
+      }
       return 0;
     });
   }
   return grid;
+}
+
+}  // namespace
+
+ImageGrid read_vti(const std::string& path) {
+  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+  // Large volumes are written with raw appended data: parse only the XML
+  // head and read the samples straight into the grid (no whole-file copy).
+  const std::string head = appended_head(path, file_bytes);
+  if (!head.empty())
+    if (auto grid = parse_vti(path, head, true, file_bytes)) return std::move(*grid);
+  return std::move(*parse_vti(path, mesh_bytes::read_whole_file(path), false, file_bytes));
 }
 
 void write_vti(const ImageGrid& grid, const std::string& path) {

@@ -2,7 +2,8 @@
 // Writes a file under a temporary name in the same directory and renames it
 // over the destination only after everything was written and flushed, so a
 // failure (unwritable directory, full disk, exception while encoding) never
-// leaves a partial file and never destroys an existing one.
+// leaves a partial file and never destroys an existing one. A destination
+// that is not a regular file (a device, a FIFO) is written in place.
 #include <cstddef>
 #include <cstdio>
 #include <string>
@@ -32,6 +33,7 @@ class AtomicFile {
   std::string temp_path_;
   std::FILE* file_ = nullptr;
   bool committed_ = false;
+  bool in_place_ = false;  // a device or FIFO: written directly, never renamed
 };
 
 }  // namespace keymesh::io

@@ -5,7 +5,10 @@
 // allocates, never inflates compressed data past the declared size, and
 // throws InputError (or LimitError for sizes past what is supported) with
 // the path and the problem.
+#include <cstddef>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "keymesh/io/volume_io.hpp"
 
@@ -38,6 +41,20 @@ void read_exact(const std::string& path, std::uint64_t offset, void* dst, std::u
 void swap_samples(ImageGrid& grid);
 // Checks dims, then allocates; `what` names the source in messages.
 void allocate_checked(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, const std::string& path);
+// Bytes of samples dims x type need, after the checks allocate_checked makes
+// (each dim positive, no overflow): InputError / LimitError naming path.
+std::uint64_t checked_byte_count(std::array<Id, 3> dims, ScalarType type, const std::string& path);
+// Reads exactly `size` bytes of an opened zlib/gzip stream (gzFile, passed
+// as void* to keep <zlib.h> out of this header) into a buffer that grows as
+// the data arrives: a header declaring more than the stream holds costs no
+// more memory than the stream really inflates to, and nothing past `size`
+// is ever inflated. `compressed_bytes` (the stream's size on disk) sizes the
+// first allocation. InputError naming path and `what` when the stream ends
+// early or is corrupt, or (unless allow_plain) is not gzip data at all.
+std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
+                                       const std::string& path, const std::string& what, bool allow_plain);
+// Moves samples read by read_gz_growing into grid (dims already checked).
+void adopt_samples(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, std::vector<std::byte> samples);
 }  // namespace detail
 
 }  // namespace keymesh::io
