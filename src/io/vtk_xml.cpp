@@ -255,7 +255,7 @@ std::string read_binary_block(Source& src, const Context& ctx, const std::string
   if (block_size > (std::uint64_t{1} << 40) || total / 1032 > compressed_total + 64)
     throw InputError(ctx.path + ": " + what + " declares " + std::to_string(total) +
                      " uncompressed bytes, impossible for its compressed size");
-  out.reserve(static_cast<std::size_t>(total));
+  // No reserve(total): the output grows with what zlib_inflate really inflates.
   std::string chunk;
   for (std::uint64_t b = 0; b < blocks; ++b) {
     chunk.clear();
