@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -41,9 +43,59 @@ decltype(auto) with_type(Scalar s, F&& f) {
   return f(double{});
 }
 
+// A decoded array, or a view of the file's own bytes when the array is
+// appended raw and uncompressed (the connectivity of 82.9 M tets is 1.3 GB
+// that need not be copied before they are converted).
+struct Values {
+  Scalar type = Scalar::Float64;
+  bool big = false;
+  int components = 1;
+  std::string_view bytes;
+  std::unique_ptr<Array> owned;  // heap-held, so `bytes` survives moves
+  std::size_t count() const { return bytes.size() / scalar_size(type); }
+  const char* at(std::size_t i) const { return bytes.data() + i * scalar_size(type); }
+};
+
+Values get_array(const XmlNode& node, const Context& ctx, const std::string& what, std::int64_t expected) {
+  const std::string* format = node.attr("format");
+  const std::string* type_attr = node.attr("type");
+  const std::string* offset_attr = node.attr("offset");
+  const std::string* comps_attr = node.attr("NumberOfComponents");
+  Scalar type = Scalar::Float64;
+  bool known_type = false;
+  if (type_attr)
+    if (const auto t = vtk_scalar(*type_attr)) type = *t, known_type = true;
+  std::int64_t offset = -1, comps = 1;
+  if (format && *format == "appended" && ctx.appended_encoding == "raw" && ctx.compressor.empty() && known_type &&
+      offset_attr && parse_int64(*offset_attr, offset) && offset >= 0 &&
+      (!comps_attr || (parse_int64(*comps_attr, comps) && comps >= 1 && comps <= 4096))) {
+    const std::size_t hs = scalar_size(ctx.header);
+    const std::uint64_t left = ctx.appended.size();
+    if (std::uint64_t(offset) <= left && left - std::uint64_t(offset) >= hs) {
+      const char* h = ctx.appended.data() + offset;
+      const std::uint64_t n = ctx.header == Scalar::UInt64 ? load<std::uint64_t>(h, ctx.big_endian)
+                                                           : load<std::uint32_t>(h, ctx.big_endian);
+      const std::uint64_t size = scalar_size(type);
+      if (n <= left - std::uint64_t(offset) - hs && n % size == 0 &&
+          (expected < 0 || n / size == std::uint64_t(expected))) {
+        Values v{type, ctx.big_endian, static_cast<int>(comps), ctx.appended.substr(std::size_t(offset) + hs, n), {}};
+        return v;
+      }
+    }
+  }
+  // Anything else, and every malformed case (for its message), goes through the shared decoder.
+  Values v;
+  v.owned = std::make_unique<Array>(decode_array(node, ctx, what, expected));
+  v.type = v.owned->type;
+  v.big = v.owned->big;
+  v.components = v.owned->components;
+  v.bytes = v.owned->bytes;
+  return v;
+}
+
 // Appends the values of `a`, converted to float, to out (in parallel: the
 // points of 256^3 are 50 M values).
-void append_floats(const Array& a, std::vector<float>& out) {
+void append_floats(const Values& a, std::vector<float>& out) {
   const std::size_t at = out.size();
   out.resize(at + a.count());
   float* dst = out.data() + at;
@@ -60,7 +112,7 @@ void append_floats(const Array& a, std::vector<float>& out) {
 // integer in [0, limit). Returns the index of the first value that is not,
 // or a.count() when all are.
 template <class D>
-std::size_t convert_ints(const Array& a, std::uint64_t limit, std::uint64_t base, D* dst) {
+std::size_t convert_ints(const Values& a, std::uint64_t limit, std::uint64_t base, D* dst) {
   const Id n = static_cast<Id>(a.count());
   const int chunks = parallel::chunk_count(n, 1 << 16);
   std::vector<Id> first_bad(static_cast<std::size_t>(std::max(chunks, 1)), n);
@@ -99,11 +151,11 @@ std::size_t convert_ints(const Array& a, std::uint64_t limit, std::uint64_t base
   return static_cast<std::size_t>(*std::min_element(first_bad.begin(), first_bad.end()));
 }
 
-std::string value_text(const Array& a, std::size_t i) {
+std::string value_text(const Values& a, std::size_t i) {
   std::int64_t v = 0;
-  if (a.as_int(i, v)) return std::to_string(v);
+  if (load_as_int64(a.at(i), a.type, a.big, v)) return std::to_string(v);
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", a.as_double(i));
+  std::snprintf(buf, sizeof buf, "%.17g", load_as_double(a.at(i), a.type, a.big));
   return buf;
 }
 
@@ -117,7 +169,7 @@ std::vector<Field> read_fields(const XmlNode* section, const Context& ctx, std::
     if (!t || !vtk_scalar(*t)) continue;  // String arrays and the like are not fields
     const std::string* name = c->attr("Name");
     const std::string label = std::string(what) + " array";
-    Array a = decode_array(*c, ctx, label, -1);
+    const Values a = get_array(*c, ctx, label, -1);
     if (a.count() != static_cast<std::uint64_t>(tuples) * static_cast<std::uint64_t>(a.components))
       throw InputError(ctx.path + ": " + label + " '" + (name ? *name : std::string()) + "' holds " +
                        std::to_string(a.count()) + " values for " + std::to_string(tuples) + " tuples x " +
@@ -199,7 +251,7 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
       const XmlNode* pts = piece.child("Points");
       const XmlNode* arr = pts ? pts->child("DataArray") : nullptr;
       if (!arr) throw InputError(path + ": piece with " + std::to_string(npts) + " points has no <Points> array");
-      append_floats(decode_array(*arr, ctx, "Points array" + where, 3 * npts), g.points);
+      append_floats(get_array(*arr, ctx, "Points array" + where, 3 * npts), g.points);
     }
     if (ncells > 0) {
       const XmlNode* cells = piece.child("Cells");
@@ -210,7 +262,7 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
         throw InputError(path + ": <Cells>" + where + " lacks its connectivity, offsets or types array");
       const std::uint64_t id_base = g.connectivity.size();
       {
-        const Array o = decode_array(*offs, ctx, "Cells offsets array" + where, ncells);
+        const Values o = get_array(*offs, ctx, "Cells offsets array" + where, ncells);
         const std::size_t at = offsets.size();
         offsets.resize(at + o.count());
         const std::size_t bad = convert_ints(o, std::uint64_t{1} << 62, id_base, offsets.data() + at);
@@ -222,14 +274,14 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
             throw InputError(path + ": cell offsets" + where + " decrease at cell " + std::to_string(k - at));
       }
       {
-        const Array t = decode_array(*typ, ctx, "Cells types array" + where, ncells);
+        const Values t = get_array(*typ, ctx, "Cells types array" + where, ncells);
         const std::size_t at = types.size();
         types.resize(at + t.count());
         const std::size_t bad = convert_ints(t, 256, 0, types.data() + at);
         if (bad < t.count())
           throw InputError(path + ": cell " + std::to_string(bad) + where + " has cell type " + value_text(t, bad));
       }
-      const Array c = decode_array(*conn, ctx, "Cells connectivity array" + where, -1);
+      const Values c = get_array(*conn, ctx, "Cells connectivity array" + where, -1);
       if (offsets.back() - id_base != c.count())
         throw InputError(path + ": cell offsets" + where + " end at " + std::to_string(offsets.back() - id_base) +
                          " but the connectivity holds " + std::to_string(c.count()) + " ids");
