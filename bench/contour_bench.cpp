@@ -3,6 +3,10 @@
 //   contour_bench --size 512 --threads 2 --reps 5
 //                 [--weld keyreduce|keyreduce-sort|vertexweld]
 //                 [--normals none|gradient|average] [--iso V] [--grid voxel|tet5]
+//                 [--file VOLUME]
+// --file contours a volume file (any format keymesh::io::read_volume reads:
+// .vti .nrrd .nii(.gz) .den) instead of generating the sphere; --iso is then
+// required and "size" reports the largest dimension.
 // --grid tet5 contours the scheme-5 tetrahedralization of the field by
 // marching tetrahedra; the tetrahedralization is timed once ("build").
 #include <sys/resource.h>
@@ -20,6 +24,7 @@
 #include "keymesh/generate/contour_tets.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
+#include "keymesh/io/volume_io.hpp"
 #include "keymesh/parallel/threads.hpp"
 
 using namespace keymesh;
@@ -28,7 +33,7 @@ int main(int argc, char** argv) {
   reexec_with_huge_pages(argc, argv);
   long long size = 256;
   int threads = 0, reps = 5;
-  std::string weld = "keyreduce", normals = "none", grid_kind = "voxel";
+  std::string weld = "keyreduce", normals = "none", grid_kind = "voxel", file;
   double iso = -1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
@@ -39,10 +44,15 @@ int main(int argc, char** argv) {
     else if (a == "--normals") normals = argv[i + 1];
     else if (a == "--iso") iso = std::atof(argv[i + 1]);
     else if (a == "--grid") grid_kind = argv[i + 1];
+    else if (a == "--file") file = argv[i + 1];
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
     }
+  }
+  if (!file.empty() && iso < 0) {
+    std::fprintf(stderr, "--file needs --iso\n");
+    return 2;
   }
   if (iso < 0) iso = static_cast<double>(size / 2) - 1 + 0.001;
   const int used = parallel::set_thread_count(threads);
@@ -50,7 +60,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--grid must be voxel or tet5\n");
     return 2;
   }
-  const ImageGrid grid = generate::spherical_distance(size);
+  ImageGrid grid;
+  try {
+    grid = file.empty() ? generate::spherical_distance(size) : io::read_volume(file);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
+  if (!file.empty()) size = static_cast<long long>(std::max({grid.dims[0], grid.dims[1], grid.dims[2]}));
   UnstructuredGrid tets;
   double build = 0;
   if (grid_kind == "tet5") {
