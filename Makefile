@@ -16,7 +16,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
   pybind11-dev python3-dev python3-pytest python3-skimage python3-meshio \
   clang-14 libfuzzer-14-dev libclang-rt-14-dev
 
-.PHONY: all deps build demo test bench clean
+.PHONY: all deps build demo test bench clean sanitize fuzz
 
 all: build
 
@@ -48,6 +48,43 @@ test: build
 
 bench: build
 	@$(PYTHON) bench/run.py --build $(BUILD_DIR) $(if $(QUICK),--quick,)
+
+# Sanitizers (issue 11): the whole ctest suite under AddressSanitizer +
+# UndefinedBehaviorSanitizer (build-asan), then the threaded primitives and
+# generators under ThreadSanitizer (build-tsan; clang with LLVM's OpenMP,
+# whose Archer tool tells TSan about OpenMP's synchronisation).
+SANITIZE_CMAKE = -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEYMESH_PYTHON=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_CUDA=OFF
+TSAN_FILTER ?= *Threads*:ExclusiveScan*:BitsNeeded*:Contour*:ContourTets*:Tetrahedralize*:Subdivide*:Coarsen*:Dual*:Curvature*:Incidence*:TopologyTest*
+SANITIZER_ENV = KEYMESH_HUGE_PAGES=0 ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+  OMP_TOOL_LIBRARIES=/usr/lib/llvm-14/lib/libarcher.so
+
+sanitize: deps
+	@cmake -S . -B build-asan $(SANITIZE_CMAKE) -DKEYMESH_SANITIZE=address,undefined $(CMAKE_FLAGS) >/dev/null
+	@cmake --build build-asan -j $(JOBS)
+	@cd build-asan && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS)
+	@CC=clang-14 CXX=clang++-14 cmake -S . -B build-tsan $(SANITIZE_CMAKE) -DKEYMESH_SANITIZE=thread >/dev/null
+	@cmake --build build-tsan -j $(JOBS) --target keymesh_tests
+	@$(SANITIZER_ENV) build-tsan/keymesh_tests --gtest_filter='$(TSAN_FILTER)' --gtest_brief=1
+
+# libFuzzer (clang 14): one executable per reader in build-fuzz, each run for
+# FUZZ_SECONDS over a copy of its seed corpus (tests/fuzz/corpus/<target>);
+# crashes are written to build-fuzz/crashes/<target>/ (add them to
+# tests/fuzz/regressions/<target>/ once fixed; `make test` replays both).
+FUZZ_SECONDS ?= 60
+FUZZ_FLAGS ?= -rss_limit_mb=2048 -malloc_limit_mb=256 -timeout=10 -max_len=65536
+fuzz: deps
+	@CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEYMESH_FUZZ=ON \
+	  -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_PYTHON=OFF -DKEYMESH_CUDA=OFF $(CMAKE_FLAGS) >/dev/null
+	@cmake --build build-fuzz -j $(JOBS)
+	@status=0; for src in tests/fuzz/*_fuzz.cpp; do \
+	  t=$$(basename $$src _fuzz.cpp); \
+	  mkdir -p build-fuzz/corpus/$$t build-fuzz/crashes/$$t; cp -n tests/fuzz/corpus/$$t/* build-fuzz/corpus/$$t/ 2>/dev/null; \
+	  echo "make fuzz: $$t for $(FUZZ_SECONDS) s"; \
+	  if KEYMESH_HUGE_PAGES=0 build-fuzz/fuzz_$$t build-fuzz/corpus/$$t -max_total_time=$(FUZZ_SECONDS) $(FUZZ_FLAGS) \
+	      -artifact_prefix=build-fuzz/crashes/$$t/ >build-fuzz/$$t.log 2>&1; then tail -1 build-fuzz/$$t.log; \
+	  else status=1; tail -40 build-fuzz/$$t.log; echo "make fuzz: $$t FAILED (build-fuzz/$$t.log, build-fuzz/crashes/$$t/)"; fi; \
+	done; exit $$status
 
 clean:
 	rm -rf $(BUILD_DIR) out

@@ -1,0 +1,376 @@
+"""Hardening rules of issue 11, end to end through the `keymesh` command.
+
+- hostile and malformed files of every format: exit 1, one line on stderr
+  naming the file, no signal, no output file, within seconds and (outside
+  sanitizer builds) within an address-space limit far below what the headers
+  declare;
+- sizes: zero, negative and overflowing dims refused by name;
+- NaN/Inf samples never give a non-finite point, normal or field value;
+  a non-finite isovalue is a usage error (2); one outside the data range
+  gives an empty mesh, a warning and exit 0;
+- meshes with out-of-range or negative indices refused; degenerate,
+  repeated and non-manifold cells handled without a crash;
+- outputs: a full device, an unwritable directory or a file-size limit
+  leave no partial file and the old file intact, exit 1 with the reason.
+"""
+import base64
+import gzip
+import math
+import os
+import resource
+import signal
+import struct
+import subprocess
+import sys
+import zlib
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from kmtest import KEYMESH, check, finish, report, run, tempdir  # noqa: E402
+
+D = tempdir()
+# Sanitizer builds reserve terabytes of shadow memory: no address-space limit there.
+SANITIZED = any(k in os.environ for k in ("ASAN_OPTIONS", "TSAN_OPTIONS", "UBSAN_OPTIONS"))
+AS_LIMIT = 1 << 30  # 1 GiB: every hostile file below declares far more
+
+
+def limited(fsize=None, address_space=True):
+    def setup():
+        if address_space and not SANITIZED:
+            resource.setrlimit(resource.RLIMIT_AS, (AS_LIMIT, AS_LIMIT))
+        if fsize is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG instead
+            resource.setrlimit(resource.RLIMIT_FSIZE, (fsize, fsize))
+    return setup
+
+
+def km(*args, preexec=None, timeout=60):
+    """Runs keymesh; returns (returncode, stdout, stderr). Never a signal."""
+    p = subprocess.run([KEYMESH, *map(str, args)], capture_output=True, text=True, stdin=subprocess.DEVNULL,
+                       timeout=timeout, preexec_fn=preexec or limited())
+    assert p.returncode >= 0, f"keymesh {args}: killed by signal {-p.returncode}\n{p.stderr}"
+    return p.returncode, p.stdout, p.stderr
+
+
+def write(name, data):
+    path = os.path.join(D, name)
+    with open(path, "wb") as f:
+        f.write(data if isinstance(data, bytes) else data.encode())
+    return path
+
+
+def expect_refused(args, named, fragment=""):
+    """Exit 1, one line on stderr that names `named` (and holds fragment)."""
+    rc, _, err = km(*args)
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert rc == 1, f"keymesh {args}: exit {rc}, expected 1\n{err}"
+    assert len(lines) == 1, f"keymesh {args}: expected one line on stderr, got:\n{err}"
+    assert named in lines[0] and fragment in lines[0], f"keymesh {args}: '{lines[0]}' lacks '{named}' / '{fragment}'"
+    return lines[0]
+
+
+def outputs_left(out):
+    """Files next to `out` that a failed run may have left (the output or a temporary)."""
+    base = os.path.basename(out)
+    return [f for f in os.listdir(os.path.dirname(out)) if f == base or f.startswith(base + ".tmp")]
+
+
+# ---- hostile files of every format ------------------------------------------------
+
+def nifti_header(dims, datatype=16, vox_offset=352.0, sizeof_hdr=348, magic=b"n+1\0"):
+    h = bytearray(348)
+    struct.pack_into("<i", h, 0, sizeof_hdr)
+    struct.pack_into("<8h", h, 40, 3, *dims, 1, 1, 1, 1)
+    struct.pack_into("<h", h, 70, datatype)
+    struct.pack_into("<f", h, 108, vox_offset)
+    h[344:348] = magic
+    return bytes(h) + b"\0" * 4
+
+
+def vti(extent, array, appended=b"", root=""):
+    head = ('<?xml version="1.0"?>\n<VTKFile type="ImageData" version="1.0"%s>\n<ImageData WholeExtent="%s">\n'
+            '<Piece Extent="%s"><PointData>%s</PointData></Piece></ImageData>\n' % (root, extent, extent, array))
+    if appended:
+        return head.encode() + b'<AppendedData encoding="raw">_' + appended + b"</AppendedData></VTKFile>"
+    return (head + "</VTKFile>").encode()
+
+
+def den(dims, length, body):
+    h = bytearray(62)
+    struct.pack_into("<h", h, 0, 1)
+    struct.pack_into("<3h", h, 50, *dims)
+    struct.pack_into("<i", h, 58, length)
+    return bytes(h) + body
+
+
+BIG = 2 ** 21  # three of these overflow 64 bits; two of them want 2^42 samples
+VOLUMES = {
+    "magic.nrrd": b"NRRX0004\ntype: float\n\n",
+    "huge.nrrd": b"NRRD0004\ntype: float\ndimension: 3\nsizes: %d %d %d\nencoding: raw\n\n\0\0\0\0" % (BIG, BIG, BIG),
+    "big.nrrd": b"NRRD0004\ntype: double\ndimension: 3\nsizes: %d %d 1\nencoding: raw\n\n" % (BIG, BIG) + bytes(64),
+    "zero.nrrd": b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 0 2\nencoding: raw\n\n",
+    "negative.nrrd": b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 -3 2\nencoding: raw\n\n",
+    "short.nrrd": b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 3 2\nencoding: raw\n\n" + bytes(95),
+    "gzlie.nrrd": b"NRRD0004\ntype: float\ndimension: 3\nsizes: 1024 1024 64\nencoding: gzip\n\n"
+                  + gzip.compress(os.urandom(300000)),
+    "gzjunk.nrrd": b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 3 2\nencoding: gzip\n\n" + b"\x1f\x8b" + bytes(200),
+    "huge.nii": nifti_header((32767, 32767, 32767), 64) + bytes(64),
+    "zero.nii": nifti_header((4, 0, 2)) + bytes(96),
+    "negative.nii": nifti_header((4, -3, 2)) + bytes(96),
+    "short.nii": nifti_header((4, 3, 2)) + bytes(95),
+    "magic.nii": nifti_header((4, 3, 2), magic=b"xyz\0") + bytes(96),
+    "huge.nii.gz": gzip.compress(nifti_header((32767, 32767, 32767), 64) + bytes(64)),
+    "lie.nii.gz": gzip.compress(nifti_header((1024, 1024, 64)) + os.urandom(300000)),
+    "junk.nii.gz": b"\x1f\x8b\x08\x00" + os.urandom(500),
+    "short.den": den((4, 3, 2), 24, bytes(23)),
+    "huge.den": den((32767, 32767, 2), 32767 * 32767 * 2, bytes(24)),
+    "version.den": b"\x07" + bytes(61 + 24),
+    "huge.vti": vti("0 %d 0 %d 0 %d" % (BIG - 1, BIG - 1, BIG - 1),
+                    '<DataArray type="Float32" Name="f" format="appended" offset="0"/>', struct.pack("<I", 4) + bytes(4)),
+    "big.vti": vti("0 %d 0 %d 0 0" % (BIG - 1, BIG - 1),
+                   '<DataArray type="Float32" Name="f" format="appended" offset="0"/>', struct.pack("<I", 4) + bytes(4)),
+    "bigascii.vti": vti("0 %d 0 %d 0 0" % (BIG - 1, BIG - 1), '<DataArray type="Float32" Name="f">1 2 3</DataArray>'),
+    "negative.vti": vti("0 3 0 -2 0 1", '<DataArray type="Float32" Name="f">1 2 3</DataArray>'),
+    "short.vti": vti("0 3 0 2 0 1", '<DataArray type="Float32" Name="f" format="appended" offset="0"/>',
+                     struct.pack("<I", 96) + bytes(10)),
+    "zliblie.vti": vti("0 1023 0 1023 0 255", '<DataArray type="Float32" Name="f" format="appended" offset="0"/>',
+                       struct.pack("<4I", 1, 1 << 30, 0, 16) + bytes(16), ' compressor="vtkZLibDataCompressor"'),
+    "zlibpast.vti": vti("0 3 0 2 0 1", '<DataArray type="Float32" Name="f" format="appended" offset="0"/>',
+                        struct.pack("<4I", 1, 96, 96, len(zlib.compress(bytes(960)))) + zlib.compress(bytes(960)),
+                        ' compressor="vtkZLibDataCompressor"'),
+    "base64.vti": vti("0 3 0 2 0 1", '<DataArray type="Float32" Name="f" format="binary">@@@@</DataArray>'),
+    "notxml.vti": b"\0\1\2 this is not XML",
+}
+
+TET = "0 0 0 1 0 0 0 1 0 0 0 1"
+MESHES = {
+    "count.ply": b"ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+                 b"property float y\nproperty float z\nend_header\n" + bytes(12),
+    "index.ply": "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 99\n",
+    "negindex.ply": "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n",
+    "listlie.ply": b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                   b"property float z\nelement face 1\nproperty list uint uint vertex_indices\nend_header\n"
+                   + bytes(36) + struct.pack("<I", 4000000000) + bytes(12),
+    "truncated.ply": b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                     b"property double z\nend_header\n" + bytes(50),
+    "nomagic.ply": b"plx\n",
+    "index.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99\n",
+    "zero.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+    "negindex.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n",
+    "hugeindex.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999999\n",
+    "count.stl": b"\0" * 80 + struct.pack("<I", 4000000000) + bytes(50),
+    "truncated.stl": "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\n",
+    "count.vtp": '<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="281474976710656" NumberOfPolys="1">'
+                 '<Points><DataArray type="Float32" NumberOfComponents="3">0 0 0</DataArray></Points>'
+                 '</Piece></PolyData></VTKFile>',
+    "index.vtp": '<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="4" NumberOfPolys="1"><Points>'
+                 '<DataArray type="Float32" NumberOfComponents="3">%s</DataArray></Points><Polys>'
+                 '<DataArray type="Int32" Name="connectivity">0 1 7</DataArray>'
+                 '<DataArray type="Int32" Name="offsets">3</DataArray></Polys></Piece></PolyData></VTKFile>' % TET,
+    "negindex.vtp": '<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="4" NumberOfPolys="1"><Points>'
+                    '<DataArray type="Float32" NumberOfComponents="3">%s</DataArray></Points><Polys>'
+                    '<DataArray type="Int32" Name="connectivity">0 -1 2</DataArray>'
+                    '<DataArray type="Int32" Name="offsets">3</DataArray></Polys></Piece></PolyData></VTKFile>' % TET,
+    "offsets.vtp": '<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="4" NumberOfPolys="2"><Points>'
+                   '<DataArray type="Float32" NumberOfComponents="3">%s</DataArray></Points><Polys>'
+                   '<DataArray type="Int32" Name="connectivity">0 1 2</DataArray>'
+                   '<DataArray type="Int32" Name="offsets">3 1</DataArray></Polys></Piece></PolyData></VTKFile>' % TET,
+    "appended.vtp": b'<VTKFile type="PolyData" header_type="UInt64"><PolyData><Piece NumberOfPoints="4">'
+                    b'<Points><DataArray type="Float32" NumberOfComponents="3" format="appended" offset="0"/></Points>'
+                    b'</Piece></PolyData><AppendedData encoding="raw">_' + struct.pack("<Q", 1 << 62) + bytes(8),
+}
+
+GRIDS = {
+    "count.vtu": '<VTKFile type="UnstructuredGrid"><UnstructuredGrid><Piece NumberOfPoints="4" '
+                 'NumberOfCells="281474976710656"><Points><DataArray type="Float32" NumberOfComponents="3">%s'
+                 '</DataArray></Points></Piece></UnstructuredGrid></VTKFile>' % TET,
+    "index.vtu": '<VTKFile type="UnstructuredGrid"><UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">'
+                 '<PointData><DataArray type="Float32" Name="s">0 1 2 3</DataArray></PointData>'
+                 '<Points><DataArray type="Float32" NumberOfComponents="3">%s</DataArray></Points><Cells>'
+                 '<DataArray type="Int64" Name="connectivity">0 1 2 9</DataArray>'
+                 '<DataArray type="Int64" Name="offsets">4</DataArray>'
+                 '<DataArray type="UInt8" Name="types">10</DataArray></Cells></Piece></UnstructuredGrid></VTKFile>' % TET,
+    "count.vtk": "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 1000000000000 float\n0 0 0\n",
+    "negative.vtk": "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS -4 float\n0 0 0\n",
+    "index.vtk": "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n%s\n"
+                 "CELLS 1 5\n4 0 1 2 -7\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS s float\nLOOKUP_TABLE default\n"
+                 "0 1 2 3\n" % TET,
+    "binary.vtk": b"# vtk DataFile Version 4.2\nx\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n" + bytes(20),
+}
+
+
+def hostile_volumes():
+    for name, data in VOLUMES.items():
+        path = write(name, data)
+        out = os.path.join(D, "out_" + name + ".vtp")
+        expect_refused(["contour", path, "-o", out, "--iso", "0.5", "-q"], path)
+        expect_refused(["info", path], path)
+        assert outputs_left(out) == [], outputs_left(out)
+
+
+def hostile_meshes():
+    for name, data in MESHES.items():
+        path = write(name, data)
+        expect_refused(["check", path], path)
+        expect_refused(["info", path], path)
+        for cmd in ("dual", "subdivide"):
+            out = os.path.join(D, f"out_{cmd}_{name}.vtp")
+            expect_refused([cmd, path, "-o", out, "-q"], path)
+            assert outputs_left(out) == [], outputs_left(out)
+        expect_refused(["quality", path], path)
+
+
+def hostile_grids():
+    for name, data in GRIDS.items():
+        path = write(name, data)
+        expect_refused(["info", path], path)
+        out = os.path.join(D, "out_" + name + ".vtp")
+        expect_refused(["contour", path, "-o", out, "--iso", "0.5", "-q"], path)
+        assert outputs_left(out) == [], outputs_left(out)
+
+
+def raw_dims_refused_by_name():
+    path = write("v.raw", bytes(96))
+    for dims, fragment in (((4, 0, 2), "--dims y"), ((-4, 3, 2), "--dims x"), ((BIG, BIG, BIG), "overflow"),
+                           ((BIG, BIG, 2), "file holds")):
+        expect_refused(["contour", path, "--dims", *dims, "--type", "float32", "-o", os.path.join(D, "r.vtp"),
+                        "--iso", 1], path, fragment)
+    expect_refused(["contour", path, "--dims", 4, 3, 2, "--type", "float64", "-o", os.path.join(D, "r.vtp"),
+                    "--iso", 1], path, "expected 192")
+    rc, _, _ = km("contour", path, "--dims", 4, 3, 2, "--type", "float32", "--header-bytes", -1,
+                  "-o", os.path.join(D, "r.vtp"), "--iso", 1)
+    assert rc == 2, rc
+
+
+# ---- NaN, Inf and isovalues ----------------------------------------------------------
+
+def ply_vertices(path):
+    """The vertex table of a binary little-endian PLY keymesh wrote, as rows of floats."""
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:end].decode().splitlines()
+    n = int(next(line.split()[2] for line in head if line.startswith("element vertex")))
+    props = sum(1 for line in head if line.startswith("property float"))
+    values = struct.unpack_from("<%df" % (n * props), data, end)
+    return [values[i * props:(i + 1) * props] for i in range(n)], head
+
+
+def nonfinite_samples_give_finite_meshes():
+    # A ball of distance values with NaN, +Inf and -Inf samples sprinkled in.
+    n = 12
+    values = []
+    for z in range(n):
+        for y in range(n):
+            for x in range(n):
+                d = math.sqrt((x - 5.5) ** 2 + (y - 5.5) ** 2 + (z - 5.5) ** 2)
+                k = (x * 7 + y * 3 + z) % 11
+                values.append(math.nan if k == 0 else math.inf if k == 1 else -math.inf if k == 2 else d)
+    path = write("nonfinite.raw", struct.pack("<%df" % len(values), *values))
+    for extra in ([], ["--normals", "gradient"], ["--normals", "average"], ["--curvature"], ["--coarsen"],
+                  ["--weld", "vertexweld"], ["--iso", 2.25]):
+        out = os.path.join(D, "nf.ply")
+        rc, _, err = km("contour", path, "--dims", n, n, n, "--type", "float32", "-o", out, "--iso", 3.5, *extra,
+                        "-q", "--report", out + ".json")
+        assert rc == 0, err
+        rows, head = ply_vertices(out)
+        assert len(rows) > 0 and report(out + ".json")["points"] == len(rows)
+        bad = [r for r in rows if not all(math.isfinite(v) for v in r)]
+        assert not bad, f"{extra}: {len(bad)} of {len(rows)} points with a non-finite value, e.g. {bad[0]} ({head})"
+
+
+def isovalues():
+    vti_path = os.path.join(D, "s16.vti")
+    run("generate", "sphere", "--size", 16, "-o", vti_path, "-q")
+    out = os.path.join(D, "iso.vtp")
+    for bad in ("nan", "inf", "-inf", "1e999"):
+        rc, _, err = km("contour", vti_path, "-o", out, "--iso", bad, "-q")
+        assert rc == 2 and "finite" in err, (bad, rc, err)
+        assert outputs_left(out) == []
+    # The sphere's samples run from 0 to 8 * sqrt(3): 100 and -5 lie outside.
+    for outside in (100, -5):
+        rc, _, err = km("contour", vti_path, "-o", out, "--iso", outside, "--report", out + ".json")
+        assert rc == 0, err
+        assert "warning" in err and "outside the data range" in err, err
+        r = report(out + ".json")
+        assert r["points"] == 0 and r["cells"] == 0, r
+        run("check", out)  # the empty mesh is a valid file
+
+
+# ---- degenerate meshes ---------------------------------------------------------------
+
+def degenerate_meshes_never_crash():
+    # Repeated points in a cell, a cell listed twice, three triangles on one
+    # edge, an unused point, a zero-area cell.
+    obj = ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nv 5 5 5\nv 2 0 0\n"
+           "f 1 2 3\nf 1 2 3\nf 1 2 4\nf 1 2 5\nf 1 1 2\nf 1 2 7\n")
+    path = write("degenerate.obj", obj)
+    rc, out, err = km("check", path, "--report", path + ".json")
+    assert rc == 0, err
+    r = report(path + ".json")
+    assert r["nonmanifold_edges"] >= 1 and not r["closed_manifold"], r
+    for cmd in (["quality", path], ["dual", path, "-o", os.path.join(D, "dd.vtp")],
+                ["subdivide", path, "-o", os.path.join(D, "ds.vtp")],
+                ["subdivide", path, "-o", os.path.join(D, "db.vtp"), "--scheme", "bezier"]):
+        rc, _, err = km(*cmd)
+        assert rc in (0, 1), (cmd, rc, err)
+        if rc == 1:  # a refusal is one line (e.g. bezier without normals)
+            assert len(err.strip().splitlines()) == 1 and err.startswith("keymesh"), err
+
+
+# ---- outputs -------------------------------------------------------------------------
+
+def outputs_fail_cleanly():
+    vti_path = os.path.join(D, "s24.vti")
+    run("generate", "sphere", "--size", 24, "-o", vti_path, "-q")
+    # A full device through a symlink: written in place, fails with the reason,
+    # the device stays a device.
+    if os.path.exists("/dev/full"):
+        for ext in (".vtp", ".ply", ".obj", ".stl"):
+            link = os.path.join(D, "full" + ext)
+            if not os.path.islink(link):
+                os.symlink("/dev/full", link)
+            line = expect_refused(["contour", vti_path, "-o", link, "--iso", 10.5, "-q"], link)
+            assert "No space left on device" in line, line
+            assert os.path.islink(link) and os.path.realpath(link) == "/dev/full"
+        link = os.path.join(D, "full.json")
+        if not os.path.islink(link):
+            os.symlink("/dev/full", link)
+        expect_refused(["contour", vti_path, "-o", os.path.join(D, "ok.vtp"), "--iso", 10.5, "-q", "--report", link],
+                       link, "No space left")
+        for ext in (".vti", ".nrrd", ".raw"):
+            link = os.path.join(D, "fullvol" + ext)
+            os.symlink("/dev/full", link)
+            expect_refused(["generate", "sphere", "--size", 16, "-o", link, "-q"], link, "No space left")
+        import stat
+        assert stat.S_ISCHR(os.stat("/dev/full").st_mode)
+    # An unwritable place: a directory that does not exist, a path under a file.
+    for bad in (os.path.join(D, "no", "such", "dir", "o.vtp"), os.path.join(vti_path, "o.vtp")):
+        expect_refused(["contour", vti_path, "-o", bad, "--iso", 10.5, "-q"], bad, "cannot write")
+    # A disk that fills part-way (a file-size limit): exit 1 with the reason,
+    # the old file untouched, no temporary left behind.
+    for ext in (".vtp", ".ply", ".obj", ".stl"):
+        out = write("old" + ext, "the old contents")
+        rc, _, err = km("contour", vti_path, "-o", out, "--iso", 10.5, "-q", preexec=limited(fsize=4096))
+        assert rc == 1 and out in err and "File too large" in err, (rc, err)
+        with open(out) as f:
+            assert f.read() == "the old contents"
+        assert outputs_left(out) == [os.path.basename(out)], outputs_left(out)
+    out = write("old.vti", "the old contents")
+    rc, _, err = km("generate", "sphere", "--size", 32, "-o", out, "-q", preexec=limited(fsize=4096))
+    assert rc == 1 and "File too large" in err, (rc, err)
+    with open(out) as f:
+        assert f.read() == "the old contents"
+    assert outputs_left(out) == ["old.vti"], outputs_left(out)
+
+
+check("hostile volumes: exit 1, one line naming the file, no output", hostile_volumes)
+check("hostile surface meshes: exit 1 from check, info, dual, subdivide, quality", hostile_meshes)
+check("hostile unstructured grids: exit 1 from info and contour", hostile_grids)
+check("raw --dims zero, negative, overflowing, past the file: refused by name", raw_dims_refused_by_name)
+check("NaN and Inf samples never give a non-finite point, normal or field", nonfinite_samples_give_finite_meshes)
+check("non-finite isovalue: exit 2; outside the range: empty mesh, warning, exit 0", isovalues)
+check("degenerate, repeated and non-manifold cells: handled, never a crash", degenerate_meshes_never_crash)
+check("full device, unwritable directory, file-size limit: exit 1, old file intact", outputs_fail_cleanly)
+finish()
