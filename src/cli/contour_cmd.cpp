@@ -10,11 +10,33 @@
 #include "keymesh/generate/contour_tets.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
+#include "keymesh/io/plane_source.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::cli {
 
 namespace {
+
+// "123", "64K", "256M", "2G" (powers of 1024) -> bytes.
+bool parse_size(const std::string& text, std::size_t& out) {
+  if (text.empty()) return false;
+  std::size_t pos = 0;
+  unsigned long long v = 0;
+  try {
+    v = std::stoull(text, &pos);
+  } catch (...) {
+    return false;
+  }
+  const std::string unit = text.substr(pos);
+  int shift = 0;
+  if (unit == "K" || unit == "k" || unit == "KiB") shift = 10;
+  else if (unit == "M" || unit == "MiB") shift = 20;
+  else if (unit == "G" || unit == "GiB") shift = 30;
+  else if (!unit.empty()) return false;
+  if (v > (~0ull >> shift)) return false;
+  out = static_cast<std::size_t>(v << shift);
+  return out > 0;
+}
 
 struct ContourCli {
   std::string input, output;
@@ -25,6 +47,7 @@ struct ContourCli {
   bool coarsen = false;
   bool curvature = false;
   std::string array;  // tet grids: the point field to contour
+  std::string memory_limit;  // stream the volume in slabs
   // Raw input description.
   std::vector<long long> dims;
   std::string type = "float32";
@@ -69,6 +92,9 @@ Register reg{Command{
           ->check(CLI::IsMember({"little", "big"}))->needs(dims);
       cmd.add_option("--header-bytes", o->header_bytes, "raw input: bytes to skip")->needs(dims)
           ->check(CLI::NonNegativeNumber);
+      cmd.add_option("--memory-limit", o->memory_limit,
+                     "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
+                     "the output is byte-identical; raw input (--dims) with --normals none so far");
       add_common_options(cmd, o->common);
       return [o]() {
         for (double iso : o->isovalues)
@@ -111,8 +137,31 @@ Register reg{Command{
         generate::ContourStats stats;
         SurfaceMesh mesh;
         nlohmann::json r;
-        progress.say("reading " + o->input);
-        if (!is_raw && io::is_grid_file(o->input)) {
+        if (!o->memory_limit.empty()) {
+          std::size_t limit = 0;
+          if (!parse_size(o->memory_limit, limit)) {
+            std::fprintf(stderr, "keymesh contour: --memory-limit %s is not a size (e.g. 512M, 2G)\n",
+                         o->memory_limit.c_str());
+            return 2;
+          }
+          if (!is_raw) {
+            std::fprintf(stderr, "keymesh contour: --memory-limit streams raw volumes (--dims ...) so far; "
+                                 "%s would be read whole\n", o->input.c_str());
+            return 2;
+          }
+          auto source = io::open_raw_planes(o->input, raw);
+          generate::StreamStats ss;
+          mesh = timer.run("contour", [&] { return generate::contour_streamed(*source, opt, limit, &stats, &ss); });
+          timer.add("read", ss.read);
+          r["dims"] = source->header().dims;
+          r["scalar_type"] = scalar_type_name(source->header().type);
+          r["grid"] = "voxels";
+          r["memory_limit"] = limit;
+          r["stream"] = {{"slabs", ss.slabs}, {"planes_per_slab", ss.planes_per_slab},
+                         {"slab_bytes", ss.slab_bytes}, {"read", ss.read}, {"contour", ss.contour},
+                         {"merge", ss.merge}};
+        } else if (!is_raw && io::is_grid_file(o->input)) {
+          progress.say("reading " + o->input);
           if (opt.normals == generate::ContourNormals::Gradient || opt.curvature) {
             std::fprintf(stderr, "keymesh contour: %s needs a voxel grid%s\n",
                          opt.curvature ? "--curvature" : "--normals gradient",
@@ -141,6 +190,7 @@ Register reg{Command{
           r["input_cells"] = grid.num_cells();
           r["grid"] = "tetrahedra";
         } else {
+          progress.say("reading " + o->input);
           const ImageGrid grid =
               timer.run("read", [&] { return io::read_volume(o->input, is_raw ? &raw : nullptr); });
           progress.enable_if(grid.num_points() > (1ll << 25));

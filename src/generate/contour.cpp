@@ -204,8 +204,10 @@ void average_normals(const keyreduce::Groups<K>& groups, const std::vector<Id>* 
 }
 
 template <class K, class T>
-SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st) {
-  const GridShape s = shape_of(grid);
+SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
+                          std::vector<std::uint64_t>* point_keys) {
+  GridShape s = shape_of(grid);
+  s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
   const K keys_per_iso = static_cast<K>(3 * s.n);
   const K key_range = static_cast<K>(n_iso) * keys_per_iso;
@@ -262,6 +264,18 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
   auto t0 = Clock::now();
   const Id points = groups.num_groups();
   const K* point_key = groups.unique_keys.data();
+  if (point_keys) {
+    // Global keys: the slab's edges renumbered as edges of the whole grid.
+    const std::uint64_t local_per_iso = static_cast<std::uint64_t>(keys_per_iso);
+    const std::uint64_t total_per_iso = 3ull * static_cast<std::uint64_t>(s.nxy) *
+                                        static_cast<std::uint64_t>(opt.total_planes ? opt.total_planes : s.nz);
+    const std::uint64_t shift = 3ull * static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(s.k_offset);
+    point_keys->resize(static_cast<std::size_t>(points));
+    parallel::for_each(points, [&](Id p) {
+      const std::uint64_t k = point_key[p];
+      (*point_keys)[p] = (k / local_per_iso) * total_per_iso + k % local_per_iso + shift;
+    });
+  }
   if (mesh.points.empty()) {
     mesh.points.resize(3 * points);
     parallel::for_each(points, [&](Id p) { interp.position(interp.locate(point_key[p]), &mesh.points[3 * p]); });
@@ -307,7 +321,8 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
 
 }  // namespace
 
-SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats) {
+SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
+                    std::vector<std::uint64_t>* point_keys) {
   if (options.isovalues.empty()) throw InputError("contour: no isovalue given");
   for (double iso : options.isovalues)
     if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
@@ -318,7 +333,17 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   if (static_cast<Id>(grid.byte_count()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
     throw InputError("contour: grid holds " + std::to_string(grid.byte_count()) + " bytes, dims need " +
                      std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
-  if (options.backend == Backend::Cuda) return cuda::contour(grid, options, stats);
+  if (options.backend == Backend::Cuda) {
+    if (point_keys || options.total_planes)
+      throw InputError("--backend cuda: streamed (slab) contouring is not available on the GPU yet");
+    return cuda::contour(grid, options, stats);
+  }
+  if (point_keys && options.coarsen)
+    throw InputError("contour: coarsened points have no edge keys (streamed contouring does not coarsen yet)");
+  if (options.total_planes && (options.first_plane < 0 || options.first_plane + grid.dims[2] > options.total_planes))
+    throw InputError("contour: slab planes [" + std::to_string(options.first_plane) + ", " +
+                     std::to_string(options.first_plane + grid.dims[2]) + ") lie outside the grid's " +
+                     std::to_string(options.total_planes) + " planes");
   ContourStats local;
   ContourStats& st = stats ? *stats : local;
   st = ContourStats{};
@@ -326,8 +351,8 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   return visit_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
     if (key_range <= std::numeric_limits<std::uint32_t>::max())
-      return contour_typed<std::uint32_t, T>(grid, samples, options, st);
-    return contour_typed<std::uint64_t, T>(grid, samples, options, st);
+      return contour_typed<std::uint32_t, T>(grid, samples, options, st, point_keys);
+    return contour_typed<std::uint64_t, T>(grid, samples, options, st, point_keys);
   });
 }
 

@@ -57,6 +57,12 @@ struct ContourOptions {
   // a sphere of radius r has kappa = 1/r. Point field "mean_curvature".
   // Voxel grids only.
   bool curvature = false;
+  // Voxel grids: when the grid is planes [first_plane, first_plane + nz) of
+  // a grid of total_planes planes (0: not a slab), positions use the global
+  // plane index and the keys returned through contour()'s point_keys are
+  // global edge ids of the whole grid (see contour_stream.hpp).
+  Id first_plane = 0;
+  Id total_planes = 0;
   // Unstructured grids only: the point field to contour (empty: the first
   // one-component point field). Every point field is carried, interpolated.
   std::string array;
@@ -77,6 +83,9 @@ struct ContourStats {
 // Throws InputError for an empty isovalue list, a non-finite isovalue or a
 // grid with fewer than 2 points along an axis; LimitError when the output
 // would exceed 2^32 - 1 points or triangle corners.
-SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats = nullptr);
+// point_keys, when given, receives every output point's key: its grid edge,
+// 3 * point id + axis + iso_index * 3N (N the points of the whole grid).
+SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats = nullptr,
+                    std::vector<std::uint64_t>* point_keys = nullptr);
 
 }  // namespace keymesh::generate

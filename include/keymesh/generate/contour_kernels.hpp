@@ -44,6 +44,10 @@ struct GridShape {
   Id nx, ny, nz, nxy, n;
   double origin[3], spacing[3];
   Id stride[3];
+  // When the grid is a slab of planes [k_offset, k_offset + nz) of a larger
+  // grid (streamed contouring): z positions are computed from the global
+  // plane index, so a slab gives the bits the whole grid gives.
+  Id k_offset;
 };
 
 // Position, scalar and gradient of the point on the edge named by a key.
@@ -89,7 +93,7 @@ struct EdgeInterpolator {
 
   KEYMESH_HD void position(const Point& p, float* xyz) const {
     for (int a = 0; a < 3; ++a) {
-      const double u = static_cast<double>(p.ijk[a]) + (a == p.axis ? p.t : 0.0);
+      const double u = static_cast<double>(p.ijk[a] + (a == 2 ? s.k_offset : 0)) + (a == p.axis ? p.t : 0.0);
       xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u);
     }
   }

@@ -1,0 +1,44 @@
+#pragma once
+// Out-of-core marching cubes (issue 9): the volume is read in slabs of
+// z-planes that fit a memory limit, each slab is contoured with *global* edge
+// keys (3 * point id of the whole grid + axis), and one KEY-REDUCE over the
+// slabs' points merges the points of the planes two slabs share. The merge
+// needs no spatial search and the output is byte-identical to contouring the
+// whole volume at once: the same keys give the same point order, the slabs
+// give the triangles in voxel order, and a shared plane's points are
+// computed from the same samples by both slabs.
+//
+// Supported: any scalar type, several isovalues, the interpolated scalar.
+// Refused by name for now: normals (gradients and averages read across slab
+// borders), coarsening, curvature, the GPU.
+#include <cstddef>
+#include <memory>
+
+#include "keymesh/generate/contour.hpp"
+
+namespace keymesh::generate {
+
+// Planes of a volume read on demand (x fastest, native byte order).
+class PlaneSource {
+ public:
+  virtual ~PlaneSource() = default;
+  // dims, type, spacing, origin and name of the volume; no samples.
+  virtual const ImageGrid& header() const = 0;
+  // Reads planes [first, first + count) into out (count * nx * ny samples).
+  virtual void read_planes(Id first, Id count, std::byte* out) = 0;
+};
+
+struct StreamStats {
+  Id slabs = 0;
+  Id planes_per_slab = 0;
+  std::size_t slab_bytes = 0;   // samples held at once
+  double read = 0, contour = 0, merge = 0;
+};
+
+// memory_limit: bytes for the samples held at once (at least two planes);
+// the output mesh comes on top. Throws InputError for unsupported options,
+// LimitError when two planes do not fit the limit.
+SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats* stats = nullptr, StreamStats* stream_stats = nullptr);
+
+}  // namespace keymesh::generate

@@ -1,0 +1,122 @@
+#include "keymesh/generate/contour_stream.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
+
+namespace keymesh::generate {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats* stats, StreamStats* stream_stats) {
+  if (options.normals != ContourNormals::None)
+    throw InputError("contour --memory-limit: normals read across slab borders; use --normals none for now");
+  if (options.coarsen || options.curvature)
+    throw InputError("contour --memory-limit: coarsening and curvature are not streamed yet");
+  if (options.backend != Backend::Cpu) throw InputError("contour --memory-limit: streaming runs on the CPU backend");
+  if (options.weld == ContourWeld::VertexWeld)
+    throw InputError("contour --memory-limit: VERTEX-WELD has no keys to merge slabs by; use --weld keyreduce");
+  const ImageGrid& head = source.header();
+  const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];
+  for (int a = 0; a < 3; ++a)
+    if (head.dims[a] < 2)
+      throw InputError("contour: grid has " + std::to_string(head.dims[a]) + " point(s) along axis " + "xyz"[a] +
+                       " (need at least 2)");
+  const std::size_t plane_bytes = static_cast<std::size_t>(nx * ny) * scalar_size(head.type);
+  const Id fit = static_cast<Id>(memory_limit / plane_bytes);
+  if (fit < 2)
+    throw LimitError("contour --memory-limit " + std::to_string(memory_limit) + " bytes holds fewer than two " +
+                     std::to_string(nx) + " x " + std::to_string(ny) + " planes (" + std::to_string(2 * plane_bytes) +
+                     " bytes needed)");
+  const Id planes = std::min(fit, nz);
+  const Id n_iso = static_cast<Id>(options.isovalues.size());
+  const std::uint64_t per_iso = 3ull * static_cast<std::uint64_t>(nx * ny * nz);
+
+  StreamStats ss;
+  ss.planes_per_slab = planes;
+  ss.slab_bytes = static_cast<std::size_t>(planes) * plane_bytes;
+  ContourStats total;
+  // Every slab's points (global keys, positions, scalars), one after the
+  // other, and its triangles as indices into that list, per isovalue so that
+  // the isovalues' triangles end up one after the other, as in one contour.
+  std::vector<std::uint64_t> keys;
+  std::vector<float> points, scalars;
+  std::vector<std::vector<std::uint32_t>> corners(static_cast<std::size_t>(n_iso));
+  ImageGrid slab;
+  slab.spacing = head.spacing;
+  slab.origin = head.origin;
+  slab.name = head.name;
+  ContourOptions opt = options;
+  opt.total_planes = nz;
+  for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
+    const Id count = std::min(planes, nz - k0);
+    auto t0 = Clock::now();
+    slab.allocate({nx, ny, count}, head.type);
+    source.read_planes(k0, count, slab.bytes.data());
+    ss.read += seconds_since(t0);
+    t0 = Clock::now();
+    opt.first_plane = k0;
+    std::vector<std::uint64_t> slab_keys;
+    ContourStats st;
+    const SurfaceMesh m = contour(slab, opt, &st, &slab_keys);
+    total.classify += st.classify, total.generate += st.generate, total.weld += st.weld, total.fields += st.fields;
+    total.soup_points += st.soup_points;
+    total.key_bits = st.key_bits;
+    ss.contour += seconds_since(t0);
+    const std::uint64_t base = keys.size();
+    if (base + slab_keys.size() > std::numeric_limits<std::uint32_t>::max())
+      throw LimitError("contour --memory-limit: more than 2^32 - 1 points before merging");
+    keys.insert(keys.end(), slab_keys.begin(), slab_keys.end());
+    points.insert(points.end(), m.points.begin(), m.points.end());
+    if (options.scalars) scalars.insert(scalars.end(), m.point_fields[0].values.begin(), m.point_fields[0].values.end());
+    for (Id t = 0; t < m.num_cells(); ++t) {
+      auto& dst = corners[static_cast<std::size_t>(slab_keys[m.connectivity[3 * t]] / per_iso)];
+      for (int c = 0; c < 3; ++c) dst.push_back(static_cast<std::uint32_t>(base + m.connectivity[3 * t + c]));
+    }
+    ++ss.slabs;
+  }
+  slab.bytes = {};
+
+  // KEY-REDUCE over the slabs' points: a shared plane's points appear twice,
+  // with equal bits; the first of each group stands for it.
+  auto t0 = Clock::now();
+  const Id n = static_cast<Id>(keys.size());
+  const auto g = keyreduce::partition_sort(keys.data(), n, parallel::bits_needed<std::uint64_t>(per_iso * n_iso - 1),
+                                           keyreduce::Order::Build);
+  SurfaceMesh mesh;
+  const Id unique = g.num_groups();
+  mesh.points.resize(static_cast<std::size_t>(3 * unique));
+  Field f{head.name, 1, std::vector<float>(options.scalars ? static_cast<std::size_t>(unique) : 0)};
+  parallel::for_each(unique, [&](Id p) {
+    const Id first = g.order[g.offsets[p]];
+    for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
+    if (options.scalars) f.values[p] = scalars[first];
+  });
+  if (options.scalars) mesh.point_fields.push_back(std::move(f));
+  std::size_t total_corners = 0;
+  for (const auto& c : corners) total_corners += c.size();
+  mesh.connectivity.resize(total_corners);
+  // KEY-REDUCE's index map takes every slab point to its merged point.
+  std::size_t at = 0;
+  for (const auto& c : corners) {
+    parallel::for_each(static_cast<Id>(c.size()), [&](Id i) { mesh.connectivity[at + i] = g.index_map[c[i]]; });
+    at += c.size();
+  }
+  ss.merge = seconds_since(t0);
+  if (stats) *stats = total;
+  if (stream_stats) *stream_stats = ss;
+  return mesh;
+}
+
+}  // namespace keymesh::generate
