@@ -76,7 +76,7 @@ FUZZ_FLAGS ?= -rss_limit_mb=2048 -malloc_limit_mb=256 -timeout=10 -max_len=65536
 fuzz: deps
 	@CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEYMESH_FUZZ=ON \
 	  -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_PYTHON=OFF -DKEYMESH_CUDA=OFF $(CMAKE_FLAGS) >/dev/null
-	@cmake --build build-fuzz -j $(JOBS)
+	@cmake --build build-fuzz -j $(JOBS) --target keymesh_fuzzers
 	@status=0; for src in tests/fuzz/*_fuzz.cpp; do \
 	  t=$$(basename $$src _fuzz.cpp); \
 	  mkdir -p build-fuzz/corpus/$$t build-fuzz/crashes/$$t; cp -n tests/fuzz/corpus/$$t/* build-fuzz/corpus/$$t/ 2>/dev/null; \
