@@ -23,9 +23,8 @@
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/contour_tets.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
-#include "keymesh/generate/spherical_distance.hpp"
-#include "keymesh/io/volume_io.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "bench_input.hpp"
 
 using namespace keymesh;
 
@@ -60,14 +59,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--grid must be voxel or tet5\n");
     return 2;
   }
-  ImageGrid grid;
-  try {
-    grid = file.empty() ? generate::spherical_distance(size) : io::read_volume(file);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  }
-  if (!file.empty()) size = static_cast<long long>(std::max({grid.dims[0], grid.dims[1], grid.dims[2]}));
+  const ImageGrid grid = bench::input_volume(file, size);
   UnstructuredGrid tets;
   double build = 0;
   if (grid_kind == "tet5") {

@@ -43,6 +43,13 @@ SPHERE_PAPER = {128: 149420, 256: 607388, 512: 2451212}  # the paper's Table 1, 
 RESAMPLING = "trilinear (numpy, separable, corner-aligned), float32"
 
 
+def sphere(n):
+    """The Spherical Distance field in numpy, [z, y, x], float32 (as keymesh generate sphere)."""
+    c = n // 2
+    x = np.arange(n, dtype=np.float64) - c
+    return np.sqrt(x[None, None, :] ** 2 + x[None, :, None] ** 2 + x[:, None, None] ** 2).astype(np.float32)
+
+
 def read_nrrd(path):
     """A raw-encoded, attached-header .nrrd as written by keymesh (x fastest)."""
     with open(path, "rb") as f:

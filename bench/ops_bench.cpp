@@ -21,11 +21,10 @@
 #include "keymesh/core/huge_pages.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/dual.hpp"
-#include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/generate/subdivide.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
-#include "keymesh/io/volume_io.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "bench_input.hpp"
 
 using namespace keymesh;
 
@@ -59,14 +58,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--file needs --iso\n");
     return 2;
   }
-  ImageGrid grid;
-  try {
-    grid = file.empty() ? generate::spherical_distance(size) : io::read_volume(file);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 1;
-  }
-  if (!file.empty()) size = static_cast<long long>(std::max({grid.dims[0], grid.dims[1], grid.dims[2]}));
+  const ImageGrid grid = bench::input_volume(file, size);
   if (iso < 0) iso = static_cast<double>(size / 2) - 1 + 0.001;
   SurfaceMesh surface;
   generate::ContourOptions contour_opt;

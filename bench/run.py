@@ -1,9 +1,14 @@
 #!/usr/bin/env python3
-"""`make bench`: marching cubes + weld on the paper's Spherical Distance field,
-keymesh beside its peers in one run (the paper's Table 2, structured rows).
+"""`make bench`: the paper's Tables 1-6 on this machine, keymesh beside its
+peers in one run: the Spherical Distance field (128^3, 256^3, 512^3) and the
+real datasets of bench/datasets.py (MRI head 128^3 and 256^3, the 432^3
+supernova stand-in), built at bench time from Debian packages.
 
-Writes bench/results/latest.jsonl (one JSON object per case) and prints a
-table of medians with ratios. `make bench QUICK=1` runs 128^3 and 256^3 only.
+Writes bench/results/latest.jsonl (one JSON object per case; every row has
+`dataset` and the load average when it was measured), prints the tables of
+medians with ratios, renders the pictures (docs/results/*.png) and runs
+bench/report.py, which writes docs/RESULTS.md. `make bench QUICK=1` runs
+128^3 and 256^3 only, with 3 repetitions.
 
 Every process (keymesh and the VTK peer) runs with glibc.malloc.hugetlb=1 in
 GLIBC_TUNABLES, the setting keymesh gives itself, so that neither side is
@@ -18,6 +23,8 @@ import subprocess
 import sys
 import tempfile
 import time
+
+import datasets
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SYSTEM_PYTHON = "/usr/bin/python3"
@@ -36,7 +43,32 @@ def run_json(cmd):
     if p.returncode != 0:
         sys.stderr.write(p.stderr)
         raise SystemExit(f"bench: {' '.join(cmd)} failed")
-    return [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]
+    rows = [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]
+    for r in rows:
+        r["loadavg"] = round(os.getloadavg()[0], 2)
+    return rows
+
+
+class Progress:
+    """Step counter with elapsed time, so a long run shows where it is."""
+
+    def __init__(self):
+        self.t0 = time.time()
+        self.step = 0
+
+    def __call__(self, text):
+        self.step += 1
+        el = time.time() - self.t0
+        el = int(el)
+        print(f"  [{self.step:3d} {el // 60:2d}:{el % 60:02d} load {os.getloadavg()[0]:4.1f}] {text}", flush=True)
+
+
+progress = Progress()
+
+
+def skipped(tool, reason, **kw):
+    print(f"  {tool} skipped: {reason}", flush=True)
+    return dict(bench="skipped", tool=tool, reason=reason, **kw)
 
 
 def machine():
@@ -95,52 +127,157 @@ def main():
     ap.add_argument("--reps", type=int, default=0)
     ap.add_argument("--out", default=os.path.join(HERE, "results", "latest.jsonl"))
     ap.add_argument("--summarize", action="store_true", help="only re-print the tables of --out")
+    ap.add_argument("--no-report", action="store_true", help="do not run bench/report.py at the end")
     a = ap.parse_args()
     sizes = [128, 256] if a.quick else [128, 256, 512]
+    names = ["head128", "head256"] if a.quick else ["head128", "head256", "big432"]
     if a.summarize:
         rows = [json.loads(line) for line in open(a.out)]
-        sizes = sorted({r["size"] for r in rows})
-        threads_all = max(r.get("threads", 1) for r in rows)
-        write_summary(rows, rows[0]["machine"], sizes, threads_all, a)
+        sphere = [r for r in rows if r.get("dataset", "sphere") == "sphere"]
+        sizes = sorted({r["size"] for r in sphere if "size" in r})
+        threads_all = max(r.get("threads", 1) for r in sphere)
+        write_summary(sphere, rows[0]["machine"], sizes, threads_all, a)
         return
-    reps = a.reps or (5 if a.quick else 7)
+    reps = a.reps or (3 if a.quick else 7)
+    peer_reps = a.reps or (3 if a.quick else 5)  # the slow peers (single-threaded, seconds per run)
     threads_all = os.cpu_count() or 1
     bench = os.path.join(a.build, "contour_bench")
     keymesh = os.path.join(a.build, "keymesh")
+    ops = os.path.join(a.build, "ops_bench")
+    thrust = os.path.join(a.build, "thrust_weld")
     rows = []
     info = machine()
-    print(f"keymesh bench on {info['cpu']}, {info['cores']} cores, {info['memory_gib']} GiB, {info['date']}")
-    print(f"sizes {sizes}, {reps} repetitions per case; expect about {3 if a.quick else 10} minutes", flush=True)
+    t_start, load_start = time.time(), os.getloadavg()
+    print(f"keymesh bench on {info['cpu']}, {info['cores']} cores, {info['memory_gib']} GiB, {info['date']}; "
+          f"load average {load_start[0]:.1f}")
+    print(f"sphere {sizes}, datasets {names}; {reps} repetitions per case ({peer_reps} for the slow peers); "
+          f"expect about {EXPECTED_MINUTES['quick' if a.quick else 'full']} minutes on a quiet 2-core VM "
+          f"(more under load)", flush=True)
     with tempfile.TemporaryDirectory(prefix="keymesh-bench-") as work:
         for n in sizes:
             iso = n / 2 - 1 + 0.001
-            for threads in sorted({1, threads_all}):
-                for weld, normals in (("vertexweld", "none"), ("keyreduce-sort", "none"),
-                                      ("keyreduce", "none"), ("keyreduce", "average")):
-                    print(f"  {n}^3 keymesh {weld} normals={normals} threads={threads}", flush=True)
-                    r = run_json([bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps),
-                                  "--weld", weld, "--normals", normals])[0]
-                    r["tool"] = "keymesh"
-                    rows.append(r)
-            print(f"  {n}^3 keymesh CLI (fresh process per run)", flush=True)
-            rows.append(cli_cold(keymesh, n, iso, threads_all, reps, work))
-            print(f"  {n}^3 VTK", flush=True)
+            part = []
+            part += contour_rows(bench, n, iso, threads_all, reps, None, f"{n}^3 sphere")
+            progress(f"{n}^3 keymesh CLI (fresh process per run)")
+            part.append(cli_cold(keymesh, n, iso, threads_all, reps, work))
+            progress(f"{n}^3 VTK")
             try:
-                rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
+                part += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
                                   "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps)])
-                rows.append(vtk_cold(n, iso, threads_all, reps, work))
+                part.append(vtk_cold(n, iso, threads_all, reps, work))
             except SystemExit as e:
-                print(f"  VTK peer unavailable: {e}")
-            if n <= 256:
-                rows += tet_rows(bench, keymesh, n, iso, threads_all, reps, work)
-            rows += ops_rows(os.path.join(a.build, "ops_bench"), keymesh, n, iso, threads_all, reps, work)
+                part.append(skipped("vtkFlyingEdges3D", str(e), size=n))
+            part += peer_rows(thrust, n, iso, None, threads_all, reps, peer_reps)
+            if n <= (128 if a.quick else 256):
+                part += tet_rows(bench, keymesh, n, iso, threads_all, reps, work)
+            part += ops_rows(ops, keymesh, n, iso, threads_all, reps, work, quick=a.quick)
+            for r in part:
+                r.setdefault("dataset", "sphere")
+            rows += part
+        for name in names:
+            progress(f"dataset {name}: building from Debian's files")
+            d = datasets.build(name, keymesh, work)
+            n, iso = d["size"], d["iso"]
+            part = [{"bench": "dataset", **{k: v for k, v in d.items() if k not in ("nrrd", "vti")}}]
+            # QUICK: the datasets at all threads only, 256^3 without tets and the other operations
+            part += contour_rows(bench, n, iso, threads_all, reps, d["nrrd"], name, all_only=a.quick)
+            progress(f"{name} VTK")
+            try:
+                part += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
+                                  "--file", d["vti"], "--iso", str(iso), "--threads", str(threads_all),
+                                  "--reps", str(peer_reps if n > 256 else reps)])
+            except SystemExit as e:
+                part.append(skipped("vtkFlyingEdges3D", str(e), size=n))
+            part += peer_rows(thrust, n, iso, d["nrrd"], threads_all, reps, peer_reps)
+            if n <= 128 or (n <= 256 and not a.quick):
+                part += tet_rows(bench, keymesh, n, iso, threads_all, reps, work, d, all_only=a.quick)
+            if n <= 128 or not a.quick:
+                part += ops_rows(ops, keymesh, n, iso, threads_all, reps, work, d, quick=a.quick)
+            for r in part:
+                r["dataset"] = name
+            rows += part
+        progress("pictures (Figures 8-10), rendered off-screen with VTK")
+        rows += figures(keymesh, work, "head128" if a.quick else names[-1], a.quick)
+    seconds = time.time() - t_start
+    rows.append({"bench": "run", "quick": a.quick, "seconds": round(seconds, 1), "reps": reps, "peer_reps": peer_reps,
+                 "loadavg_start": [round(x, 2) for x in load_start],
+                 "loadavg_end": [round(x, 2) for x in os.getloadavg()], "command":
+                 "make bench QUICK=1" if a.quick else "make bench"})
     for r in rows:
         r["machine"] = info
     os.makedirs(os.path.dirname(a.out), exist_ok=True)
     with open(a.out, "w") as f:
         for r in rows:
             f.write(json.dumps(r) + "\n")
-    write_summary(rows, info, sizes, threads_all, a)
+    sphere = [r for r in rows if r.get("dataset") == "sphere"]
+    write_summary(sphere, info, sizes, threads_all, a)
+    print(f"bench: {seconds / 60:.1f} minutes; load average {load_start[0]:.1f} at the start, "
+          f"{os.getloadavg()[0]:.1f} at the end")
+    if not a.no_report:
+        subprocess.run([SYSTEM_PYTHON, os.path.join(HERE, "report.py"), "--results", a.out], check=True)
+
+
+# Measured on the development VM (2 cores) under the load of other builds;
+# printed at the start so that a user knows what to expect.
+EXPECTED_MINUTES = {"quick": 3, "full": 20}
+
+
+def thread_counts(threads_all, all_only=False):
+    return [threads_all] if all_only else sorted({1, threads_all})
+
+
+def contour_rows(bench, n, iso, threads_all, reps, file, label, all_only=False):
+    """Table 2's structured rows: VERTEX-WELD, KEY-REDUCE (sort and dense
+    plans, no merge) and KEY-REDUCE averaging, at 1 thread and all threads."""
+    rows = []
+    for threads in thread_counts(threads_all, all_only):
+        for weld, normals in (("vertexweld", "none"), ("keyreduce-sort", "none"),
+                              ("keyreduce", "none"), ("keyreduce", "average")):
+            progress(f"{label} keymesh {weld} normals={normals} threads={threads}")
+            cmd = [bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps), "--weld", weld,
+                   "--normals", normals, "--iso", str(iso)]
+            r = run_json(cmd + (["--file", file] if file else []))[0]
+            r["tool"] = "keymesh"
+            rows.append(r)
+    return rows
+
+
+def peer_rows(thrust, n, iso, file, threads_all, reps, peer_reps):
+    """scikit-image marching_cubes, OpenVDB volumeToMesh and Bell's Thrust
+    VERTEX-WELD (OpenMP backend) on the same volume; each skipped with its
+    reason when it cannot run here."""
+    rows = []
+    src = ["--file", file] if file else []
+    for tool in ("skimage", "openvdb"):
+        progress(f"{n}^3 {tool}")
+        try:
+            rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "py_contour.py"), "--tool", tool,
+                              "--size", str(n), "--iso", str(iso), "--reps", str(peer_reps)] + src)
+        except SystemExit as e:
+            rows.append(skipped(tool, f"{e} (python3-skimage / python3-openvdb installed?)", size=n))
+    progress(f"{n}^3 Thrust VERTEX-WELD (OpenMP backend), threads={threads_all}")
+    if os.path.exists(thrust):
+        try:
+            rows += run_json([thrust, "--size", str(n), "--iso", str(iso), "--threads", str(threads_all),
+                              "--reps", str(reps)] + src)
+        except SystemExit as e:
+            rows.append(skipped("thrust-vertexweld", str(e), size=n))
+    else:
+        rows.append(skipped("thrust-vertexweld", f"{thrust} was not built: no Thrust headers compile with the "
+                            "OpenMP backend (install libthrust-dev)", size=n))
+    return rows
+
+
+def figures(keymesh, work, big, quick):
+    """The paper's Figures 8-10, rendered off-screen with VTK into docs/results."""
+    out = os.path.join(os.path.dirname(HERE), "docs", "results")
+    try:
+        return json.loads(subprocess.run([SYSTEM_PYTHON, os.path.join(HERE, "figures.py"), "--keymesh", keymesh,
+                                          "--work", work, "--big", big, "--out", out],
+                                         capture_output=False, stdout=subprocess.PIPE, text=True,
+                                         check=True).stdout.strip().splitlines()[-1])
+    except (subprocess.CalledProcessError, ValueError, IndexError) as e:
+        return [skipped("figures", f"bench/figures.py failed: {e}")]
 
 
 def write_summary(rows, info, sizes, threads_all, a):
@@ -153,79 +290,90 @@ def write_summary(rows, info, sizes, threads_all, a):
     print(f"\nresults: {a.out} and {md}")
 
 
-def tet_rows(bench, keymesh, n, iso, threads_all, reps, work):
+def tet_rows(bench, keymesh, n, iso, threads_all, reps, work, d=None, all_only=False):
     """Marching tetrahedra on the scheme-5 grid of the field (Table 2's
     unstructured rows): keymesh in-process, the CLI's tetrahedralize, and
-    vtkContour3DLinearGrid on keymesh's .vtu."""
+    vtkContour3DLinearGrid on keymesh's .vtu. d: a dataset of datasets.py."""
     rows = []
-    for threads in sorted({1, threads_all}):
+    label = d["dataset"] if d else f"{n}^3"
+    for threads in thread_counts(threads_all, all_only):
         for weld in ("vertexweld", "keyreduce"):
-            print(f"  {n}^3 tets keymesh {weld} threads={threads}", flush=True)
+            progress(f"{label} tets keymesh {weld} threads={threads}")
             r = run_json([bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps), "--grid", "tet5",
-                          "--weld", weld])[0]
+                          "--weld", weld, "--iso", str(iso)] + (["--file", d["nrrd"]] if d else []))[0]
             r["tool"] = "keymesh"
             rows.append(r)
-    vti, vtu = os.path.join(work, f"sphere{n}.vti"), os.path.join(work, f"tets{n}.vtu")
+    vti = d["vti"] if d else os.path.join(work, f"sphere{n}.vti")
+    vtu = os.path.join(work, f"tets{n}.vtu")
     if not os.path.exists(vti):
         subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
     rep = os.path.join(work, "tet.json")
-    print(f"  {n}^3 keymesh tetrahedralize (CLI)", flush=True)
+    progress(f"{label} keymesh tetrahedralize (CLI)")
     subprocess.run([keymesh, "tetrahedralize", vti, "-o", vtu, "-q", "--report", rep], check=True,
                    env=env_hugepages())
     tr = json.load(open(rep))
     rows.append({"bench": "tetrahedralize", "tool": "keymesh-cli", "grid": "tet5", "size": n,
                  "threads": tr["threads"], "median": tr["seconds"]["tetrahedralize"], "cells": tr["cells"],
                  "peak_rss_mib": tr["peak_rss_mib"]})
-    print(f"  {n}^3 tets VTK", flush=True)
+    progress(f"{label} tets VTK")
     try:
         rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_tet_contour.py"), "--vtu", vtu,
                           "--size", str(n), "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps)])
     except SystemExit as e:
-        print(f"  VTK peer unavailable: {e}")
+        rows.append(skipped("vtkContour3DLinearGrid", str(e), size=n, grid="tet5"))
     os.remove(vtu)
     return rows
 
 
-def ops_rows(ops, keymesh, n, iso, threads_all, reps, work):
+def ops_rows(ops, keymesh, n, iso, threads_all, reps, work, d=None, quick=False):
     """The paper's Tables 3 and 4: triangle subdivision of the sphere contour
     (KEY-REDUCE, VERTEX-WELD, vtkLinearSubdivisionFilter) and the face-centred
     tetrahedralization (KEY-REDUCE, VERTEX-WELD; up to 128^3, 49 M tets)."""
     rows = []
-    for threads in sorted({1, threads_all}):
+    label = d["dataset"] if d else f"{n}^3"
+    src = ["--iso", str(iso)] + (["--file", d["nrrd"]] if d else [])
+    # QUICK: datasets at all threads only; tet24 (data-independent, ~10 s a run
+    # at 128^3) once per weld at all threads on the sphere only
+    all_only = quick and d is not None
+    for threads in thread_counts(threads_all, all_only):
         for weld in ("vertexweld", "keyreduce"):
-            print(f"  {n}^3 subdivide {weld} threads={threads}", flush=True)
+            progress(f"{label} subdivide {weld} threads={threads}")
             r = run_json([ops, "--op", "subdivide", "--size", str(n), "--threads", str(threads), "--reps", str(reps),
-                          "--weld", weld])[0]
+                          "--weld", weld] + src)[0]
             r["tool"] = "keymesh"
             rows.append(r)
-            if n <= 128:
-                print(f"  {n}^3 tet24 {weld} threads={threads}", flush=True)
+            if n <= 128 and (not quick or (d is None and threads == threads_all)):
+                progress(f"{label} tet24 {weld} threads={threads}")
                 r = run_json([ops, "--op", "tet24", "--size", str(n), "--threads", str(threads), "--reps",
-                              str(min(reps, 3)), "--weld", weld])[0]
+                              str(1 if quick else min(reps, 3)), "--weld", weld] + src)[0]
                 r["tool"] = "keymesh"
                 rows.append(r)
-    for threads in sorted({1, threads_all}):
+    for threads in thread_counts(threads_all, all_only):
         for op in ("contour", "coarsen", "dual"):
-            print(f"  {n}^3 {op} threads={threads}", flush=True)
-            r = run_json([ops, "--op", op, "--size", str(n), "--threads", str(threads), "--reps", str(reps)])[0]
+            progress(f"{label} {op} threads={threads}")
+            r = run_json([ops, "--op", op, "--size", str(n), "--threads", str(threads), "--reps", str(reps)] + src)[0]
             r["tool"] = "keymesh"
             rows.append(r)
-    vti, vtp = os.path.join(work, f"sphere{n}.vti"), os.path.join(work, f"contour{n}.vtp")
+    vti = d["vti"] if d else os.path.join(work, f"sphere{n}.vti")
+    vtp = os.path.join(work, f"contour{n}.vtp")
     if not os.path.exists(vti):
         subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
+    if quick and d is not None:
+        return rows  # QUICK: the VTK surface peers on the sphere only
     subprocess.run([keymesh, "contour", vti, "-o", vtp, "--iso", str(iso), "--normals", "average", "-q"], check=True)
-    print(f"  {n}^3 subdivide VTK", flush=True)
+    progress(f"{label} subdivide VTK")
     try:
         rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_subdivide.py"), "--mesh", vtp,
                           "--size", str(n), "--reps", str(reps)])
     except SystemExit as e:
-        print(f"  VTK peer unavailable: {e}")
-    print(f"  {n}^3 decimation VTK", flush=True)
+        rows.append(skipped("vtkLinearSubdivisionFilter", str(e), size=n))
+    progress(f"{label} decimation VTK")
     try:
         rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_decimate.py"), "--mesh", vtp,
                           "--size", str(n), "--reps", str(reps)])
     except SystemExit as e:
-        print(f"  VTK peer unavailable: {e}")
+        rows.append(skipped("vtkBinnedDecimation", str(e), size=n))
+    os.remove(vtp)
     return rows
 
 

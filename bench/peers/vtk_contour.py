@@ -7,18 +7,17 @@ the volume is built once. VTK's SMP backend (TBB in Debian) uses --threads.
 import argparse
 import json
 import resource
+import os
 import statistics
+import sys
 import time
 
 import numpy as np
 import vtk
 from vtk.util import numpy_support as ns
 
-
-def sphere(n):
-    c = n // 2
-    x = np.arange(n, dtype=np.float64) - c
-    return np.sqrt(x[None, None, :] ** 2 + x[None, :, None] ** 2 + x[:, None, None] ** 2).astype(np.float32)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import datasets  # noqa: E402
 
 
 def main():
@@ -37,7 +36,7 @@ def main():
         reader.Update()
         img = reader.GetOutput()
     else:
-        d = sphere(a.size)
+        d = datasets.sphere(a.size)
         img = vtk.vtkImageData()
         img.SetDimensions(a.size, a.size, a.size)
         arr = ns.numpy_to_vtk(d.ravel(), deep=True)

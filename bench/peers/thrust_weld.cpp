@@ -1,0 +1,117 @@
+// Peer: Bell's Thrust VERTEX-WELD (the paper's [Bel10] baseline) on Thrust's
+// OpenMP host backend, for bench/run.py. One JSON line:
+//   thrust_weld --size 256 --threads 2 --reps 5            the Spherical Distance field
+//   thrust_weld --file VOLUME --iso V --threads 2 --reps 5 a volume file
+//
+// The triangle soup is what marching cubes writes: a position per triangle
+// corner. It is rebuilt here from keymesh's welded contour (each triangle's
+// three corners expanded to their positions), which is exactly the soup
+// keymesh's own VERTEX-WELD welds. Only the weld is timed, as in Bell's
+// example: copy the soup, sort the positions lexicographically, unique, then
+// lower_bound every corner to get the connectivity.
+#include <sys/resource.h>
+
+#include <thrust/binary_search.h>
+#include <thrust/device_vector.h>
+#include <thrust/sort.h>
+#include <thrust/tuple.h>
+#include <thrust/unique.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <omp.h>
+
+#include "keymesh/core/huge_pages.hpp"
+#include "keymesh/generate/contour.hpp"
+#include "keymesh/parallel/threads.hpp"
+#include "../bench_input.hpp"
+
+using namespace keymesh;
+
+namespace {
+struct Pos {
+  float x, y, z;
+};
+struct Less {
+  __host__ __device__ bool operator()(const Pos& a, const Pos& b) const {
+    if (a.x != b.x) return a.x < b.x;
+    if (a.y != b.y) return a.y < b.y;
+    return a.z < b.z;
+  }
+};
+struct Equal {
+  __host__ __device__ bool operator()(const Pos& a, const Pos& b) const {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+  }
+};
+}  // namespace
+
+int main(int argc, char** argv) {
+  reexec_with_huge_pages(argc, argv);
+  long long size = 256;
+  int threads = 0, reps = 5;
+  double iso = -1;
+  std::string file;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--size") size = std::atoll(argv[i + 1]);
+    else if (a == "--threads") threads = std::atoi(argv[i + 1]);
+    else if (a == "--reps") reps = std::atoi(argv[i + 1]);
+    else if (a == "--iso") iso = std::atof(argv[i + 1]);
+    else if (a == "--file") file = argv[i + 1];
+    else {
+      std::fprintf(stderr, "unknown option %s\n", a.c_str());
+      return 2;
+    }
+  }
+  if (!file.empty() && iso < 0) {
+    std::fprintf(stderr, "--file needs --iso\n");
+    return 2;
+  }
+  const int used = parallel::set_thread_count(threads);
+  omp_set_num_threads(used);
+  std::vector<float> soup;
+  {
+    const ImageGrid grid = bench::input_volume(file, size);
+    if (iso < 0) iso = static_cast<double>(size / 2) - 1 + 0.001;
+    generate::ContourOptions opt;
+    opt.isovalues = {iso};
+    opt.scalars = false;
+    const SurfaceMesh m = generate::contour(grid, opt);
+    soup.resize(m.connectivity.size() * 3);
+    for (std::size_t c = 0; c < m.connectivity.size(); ++c)
+      for (int d = 0; d < 3; ++d) soup[3 * c + d] = m.points[3 * std::size_t(m.connectivity[c]) + d];
+  }
+  const std::size_t corners = soup.size() / 3;
+  const Pos* soup_pos = reinterpret_cast<const Pos*>(soup.data());
+  std::vector<double> times;
+  std::size_t points = 0;
+  for (int r = 0; r < reps; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    thrust::device_vector<Pos> vertices(soup_pos, soup_pos + corners);
+    thrust::device_vector<Pos> input(vertices);
+    thrust::sort(vertices.begin(), vertices.end(), Less());
+    vertices.erase(thrust::unique(vertices.begin(), vertices.end(), Equal()), vertices.end());
+    thrust::device_vector<unsigned> indices(corners);
+    thrust::lower_bound(vertices.begin(), vertices.end(), input.begin(), input.end(), indices.begin(), Less());
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    points = vertices.size();
+  }
+  const double first = times.front();
+  std::sort(times.begin(), times.end());
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  std::printf(
+      "{\"bench\":\"contour\",\"tool\":\"thrust-vertexweld\",\"backend\":\"thrust-omp-%d.%d.%d\",\"grid\":\"voxel\","
+      "\"size\":%lld,\"iso\":%.6f,\"threads\":%d,\"soup_points\":%zu,\"points\":%zu,\"cells\":%zu,\"median\":%.6f,"
+      "\"min\":%.6f,\"max\":%.6f,\"first\":%.6f,\"reps\":%d,\"peak_rss_mib\":%.1f}\n",
+      THRUST_MAJOR_VERSION, THRUST_MINOR_VERSION, THRUST_SUBMINOR_VERSION, size, iso, used, corners, points,
+      corners / 3, times[times.size() / 2], times.front(), times.back(), first, reps,
+      static_cast<double>(usage.ru_maxrss) / 1024.0);
+  return 0;
+}
