@@ -134,6 +134,10 @@ class Report:
     def q(self, ds, n, **kw):
         return find(self.rows, dataset=ds, size=n, **kw)
 
+    def threads_of(self, ds, n, **kw):
+        """The thread counts measured for this case (1 and all, or all only in QUICK runs)."""
+        return [t for t in sorted({1, self.T}) if self.q(ds, n, threads=t, **kw)]
+
     def km(self, ds, n, weld="keyreduce", normals="none", threads=None, grid="voxel"):
         return self.q(ds, n, bench="contour", tool="keymesh", grid=grid, weld=weld, normals=normals,
                       threads=threads or self.T)
@@ -202,10 +206,11 @@ class Report:
         for ds, n, label in self.cases:
             pk = (kind(ds), n)
             po, pc = PAPER_T2[("openmp", "voxel")].get(pk), PAPER_T2[("cuda", "voxel")].get(pk)
-            for t in sorted({1, T}):
+            ts = self.threads_of(ds, n, bench="contour", tool="keymesh", grid="voxel")
+            for t in ts:
                 vw, srt = self.km(ds, n, "vertexweld", threads=t), self.km(ds, n, "keyreduce-sort", threads=t)
                 kr, av = self.km(ds, n, threads=t), self.km(ds, n, normals="average", threads=t)
-                body.append([label if t == 1 else "", t, ms(vw), ms(srt), ms(kr), ms(av), ratio(kr, vw),
+                body.append([label if t == ts[0] else "", t, ms(vw), ms(srt), ms(kr), ms(av), ratio(kr, vw),
                              f"{100 * (av['median'] / kr['median'] - 1):+.0f}%" if kr and av else "—",
                              mib(kr),
                              "/".join(map(str, po)) if po and t == T else "",
@@ -216,15 +221,17 @@ class Report:
         out += ["### Peers (same volume, same isovalue)", "",
                 "Ratio = peer median / keymesh KEY-REDUCE dense plan (no merge) median at "
                 f"{T} threads; above 1 means keymesh is faster. Thrust is Bell's VERTEX-WELD (sort, unique, "
-                "lower_bound of the soup's positions) on Thrust's OpenMP backend; it times the weld alone, so "
-                "it is set beside keymesh VERTEX-WELD's weld stage (`weld_s`) too. scikit-image is "
+                "lower_bound of the soup's positions) on Thrust's OpenMP backend, and vtkCleanPolyData "
+                "(tolerance 0) welds the same soup with VTK's point locator; both time the weld alone, so they "
+                "are set beside keymesh VERTEX-WELD's weld stage (`weld_s`) too. scikit-image is "
                 "single-threaded and also computes normals; OpenVDB meshes dually (a point per cut voxel, "
                 "quads counted as 2 triangles) on all cores through TBB.", ""]
         body = []
         peers = [("vtkFlyingEdges3D", "vtkFlyingEdges3D"), ("vtkMarchingCubes", "vtkMarchingCubes"),
                  ("skimage-marching_cubes", "scikit-image marching_cubes (lorensen)"),
                  ("openvdb-volumeToMesh", "OpenVDB volumeToMesh"),
-                 ("thrust-vertexweld", "Thrust VERTEX-WELD (weld only)")]
+                 ("thrust-vertexweld", "Thrust VERTEX-WELD (weld only)"),
+                 ("vtkCleanPolyData", "vtkCleanPolyData on the soup (weld only)")]
         for ds, n, label in self.cases:
             kr = self.km(ds, n)
             for tool, name in peers:
@@ -233,14 +240,16 @@ class Report:
                     p = self.q(ds, n, bench="contour", tool=tool)
                 if not p:
                     continue
-                extra = ""
-                if tool == "thrust-vertexweld":
+                extra, rat = "", ratio(kr, p)
+                if tool in ("thrust-vertexweld", "vtkCleanPolyData"):
+                    # weld only: against keymesh's weld stages (last repetition's stage times)
                     vw = self.km(ds, n, "vertexweld")
+                    if kr and kr.get("weld_s"):
+                        rat = f"{p['median'] / kr['weld_s']:.2f}× (vs KR weld stage {kr['weld_s'] * 1e3:.1f} ms)"
                     if vw:
-                        extra = (f"keymesh VW weld stage {vw['weld_s'] * 1e3:.1f} ms: "
-                                 f"{p['median'] / vw['weld_s']:.2f}×")
-                body.append([label, name, p.get("threads", 1), ms(p), f"{p['cells']:,}", mib(p),
-                             ratio(kr, p), extra])
+                        extra = (f"keymesh VERTEX-WELD weld stage {vw['weld_s'] * 1e3:.1f} ms: "
+                                 f"{p['median'] / vw['weld_s']:.2f}×; whole KR contour {ratio(kr, p)}")
+                body.append([label, name, p.get("threads", 1), ms(p), f"{p['cells']:,}", mib(p), rat, extra])
             cli, fec = self.q(ds, n, tool="keymesh-cli"), self.q(ds, n, tool="vtkFlyingEdges3D-cold")
             if cli and fec:
                 body.append([label, "one-shot: keymesh CLI `seconds.contour` vs vtkFlyingEdges3D fresh process",
@@ -257,9 +266,10 @@ class Report:
             pk = (kind(ds), n)
             po, pc = PAPER_T2[("openmp", "tet5")].get(pk), PAPER_T2[("cuda", "tet5")].get(pk)
             vt = self.q(ds, n, bench="contour", grid="tet5", tool="vtkContour3DLinearGrid")
-            for t in sorted({1, self.T}):
+            ts = self.threads_of(ds, n, bench="contour", tool="keymesh", grid="tet5")
+            for t in ts:
                 vw, k = self.km(ds, n, "vertexweld", threads=t, grid="tet5"), self.km(ds, n, threads=t, grid="tet5")
-                body.append([label if t == 1 else "", t, ms(vw), ms(k), ratio(k, vw), mib(k),
+                body.append([label if t == ts[0] else "", t, ms(vw), ms(k), ratio(k, vw), mib(k),
                              ms(vt) if t == self.T else "", ratio(k, vt) if t == self.T else "",
                              "/".join(map(str, po)) if po and t == self.T else "",
                              "/".join(map(str, pc)) if pc and t == self.T else ""])
@@ -281,10 +291,11 @@ class Report:
             pk = (kind(ds), n)
             po, pc = paper["openmp"].get(pk), paper["cuda"].get(pk)
             p = self.q(ds, n, bench=bench, tool=peer) if peer else None
-            for t in sorted({1, self.T}):
+            ts = self.threads_of(ds, n, bench=bench, tool="keymesh")
+            for t in ts:
                 vw = self.q(ds, n, bench=bench, tool="keymesh", weld="vertexweld", threads=t)
                 kr = self.q(ds, n, bench=bench, tool="keymesh", weld="keyreduce", threads=t)
-                row = [label if t == 1 else "", t, f"{kr['cells']:,}" if kr else "—", ms(vw), ms(kr), ratio(kr, vw),
+                row = [label if t == ts[0] else "", t, f"{kr['cells']:,}" if kr else "—", ms(vw), ms(kr), ratio(kr, vw),
                        mib(kr)]
                 if peer:
                     row += [ms(p) if t == self.T else "", ratio(kr, p) if t == self.T else ""]
@@ -309,12 +320,11 @@ class Report:
             p5 = PAPER_T5.get(pk)
             bd = self.q(ds, n, bench="coarsen", tool="vtkBinnedDecimation")
             qc = self.q(ds, n, bench="coarsen", tool="vtkQuadricClustering")
-            for t in sorted({1, self.T}):
+            ts = self.threads_of(ds, n, bench="coarsen", tool="keymesh")
+            for t in ts:
                 c0 = self.q(ds, n, bench="contour", tool="keymesh", threads=t, grid=None)
                 c1 = self.q(ds, n, bench="coarsen", tool="keymesh", threads=t)
-                if not c1:
-                    continue
-                body.append([label if t == 1 else "", t, ms(c0), ms(c1),
+                body.append([label if t == ts[0] else "", t, ms(c0), ms(c1),
                              f"{100 * (c1['median'] / c0['median'] - 1):+.0f}%" if c0 else "—",
                              f"{c0['cells']:,} → {c1['cells']:,}" if c0 else "—", mib(c1),
                              ms(bd) if t == self.T else "", ms(qc) if t == self.T else "",
@@ -328,11 +338,10 @@ class Report:
         body = []
         for ds, n, label in self.cases:
             p6 = PAPER_T6.get((kind(ds), n))
-            for t in sorted({1, self.T}):
+            ts = self.threads_of(ds, n, bench="dual", tool="keymesh")
+            for t in ts:
                 d = self.q(ds, n, bench="dual", tool="keymesh", threads=t)
-                if not d:
-                    continue
-                body.append([label if t == 1 else "", t, f"{d['input_cells']:,}", f"{d['cells']:,}", ms(d), mib(d),
+                body.append([label if t == ts[0] else "", t, f"{d['input_cells']:,}", f"{d['cells']:,}", ms(d), mib(d),
                              f"{p6[1]}/{p6[0]}" if p6 and t == self.T else ""])
         out += [table(["dataset", "thr", "input triangles", "dual polygons", "dual", "peak MiB",
                        "paper OpenMP/CUDA ms"], body),
@@ -385,17 +394,28 @@ class Report:
                         "median" not in r:
                     continue
                 base = None
-                if r.get("bench") == "contour" and r.get("grid") is None and r["tool"] != "keymesh-cli":
+                if r["tool"].endswith("-cold") or r["tool"] == "keymesh-cli":
+                    base = self.q(ds, n, tool="keymesh-cli") if r["tool"].endswith("-cold") else None
+                elif r.get("bench") == "contour" and r.get("grid") is None:
                     base = kr
                 elif r.get("bench") == "contour" and r.get("grid") == "tet5":
                     base = self.km(ds, n, grid="tet5")
                 elif r.get("bench") == "subdivide":
                     base = self.q(ds, n, bench="subdivide", tool="keymesh", weld="keyreduce", threads=T)
                 elif r.get("bench") == "coarsen":
-                    base = self.q(ds, n, bench="coarsen", tool="keymesh", threads=T)
-                elif r["tool"] == "vtkFlyingEdges3D-cold":
-                    base = self.q(ds, n, tool="keymesh-cli")
-                elif r["tool"] == "thrust-vertexweld":
+                    # the peers decimate a finished contour: set them beside what
+                    # coarsening adds to keymesh's contour (difference of medians)
+                    c0 = self.q(ds, n, bench="contour", tool="keymesh", threads=T, grid=None)
+                    c1 = self.q(ds, n, bench="coarsen", tool="keymesh", threads=T)
+                    if c0 and c1 and c1["median"] - c0["median"] > r["median"]:
+                        out.append(f"- {label}, coarsening: **{r['tool']}** decimates the finished contour in "
+                                   f"{r['median'] * 1e3:.1f} ms; keymesh's coarsening adds "
+                                   f"{(c1['median'] - c0['median']) * 1e3:.1f} ms to its contour (medians "
+                                   f"{c1['median'] * 1e3:.1f} − {c0['median'] * 1e3:.1f} ms, {T} threads, load "
+                                   f"{c1.get('loadavg')}); keymesh's output keeps every surface point's history "
+                                   "(fields averaged per grid point), the peers' bins do not")
+                    continue
+                elif r["tool"] in ("thrust-vertexweld", "vtkCleanPolyData"):
                     base = kr
                 if base and r["median"] < base["median"]:
                     st = ""
@@ -403,10 +423,28 @@ class Report:
                         st = (f"; keymesh stages: classify {base['classify'] * 1e3:.1f}, generate "
                               f"{base['generate'] * 1e3:.1f}, weld {base['weld_s'] * 1e3:.1f}, fields "
                               f"{base['fields'] * 1e3:.1f} ms (stage times of the last repetition)")
-                    out.append(f"- {label}, {r['bench']}: **{r['tool']}** {r['median'] * 1e3:.1f} ms against keymesh "
-                               f"{base['median'] * 1e3:.1f} ms (min {r['min'] * 1e3:.1f} vs "
-                               f"{base['min'] * 1e3:.1f}; load {base.get('loadavg', '?')} / "
-                               f"{r.get('loadavg', '?')}){st}")
+                    one = self.q(ds, n, bench=base.get("bench"), tool="keymesh", grid=base.get("grid"),
+                                 weld=base.get("weld"), normals=base.get("normals"), threads=1) \
+                        if base.get("tool") == "keymesh" and T > 1 else None
+                    one_s = (f"; keymesh at 1 thread {one['median'] * 1e3:.1f} ms"
+                             if one and base.get("threads") != 1 else "")
+                    out.append(f"- {label}, {r['bench']}: **{r['tool']}** ({r.get('threads', 1)} thr) "
+                               f"{r['median'] * 1e3:.1f} ms against keymesh {base['median'] * 1e3:.1f} ms at "
+                               f"{base.get('threads', T)} thr (min {r['min'] * 1e3:.1f} vs {base['min'] * 1e3:.1f}; "
+                               f"load {base.get('loadavg', '?')} / {r.get('loadavg', '?')}){one_s}{st}")
+        for ds, n, label in self.cases:
+            act = self.km(ds, n)
+            pas = self.q(ds, n, bench="contour", tool="keymesh", weld="keyreduce-passive")
+            one = self.km(ds, n, threads=1)
+            if act and pas:
+                out.append(f"- {label}, contour at {T} threads with libgomp's default waiting (threads spin at "
+                           f"barriers) {act['median'] * 1e3:.1f} ms (min {act['min'] * 1e3:.1f}), with "
+                           f"`OMP_WAIT_POLICY=passive` {pas['median'] * 1e3:.1f} ms (min {pas['min'] * 1e3:.1f}), "
+                           f"at 1 thread {one['median'] * 1e3:.1f} ms (load {act.get('loadavg')} / "
+                           f"{pas.get('loadavg')}). keymesh splits every parallel step into fixed chunks, one per "
+                           "thread, and waits at a barrier for the slowest; when other processes hold a core, "
+                           "the waiting thread spins and the descheduled one finishes late. VTK's TBB backend "
+                           "steals work instead. On a quiet machine the default is the faster one.")
         head = ["## Where keymesh loses", "",
                 "Cases in this run where a peer's median is below keymesh's at the same thread count "
                 "(keymesh at all threads; peers as noted above). Listed from the results file, with keymesh's "

@@ -38,8 +38,10 @@ def env_hugepages():
     return env
 
 
-def run_json(cmd):
-    p = subprocess.run(cmd, capture_output=True, text=True, env=env_hugepages())
+def run_json(cmd, extra_env=None):
+    env = env_hugepages()
+    env.update(extra_env or {})
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
         sys.stderr.write(p.stderr)
         raise SystemExit(f"bench: {' '.join(cmd)} failed")
@@ -103,7 +105,7 @@ def cli_cold(keymesh, size, iso, threads, reps, workdir):
     return {"bench": "contour", "tool": "keymesh-cli", "size": size, "iso": iso, "threads": threads,
             "weld": "keyreduce", "normals": "none", "points": points, "cells": cells,
             "median": statistics.median(times), "min": min(times), "max": max(times), "reps": reps,
-            "peak_rss_mib": rss}
+            "peak_rss_mib": rss, "loadavg": round(os.getloadavg()[0], 2)}
 
 
 def vtk_cold(size, iso, threads, reps, workdir):
@@ -158,12 +160,22 @@ def main():
             iso = n / 2 - 1 + 0.001
             part = []
             part += contour_rows(bench, n, iso, threads_all, reps, None, f"{n}^3 sphere")
+            if n == sizes[-1] and threads_all > 1:
+                # libgomp's threads spin at barriers (OMP_WAIT_POLICY unset):
+                # on a loaded VM a spinning thread holds a core the other needs.
+                # The same case with passive waiting, to show what that costs.
+                progress(f"{n}^3 sphere keymesh keyreduce threads={threads_all} OMP_WAIT_POLICY=passive")
+                r = run_json([bench, "--size", str(n), "--threads", str(threads_all), "--reps", str(reps),
+                              "--iso", str(iso)], {"OMP_WAIT_POLICY": "passive"})[0]
+                r.update(tool="keymesh", weld="keyreduce-passive")
+                part.append(r)
             progress(f"{n}^3 keymesh CLI (fresh process per run)")
             part.append(cli_cold(keymesh, n, iso, threads_all, reps, work))
             progress(f"{n}^3 VTK")
             try:
                 part += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
-                                  "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps)])
+                                  "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps),
+                                  "--filters", VTK_CONTOUR_PEERS])
                 part.append(vtk_cold(n, iso, threads_all, reps, work))
             except SystemExit as e:
                 part.append(skipped("vtkFlyingEdges3D", str(e), size=n))
@@ -185,7 +197,7 @@ def main():
             try:
                 part += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
                                   "--file", d["vti"], "--iso", str(iso), "--threads", str(threads_all),
-                                  "--reps", str(peer_reps if n > 256 else reps)])
+                                  "--reps", str(peer_reps if n > 256 else reps), "--filters", VTK_CONTOUR_PEERS])
             except SystemExit as e:
                 part.append(skipped("vtkFlyingEdges3D", str(e), size=n))
             part += peer_rows(thrust, n, iso, d["nrrd"], threads_all, reps, peer_reps)
@@ -216,6 +228,9 @@ def main():
     if not a.no_report:
         subprocess.run([SYSTEM_PYTHON, os.path.join(HERE, "report.py"), "--results", a.out], check=True)
 
+
+# VTK's contour filters, and vtkCleanPolyData welding the contour's soup (VTK's VERTEX-WELD)
+VTK_CONTOUR_PEERS = "vtkFlyingEdges3D,vtkMarchingCubes,vtkCleanPolyData"
 
 # Measured on the development VM (2 cores) under the load of other builds;
 # printed at the start so that a user knows what to expect.
