@@ -237,9 +237,39 @@ ImageGrid read_nrrd(const std::string& path) {
     if (!std::filesystem::is_regular_file(data_path, ec))
       throw InputError(path + ": NRRD data file '" + data_path + "' is not a readable file");
   }
-  if (const std::string* skip = get("byte skip")) {
-    const double v = parse_number(path, "byte skip", *skip);
-    if (v < 0 || v != std::floor(v)) throw InputError(path + ": NRRD byte skip " + *skip + " is not supported");
+  // Skips before the data: whole lines, then bytes, in the data file. With
+  // gzip, teem applies them to the decompressed stream: not supported (a
+  // silent offset would read garbage).
+  const std::string* line_skip = get("line skip");
+  if (!line_skip) line_skip = get("lineskip");
+  const std::string* byte_skip = get("byte skip");
+  if (!byte_skip) byte_skip = get("byteskip");
+  if (encoding != "raw" && ((line_skip && parse_number(path, "line skip", *line_skip) != 0) ||
+                            (byte_skip && parse_number(path, "byte skip", *byte_skip) != 0)))
+    throw InputError(path + ": NRRD line skip / byte skip with " + encoding + " encoding is not supported");
+  if (line_skip) {
+    const double v = parse_number(path, "line skip", *line_skip);
+    if (v < 0 || v != std::floor(v) || v > 1e12) throw InputError(path + ": NRRD line skip " + *line_skip + " is not supported");
+    std::FILE* d = std::fopen(data_path.c_str(), "rb");
+    if (!d || fseeko(d, static_cast<off_t>(data_offset), SEEK_SET) != 0) {
+      if (d) std::fclose(d);
+      throw InputError(path + ": cannot read the NRRD data file '" + data_path + "'");
+    }
+    for (double lines = 0; lines < v;) {
+      const int c = std::fgetc(d);
+      if (c == EOF) {
+        std::fclose(d);
+        throw InputError(path + ": NRRD line skip " + *line_skip + " passes the end of '" + data_path + "'");
+      }
+      ++data_offset;
+      if (c == '\n') ++lines;
+    }
+    std::fclose(d);
+  }
+  if (byte_skip) {
+    const double v = parse_number(path, "byte skip", *byte_skip);
+    if (v < 0 || v != std::floor(v) || v > 9.0e15)
+      throw InputError(path + ": NRRD byte skip " + *byte_skip + " is not supported");
     data_offset += static_cast<std::uint64_t>(v);
   }
   ImageGrid grid;

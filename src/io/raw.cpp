@@ -77,9 +77,9 @@ std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::u
                                        const std::string& path, const std::string& what, bool allow_plain) {
   gzFile gz = static_cast<gzFile>(gz_file);
   std::vector<std::byte> out;
-  // Typical volumes compress 2-10:1; a first guess of 4x (plus 4 MiB) takes
-  // one allocation for most, and doubling covers the rest.
-  const std::uint64_t guess = compressed_bytes > (std::uint64_t{1} << 60) / 4 ? size : 4 * compressed_bytes + (4u << 20);
+  // Typical volumes compress 2-10:1; a first guess of 4x (plus 64 KiB) takes
+  // one allocation for many, and doubling covers the rest.
+  const std::uint64_t guess = compressed_bytes > (std::uint64_t{1} << 60) / 4 ? size : 4 * compressed_bytes + (64u << 10);
   std::uint64_t done = 0;
   while (done < size) {
     if (done == out.size()) {

@@ -296,6 +296,15 @@ def isovalues():
         r = report(out + ".json")
         assert r["points"] == 0 and r["cells"] == 0, r
         run("check", out)  # the empty mesh is a valid file
+    # The same on tetrahedra (marching tetrahedra).
+    tets = os.path.join(D, "t16.vtu")
+    run("tetrahedralize", vti_path, "-o", tets, "--scheme", 5, "-q")
+    for bad in ("nan", "-inf"):
+        rc, _, err = km("contour", tets, "-o", out, "--iso", bad, "-q")
+        assert rc == 2 and "finite" in err, (bad, rc, err)
+    rc, _, err = km("contour", tets, "-o", out, "--iso", 100, "--report", out + ".json")
+    assert rc == 0 and "outside the data range" in err, err
+    assert report(out + ".json")["points"] == 0
 
 
 # ---- degenerate meshes ---------------------------------------------------------------

@@ -365,6 +365,15 @@ TEST_F(VolumeIo, NrrdDetachedRawAndGzip) {
   const std::string abs = file("a.nhdr", "NRRD0005\ntype: short\ndimension: 3\nsizes: 4 3 2\nencoding: raw\n"
                                          "byte skip: 10\ndata file: " + path("skip.raw"));
   expect_samples<std::int16_t>(read_volume(abs));
+  // Line skip then byte skip in the data file.
+  file("lines.raw", "first line\nsecond\nXY" + sample_bytes<float>());
+  const std::string lines = file("l.nhdr", nrrd_header("float", "encoding: raw\nline skip: 2\nbyte skip: 2\n"
+                                                                "data file: lines.raw"));
+  expect_samples<float>(read_volume(lines));
+  expect_refused_read(file("l2.nhdr", nrrd_header("float", "encoding: raw\nline skip: 3\ndata file: lines.raw")),
+                      "line skip");
+  expect_refused_read(file("l3.nhdr", nrrd_header("float", "encoding: gzip\nbyte skip: 4\ndata file: lines.raw")),
+                      "not supported");
 }
 
 TEST_F(VolumeIo, NrrdLeadingScalarAxisAndComments) {
