@@ -323,7 +323,9 @@ TEST_F(VolumeIo, NrrdAttachedRawEveryType) {
       {"uchar", ScalarType::UInt8},  {"signed char", ScalarType::Int8}, {"unsigned short", ScalarType::UInt16},
       {"short", ScalarType::Int16},  {"int", ScalarType::Int32},        {"float", ScalarType::Float32},
       {"double", ScalarType::Float64}};
-  for (const auto& [name, type] : names) {
+  for (const auto& entry : names) {
+    const std::string name = entry.first;  // (clang 14 cannot capture structured bindings)
+    const ScalarType type = entry.second;
     SCOPED_TRACE(name);
     for_each_type([&](auto tag, ScalarType t) {
       using T = decltype(tag);
@@ -477,7 +479,9 @@ TEST_F(VolumeIo, NiftiEveryDatatypeBothByteOrders) {
                                                        {512, ScalarType::UInt16}, {4, ScalarType::Int16},
                                                        {8, ScalarType::Int32},    {16, ScalarType::Float32},
                                                        {64, ScalarType::Float64}};
-  for (const auto& [code, type] : types) {
+  for (const auto& entry : types) {
+    const std::int16_t code = entry.first;
+    const ScalarType type = entry.second;
     for_each_type([&](auto tag, ScalarType t) {
       using T = decltype(tag);
       if (t != type) return;
