@@ -118,8 +118,9 @@ def table(head, body):
 
 
 class Report:
-    def __init__(self, rows):
+    def __init__(self, rows, results):
         self.rows = rows
+        self.results = results
         self.run = find(rows, bench="run") or {}
         self.machine = rows[0].get("machine", {})
         self.T = max((r.get("threads", 1) for r in rows if r.get("tool") == "keymesh"), default=1)
@@ -149,7 +150,7 @@ class Report:
         return [
             "# keymesh benchmark results",
             "",
-            "Written by `bench/report.py` from `bench/results/latest.jsonl`, the output of "
+            f"Written by `bench/report.py` from `{os.path.relpath(self.results, ROOT)}`, the output of "
             f"`{run.get('command', 'make bench')}`. Every measured figure below comes from that one run; "
             "figures labelled *paper* are quoted from Miller, Moreland and Ma (EGPGV 2014), measured on "
             f"their machine: {PAPER_MACHINE}. Paper quotes {check_paper()}.",
@@ -160,16 +161,31 @@ class Report:
             f"- **Compiler:** {m.get('compiler')}; Linux {m.get('kernel')}",
             f"- **Date:** {m.get('date')}; **command:** `{run.get('command')}`; **duration:** "
             f"{run.get('seconds', 0) / 60:.1f} min",
+            *self.durations(),
             f"- **Load average** (1 min) {la0} at the start, {la1} at the end; each row of "
             "`latest.jsonl` carries the load average when it was measured (`loadavg`). The VM is shared: "
             "other processes (compilers) compete for its 2 cores, so absolute times vary between runs "
             "and min–max spreads are wide; read ratios measured side by side, and minima beside medians.",
-            f"- **Repetitions:** {run.get('reps')} per case ({run.get('peer_reps')} for scikit-image, OpenVDB "
-            "and VTK on the 432³ case); medians, with (min–max) in ms. Peak memory is the process's "
+            f"- **Repetitions:** {run.get('reps')} per case ({run.get('peer_reps')} for scikit-image and OpenVDB, "
+            "and for VTK's contour filters on the 432³ case; 3 for tet24, 1 in QUICK runs); medians, with "
+            "(min–max) in ms; stage times (classify, generate, weld, fields) are the last repetition's. Peak memory is the process's "
             "peak RSS (MiB), for peers the whole Python process including the interpreter and VTK.",
             f"- keymesh and Thrust run with `GLIBC_TUNABLES=glibc.malloc.hugetlb=1`, as do the VTK peers.",
             "",
         ]
+
+    def durations(self):
+        """Today's run durations, from bench/results/durations.jsonl (run.py appends one line per run)."""
+        path = os.path.join(os.path.dirname(self.results), "durations.jsonl")
+        if not os.path.exists(path):
+            return []
+        today = [json.loads(line) for line in open(path) if line.strip()]
+        today = [d for d in today if d.get("date") == self.machine.get("date")]
+        if not today:
+            return []
+        return ["- **Run durations today** (`bench/results/durations.jsonl`): " + "; ".join(
+            f"`{d['command']}` at {d['time']}: {d['seconds'] / 60:.1f} min (load {d['loadavg_start'][0]:.1f} → "
+            f"{d['loadavg_end'][0]:.1f})" for d in today)]
 
     def table1(self):
         body = []
@@ -505,6 +521,8 @@ class Report:
         fig, ax = plt.subplots(figsize=(7, 4.5))
         series = [("keymesh KEY-REDUCE", dict(bench="contour", tool="keymesh", grid="voxel", weld="keyreduce",
                                               normals="none", threads=T), "o-"),
+                  ("keymesh KEY-REDUCE, 1 thread", dict(bench="contour", tool="keymesh", grid="voxel",
+                                                        weld="keyreduce", normals="none", threads=1), "o:"),
                   ("keymesh VERTEX-WELD", dict(bench="contour", tool="keymesh", grid="voxel", weld="vertexweld",
                                                threads=T), "s--"),
                   ("vtkFlyingEdges3D", dict(bench="contour", tool="vtkFlyingEdges3D", grid=None), "^-"),
@@ -609,7 +627,7 @@ def main():
     rows = [json.loads(line) for line in open(a.results)]
     if not rows:
         sys.exit("report.py: no results")
-    print(f"report: {Report(rows).write(a.out, a.plots)}")
+    print(f"report: {Report(rows, a.results).write(a.out, a.plots)}")
 
 
 if __name__ == "__main__":

@@ -153,8 +153,8 @@ def main():
     print(f"keymesh bench on {info['cpu']}, {info['cores']} cores, {info['memory_gib']} GiB, {info['date']}; "
           f"load average {load_start[0]:.1f}")
     print(f"sphere {sizes}, datasets {names}; {reps} repetitions per case ({peer_reps} for the slow peers); "
-          f"expect about {EXPECTED_MINUTES['quick' if a.quick else 'full']} minutes on a quiet 2-core VM "
-          f"(more under load)", flush=True)
+          f"expect about {EXPECTED_MINUTES['quick' if a.quick else 'full']} minutes on a 2-core VM "
+          f"(measured under load 4-5)", flush=True)
     with tempfile.TemporaryDirectory(prefix="keymesh-bench-") as work:
         for n in sizes:
             iso = n / 2 - 1 + 0.001
@@ -221,6 +221,10 @@ def main():
     with open(a.out, "w") as f:
         for r in rows:
             f.write(json.dumps(r) + "\n")
+    # every run's duration, kept across runs (report.py lists today's)
+    with open(os.path.join(os.path.dirname(a.out), "durations.jsonl"), "a") as f:
+        f.write(json.dumps({k: rows[-1][k] for k in ("command", "seconds", "loadavg_start", "loadavg_end")} |
+                           {"date": info["date"], "time": time.strftime("%H:%M")}) + "\n")
     sphere = [r for r in rows if r.get("dataset") == "sphere"]
     write_summary(sphere, info, sizes, threads_all, a)
     print(f"bench: {seconds / 60:.1f} minutes; load average {load_start[0]:.1f} at the start, "
@@ -232,9 +236,10 @@ def main():
 # VTK's contour filters, and vtkCleanPolyData welding the contour's soup (VTK's VERTEX-WELD)
 VTK_CONTOUR_PEERS = "vtkFlyingEdges3D,vtkMarchingCubes,vtkCleanPolyData"
 
-# Measured on the development VM (2 cores) under the load of other builds;
-# printed at the start so that a user knows what to expect.
-EXPECTED_MINUTES = {"quick": 3, "full": 20}
+# Measured on the development VM (2 cores) on 2026-11-23 under the load of
+# other builds (load average 4-5): full 17.5 min, QUICK 2.1 min, plus the
+# build; printed at the start so that a user knows what to expect.
+EXPECTED_MINUTES = {"quick": 2, "full": 18}
 
 
 def thread_counts(threads_all, all_only=False):
