@@ -132,3 +132,14 @@ def build(name, keymesh, work):
 def load(desc):
     """The float32 volume [z, y, x] of a built dataset (for skimage, OpenVDB)."""
     return read_nrrd(desc["nrrd"])
+
+
+if __name__ == "__main__":
+    # python3 datasets.py NAME KEYMESH WORK: builds one dataset, prints its
+    # description as JSON. bench/run.py builds in this separate process so
+    # that its own peak RSS stays small: a child inherits its parent's peak
+    # RSS high-water mark through fork and exec, which would otherwise show in
+    # every benchmark program's getrusage() peak.
+    import json
+    import sys
+    print(json.dumps(build(sys.argv[1], sys.argv[2], sys.argv[3])))

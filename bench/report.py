@@ -107,8 +107,15 @@ def ratio(a, b):
     return f"{b['median'] / a['median']:.2f}×"
 
 
+RSS_CLEAN = True  # False for results of a run.py that built the datasets in its own process
+
+
 def mib(r):
-    return f"{r['peak_rss_mib']:.0f}" if r and "peak_rss_mib" in r else "—"
+    if not r or "peak_rss_mib" not in r:
+        return "—"
+    if not RSS_CLEAN and r.get("dataset", "sphere") != "sphere":
+        return "n/a"
+    return f"{r['peak_rss_mib']:.0f}"
 
 
 def table(head, body):
@@ -122,6 +129,8 @@ class Report:
         self.rows = rows
         self.results = results
         self.run = find(rows, bench="run") or {}
+        global RSS_CLEAN
+        RSS_CLEAN = bool(self.run.get("rss_clean"))
         self.machine = rows[0].get("machine", {})
         self.T = max((r.get("threads", 1) for r in rows if r.get("tool") == "keymesh"), default=1)
         self.cases = []  # (dataset, size, label) in order
@@ -170,6 +179,12 @@ class Report:
             "and for VTK's contour filters on the 432³ case; 3 for tet24, 1 in QUICK runs); medians, with "
             "(min–max) in ms; stage times (classify, generate, weld, fields) are the last repetition's. Peak memory is the process's "
             "peak RSS (MiB), for peers the whole Python process including the interpreter and VTK.",
+            *([] if RSS_CLEAN else [
+                "- **Peak memory of the MRI rows is not reported (n/a)** for this run: bench/run.py resampled "
+                "those volumes in its own process, and a child inherits its parent's peak-RSS high-water mark "
+                "through fork and exec, so every program measured after that reported run.py's peak (1227 MiB "
+                "for every 432³ row). Fixed since (datasets built in a separate process); the sphere rows ran "
+                "before any dataset was built and are unaffected."]),
             f"- keymesh and Thrust run with `GLIBC_TUNABLES=glibc.malloc.hugetlb=1`, as do the VTK peers.",
             "",
         ]
