@@ -14,7 +14,9 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev zlib1g-dev \
   python3 python3-numpy python3-vtk9 libvolpack1-dev mricron-data \
   pybind11-dev python3-dev python3-pytest python3-skimage python3-meshio \
-  clang-14 libfuzzer-14-dev libclang-rt-14-dev
+  clang-14 libfuzzer-14-dev libclang-rt-14-dev libopenmpi-dev openmpi-bin
+# and those `make bench` adds for its peers, plots and pictures.
+BENCH_PACKAGES = libthrust-dev libtbb-dev python3-openvdb python3-matplotlib xvfb
 
 .PHONY: all deps build demo test bench clean sanitize fuzz
 
@@ -23,7 +25,7 @@ all: build
 # Installs the missing Debian packages when run as root, otherwise says which
 # ones to install.
 deps:
-	@missing=""; for p in $(DEBIAN_PACKAGES); do \
+	@missing=""; for p in $(DEBIAN_PACKAGES) $(EXTRA_PACKAGES); do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
@@ -46,6 +48,7 @@ demo: build
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+bench: EXTRA_PACKAGES = $(BENCH_PACKAGES)
 bench: build
 	@$(PYTHON) bench/run.py --build $(BUILD_DIR) $(if $(QUICK),--quick,)
 
@@ -56,7 +59,7 @@ bench: build
 SANITIZE_CMAKE = -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEYMESH_PYTHON=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_CUDA=OFF
 TSAN_FILTER ?= *Threads*:ExclusiveScan*:BitsNeeded*:Contour*:ContourTets*:Tetrahedralize*:Subdivide*:Coarsen*:Dual*:Curvature*:Incidence*:TopologyTest*
 SANITIZER_ENV = KEYMESH_HUGE_PAGES=0 ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
-  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:ignore_noninstrumented_modules=1 \
   OMP_TOOL_LIBRARIES=/usr/lib/llvm-14/lib/libarcher.so
 
 sanitize: deps

@@ -8,6 +8,8 @@
 #include "keymesh/analyze/topology.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/contour_tets.hpp"
+#include "contour_distributed.hpp"
+#include "keymesh/distributed/mpi.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/plane_source.hpp"
@@ -48,6 +50,7 @@ struct ContourCli {
   bool curvature = false;
   std::string array;  // tet grids: the point field to contour
   std::string memory_limit;  // stream the volume in slabs
+  bool gather = false;       // under mpirun: one file from rank 0
   // Raw input description.
   std::vector<long long> dims;
   std::string type = "float32";
@@ -66,7 +69,7 @@ Register reg{Command{
                      "or a tetrahedral grid: .vtu, .vtk (UNSTRUCTURED_GRID)")
           ->required();
       cmd.add_option("--array", o->array, "tet grids: the point field to contour (default: the first scalar field)");
-      cmd.add_option("-o,--output", o->output, "output mesh (.vtp .ply .obj .stl)")->required();
+      cmd.add_option("-o,--output", o->output, "output mesh (.vtp .ply .obj .stl; under mpirun also .pvtp: one piece per rank)")->required();
       cmd.add_option("--iso", o->isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
       cmd.add_option("--weld", o->weld,
                      "how to connect the soup: keyreduce (edge keys, dense plan: direct addressing; default), "
@@ -95,6 +98,9 @@ Register reg{Command{
       cmd.add_option("--memory-limit", o->memory_limit,
                      "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
                      "the output is byte-identical; raw input (--dims) with --normals none so far");
+      cmd.add_flag("--gather", o->gather,
+                   "under mpirun: gather the whole mesh on rank 0 into one file (the default unless OUT is .pvtp, "
+                   "which writes one OUT_<rank>.vtp piece per rank with GlobalPointIds)");
       add_common_options(cmd, o->common);
       return [o]() {
         for (double iso : o->isovalues)
@@ -137,6 +143,33 @@ Register reg{Command{
         generate::ContourStats stats;
         SurfaceMesh mesh;
         nlohmann::json r;
+        if (distributed::size() > 1 || (distributed::launched_by_mpi() && is_raw && o->memory_limit.empty())) {
+          // mpirun -np P keymesh contour RAW ...: each rank reads its slab.
+          if (!is_raw) {
+            if (distributed::rank() == 0)
+              std::fprintf(stderr, "keymesh contour: under mpirun each rank reads its slab of a raw volume "
+                                   "(--dims ...); %s would be read whole by every rank\n", o->input.c_str());
+            return 2;
+          }
+          if (!o->memory_limit.empty()) {
+            if (distributed::rank() == 0)
+              std::fprintf(stderr, "keymesh contour: --memory-limit is for one process; under mpirun each rank "
+                                   "holds only its slab\n");
+            return 2;
+          }
+          DistributedContourJob job;
+          job.input = o->input;
+          job.output = o->output;
+          job.report_path = o->common.report_path;
+          job.raw = raw;
+          job.options = opt;
+          job.gather = o->gather;
+          job.quiet = o->common.quiet;
+          job.threads = threads;
+          job.weld = o->weld;
+          job.normals = o->normals;
+          return run_distributed_contour(job);
+        }
         if (!o->memory_limit.empty()) {
           std::size_t limit = 0;
           if (!parse_size(o->memory_limit, limit)) {

@@ -8,9 +8,15 @@
 
 #include "command.hpp"
 #include "keymesh/core/huge_pages.hpp"
+#include "keymesh/distributed/mpi.hpp"
 
 int main(int argc, char** argv) {
   keymesh::reexec_with_huge_pages(argc, argv);
+  // Under mpirun: MPI for the whole run (a no-op otherwise).
+  keymesh::distributed::init(&argc, &argv);
+  struct Finalize {
+    ~Finalize() { keymesh::distributed::finalize(); }
+  } finalize;
   CLI::App app{"keymesh: turns triangle soup from threaded mesh generators into connected meshes\n"
                "by keying every generated element on the input element that produced it."};
   app.require_subcommand(1);
@@ -33,15 +39,34 @@ int main(int argc, char** argv) {
     app.exit(e);
     return 2;
   }
+  namespace dist = keymesh::distributed;
+  if (dist::launched_size() > 1 && !dist::compiled()) {
+    std::fprintf(stderr, "keymesh: started by mpirun with %d ranks, but this keymesh was built without MPI "
+                         "(install libopenmpi-dev and rebuild)\n", dist::launched_size());
+    return 2;
+  }
   try {
     for (auto& [sub, run] : runners)
-      if (sub->parsed()) return run();
+      if (sub->parsed()) {
+        // Only the voxel contour is distributed; the other operations would
+        // each run whole on every rank and race on the output.
+        if (dist::size() > 1 && sub->get_name() != "contour") {
+          if (dist::rank() == 0)
+            std::fprintf(stderr, "keymesh %s: not distributed; under mpirun -np %d only `contour` of a raw volume "
+                                 "runs on several ranks (run %s as one process)\n",
+                         sub->get_name().c_str(), dist::size(), sub->get_name().c_str());
+          return 2;
+        }
+        return run();
+      }
     return 2;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "keymesh: out of memory\n");
+    if (keymesh::distributed::size() > 1) keymesh::distributed::abort_all(1);  // the other ranks wait on us
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "keymesh: %s\n", e.what());
+    if (keymesh::distributed::size() > 1) keymesh::distributed::abort_all(1);
     return 1;
   }
 }

@@ -178,17 +178,33 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path) {
   return mesh;
 }
 
-void write_vtp(const SurfaceMesh& mesh, const std::string& path) {
-  validate_mesh(mesh, path);
-  const Id n = mesh.num_points();
-  const Id cells = mesh.num_cells();
-  const Field* normals = normals_field(mesh);
-  const Field* scalars = nullptr;
+namespace {
+
+// The attributes of <PointData>/<PPointData>: the first 1-component field as
+// Scalars, "Normals" as Normals, the global ids of a piece as GlobalIds.
+std::string point_data_attributes(const SurfaceMesh& mesh, bool global_point_ids) {
+  std::string a;
   for (const Field& f : mesh.point_fields)
     if (f.components == 1) {
-      scalars = &f;
+      a += " Scalars=\"" + xml_escape(f.name) + "\"";
       break;
     }
+  if (normals_field(mesh)) a += " Normals=\"Normals\"";
+  if (global_point_ids) a += " GlobalIds=\"GlobalPointIds\"";
+  return a;
+}
+
+}  // namespace
+
+void write_vtp(const SurfaceMesh& mesh, const std::string& path) { write_vtp(mesh, path, nullptr); }
+
+void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids) {
+  validate_mesh(mesh, path);
+  if (global_point_ids && global_point_ids->size() != static_cast<std::size_t>(mesh.num_points()))
+    throw InputError(path + ": " + std::to_string(global_point_ids->size()) + " global point ids for " +
+                     std::to_string(mesh.num_points()) + " points");
+  const Id n = mesh.num_points();
+  const Id cells = mesh.num_cells();
 
   // Appended blocks in file order: point fields, points, connectivity, offsets.
   std::uint64_t offset = 0;
@@ -202,13 +218,13 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path) {
   x += "  <PolyData>\n";
   x += "    <Piece NumberOfPoints=\"" + std::to_string(n) +
        "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" + std::to_string(cells) + "\">\n";
-  x += "      <PointData";
-  if (scalars) x += " Scalars=\"" + xml_escape(scalars->name) + "\"";
-  if (normals) x += " Normals=\"Normals\"";
-  x += ">\n";
+  x += "      <PointData" + point_data_attributes(mesh, global_point_ids != nullptr) + ">\n";
   for (const Field& f : mesh.point_fields)
     x += "        <DataArray type=\"Float32\" Name=\"" + xml_escape(f.name) + "\" NumberOfComponents=\"" +
          std::to_string(f.components) + "\" format=\"appended\" offset=\"" + block(4 * f.values.size()) + "\"/>\n";
+  if (global_point_ids)
+    x += "        <DataArray type=\"Int64\" Name=\"GlobalPointIds\" format=\"appended\" offset=\"" +
+         block(8 * global_point_ids->size()) + "\"/>\n";
   x += "      </PointData>\n";
   x += "      <Points>\n";
   x += "        <DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"" +
@@ -246,6 +262,13 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path) {
     }
   };
   for (const Field& f : mesh.point_fields) write_floats(f.values);
+  if (global_point_ids) {
+    append_le(buf, static_cast<std::uint64_t>(8 * global_point_ids->size()));
+    for (std::uint64_t id : *global_point_ids) {
+      append_le(buf, static_cast<std::int64_t>(id));
+      flush(false);
+    }
+  }
   write_floats(mesh.points);
   append_le(buf, static_cast<std::uint64_t>(8 * mesh.connectivity.size()));
   for (PointIndex id : mesh.connectivity) {
@@ -259,6 +282,25 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path) {
   }
   buf += "\n  </AppendedData>\n</VTKFile>\n";
   flush(true);
+  file.commit();
+}
+
+void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
+                bool global_point_ids) {
+  std::string x = "<?xml version=\"1.0\"?>\n";
+  x += "<VTKFile type=\"PPolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  x += "  <PPolyData GhostLevel=\"0\">\n";
+  x += "    <PPointData" + point_data_attributes(like, global_point_ids) + ">\n";
+  for (const Field& f : like.point_fields)
+    x += "      <PDataArray type=\"Float32\" Name=\"" + xml_escape(f.name) + "\" NumberOfComponents=\"" +
+         std::to_string(f.components) + "\"/>\n";
+  if (global_point_ids) x += "      <PDataArray type=\"Int64\" Name=\"GlobalPointIds\"/>\n";
+  x += "    </PPointData>\n";
+  x += "    <PPoints>\n      <PDataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
+  for (const std::string& p : pieces) x += "    <Piece Source=\"" + xml_escape(p) + "\"/>\n";
+  x += "  </PPolyData>\n</VTKFile>\n";
+  AtomicFile file(path);
+  file.write(x);
   file.commit();
 }
 

@@ -14,8 +14,10 @@
 //        array becomes a float field (the array marked as Normals
 //        is renamed "Normals"); several Pieces are concatenated, keeping
 //        the fields every piece has.
+#include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "keymesh/mesh/surface_mesh.hpp"
 
@@ -24,5 +26,14 @@ namespace keymesh::io {
 SurfaceMesh read_vtp(const std::string& path);
 SurfaceMesh parse_vtp(std::string_view data, const std::string& path);
 void write_vtp(const SurfaceMesh& mesh, const std::string& path);
+// With an Int64 PointData array "GlobalPointIds" marked GlobalIds (a piece
+// of a distributed mesh: its points' ids in the whole mesh).
+void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids);
+
+// A ParaView parallel PolyData index (.pvtp) over piece files written by
+// write_vtp (Source paths relative to the index); `like` gives the point
+// fields every piece has.
+void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
+                bool global_point_ids);
 
 }  // namespace keymesh::io

@@ -1,0 +1,53 @@
+#pragma once
+// Distributed contouring over MPI: `mpirun -np P keymesh contour`.
+//
+// Each rank reads only its slab of the volume (its voxel layers plus the
+// plane above them: the one sample layer a cell needs), contours it with
+// global edge keys (3 * point id of the whole grid + axis, isovalue-major),
+// and number_keys (key_exchange.hpp) gives every point one global id: a
+// point belongs to the rank whose slab starts at its plane, so the only keys
+// two ranks share are those of the plane between them, and they are welded
+// by key, not by position. The result is either one piece per rank (its
+// points with their global ids, written as a .vtp piece of a .pvtp) or the
+// whole mesh gathered on rank 0, byte-identical to the single-process run.
+#include <vector>
+
+#include "keymesh/distributed/key_exchange.hpp"
+#include "keymesh/generate/contour_stream.hpp"
+
+namespace keymesh::distributed {
+
+// What one rank did, for the report and docs/SCALING.md.
+struct RankStats {
+  double first_plane = 0, planes = 0;        // its slab
+  double points = 0, points_owned = 0, triangles = 0;
+  double keys_requested = 0, bytes_sent = 0; // in the key exchange
+  double read = 0, contour = 0, exchange = 0, output = 0;  // seconds
+};
+
+struct ContourPiece {
+  SurfaceMesh mesh;             // this rank's triangles, local point ids
+  GlobalNumbering numbering;    // global id of each local point
+  std::vector<std::uint64_t> keys;
+  RankStats stats;
+};
+
+// Throws InputError naming what a distributed contour of this volume with
+// these options on `ranks` ranks cannot do (not collective: every rank
+// reaches the same verdict, so the CLI refuses without MPI_Abort).
+void require_distributable(const ImageGrid& header, const generate::ContourOptions& options, int ranks);
+
+// Collective: every rank calls it with its own source of the same volume.
+// Supports what contour_streamed supports (--normals none, scalars, several
+// isovalues, --weld keyreduce); the rest is refused by name.
+ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options);
+
+// Collective: rank 0 returns the whole mesh (points in global id order,
+// triangles isovalue by isovalue in rank order: the single-process file),
+// the others an empty one. Adds the gather's time to piece.stats.output.
+SurfaceMesh gather(ContourPiece& piece);
+
+// Collective: every rank's stats, on rank 0 (empty elsewhere).
+std::vector<RankStats> gather_stats(const RankStats& mine);
+
+}  // namespace keymesh::distributed

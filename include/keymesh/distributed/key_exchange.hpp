@@ -1,0 +1,42 @@
+#pragma once
+// Distributed KEY-REDUCE of point keys: one global id per distinct key over
+// all ranks, with no spatial search.
+//
+// Every rank holds the keys of its points in ascending order; a key may be
+// held by several ranks (the points on the plane two slabs share). Keys are
+// split into `segments` (an isovalue each) and, within a segment, owned by
+// rank by key range in rank order (owner_of). Each rank numbers the keys it
+// owns; the others send the keys they hold but do not own to the owners
+// (all-to-all by key range) and get back their global ids (the index map).
+// Global ids follow key order within a segment, segment after segment: the
+// numbering a single process gives the same keys.
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "keymesh/core/types.hpp"
+
+namespace keymesh::distributed {
+
+struct GlobalNumbering {
+  std::vector<std::uint64_t> ids;   // per local key
+  std::vector<std::uint8_t> owned;  // per local key: 1 when this rank owns it
+  // Keys owned per rank and segment, counts[q * segments + s], on every rank.
+  std::vector<long long> counts;
+  long long total = 0;              // distinct keys over all ranks
+  std::uint64_t keys_requested = 0; // keys this rank asked their owners for
+  std::uint64_t bytes_sent = 0;     // by this rank in the exchange
+  // First global id of (segment s, rank q).
+  long long first_id(int s, int q) const { return first_ids[static_cast<std::size_t>(s) * ranks + q]; }
+  int ranks = 1, segments = 1;
+  std::vector<long long> first_ids;
+};
+
+// Collective over MPI_COMM_WORLD. Throws InputError when a rank asks for a
+// key its owner does not hold (the ranks read different inputs).
+GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
+                            const std::function<int(std::uint64_t)>& segment_of,
+                            const std::function<int(std::uint64_t)>& owner_of);
+
+}  // namespace keymesh::distributed

@@ -1,0 +1,207 @@
+// Distributed contouring over MPI (keymesh/distributed/contour_distributed.hpp).
+#include "keymesh/distributed/contour_distributed.hpp"
+
+#if defined(KEYMESH_HAVE_MPI)
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <string>
+#include <type_traits>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/contour.hpp"
+
+namespace keymesh::distributed {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+int checked_int(long long n, const char* what) {
+  if (n < 0 || n > std::numeric_limits<int>::max())
+    throw LimitError(std::string("distributed contour: ") + what + " exceed MPI's 2^31 - 1 elements per message");
+  return static_cast<int>(n);
+}
+
+// Gathers per-rank arrays packed segment after segment (count[q * S + s]
+// elements of `per` values from rank q for segment s) to rank 0, reordered
+// segment-major, rank order within a segment.
+template <class T>
+void gather_segments(const std::vector<T>& local, int per, MPI_Datatype type, const std::vector<long long>& count,
+                     int segments, std::vector<T>& out) {
+  int P = 1, r = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &P);
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  std::vector<int> sizes(static_cast<std::size_t>(P)), displs(static_cast<std::size_t>(P));
+  long long all = 0;
+  for (int q = 0; q < P; ++q) {
+    long long rank_total = 0;
+    for (int s = 0; s < segments; ++s) rank_total += count[static_cast<std::size_t>(q) * segments + s];
+    sizes[q] = checked_int(rank_total * per, "gathered arrays");
+    displs[q] = checked_int(all * per, "gathered arrays");
+    all += rank_total;
+  }
+  checked_int(all * per, "gathered arrays");
+  std::vector<T> packed(r == 0 ? static_cast<std::size_t>(all * per) : 0);
+  MPI_Gatherv(local.data(), checked_int(static_cast<long long>(local.size()), "gathered arrays"), type, packed.data(),
+              sizes.data(), displs.data(), type, 0, MPI_COMM_WORLD);
+  if (r != 0) return;
+  std::vector<long long> dst_first(static_cast<std::size_t>(segments) * P);
+  long long at = 0;
+  for (int s = 0; s < segments; ++s)
+    for (int q = 0; q < P; ++q) {
+      dst_first[static_cast<std::size_t>(s) * P + q] = at;
+      at += count[static_cast<std::size_t>(q) * segments + s];
+    }
+  out.resize(static_cast<std::size_t>(all * per));
+  long long src = 0;
+  for (int q = 0; q < P; ++q)
+    for (int s = 0; s < segments; ++s) {
+      const long long c = count[static_cast<std::size_t>(q) * segments + s];
+      std::copy_n(packed.begin() + src * per, c * per, out.begin() + dst_first[static_cast<std::size_t>(s) * P + q] * per);
+      src += c;
+    }
+}
+
+}  // namespace
+
+void require_distributable(const ImageGrid& head, const generate::ContourOptions& options, int ranks) {
+  if (options.normals != generate::ContourNormals::None)
+    throw InputError("distributed contour: --normals none only so far (point normals would need the partial sums "
+                     "of the shared planes merged across ranks)");
+  if (options.coarsen || options.curvature)
+    throw InputError("distributed contour: --coarsen and --curvature run on one process so far");
+  if (options.weld == generate::ContourWeld::VertexWeld)
+    throw InputError("distributed contour: --weld vertexweld compares coordinates; across ranks only keys weld");
+  if (options.backend != generate::Backend::Cpu) throw InputError("distributed contour: --backend cpu only so far");
+  if (head.dims[2] - 1 < ranks)
+    throw InputError("distributed contour: " + std::to_string(head.dims[2] - 1) + " voxel layers (z) for " +
+                     std::to_string(ranks) + " ranks; each rank needs at least one (use fewer ranks)");
+}
+
+ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options) {
+  int P = 1, r = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &P);
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  const ImageGrid& head = source.header();
+  require_distributable(head, options, P);
+  const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2], nxy = nx * ny;
+  ContourPiece piece;
+  RankStats& st = piece.stats;
+  // This rank's voxel layers [lo, hi) need planes lo .. hi.
+  const Id lo = (nz - 1) * r / P, hi = (nz - 1) * (r + 1) / P;
+  st.first_plane = static_cast<double>(lo);
+  st.planes = static_cast<double>(hi - lo + 1);
+
+  auto t0 = Clock::now();
+  ImageGrid slab;
+  slab.spacing = head.spacing;
+  slab.origin = head.origin;
+  slab.name = head.name;
+  slab.allocate({nx, ny, hi - lo + 1}, head.type);
+  source.read_planes(lo, hi - lo + 1, slab.bytes.data());
+  st.read = seconds_since(t0);
+
+  t0 = Clock::now();
+  generate::ContourOptions opt = options;
+  opt.first_plane = lo;
+  opt.total_planes = nz;
+  piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys);
+  slab.bytes = {};
+  st.contour = seconds_since(t0);
+
+  // Keys are isovalue-major (isovalue * 3 * points + 3 * point + axis); a
+  // point belongs to the rank whose voxel layers start at its plane.
+  t0 = Clock::now();
+  const int segments = static_cast<int>(options.isovalues.size());
+  const std::uint64_t per_iso = 3ull * static_cast<std::uint64_t>(nxy * nz);
+  const auto plane_of = [=](std::uint64_t k) { return static_cast<Id>((k % per_iso) / 3 / static_cast<std::uint64_t>(nxy)); };
+  const auto owner_of = [=](std::uint64_t k) {
+    // The rank q with (nz-1) q / P <= plane < (nz-1)(q+1) / P; the top plane to the last rank.
+    const Id z = std::min(plane_of(k), nz - 2);
+    int q = static_cast<int>((z * P) / (nz - 1));
+    while (q + 1 < P && (nz - 1) * (q + 1) / P <= z) ++q;
+    while (q > 0 && (nz - 1) * q / P > z) --q;
+    return q;
+  };
+  piece.numbering = number_keys(piece.keys, segments, [=](std::uint64_t k) { return static_cast<int>(k / per_iso); },
+                                owner_of);
+  const GlobalNumbering& g = piece.numbering;
+  if (g.total > static_cast<long long>(std::numeric_limits<PointIndex>::max()))
+    throw LimitError("distributed contour: " + std::to_string(g.total) + " points exceed 32-bit point ids");
+  st.points = static_cast<double>(piece.mesh.num_points());
+  for (std::uint8_t o : g.owned) st.points_owned += o;
+  st.triangles = static_cast<double>(piece.mesh.num_cells());
+  st.keys_requested = static_cast<double>(g.keys_requested);
+  st.bytes_sent = static_cast<double>(g.bytes_sent);
+  st.exchange = seconds_since(t0);
+  return piece;
+}
+
+SurfaceMesh gather(ContourPiece& piece) {
+  const auto t0 = Clock::now();
+  int P = 1, r = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &P);
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  const SurfaceMesh& m = piece.mesh;
+  const GlobalNumbering& g = piece.numbering;
+  const int S = g.segments;
+  // Owned points (positions and fields) in local order: key order, segment after segment.
+  const Id n = m.num_points();
+  std::vector<float> xyz;
+  std::vector<std::vector<float>> fields(m.point_fields.size());
+  xyz.reserve(static_cast<std::size_t>(3 * piece.stats.points_owned));
+  for (Id p = 0; p < n; ++p)
+    if (g.owned[p]) {
+      xyz.insert(xyz.end(), m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3);
+      for (std::size_t f = 0; f < fields.size(); ++f) {
+        const Field& fd = m.point_fields[f];
+        fields[f].insert(fields[f].end(), fd.values.begin() + fd.components * p, fd.values.begin() + fd.components * (p + 1));
+      }
+    }
+  // Triangles in global ids; a triangle's segment is its points' (an isovalue's).
+  std::vector<long long> my_tris(static_cast<std::size_t>(S), 0);
+  std::vector<PointIndex> conn(m.connectivity.size());
+  auto segment_of_id = [&](std::uint64_t id) {
+    int s = 0;
+    while (s + 1 < S && static_cast<long long>(id) >= g.first_id(s + 1, 0)) ++s;
+    return s;
+  };
+  for (Id t = 0; t < m.num_cells(); ++t) {
+    for (int c = 0; c < 3; ++c) conn[3 * t + c] = static_cast<PointIndex>(g.ids[m.connectivity[3 * t + c]]);
+    ++my_tris[static_cast<std::size_t>(segment_of_id(conn[3 * t]))];
+  }
+  std::vector<long long> tri_counts(static_cast<std::size_t>(P) * S);
+  MPI_Allgather(my_tris.data(), S, MPI_LONG_LONG, tri_counts.data(), S, MPI_LONG_LONG, MPI_COMM_WORLD);
+
+  SurfaceMesh out;
+  gather_segments(xyz, 3, MPI_FLOAT, g.counts, S, out.points);
+  for (std::size_t f = 0; f < fields.size(); ++f) {
+    Field whole{m.point_fields[f].name, m.point_fields[f].components, {}};
+    gather_segments(fields[f], whole.components, MPI_FLOAT, g.counts, S, whole.values);
+    if (r == 0) out.point_fields.push_back(std::move(whole));
+  }
+  static_assert(sizeof(PointIndex) == 4, "the gather sends point ids as MPI_UINT32_T");
+  gather_segments(conn, 3, MPI_UINT32_T, tri_counts, S, out.connectivity);
+  piece.stats.output += seconds_since(t0);
+  return out;
+}
+
+std::vector<RankStats> gather_stats(const RankStats& mine) {
+  int P = 1, r = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &P);
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  static_assert(std::is_trivially_copyable_v<RankStats> && sizeof(RankStats) % sizeof(double) == 0);
+  constexpr int n = sizeof(RankStats) / sizeof(double);
+  std::vector<RankStats> all(r == 0 ? static_cast<std::size_t>(P) : 0);
+  MPI_Gather(&mine, n, MPI_DOUBLE, all.data(), n, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  return all;
+}
+
+}  // namespace keymesh::distributed
+
+#endif

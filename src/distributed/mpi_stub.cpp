@@ -1,0 +1,39 @@
+// The distributed entry points when keymesh is built without MPI: a world of
+// one rank; the CLI refuses a multi-rank launch by name (see main.cpp).
+#include "keymesh/distributed/contour_distributed.hpp"
+#include "keymesh/distributed/mpi.hpp"
+
+#if !defined(KEYMESH_HAVE_MPI)
+
+#include <cstdlib>
+
+#include "keymesh/core/error.hpp"
+
+namespace keymesh::distributed {
+
+namespace {
+[[noreturn]] void not_built() {
+  throw InputError("distributed contour: keymesh was built without MPI (install libopenmpi-dev and rebuild)");
+}
+}  // namespace
+
+bool compiled() { return false; }
+void init(int*, char***) {}
+void finalize() {}
+int rank() { return 0; }
+int size() { return 1; }
+void abort_all(int code) { std::exit(code); }
+bool all_ok(bool ok) { return ok; }
+
+GlobalNumbering number_keys(std::span<const std::uint64_t>, int, const std::function<int(std::uint64_t)>&,
+                            const std::function<int(std::uint64_t)>&) {
+  not_built();
+}
+void require_distributable(const ImageGrid&, const generate::ContourOptions&, int) { not_built(); }
+ContourPiece contour_piece(generate::PlaneSource&, const generate::ContourOptions&) { not_built(); }
+SurfaceMesh gather(ContourPiece&) { not_built(); }
+std::vector<RankStats> gather_stats(const RankStats&) { not_built(); }
+
+}  // namespace keymesh::distributed
+
+#endif
