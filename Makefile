@@ -18,7 +18,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
 # and those `make bench` adds for its peers, plots and pictures.
 BENCH_PACKAGES = libthrust-dev libtbb-dev python3-openvdb python3-matplotlib xvfb
 
-.PHONY: all deps build demo test bench clean sanitize fuzz
+.PHONY: all deps build demo test bench scaling clean sanitize fuzz
 
 all: build
 
@@ -47,6 +47,10 @@ demo: build
 
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+# The distributed contour for 1..8 MPI ranks -> docs/SCALING.md.
+scaling: build
+	@$(PYTHON) bench/scaling.py --build $(BUILD_DIR)
 
 bench: EXTRA_PACKAGES = $(BENCH_PACKAGES)
 bench: build

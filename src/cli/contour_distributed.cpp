@@ -25,7 +25,8 @@ nlohmann::json rank_json(const distributed::RankStats& s) {
           {"points", s.points},                 {"points_owned", s.points_owned},
           {"triangles", s.triangles},           {"keys_requested", s.keys_requested},
           {"bytes_sent", s.bytes_sent},         {"read", s.read},
-          {"contour", s.contour},               {"exchange", s.exchange},
+          {"contour", s.contour},               {"wait", s.wait},
+          {"exchange", s.exchange},
           {"output", s.output}};
 }
 
@@ -94,7 +95,9 @@ int run_distributed_contour(const DistributedContourJob& job) {
     bool ok = true;
     if (rank == 0) {
       try {
+        const auto t0 = std::chrono::steady_clock::now();
         timer.run("write", [&] { io::write_mesh(whole, job.output); });
+        piece.stats.output += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       } catch (const std::exception& e) {
         std::fprintf(stderr, "keymesh: %s\n", e.what());
         ok = false;

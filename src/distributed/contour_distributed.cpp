@@ -114,22 +114,24 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   slab.bytes = {};
   st.contour = seconds_since(t0);
 
+  // The exchange starts when the slowest rank is done: that wait is the
+  // load imbalance, timed apart from the exchange.
+  t0 = Clock::now();
+  MPI_Barrier(MPI_COMM_WORLD);
+  st.wait = seconds_since(t0);
+
   // Keys are isovalue-major (isovalue * 3 * points + 3 * point + axis); a
   // point belongs to the rank whose voxel layers start at its plane.
   t0 = Clock::now();
   const int segments = static_cast<int>(options.isovalues.size());
   const std::uint64_t per_iso = 3ull * static_cast<std::uint64_t>(nxy * nz);
-  const auto plane_of = [=](std::uint64_t k) { return static_cast<Id>((k % per_iso) / 3 / static_cast<std::uint64_t>(nxy)); };
-  const auto owner_of = [=](std::uint64_t k) {
-    // The rank q with (nz-1) q / P <= plane < (nz-1)(q+1) / P; the top plane to the last rank.
-    const Id z = std::min(plane_of(k), nz - 2);
-    int q = static_cast<int>((z * P) / (nz - 1));
-    while (q + 1 < P && (nz - 1) * (q + 1) / P <= z) ++q;
-    while (q > 0 && (nz - 1) * q / P > z) --q;
-    return q;
+  // Rank q owns the points of planes [lo_q, lo_{q+1}); the last rank also the top plane.
+  const auto first_key = [=](int iso, int q) -> std::uint64_t {
+    const std::uint64_t base = static_cast<std::uint64_t>(iso) * per_iso;
+    if (q == P) return base + per_iso;
+    return base + std::uint64_t{3} * static_cast<std::uint64_t>(nxy) * static_cast<std::uint64_t>((nz - 1) * q / P);
   };
-  piece.numbering = number_keys(piece.keys, segments, [=](std::uint64_t k) { return static_cast<int>(k / per_iso); },
-                                owner_of);
+  piece.numbering = number_keys(piece.keys, segments, first_key);
   const GlobalNumbering& g = piece.numbering;
   if (g.total > static_cast<long long>(std::numeric_limits<PointIndex>::max()))
     throw LimitError("distributed contour: " + std::to_string(g.total) + " points exceed 32-bit point ids");

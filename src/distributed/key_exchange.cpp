@@ -36,8 +36,7 @@ std::vector<int> displacements(const std::vector<int>& counts, const char* what)
 }  // namespace
 
 GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
-                            const std::function<int(std::uint64_t)>& segment_of,
-                            const std::function<int(std::uint64_t)>& owner_of) {
+                            const std::function<std::uint64_t(int segment, int rank)>& first_key) {
   int P = 1, r = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &P);
   MPI_Comm_rank(MPI_COMM_WORLD, &r);
@@ -48,44 +47,62 @@ GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
   g.ids.assign(n, 0);
   g.owned.assign(n, 0);
 
-  // 1. Count the keys this rank owns per segment; every rank learns all counts.
-  std::vector<int> owner(n);
-  std::vector<long long> mine(static_cast<std::size_t>(segments), 0);
-  for (std::size_t p = 0; p < n; ++p) {
-    owner[p] = owner_of(keys[p]);
-    if (owner[p] < 0 || owner[p] >= P)
-      throw InputError("distributed KEY-REDUCE: key " + std::to_string(keys[p]) + " has no owner rank");
-    if (owner[p] == r) {
-      g.owned[p] = 1;
-      ++mine[static_cast<std::size_t>(segment_of(keys[p]))];
+  // 1. The key ranges, found by binary search among this rank's sorted keys:
+  //    bound[s * (P + 1) + q] = first local key >= first_key(s, q).
+  std::vector<std::uint64_t> range(static_cast<std::size_t>(segments) * (P + 1));
+  std::vector<std::size_t> bound(range.size());
+  for (int s = 0; s < segments; ++s)
+    for (int q = 0; q <= P; ++q) {
+      const std::size_t i = static_cast<std::size_t>(s) * (P + 1) + q;
+      range[i] = first_key(s, q);
+      if (i > 0 && range[i] < range[i - 1])
+        throw InputError("distributed KEY-REDUCE: key ranges do not ascend at segment " + std::to_string(s) +
+                         ", rank " + std::to_string(q));
+      bound[i] = static_cast<std::size_t>(std::lower_bound(keys.begin(), keys.end(), range[i]) - keys.begin());
     }
-  }
+  if (bound.front() != 0 || bound.back() != n)
+    throw InputError("distributed KEY-REDUCE: rank " + std::to_string(r) + " holds keys outside every segment");
+  auto at = [&](int s, int q) { return bound[static_cast<std::size_t>(s) * (P + 1) + q]; };
+
+  // 2. Count the keys this rank owns per segment; every rank learns all counts.
+  std::vector<long long> mine(static_cast<std::size_t>(segments), 0);
+  for (int s = 0; s < segments; ++s) mine[s] = static_cast<long long>(at(s, r + 1) - at(s, r));
   g.counts.assign(static_cast<std::size_t>(P) * segments, 0);
   MPI_Allgather(mine.data(), segments, MPI_LONG_LONG, g.counts.data(), segments, MPI_LONG_LONG, MPI_COMM_WORLD);
   // Global ids: segment after segment, rank order within a segment (key
   // order, since ownership is by key range in rank order).
   g.first_ids.assign(static_cast<std::size_t>(segments) * P, 0);
-  long long at = 0;
+  long long total = 0;
   for (int s = 0; s < segments; ++s)
     for (int q = 0; q < P; ++q) {
-      g.first_ids[static_cast<std::size_t>(s) * P + q] = at;
-      at += g.counts[static_cast<std::size_t>(q) * segments + s];
+      g.first_ids[static_cast<std::size_t>(s) * P + q] = total;
+      total += g.counts[static_cast<std::size_t>(q) * segments + s];
     }
-  g.total = at;
+  g.total = total;
 
-  // 2. Number the owned keys: ascending keys give ascending ids.
-  {
-    std::vector<long long> next(static_cast<std::size_t>(segments));
-    for (int s = 0; s < segments; ++s) next[s] = g.first_id(s, r);
-    for (std::size_t p = 0; p < n; ++p)
-      if (g.owned[p]) g.ids[p] = static_cast<std::uint64_t>(next[static_cast<std::size_t>(segment_of(keys[p]))]++);
+  // 3. Number the owned keys: ascending keys, ascending ids.
+  for (int s = 0; s < segments; ++s) {
+    const std::uint64_t first = static_cast<std::uint64_t>(g.first_id(s, r));
+    for (std::size_t p = at(s, r), e = at(s, r + 1); p < e; ++p) {
+      g.ids[p] = first + (p - at(s, r));
+      g.owned[p] = 1;
+    }
   }
+  // The owner of every key held but not owned (few: the shared planes).
+  std::vector<std::size_t> foreign;
+  std::vector<int> owner;
+  for (int s = 0; s < segments; ++s)
+    for (int q = 0; q < P; ++q)
+      if (q != r)
+        for (std::size_t p = at(s, q), e = at(s, q + 1); p < e; ++p) {
+          foreign.push_back(p);
+          owner.push_back(q);
+        }
 
   // 3. Route every key held but not owned to its owner (all-to-all by key
   //    range), which answers with the key's global id.
   std::vector<int> send_counts(static_cast<std::size_t>(P), 0), recv_counts(static_cast<std::size_t>(P), 0);
-  for (std::size_t p = 0; p < n; ++p)
-    if (!g.owned[p]) ++send_counts[static_cast<std::size_t>(owner[p])];
+  for (int q : owner) ++send_counts[static_cast<std::size_t>(q)];
   MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
   const std::vector<int> send_displs = displacements(send_counts, "requested keys");
   const std::vector<int> recv_displs = displacements(recv_counts, "requested keys");
@@ -96,12 +113,11 @@ GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
   std::vector<std::size_t> asked(n_send);  // local point of each request
   {
     std::vector<int> fill(send_displs);
-    for (std::size_t p = 0; p < n; ++p)
-      if (!g.owned[p]) {
-        const int at_q = fill[static_cast<std::size_t>(owner[p])]++;
-        request[static_cast<std::size_t>(at_q)] = keys[p];
-        asked[static_cast<std::size_t>(at_q)] = p;
-      }
+    for (std::size_t i = 0; i < foreign.size(); ++i) {
+      const int at_q = fill[static_cast<std::size_t>(owner[i])]++;
+      request[static_cast<std::size_t>(at_q)] = keys[foreign[i]];
+      asked[static_cast<std::size_t>(at_q)] = foreign[i];
+    }
   }
   std::vector<std::uint64_t> incoming(n_recv);
   MPI_Alltoallv(request.data(), send_counts.data(), send_displs.data(), MPI_UINT64_T, incoming.data(),

@@ -22,7 +22,9 @@ struct RankStats {
   double first_plane = 0, planes = 0;        // its slab
   double points = 0, points_owned = 0, triangles = 0;
   double keys_requested = 0, bytes_sent = 0; // in the key exchange
-  double read = 0, contour = 0, exchange = 0, output = 0;  // seconds
+  // Seconds: reading the slab, contouring it, waiting for the slowest rank
+  // (load imbalance), the key exchange itself, writing or gathering.
+  double read = 0, contour = 0, wait = 0, exchange = 0, output = 0;
 };
 
 struct ContourPiece {

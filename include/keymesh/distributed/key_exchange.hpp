@@ -5,7 +5,9 @@
 // Every rank holds the keys of its points in ascending order; a key may be
 // held by several ranks (the points on the plane two slabs share). Keys are
 // split into `segments` (an isovalue each) and, within a segment, owned by
-// rank by key range in rank order (owner_of). Each rank numbers the keys it
+// rank by key range in rank order: rank q owns the keys of segment s in
+// [first_key(s, q), first_key(s, q + 1)), and first_key(s, P) ends the
+// segment (the ranges ascend with s, then q). Each rank numbers the keys it
 // owns; the others send the keys they hold but do not own to the owners
 // (all-to-all by key range) and get back their global ids (the index map).
 // Global ids follow key order within a segment, segment after segment: the
@@ -35,8 +37,9 @@ struct GlobalNumbering {
 
 // Collective over MPI_COMM_WORLD. Throws InputError when a rank asks for a
 // key its owner does not hold (the ranks read different inputs).
+// Costs O(segments * P * log n) searches plus a pass over the keys not
+// owned; the owned ones are numbered in one sweep.
 GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
-                            const std::function<int(std::uint64_t)>& segment_of,
-                            const std::function<int(std::uint64_t)>& owner_of);
+                            const std::function<std::uint64_t(int segment, int rank)>& first_key);
 
 }  // namespace keymesh::distributed

@@ -1,0 +1,223 @@
+#!/usr/bin/env python3
+"""`make scaling`: the distributed contour (mpirun -np P keymesh contour) for
+P = 1..8 on this machine, and docs/SCALING.md from the measurements.
+
+Two series, each rank with one OpenMP thread (ranks beyond the cores are
+oversubscribed, so wall time past P = cores measures time-sharing, not
+speed-up; the per-rank stage times, bytes and balance are what carry over):
+  strong: the Spherical Distance field, 512^3 float32, iso 180.5 (one volume,
+          split into P slabs);
+  weak:   a gyroid-like periodic field, 256 x 256 x (128 P + 1) float32 (every rank
+          holds 128 voxel layers and about the same surface).
+Every run gathers to rank 0 (the file is checked byte-identical to the
+single-process one) and runs again writing .pvtp pieces, which skips the
+gather. Medians of --reps runs; per-rank figures from keymesh's --report.
+Writes bench/results/scaling.jsonl and docs/SCALING.md.
+"""
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+from run import machine  # noqa: E402
+
+
+def mpirun_cmd(P):
+    cmd = [shutil.which("mpirun"), "--oversubscribe", "--bind-to", "none", "-np", str(P)]
+    if os.geteuid() == 0:
+        cmd.insert(1, "--allow-run-as-root")
+    return cmd
+
+
+def contour(keymesh, P, raw, dims, iso, out, report):
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    cmd = [keymesh, "contour", raw, "--dims", *map(str, dims), "--iso", str(iso), "-o", out, "--threads", "1",
+           "--no-scalars", "-q", "--report", report]
+    if P > 0:
+        cmd = mpirun_cmd(P) + cmd
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, env=env, stdin=subprocess.DEVNULL, timeout=600)
+    wall = time.perf_counter() - t0
+    r = json.load(open(report))
+    r["wall"] = wall
+    return r
+
+
+def write_gyroid(path, nx, ny, nz):
+    import numpy as np
+    x = np.arange(nx, dtype=np.float32) * np.float32(2 * np.pi / 48)
+    y = np.arange(ny, dtype=np.float32) * np.float32(2 * np.pi / 48)
+    with open(path, "wb") as f:
+        for z0 in range(0, nz, 32):
+            z = np.arange(z0, min(nz, z0 + 32), dtype=np.float32) * np.float32(2 * np.pi / 48)
+            Z, Y, X = np.meshgrid(z, y, x, indexing="ij")
+            v = np.sin(X) * np.cos(Y) + np.sin(Y) * np.cos(Z) + np.sin(Z) * np.cos(X)
+            v.astype(np.float32).tofile(f)
+
+
+def stage_summary(runs):
+    """Medians over repetitions of the per-rank maxima (the critical path) and sums."""
+    keys = ["read", "contour", "wait", "exchange", "output"]
+    out = {}
+    for k in keys:
+        out[k + "_max"] = statistics.median(max(s[k] for s in r["distributed"]["per_rank"]) for r in runs)
+    per0 = runs[0]["distributed"]["per_rank"]
+    out["bytes_exchanged"] = runs[0]["distributed"]["bytes_exchanged"]
+    out["bytes_max_rank"] = max(s["bytes_sent"] for s in per0)
+    out["keys_requested"] = sum(s["keys_requested"] for s in per0)
+    out["triangle_imbalance"] = runs[0]["distributed"]["triangle_imbalance"]
+    out["triangles_min"] = min(s["triangles"] for s in per0)
+    out["triangles_max"] = max(s["triangles"] for s in per0)
+    out["peak_rss_mib_rank0"] = statistics.median(r["peak_rss_mib"] for r in runs)
+    return out
+
+
+def series(keymesh, name, make_volume, ranks, reps, work, rows, progress):
+    for P in ranks:
+        raw, dims, iso = make_volume(P)
+        ref = os.path.join(work, f"{name}{P}_ref.ply")
+        single = [contour(keymesh, 0, raw, dims, iso, ref, os.path.join(work, "s.json")) for _ in range(reps)]
+        for mode, ext in (("gathered", ".ply"), ("pieces", ".pvtp")):
+            out = os.path.join(work, f"{name}{P}_{mode}{ext}")
+            runs = [contour(keymesh, P, raw, dims, iso, out, os.path.join(work, "d.json")) for _ in range(reps)]
+            if mode == "gathered" and open(out, "rb").read() != open(ref, "rb").read():
+                raise SystemExit(f"scaling: -np {P} {name}: gathered file differs from the single-process run")
+            row = {"series": name, "ranks": P, "mode": mode, "dims": dims, "iso": iso,
+                   "points": runs[0]["points"], "triangles": runs[0]["cells"],
+                   "seconds_total": statistics.median(r["seconds"]["total"] for r in runs),
+                   "wall_mpirun": statistics.median(r["wall"] for r in runs),
+                   "single_process_total": statistics.median(r["seconds"]["total"] for r in single),
+                   "single_process_contour": statistics.median(r["seconds"]["contour"] for r in single),
+                   "loadavg": round(os.getloadavg()[0], 2), **stage_summary(runs)}
+            rows.append(row)
+            progress(f"{name} -np {P} {mode}: {row['seconds_total']:.3f} s (single process "
+                     f"{row['single_process_total']:.3f} s), exchange max {row['exchange_max'] * 1e3:.1f} ms, "
+                     f"{row['bytes_exchanged'] / 1024:.0f} KiB")
+
+
+def fmt_ms(s):
+    return f"{s * 1e3:.1f}"
+
+
+def write_doc(rows, mach, path, reps, elapsed):
+    L = []
+    L.append("# Distributed contour: scaling on this machine\n")
+    L.append("Measured by `make scaling` (bench/scaling.py) on "
+             f"{mach['date']}: {mach['cpu']}, {mach['cores']} cores, {mach['memory_gib']} GiB, {mach['compiler']}, "
+             f"OpenMPI (shared-memory transport), one OpenMP thread per rank, median of {reps} runs; "
+             f"the run took {elapsed / 60:.1f} min. Ranks beyond {mach['cores']} are oversubscribed: their wall time "
+             "measures time-sharing of the cores, not speed-up. What carries over to a cluster is the per-rank work, "
+             "the bytes each rank sends and the balance, which the tables give rank by rank (maxima over ranks: the "
+             "critical path).\n")
+    L.append("Every gathered file was checked byte-identical to the single-process run before its row was kept.\n")
+    L.append("## How the work is split\n")
+    L.append("Rank q of P reads voxel layers [(nz-1)q/P, (nz-1)(q+1)/P) plus the plane above them (the one sample "
+             "layer a cell needs) and contours them with global edge keys. A point belongs to the rank whose layers "
+             "start at its plane, so two ranks share only the points of the plane between them. The distributed "
+             "KEY-REDUCE (`number_keys`, src/distributed/key_exchange.cpp) is: one Allgather of the owned counts "
+             "(8 bytes per rank and isovalue), one Alltoall of request counts, one Alltoallv of the keys a rank holds "
+             "but does not own (8 bytes each) to their owners, and one Alltoallv of their global ids back (8 bytes "
+             "each). No coordinates travel and nothing is compared by position.\n")
+    for name, title in (("strong", "Strong scaling: Spherical Distance 512^3, iso 180.5"),
+                        ("weak", "Weak scaling: periodic field, 256 x 256 x (128P + 1), iso 0.0 (128 voxel layers per rank)")):
+        rs = [r for r in rows if r["series"] == name]
+        if not rs:
+            continue
+        L.append(f"## {title}\n")
+        L.append("| ranks | output | points | triangles | total s | single process s | read ms (max) | "
+                 "contour ms (max) | wait ms (max) | exchange ms (max) | output ms (max) | bytes exchanged (all ranks) | "
+                 "bytes of the busiest rank | triangles min..max per rank | imbalance (max/mean) | rank 0 peak MiB |")
+        L.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for r in rs:
+            L.append(f"| {r['ranks']} | {r['mode']} | {r['points']:,} | {r['triangles']:,} | {r['seconds_total']:.3f} | "
+                     f"{r['single_process_total']:.3f} | {fmt_ms(r['read_max'])} | {fmt_ms(r['contour_max'])} | "
+                     f"{fmt_ms(r['wait_max'])} | {fmt_ms(r['exchange_max'])} | {fmt_ms(r['output_max'])} | {r['bytes_exchanged']:,.0f} | "
+                     f"{r['bytes_max_rank']:,.0f} | {r['triangles_min']:,.0f}..{r['triangles_max']:,.0f} | "
+                     f"{r['triangle_imbalance']:.2f} | {r['peak_rss_mib_rank0']:.0f} |")
+        L.append("")
+    # The model, from the weak series' measurements.
+    weak = {r["ranks"]: r for r in rows if r["series"] == "weak" and r["mode"] == "pieces"}
+    if weak:
+        P1 = weak[min(weak)]
+        Pmax = weak[max(weak)]
+        per_plane_bytes = max(r["bytes_max_rank"] for r in weak.values() if r["ranks"] > 1) if len(weak) > 1 else 0
+        L.append("## A model of weak scaling to 64+ ranks\n")
+        L.append("With slabs, a rank's work does not depend on P: it reads and contours its own layers "
+                 f"(at P = {P1['ranks']}: read {fmt_ms(P1['read_max'])} ms, contour {fmt_ms(P1['contour_max'])} ms "
+                 "per 256 x 256 x 128 slab on one core), and it exchanges only the points of its two shared planes: "
+                 f"the busiest rank sent {per_plane_bytes:,.0f} bytes here, the same at every P > 2 because the "
+                 "field repeats. What grows with P is only the collectives' count arrays (8 bytes per rank for "
+                 "the Allgather, 4 for the Alltoall) and their latency, about log2 P message rounds on a tree or "
+                 "dissemination algorithm. So, per rank,\n")
+        L.append("    T(P) = t_read + t_contour + t_exchange(P) + t_output,   "
+                 "t_exchange(P) = a * log2(P) + b * bytes_of_two_planes + c * 12 P\n")
+        L.append("where a is the network's latency per collective round, b its inverse bandwidth and c the "
+                 "per-byte cost of the count arrays. At 64 ranks the count arrays are 768 bytes and "
+                 f"the shared planes {per_plane_bytes:,.0f} bytes per rank (the same slab size as here), so on any "
+                 "network whose latency is in the microseconds the exchange stays far below the "
+                 f"{fmt_ms(P1['contour_max'])} ms each rank spends contouring: weak-scaling efficiency is set by "
+                 "the file system delivering each rank its slab (t_read) and, for `--gather`, by rank 0, which "
+                 "receives and writes the whole mesh (O(P) bytes: its time grows linearly, "
+                 f"{fmt_ms(Pmax['output_max'])} ms for the pieces of {Pmax['ranks']} ranks against the gathered "
+                 "rows above). Use .pvtp pieces past a few ranks; ParaView reads them in parallel and welds nothing: "
+                 "GlobalPointIds already name every shared point once.\n")
+        L.append("Limits of this measurement: one machine, shared memory instead of a network, oversubscribed "
+                 "past its cores; no figure above was taken on a cluster. The model's a and b are the cluster's "
+                 "own and are not measured here.\n")
+    L.append("Reproduce: `make scaling` (needs openmpi-bin; about "
+             f"{elapsed / 60:.0f} min on this machine).\n")
+    with open(path, "w") as f:
+        f.write("\n".join(L))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--max-ranks", type=int, default=8)
+    ap.add_argument("--doc", default=os.path.join(ROOT, "docs", "SCALING.md"))
+    args = ap.parse_args()
+    if not shutil.which("mpirun"):
+        raise SystemExit("scaling: no mpirun (install openmpi-bin)")
+    keymesh = os.path.join(args.build, "keymesh")
+    t0 = time.time()
+    step = [0]
+
+    def progress(text):
+        step[0] += 1
+        print(f"[{time.time() - t0:6.1f} s] {text}", flush=True)
+
+    rows = []
+    ranks = list(range(1, args.max_ranks + 1))
+    with tempfile.TemporaryDirectory(prefix="keymesh-scaling-") as work:
+        sphere = os.path.join(work, "sphere512.raw")
+        subprocess.run([keymesh, "generate", "sphere", "--size", "512", "-o", sphere, "-q"], check=True)
+        series(keymesh, "strong", lambda P: (sphere, [512, 512, 512], 180.5), ranks, args.reps, work, rows, progress)
+
+        def weak_volume(P):
+            path = os.path.join(work, f"weak{P}.raw")
+            dims = [256, 256, 128 * P + 1]
+            if not os.path.exists(path):
+                write_gyroid(path, *dims)
+            return path, dims, 0.0
+
+        series(keymesh, "weak", weak_volume, ranks, args.reps, work, rows, progress)
+    mach = machine()
+    os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
+    with open(os.path.join(HERE, "results", "scaling.jsonl"), "w") as f:
+        for r in rows:
+            f.write(json.dumps({**r, "machine": mach}) + "\n")
+    write_doc(rows, mach, args.doc, args.reps, time.time() - t0)
+    print(f"scaling: wrote {args.doc} in {(time.time() - t0) / 60:.1f} min")
+
+
+if __name__ == "__main__":
+    main()
