@@ -13,6 +13,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour_kernels.hpp"
 
 namespace keymesh::distributed {
 
@@ -70,9 +71,9 @@ void gather_segments(const std::vector<T>& local, int per, MPI_Datatype type, co
 }  // namespace
 
 void require_distributable(const ImageGrid& head, const generate::ContourOptions& options, int ranks) {
-  if (options.normals != generate::ContourNormals::None)
-    throw InputError("distributed contour: --normals none only so far (point normals would need the partial sums "
-                     "of the shared planes merged across ranks)");
+  if (options.normals == generate::ContourNormals::Gradient)
+    throw InputError("distributed contour: --normals none or average (gradient normals would need a ghost plane on "
+                     "each side of a slab)");
   if (options.coarsen || options.curvature)
     throw InputError("distributed contour: --coarsen and --curvature run on one process so far");
   if (options.weld == generate::ContourWeld::VertexWeld)
@@ -110,8 +111,22 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   generate::ContourOptions opt = options;
   opt.first_plane = lo;
   opt.total_planes = nz;
+  opt.normals = generate::ContourNormals::None;  // averaged below, across ranks
   piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys);
   slab.bytes = {};
+  // Averaged normals, KEY-REDUCE's merge over this rank's triangles first:
+  // each point's sum of its face normals in triangle order.
+  const bool average = options.normals == generate::ContourNormals::Average;
+  std::vector<float> normal_sums;
+  if (average) {
+    const SurfaceMesh& m = piece.mesh;
+    normal_sums.assign(3 * static_cast<std::size_t>(m.num_points()), 0.0f);
+    auto* sum = reinterpret_cast<generate::Vec3f*>(normal_sums.data());
+    for (Id t = 0; t < m.num_cells(); ++t) {
+      const generate::Vec3f f = generate::triangle_normal(m.points.data(), m.connectivity.data(), t);
+      for (int c = 0; c < 3; ++c) sum[m.connectivity[3 * t + c]] = generate::add(sum[m.connectivity[3 * t + c]], f);
+    }
+  }
   st.contour = seconds_since(t0);
 
   // The exchange starts when the slowest rank is done: that wait is the
@@ -131,7 +146,14 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
     if (q == P) return base + per_iso;
     return base + std::uint64_t{3} * static_cast<std::uint64_t>(nxy) * static_cast<std::uint64_t>((nz - 1) * q / P);
   };
-  piece.numbering = number_keys(piece.keys, segments, first_key);
+  // The shared planes' partial sums merge at their owners (the rest of the
+  // merge); then the transform, normalising, on every copy alike.
+  piece.numbering = number_keys(piece.keys, segments, first_key, average ? &normal_sums : nullptr, 3);
+  if (average) {
+    auto* sum = reinterpret_cast<generate::Vec3f*>(normal_sums.data());
+    for (Id p = 0; p < piece.mesh.num_points(); ++p) sum[p] = generate::unit(sum[p]);
+    piece.mesh.point_fields.push_back(Field{"Normals", 3, std::move(normal_sums)});
+  }
   const GlobalNumbering& g = piece.numbering;
   if (g.total > static_cast<long long>(std::numeric_limits<PointIndex>::max()))
     throw LimitError("distributed contour: " + std::to_string(g.total) + " points exceed 32-bit point ids");

@@ -36,7 +36,11 @@ std::vector<int> displacements(const std::vector<int>& counts, const char* what)
 }  // namespace
 
 GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
-                            const std::function<std::uint64_t(int segment, int rank)>& first_key) {
+                            const std::function<std::uint64_t(int segment, int rank)>& first_key,
+                            std::vector<float>* sums, int components) {
+  if (sums && (components <= 0 || sums->size() != keys.size() * static_cast<std::size_t>(components)))
+    throw InputError("distributed KEY-REDUCE: " + std::to_string(sums->size()) + " values for " +
+                     std::to_string(keys.size()) + " keys of " + std::to_string(components) + " components");
   int P = 1, r = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &P);
   MPI_Comm_rank(MPI_COMM_WORLD, &r);
@@ -124,6 +128,7 @@ GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
                 recv_counts.data(), recv_displs.data(), MPI_UINT64_T, MPI_COMM_WORLD);
   // Answer: binary search among this rank's (ascending) keys.
   std::vector<std::uint64_t> answer(n_recv);
+  std::vector<std::size_t> answered(n_recv);  // local point of each incoming key
   for (std::size_t i = 0; i < n_recv; ++i) {
     const auto it = std::lower_bound(keys.begin(), keys.end(), incoming[i]);
     const std::size_t p = static_cast<std::size_t>(it - keys.begin());
@@ -131,13 +136,40 @@ GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
       throw InputError("distributed KEY-REDUCE: rank " + std::to_string(r) + " owns key " +
                        std::to_string(incoming[i]) + " but has no point with it (did the ranks read different inputs?)");
     answer[i] = g.ids[p];
+    answered[i] = p;
+  }
+  std::uint64_t value_bytes = 0;
+  if (sums) {
+    // The merge: each copy's partial sum goes to the owner, which adds them
+    // to its own in sender rank order (fixed, whatever the timing), then
+    // sends the total back to every copy.
+    const std::size_t c = static_cast<std::size_t>(components);
+    auto scaled = [&](const std::vector<int>& v) {
+      std::vector<int> out(v.size());
+      for (std::size_t q = 0; q < v.size(); ++q) out[q] = checked_int(static_cast<std::size_t>(v[q]) * c, "merged values");
+      return out;
+    };
+    const std::vector<int> sc = scaled(send_counts), sd = scaled(send_displs), rc = scaled(recv_counts),
+                           rd = scaled(recv_displs);
+    float* v = sums->data();
+    std::vector<float> partial(n_send * c), received(n_recv * c);
+    for (std::size_t i = 0; i < n_send; ++i) std::copy_n(v + asked[i] * c, c, partial.begin() + i * c);
+    MPI_Alltoallv(partial.data(), sc.data(), sd.data(), MPI_FLOAT, received.data(), rc.data(), rd.data(), MPI_FLOAT,
+                  MPI_COMM_WORLD);
+    for (std::size_t i = 0; i < n_recv; ++i)
+      for (std::size_t k = 0; k < c; ++k) v[answered[i] * c + k] += received[i * c + k];
+    for (std::size_t i = 0; i < n_recv; ++i) std::copy_n(v + answered[i] * c, c, received.begin() + i * c);
+    MPI_Alltoallv(received.data(), rc.data(), rd.data(), MPI_FLOAT, partial.data(), sc.data(), sd.data(), MPI_FLOAT,
+                  MPI_COMM_WORLD);
+    for (std::size_t i = 0; i < n_send; ++i) std::copy_n(partial.begin() + i * c, c, v + asked[i] * c);
+    value_bytes = 4 * c * (n_send + n_recv);
   }
   std::vector<std::uint64_t> reply(n_send);
   MPI_Alltoallv(answer.data(), recv_counts.data(), recv_displs.data(), MPI_UINT64_T, reply.data(),
                 send_counts.data(), send_displs.data(), MPI_UINT64_T, MPI_COMM_WORLD);
   for (std::size_t i = 0; i < n_send; ++i) g.ids[asked[i]] = reply[i];
   g.keys_requested = n_send;
-  g.bytes_sent = 8 * (n_send + n_recv) + sizeof(long long) * static_cast<std::uint64_t>(segments) * (P - 1) +
+  g.bytes_sent = 8 * (n_send + n_recv) + value_bytes + sizeof(long long) * static_cast<std::uint64_t>(segments) * (P - 1) +
                  sizeof(int) * static_cast<std::uint64_t>(P - 1);
   return g;
 }

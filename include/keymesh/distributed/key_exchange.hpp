@@ -39,7 +39,14 @@ struct GlobalNumbering {
 // key its owner does not hold (the ranks read different inputs).
 // Costs O(segments * P * log n) searches plus a pass over the keys not
 // owned; the owned ones are numbered in one sweep.
+//
+// With `sums` (`components` floats per key, this rank's partial sums) the
+// fields merge the same way: every copy's partial sum travels with its key
+// to the owner, which adds them to its own in sender rank order (a fixed
+// order), and every copy receives the total; the caller applies the
+// transform (e.g. normalising). Deterministic for a given P.
 GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
-                            const std::function<std::uint64_t(int segment, int rank)>& first_key);
+                            const std::function<std::uint64_t(int segment, int rank)>& first_key,
+                            std::vector<float>* sums = nullptr, int components = 0);
 
 }  // namespace keymesh::distributed
