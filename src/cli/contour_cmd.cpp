@@ -97,7 +97,8 @@ Register reg{Command{
           ->check(CLI::NonNegativeNumber);
       cmd.add_option("--memory-limit", o->memory_limit,
                      "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
-                     "the output is byte-identical; raw input (--dims) with --normals none so far");
+                     "the output is byte-identical; raw (--dims), .nrrd/.nhdr or .nii with uncompressed samples, "
+                     "--normals none so far");
       cmd.add_flag("--gather", o->gather,
                    "under mpirun: gather the whole mesh on rank 0 into one file (the default unless OUT is .pvtp, "
                    "which writes one OUT_<rank>.vtp piece per rank with GlobalPointIds)");
@@ -144,11 +145,11 @@ Register reg{Command{
         SurfaceMesh mesh;
         nlohmann::json r;
         if (distributed::size() > 1 || (distributed::launched_by_mpi() && is_raw && o->memory_limit.empty())) {
-          // mpirun -np P keymesh contour RAW ...: each rank reads its slab.
-          if (!is_raw) {
+          // mpirun -np P keymesh contour VOLUME ...: each rank reads its slab.
+          if (!is_raw && io::is_grid_file(o->input)) {
             if (distributed::rank() == 0)
-              std::fprintf(stderr, "keymesh contour: under mpirun each rank reads its slab of a raw volume "
-                                   "(--dims ...); %s would be read whole by every rank\n", o->input.c_str());
+              std::fprintf(stderr, "keymesh contour: %s: marching tetrahedra is not distributed; run it as one "
+                                   "process\n", o->input.c_str());
             return 2;
           }
           if (!o->memory_limit.empty()) {
@@ -162,6 +163,7 @@ Register reg{Command{
           job.output = o->output;
           job.report_path = o->common.report_path;
           job.raw = raw;
+          job.raw_given = is_raw;
           job.options = opt;
           job.gather = o->gather;
           job.quiet = o->common.quiet;
@@ -177,12 +179,7 @@ Register reg{Command{
                          o->memory_limit.c_str());
             return 2;
           }
-          if (!is_raw) {
-            std::fprintf(stderr, "keymesh contour: --memory-limit streams raw volumes (--dims ...) so far; "
-                                 "%s would be read whole\n", o->input.c_str());
-            return 2;
-          }
-          auto source = io::open_raw_planes(o->input, raw);
+          auto source = io::open_volume_planes(o->input, is_raw ? &raw : nullptr);
           generate::StreamStats ss;
           mesh = timer.run("contour", [&] { return generate::contour_streamed(*source, opt, limit, &stats, &ss); });
           timer.add("read", ss.read);

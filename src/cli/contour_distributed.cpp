@@ -45,7 +45,7 @@ int run_distributed_contour(const DistributedContourJob& job) {
   // Checks every rank makes alike: refused with one message, no MPI_Abort.
   std::unique_ptr<generate::PlaneSource> source;
   try {
-    source = io::open_raw_planes(job.input, job.raw);
+    source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
     distributed::require_distributable(source->header(), job.options, ranks);
   } catch (const std::exception& e) {
     if (rank == 0) std::fprintf(stderr, "keymesh: %s\n", e.what());

@@ -1,5 +1,5 @@
 #pragma once
-// `mpirun -np P keymesh contour RAW --dims ... -o OUT`: the distributed
+// `mpirun -np P keymesh contour VOLUME -o OUT`: the distributed
 // contour's command-line side (reading slabs, pieces or gather, report).
 #include <string>
 
@@ -11,6 +11,7 @@ namespace keymesh::cli {
 struct DistributedContourJob {
   std::string input, output, report_path;
   io::RawOptions raw;
+  bool raw_given = false;  // raw input described by --dims ...; otherwise .nrrd/.nhdr/.nii
   generate::ContourOptions options;
   bool gather = false;  // --gather: one file written by rank 0
   bool quiet = false;

@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
         // each run whole on every rank and race on the output.
         if (dist::size() > 1 && sub->get_name() != "contour") {
           if (dist::rank() == 0)
-            std::fprintf(stderr, "keymesh %s: not distributed; under mpirun -np %d only `contour` of a raw volume "
+            std::fprintf(stderr, "keymesh %s: not distributed; under mpirun -np %d only `contour` of a volume "
                                  "runs on several ranks (run %s as one process)\n",
                          sub->get_name().c_str(), dist::size(), sub->get_name().c_str());
           return 2;

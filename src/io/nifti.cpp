@@ -2,6 +2,7 @@
 // vox_offset. Voxel sizes from pixdim; scl_slope/scl_inter applied.
 #include <zlib.h>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -56,11 +57,13 @@ T get(const unsigned char* h, std::size_t offset, bool swap) {
 
 }  // namespace
 
-ImageGrid read_nifti(const std::string& path) {
+VolumeLayout nifti_layout(const std::string& path) {
   const std::uint64_t file_bytes = detail::file_size_or_throw(path);
-  Stream in(path);
   unsigned char h[348];
-  in.read(h, sizeof h, "header");
+  {
+    Stream in(path);
+    in.read(h, sizeof h, "header");
+  }
   bool swap = false;
   if (get<std::int32_t>(h, 0, false) != 348) {
     if (get<std::int32_t>(h, 0, true) != 348) throw InputError(path + ": not a NIfTI-1 file (sizeof_hdr is not 348)");
@@ -113,8 +116,36 @@ ImageGrid read_nifti(const std::string& path) {
   if (gz && need / 1032 > file_bytes + 64)
     throw InputError(path + ": gzip file of " + std::to_string(file_bytes) + " bytes cannot hold the declared " +
                      declared);
+  VolumeLayout layout;
+  layout.data_path = path;
+  layout.raw.dims = dims;
+  layout.raw.type = type;
+  layout.raw.spacing = spacing;
+  layout.raw.big_endian = swap == (std::endian::native == std::endian::little);
+  layout.raw.header_bytes = static_cast<Id>(offset);
+  if (gz) layout.compressed = "gzip";
+  const float slope = get<float>(h, 112, swap), inter = get<float>(h, 116, swap);
+  if (std::isfinite(slope) && std::isfinite(inter) && slope != 0 && !(slope == 1 && inter == 0)) {
+    layout.scale_slope = slope;
+    layout.scale_inter = inter;
+  }
+  return layout;
+}
+
+ImageGrid read_nifti(const std::string& path) {
+  const VolumeLayout layout = nifti_layout(path);
+  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+  const std::array<Id, 3> dims = layout.raw.dims;
+  const ScalarType type = layout.raw.type;
+  const std::uint64_t need = detail::checked_byte_count(dims, type, path);
+  const bool gz = !layout.compressed.empty();
+  const auto offset = static_cast<std::uint64_t>(layout.raw.header_bytes);
+  const bool swap = layout.raw.big_endian != (std::endian::native == std::endian::big);
+  Stream in(path);
+  unsigned char h[348];
+  in.read(h, sizeof h, "header");
   ImageGrid grid;
-  grid.spacing = spacing;
+  grid.spacing = layout.raw.spacing;
   grid.name = "scalars";
   // Skip to vox_offset, then read exactly the declared samples.
   std::uint64_t skip = offset - 348;
@@ -131,8 +162,8 @@ ImageGrid read_nifti(const std::string& path) {
     in.read(grid.data(), grid.bytes.size(), "voxel data");
   }
   if (swap) detail::swap_samples(grid);
-  const float slope = get<float>(h, 112, swap), inter = get<float>(h, 116, swap);
-  if (std::isfinite(slope) && std::isfinite(inter) && slope != 0 && !(slope == 1 && inter == 0)) {
+  const double slope = layout.scale_slope, inter = layout.scale_inter;
+  if (layout.scaled()) {
     // Scaled data: the real values are slope * stored + inter, as float
     // (float64 input stays float64).
     ImageGrid scaled;

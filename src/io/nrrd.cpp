@@ -112,7 +112,7 @@ std::vector<std::byte> read_gzip(const std::string& path, std::uint64_t offset, 
 
 }  // namespace
 
-ImageGrid read_nrrd(const std::string& path) {
+VolumeLayout nrrd_layout(const std::string& path) {
   const std::uint64_t file_bytes = detail::file_size_or_throw(path);
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw InputError(path + ": cannot open");
@@ -272,7 +272,6 @@ ImageGrid read_nrrd(const std::string& path) {
       throw InputError(path + ": NRRD byte skip " + *byte_skip + " is not supported");
     data_offset += static_cast<std::uint64_t>(v);
   }
-  ImageGrid grid;
   // Refuse a body shorter than declared before allocating.
   const std::uint64_t data_file_bytes = data_file ? detail::file_size_or_throw(data_path) : file_bytes;
   const std::uint64_t need = detail::checked_byte_count(dims, st, path);
@@ -284,15 +283,33 @@ ImageGrid read_nrrd(const std::string& path) {
   if (encoding == "gzip" && need / 1032 > body + 64)
     throw InputError(data_path + ": NRRD gzip data of " + std::to_string(body) + " bytes cannot hold the " +
                      std::to_string(need) + " bytes the header of " + path + " declares (sizes " + *sizes + ")");
-  grid.spacing = spacing;
-  grid.origin = origin;
-  if (encoding == "raw") {
-    detail::allocate_checked(grid, dims, st, path);
-    detail::read_exact(data_path, data_offset, grid.data(), grid.bytes.size(), "the samples");
+  VolumeLayout layout;
+  layout.data_path = data_path;
+  layout.raw.dims = dims;
+  layout.raw.type = st;
+  layout.raw.spacing = spacing;
+  layout.raw.origin = origin;
+  layout.raw.big_endian = big_endian;
+  layout.raw.header_bytes = static_cast<Id>(data_offset);
+  if (encoding != "raw") layout.compressed = encoding;
+  return layout;
+}
+
+ImageGrid read_nrrd(const std::string& path) {
+  const VolumeLayout layout = nrrd_layout(path);
+  ImageGrid grid;
+  grid.spacing = layout.raw.spacing;
+  grid.origin = layout.raw.origin;
+  const auto offset = static_cast<std::uint64_t>(layout.raw.header_bytes);
+  if (layout.compressed.empty()) {
+    detail::allocate_checked(grid, layout.raw.dims, layout.raw.type, path);
+    detail::read_exact(layout.data_path, offset, grid.data(), grid.bytes.size(), "the samples");
   } else {
-    detail::adopt_samples(grid, dims, st, read_gzip(data_path, data_offset, data_file_bytes, need));
+    const std::uint64_t need = detail::checked_byte_count(layout.raw.dims, layout.raw.type, path);
+    detail::adopt_samples(grid, layout.raw.dims, layout.raw.type,
+                          read_gzip(layout.data_path, offset, detail::file_size_or_throw(layout.data_path), need));
   }
-  if (big_endian) detail::swap_samples(grid);
+  if (layout.raw.big_endian) detail::swap_samples(grid);
   return grid;
 }
 

@@ -1,6 +1,9 @@
 #include "keymesh/io/plane_source.hpp"
 
 #include <bit>
+#include <cctype>
+#include <type_traits>
+#include <vector>
 #include <string>
 #include <utility>
 
@@ -13,11 +16,14 @@ namespace {
 
 class RawPlanes : public generate::PlaneSource {
  public:
-  RawPlanes(std::string path, const RawOptions& o) : path_(std::move(path)), options_(o) {
+  RawPlanes(std::string path, const RawOptions& o, double slope = 1, double inter = 0)
+      : path_(std::move(path)), options_(o), slope_(slope), inter_(inter) {
     head_.dims = o.dims;
     head_.type = o.type;
     head_.spacing = o.spacing;
     head_.origin = o.origin;
+    // Scaled samples (NIfTI scl_slope/scl_inter) come out as float, as read_nifti gives them.
+    if (scaled()) head_.type = o.type == ScalarType::Float64 ? ScalarType::Float64 : ScalarType::Float32;
     const std::uint64_t bytes = detail::checked_byte_count(o.dims, o.type, path_);
     const std::uint64_t have = detail::file_size_or_throw(path_);
     if (o.header_bytes < 0 || static_cast<std::uint64_t>(o.header_bytes) > have ||
@@ -29,7 +35,44 @@ class RawPlanes : public generate::PlaneSource {
   }
   const ImageGrid& header() const override { return head_; }
   void read_planes(Id first, Id count, std::byte* out) override {
-    const std::uint64_t size = scalar_size(head_.type);
+    if (scaled()) {
+      // Stored samples into a buffer, then value = slope * stored + inter.
+      const std::uint64_t n = static_cast<std::uint64_t>(head_.dims[0] * head_.dims[1]) * static_cast<std::uint64_t>(count);
+      std::vector<std::byte> stored(n * scalar_size(options_.type));
+      read_stored(first, count, stored.data());
+      visit_type(options_.type, stored.data(), [&](const auto* s) {
+        visit_type(head_.type, out, [&](const auto* d_const) {
+          using D = std::remove_cv_t<std::remove_pointer_t<decltype(d_const)>>;
+          D* d = const_cast<D*>(d_const);
+          for (std::uint64_t i = 0; i < n; ++i)
+            d[i] = static_cast<D>(slope_ * static_cast<double>(s[i]) + inter_);
+        });
+      });
+      return;
+    }
+    read_stored(first, count, out);
+  }
+
+ private:
+  bool scaled() const { return !(slope_ == 1 && inter_ == 0); }
+
+  // Dispatches on a scalar type for a typed pointer to the samples at p.
+  template <class F>
+  static void visit_type(ScalarType t, const std::byte* p, F&& f) {
+    switch (t) {
+      case ScalarType::UInt8: f(reinterpret_cast<const std::uint8_t*>(p)); break;
+      case ScalarType::Int8: f(reinterpret_cast<const std::int8_t*>(p)); break;
+      case ScalarType::UInt16: f(reinterpret_cast<const std::uint16_t*>(p)); break;
+      case ScalarType::Int16: f(reinterpret_cast<const std::int16_t*>(p)); break;
+      case ScalarType::Int32: f(reinterpret_cast<const std::int32_t*>(p)); break;
+      case ScalarType::Float32: f(reinterpret_cast<const float*>(p)); break;
+      case ScalarType::Float64: f(reinterpret_cast<const double*>(p)); break;
+      default: throw InputError("plane source: unsupported scalar type");
+    }
+  }
+
+  void read_stored(Id first, Id count, std::byte* out) {
+    const std::uint64_t size = scalar_size(options_.type);
     const std::uint64_t plane = static_cast<std::uint64_t>(head_.dims[0] * head_.dims[1]) * size;
     detail::read_exact(path_, static_cast<std::uint64_t>(options_.header_bytes) + plane * static_cast<std::uint64_t>(first),
                        out, plane * static_cast<std::uint64_t>(count), "planes " + std::to_string(first) + ".." +
@@ -41,9 +84,9 @@ class RawPlanes : public generate::PlaneSource {
     }
   }
 
- private:
   std::string path_;
   RawOptions options_;
+  double slope_, inter_;
   ImageGrid head_;
 };
 
@@ -51,6 +94,26 @@ class RawPlanes : public generate::PlaneSource {
 
 std::unique_ptr<generate::PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options) {
   return std::make_unique<RawPlanes>(path, options);
+}
+
+std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw) {
+  if (raw) return open_raw_planes(path, *raw);
+  auto lower_ext = [&](std::size_t n) {
+    if (path.size() < n) return std::string();
+    std::string e = path.substr(path.size() - n);
+    for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return e;
+  };
+  VolumeLayout layout;
+  if (lower_ext(5) == ".nrrd" || lower_ext(5) == ".nhdr") layout = nrrd_layout(path);
+  else if (lower_ext(4) == ".nii" || lower_ext(7) == ".nii.gz") layout = nifti_layout(path);
+  else
+    throw InputError(path + ": cannot be read plane by plane (raw with --dims, .nrrd/.nhdr or .nii with "
+                     "uncompressed samples can; convert with `keymesh convert " + path + " out.nrrd`)");
+  if (!layout.compressed.empty())
+    throw InputError(path + ": " + layout.compressed + "-compressed samples cannot be read plane by plane "
+                     "(decompress it, e.g. `keymesh convert " + path + " out.nrrd`)");
+  return std::make_unique<RawPlanes>(layout.data_path, layout.raw, layout.scale_slope, layout.scale_inter);
 }
 
 }  // namespace keymesh::io

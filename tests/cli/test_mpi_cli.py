@@ -1,6 +1,6 @@
 """`mpirun -np P keymesh contour`: the distributed contour (issue 9).
 
-Every rank reads its slab of a raw volume and the ranks weld the planes they
+Every rank reads its slab of the volume and the ranks weld the planes they
 share by edge key. Checked against the single-process run of the same
 keymesh: the gathered file is byte-identical for P = 1..4 (and 7 on an odd
 grid), so points, triangles and their order agree bitwise; the .pvtp pieces,
@@ -184,12 +184,49 @@ def averaged_normals_merge_across_ranks():
     # off by far more than rounding: the test above would see it.
 
 
+def write_nifti(path, vol, slope, inter):
+    """A NIfTI-1 .nii of int16 samples (x fastest), scl_slope/scl_inter set."""
+    import struct
+    h = bytearray(348)
+    struct.pack_into("<i", h, 0, 348)
+    nz, ny, nx = vol.shape
+    struct.pack_into("<8h", h, 40, 3, nx, ny, nz, 1, 1, 1, 1)
+    struct.pack_into("<hh", h, 70, 4, 16)                  # datatype int16, bitpix
+    struct.pack_into("<8f", h, 76, 1, 0.5, 0.5, 0.5, 0, 0, 0, 0)
+    struct.pack_into("<fff", h, 108, 352.0, slope, inter)  # vox_offset, scl_slope, scl_inter
+    h[344:348] = b"n+1\0"
+    with open(path, "wb") as f:
+        f.write(bytes(h) + b"\0" * 4 + vol.astype("<i2").tobytes())
+
+
+def nrrd_and_nifti_read_by_slab():
+    """Volumes in NRRD (uncompressed, big-endian) and scaled NIfTI: each
+    rank reads its planes at their offset; the file equals the one process
+    that reads the whole volume."""
+    import numpy as np
+    rng = np.random.default_rng(3)
+    vol = rng.integers(-500, 500, size=(19, 16, 13)).astype(np.int16)
+    nrrd = os.path.join(D, "v.nrrd")
+    with open(nrrd, "wb") as f:
+        f.write(b"NRRD0004\ntype: short\ndimension: 3\nsizes: 13 16 19\nencoding: raw\nendian: big\n"
+                b"spacings: 1 2 0.5\n\n" + vol.astype(">i2").tobytes())
+    nii = os.path.join(D, "v.nii")
+    write_nifti(nii, vol, 0.25, 10.0)
+    for path, iso in ((nrrd, 0.5), (nii, 10.125)):
+        ref = os.path.join(D, "slab_ref.ply")
+        run("contour", path, "--iso", iso, "-o", ref, "-q")
+        for P in (2, 3):
+            out = os.path.join(D, f"slab{P}.ply")
+            mpirun(P, "contour", path, "--iso", iso, "-o", out, "-q")
+            assert open(out, "rb").read() == open(ref, "rb").read(), f"{path} -np {P} differs"
+
+
 def refusals():
     out = os.path.join(D, "refused.ply")
     vti = os.path.join(D, "s.vti")
     run("generate", "sphere", "--size", 16, "-o", vti, "-q")
-    p = mpirun(2, "contour", vti, "--iso", 5.5, "-o", out, expect=2)
-    assert "raw volume" in p.stderr, p.stderr
+    p = mpirun(2, "contour", vti, "--iso", 5.5, "-o", out, expect=1)
+    assert "plane by plane" in p.stderr and p.stderr.count("plane by plane") == 1, p.stderr
     p = mpirun(2, "subdivide", REF, "-o", out, expect=2)
     assert "not distributed" in p.stderr and p.stderr.count("not distributed") == 1, p.stderr
     p = mpirun(2, "contour", SPHERE, *DIMS, "--iso", 20.5, "--normals", "gradient", "-o", out, expect=1)
@@ -212,6 +249,7 @@ check(".pvtp pieces read by VTK and merged by GlobalPointIds equal the single-pr
       pieces_merge_to_the_same_mesh)
 check("--normals average: partial sums merged at the owner; normals within rounding of one process",
       averaged_normals_merge_across_ranks)
+check(".nrrd (big-endian) and scaled .nii read by slab: byte-identical at -np 2 and 3", nrrd_and_nifti_read_by_slab)
 check("refused by name: non-raw input, other commands, normals, --gather with .pvtp, too many ranks, "
       "unwritable pieces", refusals)
 finish()

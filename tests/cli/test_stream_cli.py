@@ -55,6 +55,26 @@ def bounded_memory():
     assert p["peak_rss_mib"] < base + limit_mib + 3 * mesh_mib + 8, (p["peak_rss_mib"], base, limit_mib, mesh_mib)
 
 
+def nrrd_streamed():
+    """An attached NRRD (keymesh's writer) streamed at a quarter of its size
+    gives the in-memory file; a gzip NRRD is refused by name."""
+    nrrd = os.path.join(D, "s.nrrd")
+    run("generate", "sphere", "--size", 96, "-o", nrrd, "-q")
+    whole, part = os.path.join(D, "nw.ply"), os.path.join(D, "np.ply")
+    run("contour", nrrd, "-o", whole, "--iso", 30.5, "-q")
+    run("contour", nrrd, "-o", part, "--iso", 30.5, "-q", "--memory-limit", f"{96 ** 3 * 4 // 4}")
+    assert open(whole, "rb").read() == open(part, "rb").read(), "streamed NRRD differs"
+    import gzip
+    gz = os.path.join(D, "g.nrrd")
+    with open(nrrd, "rb") as f:
+        data = f.read()
+    head, body = data.split(b"\n\n", 1)
+    with open(gz, "wb") as f:
+        f.write(head.replace(b"encoding: raw", b"encoding: gzip") + b"\n\n" + gzip.compress(body))
+    p = run("contour", gz, "-o", part + "2.ply", "--iso", 30.5, "--memory-limit", "1M", expect=1)
+    assert "plane by plane" in p.stderr and not os.path.exists(part + "2.ply"), p.stderr
+
+
 def refusals():
     p = run("contour", RAW, *DIMS, "-o", os.path.join(D, "x.ply"), "--iso", 9, "--memory-limit", "10", expect=1)
     assert "fewer than two" in p.stderr
@@ -66,5 +86,6 @@ def refusals():
 
 check("streamed contour equals the in-memory one byte for byte (one and two isovalues)", identical_output)
 check("a quarter-volume limit keeps peak memory near the limit plus the mesh", bounded_memory)
+check("--memory-limit streams an uncompressed NRRD; gzip refused by name", nrrd_streamed)
 check("limits too small, bad sizes and unsupported options are refused", refusals)
 finish()

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "keymesh/io/plane_source.hpp"
 #include "keymesh/io/volume_formats.hpp"
 #include "keymesh/io/volume_io.hpp"
 
@@ -474,17 +475,27 @@ struct Nifti {
   std::string file(bool big, const std::string& samples) const { return header(big) + std::string(4, '\0') + samples; }
 };
 
-TEST_F(VolumeIo, NiftiEveryDatatypeBothByteOrders) {
-  const std::pair<std::int16_t, ScalarType> types[] = {{2, ScalarType::UInt8},    {256, ScalarType::Int8},
-                                                       {512, ScalarType::UInt16}, {4, ScalarType::Int16},
-                                                       {8, ScalarType::Int32},    {16, ScalarType::Float32},
-                                                       {64, ScalarType::Float64}};
-  for (const auto& entry : types) {
+// NIfTI datatype codes and the scalar types they hold.
+const std::pair<std::int16_t, ScalarType> kNiftiTypes[] = {{2, ScalarType::UInt8},    {256, ScalarType::Int8},
+                                                          {512, ScalarType::UInt16}, {4, ScalarType::Int16},
+                                                          {8, ScalarType::Int32},    {16, ScalarType::Float32},
+                                                          {64, ScalarType::Float64}};
+
+// Calls f(code, T{}, type) for every NIfTI datatype code and its sample type T.
+template <class F>
+void for_each_nifti_type(F&& f) {
+  for (const auto& entry : kNiftiTypes) {
     const std::int16_t code = entry.first;
     const ScalarType type = entry.second;
     for_each_type([&](auto tag, ScalarType t) {
+      if (t == type) f(code, tag, type);
+    });
+  }
+}
+
+TEST_F(VolumeIo, NiftiEveryDatatypeBothByteOrders) {
+  for_each_nifti_type([&](std::int16_t code, auto tag, ScalarType type) {
       using T = decltype(tag);
-      if (t != type) return;
       for (bool big : {false, true}) {
         SCOPED_TRACE(std::string(scalar_type_name(type)) + (big ? " big" : " little"));
         Nifti n;
@@ -498,8 +509,7 @@ TEST_F(VolumeIo, NiftiEveryDatatypeBothByteOrders) {
         const std::string gz = file("v.nii.gz", gzip_bytes(n.file(big, sample_bytes<T>(big))));
         expect_samples<T>(read_volume(gz));
       }
-    });
-  }
+  });
 }
 
 TEST_F(VolumeIo, NiftiScaleSlopeAndIntercept) {
@@ -857,6 +867,75 @@ TEST_F(VolumeIo, DispatchRefusesUnknownAndMissingFiles) {
   expect_refused_read(path("missing.den"), "");
   fs::create_directories(path("dir.nrrd"));
   expect_refused_read(path("dir.nrrd"), "");
+}
+
+
+// ---- plane by plane (the streamed and distributed contours' reader) --------------
+
+// Reads every plane of `p` through open_volume_planes, in two slabs (plane
+// 0, then the rest), and expects the samples, type and geometry read_volume
+// gives.
+void expect_planes_equal_reader(const std::string& p, const RawOptions* raw = nullptr) {
+  SCOPED_TRACE(p);
+  const ImageGrid whole = read_volume(p, raw);
+  auto source = open_volume_planes(p, raw);
+  const ImageGrid& head = source->header();
+  EXPECT_EQ(head.dims, whole.dims);
+  EXPECT_EQ(head.type, whole.type);
+  EXPECT_EQ(head.spacing, whole.spacing);
+  EXPECT_EQ(head.origin, whole.origin);
+  const std::size_t plane = static_cast<std::size_t>(whole.dims[0] * whole.dims[1]) * scalar_size(whole.type);
+  std::vector<std::byte> got(plane * static_cast<std::size_t>(whole.dims[2]));
+  source->read_planes(0, 1, got.data());
+  source->read_planes(1, whole.dims[2] - 1, got.data() + plane);
+  EXPECT_TRUE(std::memcmp(got.data(), whole.bytes.data(), got.size()) == 0);
+}
+
+TEST_F(VolumeIo, PlanesOfNiftiEqualTheReader) {
+  for_each_nifti_type([&](std::int16_t code, auto tag, ScalarType) {
+      using T = decltype(tag);
+      for (bool big : {false, true})
+        for (float slope : {0.0f, 0.5f}) {  // unscaled, then scaled: float samples
+          Nifti n;
+          n.datatype = code;
+          n.bitpix = static_cast<std::int16_t>(8 * sizeof(T));
+          n.slope = slope;
+          n.inter = slope == 0 ? 0.0f : -3.0f;
+          n.vox_offset = 352 + 32;  // an extension before the data
+          expect_planes_equal_reader(file("p.nii", n.header(big) + std::string(36, '\0') + sample_bytes<T>(big)));
+        }
+  });
+}
+
+TEST_F(VolumeIo, PlanesOfNrrdEqualTheReader) {
+  for (bool big : {false, true})
+    expect_planes_equal_reader(file("p.nrrd", nrrd_header("short", std::string("encoding: raw\nendian: ") +
+                                                                     (big ? "big" : "little") + "\nspacings: 0.5 2 3\n") +
+                                                  sample_bytes<std::int16_t>(big)));
+  file("lines.raw", "first line\nsecond\nXY" + sample_bytes<float>());
+  expect_planes_equal_reader(
+      file("l.nhdr", nrrd_header("float", "encoding: raw\nline skip: 2\nbyte skip: 2\ndata file: lines.raw\n"
+                                          "space dimension: 3\nspace directions: (0,0,2) (0,1.5,0) (3,4,0)\n"
+                                          "space origin: (10,-20,30.5)")));
+  RawOptions o;
+  o.dims = {4, 3, 2};
+  o.type = ScalarType::UInt16;
+  o.big_endian = true;
+  o.header_bytes = 5;
+  expect_planes_equal_reader(file("p.raw", "HEAD!" + sample_bytes<std::uint16_t>(true)), &o);
+}
+
+TEST_F(VolumeIo, PlanesRefusedByNameWhenCompressedOrNotAVolumeFile) {
+  const std::string gz = file("g.nrrd", nrrd_header("float", "encoding: gzip") + gzip_bytes(sample_bytes<float>()));
+  expect_refused([&] { open_volume_planes(gz, nullptr); }, gz, "plane by plane");
+  Nifti n;
+  const std::string niigz = file("g.nii.gz", gzip_bytes(n.file(false, sample_bytes<float>())));
+  expect_refused([&] { open_volume_planes(niigz, nullptr); }, niigz, "plane by plane");
+  const std::string vti = file("v.vti", "<VTKFile/>");
+  expect_refused([&] { open_volume_planes(vti, nullptr); }, vti, "plane by plane");
+  // The header's checks still apply: a body shorter than declared.
+  const std::string short_body = file("s.nrrd", nrrd_header("float", "encoding: raw") + "abc");
+  expect_refused([&] { open_volume_planes(short_body, nullptr); }, short_body, "declares");
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
 #pragma once
-// Volumes read plane by plane for streamed contouring
-// (keymesh/generate/contour_stream.hpp): so far raw files described by
-// RawOptions, read with a seek per slab (either byte order).
+// Volumes read plane by plane for streamed and distributed contouring
+// (keymesh/generate/contour_stream.hpp, keymesh/distributed): raw files
+// described by RawOptions and uncompressed NRRD / NIfTI, read with a seek
+// per slab (either byte order).
 #include <memory>
 #include <string>
 
@@ -13,5 +14,12 @@ namespace keymesh::io {
 // Throws InputError naming the file when it is shorter than the header
 // bytes plus the samples the dims declare.
 std::unique_ptr<generate::PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options);
+
+// Raw (when `raw` is given), or a .nrrd/.nhdr or .nii whose samples are
+// stored uncompressed: the header parsed with the reader's checks, then
+// planes read at their offset (NIfTI scl_slope/scl_inter applied as
+// read_volume applies them). Anything else, or gzip-compressed samples:
+// InputError naming the file and what to do.
+std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw);
 
 }  // namespace keymesh::io

@@ -14,6 +14,19 @@
 
 namespace keymesh::io {
 
+// Where the samples of a volume file lie, parsed from its header with the
+// same checks as the reader (dims, sizes against the bytes present): what
+// reading the volume plane by plane needs (io/plane_source.hpp).
+struct VolumeLayout {
+  std::string data_path;   // the file holding the samples (a .nhdr's data file)
+  RawOptions raw;          // dims, type, spacing, origin, byte order; header_bytes = data offset
+  std::string compressed;  // "gzip" when the samples cannot be read by offset
+  double scale_slope = 1, scale_inter = 0;  // NIfTI: value = slope * stored + inter
+  bool scaled() const { return !(scale_slope == 1 && scale_inter == 0); }
+};
+VolumeLayout nrrd_layout(const std::string& path);
+VolumeLayout nifti_layout(const std::string& path);
+
 ImageGrid read_raw(const std::string& path, const RawOptions& options);
 void write_raw(const ImageGrid& grid, const std::string& path);  // native little-endian samples only
 
