@@ -18,7 +18,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
 # and those `make bench` adds for its peers, plots and pictures.
 BENCH_PACKAGES = libthrust-dev libtbb-dev python3-openvdb python3-matplotlib xvfb
 
-.PHONY: all deps build demo test bench scaling clean sanitize fuzz
+.PHONY: all deps build demo test bench scaling clean sanitize sanitize-quick fuzz
 
 all: build
 
@@ -45,8 +45,13 @@ build: deps
 demo: build
 	@$(PYTHON) scripts/demo.py --keymesh $(BUILD_DIR)/keymesh --out out
 
+# Every test, then a short sanitized run (SANITIZE_QUICK=0 skips it).
+SANITIZE_QUICK ?= 1
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+ifneq ($(SANITIZE_QUICK),0)
+	@$(MAKE) --no-print-directory sanitize-quick
+endif
 
 # The distributed contour for 1..8 MPI ranks -> docs/SCALING.md.
 scaling: build
@@ -65,6 +70,16 @@ TSAN_FILTER ?= *Threads*:ExclusiveScan*:BitsNeeded*:Contour*:ContourTets*:Tetrah
 SANITIZER_ENV = KEYMESH_HUGE_PAGES=0 ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:ignore_noninstrumented_modules=1 \
   OMP_TOOL_LIBRARIES=/usr/lib/llvm-14/lib/libarcher.so
+
+# The short sanitized run of `make test`: the keymesh command alone under
+# ASan+UBSan (-O1) on the hostile-input and contour CLI tests and every
+# fuzz corpus and regression file (tests/sanitized_cli.py).
+sanitize-quick: deps
+	@echo "make test: short sanitized run (ASan+UBSan keymesh in build-asan-quick)"
+	@cmake -S . -B build-asan-quick $(SANITIZE_CMAKE) -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_SANITIZE=address,undefined \
+	  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" >/dev/null
+	@cmake --build build-asan-quick -j $(JOBS) --target keymesh
+	@$(SANITIZER_ENV) $(PYTHON) tests/sanitized_cli.py build-asan-quick/keymesh
 
 sanitize: deps
 	@cmake -S . -B build-asan $(SANITIZE_CMAKE) -DKEYMESH_SANITIZE=address,undefined $(CMAKE_FLAGS) >/dev/null
@@ -94,4 +109,4 @@ fuzz: deps
 	done; exit $$status
 
 clean:
-	rm -rf $(BUILD_DIR) out
+	rm -rf $(BUILD_DIR) out build-asan build-asan-quick build-tsan build-fuzz
