@@ -124,6 +124,14 @@ def table(head, body):
     return "\n".join(out)
 
 
+
+def _num(x):
+    """A load average as a float, 0 when the run did not record it."""
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        return 0.0
+
 class Report:
     def __init__(self, rows, results):
         self.rows = rows
@@ -172,9 +180,11 @@ class Report:
             f"{run.get('seconds', 0) / 60:.1f} min",
             *self.durations(),
             f"- **Load average** (1 min) {la0} at the start, {la1} at the end; each row of "
-            "`latest.jsonl` carries the load average when it was measured (`loadavg`). The VM is shared: "
-            "other processes (compilers) compete for its 2 cores, so absolute times vary between runs "
-            "and min–max spreads are wide; read ratios measured side by side, and minima beside medians.",
+            "`latest.jsonl` carries the load average when it was measured (`loadavg`). " +
+            ("The VM is shared: other processes (compilers) competed for its cores during this run, so absolute "
+             "times vary between runs and min–max spreads are wide; read ratios measured side by side, and "
+             "minima beside medians." if max(_num(la0), _num(la1)) > 1.0 * (m.get("cores") or 1)
+             else "Nothing but the benchmark ran during this run (its own processes make the load average)."),
             f"- **Repetitions:** {run.get('reps')} per case ({run.get('peer_reps')} for scikit-image and OpenVDB, "
             "and for VTK's contour filters on the 432³ case; 3 for tet24, 1 in QUICK runs); medians, with "
             "(min–max) in ms; stage times (classify, generate, weld, fields) are the last repetition's. Peak memory is the process's "
