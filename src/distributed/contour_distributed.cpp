@@ -71,11 +71,7 @@ void gather_segments(const std::vector<T>& local, int per, MPI_Datatype type, co
 }  // namespace
 
 void require_distributable(const ImageGrid& head, const generate::ContourOptions& options, int ranks) {
-  if (options.normals == generate::ContourNormals::Gradient)
-    throw InputError("distributed contour: --normals none or average (gradient normals would need a ghost plane on "
-                     "each side of a slab)");
-  if (options.coarsen || options.curvature)
-    throw InputError("distributed contour: --coarsen and --curvature run on one process so far");
+  if (options.coarsen) throw InputError("distributed contour: --coarsen runs on one process so far");
   if (options.weld == generate::ContourWeld::VertexWeld)
     throw InputError("distributed contour: --weld vertexweld compares coordinates; across ranks only keys weld");
   if (options.backend != generate::Backend::Cpu) throw InputError("distributed contour: --backend cpu only so far");
@@ -97,21 +93,28 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   const Id lo = (nz - 1) * r / P, hi = (nz - 1) * (r + 1) / P;
   st.first_plane = static_cast<double>(lo);
   st.planes = static_cast<double>(hi - lo + 1);
+  // Gradient normals and curvature take central differences across the
+  // slab's border: a ghost plane on either side (where the grid has one).
+  const bool ghosts = options.normals == generate::ContourNormals::Gradient || options.curvature;
+  const Id below = ghosts && lo > 0 ? 1 : 0, above = ghosts && hi < nz - 1 ? 1 : 0;
 
   auto t0 = Clock::now();
   ImageGrid slab;
   slab.spacing = head.spacing;
   slab.origin = head.origin;
   slab.name = head.name;
-  slab.allocate({nx, ny, hi - lo + 1}, head.type);
-  source.read_planes(lo, hi - lo + 1, slab.bytes.data());
+  slab.allocate({nx, ny, below + hi - lo + 1 + above}, head.type);
+  source.read_planes(lo - below, below + hi - lo + 1 + above, slab.bytes.data());
   st.read = seconds_since(t0);
 
   t0 = Clock::now();
   generate::ContourOptions opt = options;
-  opt.first_plane = lo;
+  opt.first_plane = lo - below;
   opt.total_planes = nz;
-  opt.normals = generate::ContourNormals::None;  // averaged below, across ranks
+  opt.ghost_below = below;
+  opt.ghost_above = above;
+  if (options.normals == generate::ContourNormals::Average)
+    opt.normals = generate::ContourNormals::None;  // averaged below, across ranks
   piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys);
   slab.bytes = {};
   // Averaged normals, KEY-REDUCE's merge over this rank's triangles first:

@@ -133,14 +133,15 @@ constexpr Id kSlabsPerBlock = 4;
 // by the slabs on either side of its plane, so a block shares points with
 // its two neighbours at most.
 template <class K>
-Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::vector<K>& keys,
+Id generate_soup(const InsideBits& bits, const GridShape& s, Id k_begin, Id k_end, K key_offset, std::vector<K>& keys,
                  std::vector<Id>& blocks, ContourStats& st) {
+  // Voxel layers [k_begin, k_end): all of them but ghost planes' layers.
   const auto& table = marching_cubes_table();
-  const Id rows = (s.ny - 1) * (s.nz - 1);
+  const Id rows = (s.ny - 1) * (k_end - k_begin);
   auto t0 = Clock::now();
   std::vector<Id> row_offsets(rows + 1, 0);
   parallel::for_each_dynamic(rows, [&](Id r) {
-    const Id j = r % (s.ny - 1), k = r / (s.ny - 1);
+    const Id j = r % (s.ny - 1), k = k_begin + r / (s.ny - 1);
     Id count = 0;
     for_each_cut_voxel(bits, s, j, k, [&](Id, unsigned cube_case) { count += table.triangle_count[cube_case]; });
     row_offsets[r] = count;
@@ -149,7 +150,7 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::
   st.classify += seconds_since(t0);
   t0 = Clock::now();
   const Id base = static_cast<Id>(keys.size());
-  for (Id k = 0; k < s.nz - 1; k += kSlabsPerBlock) blocks.push_back(base + 3 * row_offsets[k * (s.ny - 1)]);
+  for (Id k = 0; k < k_end - k_begin; k += kSlabsPerBlock) blocks.push_back(base + 3 * row_offsets[k * (s.ny - 1)]);
   if (base + 3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("contour: " + std::to_string(base / 3 + triangles) +
                      " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
@@ -162,7 +163,7 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, K key_offset, std::
   }
   K* out = keys.data() + base;
   parallel::for_each_dynamic(rows, [&](Id r) {
-    const Id j = r % (s.ny - 1), k = r / (s.ny - 1);
+    const Id j = r % (s.ny - 1), k = k_begin + r / (s.ny - 1);
     K* o = out + 3 * row_offsets[r];
     const K row_key = key_offset + static_cast<K>(3 * (j * s.nx + k * s.nxy));
     for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
@@ -228,7 +229,8 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
       auto t0 = Clock::now();
       classify(samples, s, InsideTest<T>(opt.isovalues[iso_index]), bits);
       st.classify += seconds_since(t0);
-      generate_soup<K>(bits, s, static_cast<K>(iso_index) * keys_per_iso, soup, blocks, st);
+      generate_soup<K>(bits, s, opt.ghost_below, s.nz - 1 - opt.ghost_above, static_cast<K>(iso_index) * keys_per_iso,
+                       soup, blocks, st);
     }
     const Id corners = static_cast<Id>(soup.size());
     blocks.push_back(corners);
@@ -338,6 +340,13 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
       throw InputError("--backend cuda: streamed (slab) contouring is not available on the GPU yet");
     return cuda::contour(grid, options, stats);
   }
+  if (options.ghost_below < 0 || options.ghost_below > 1 || options.ghost_above < 0 || options.ghost_above > 1 ||
+      ((options.ghost_below || options.ghost_above) && !options.total_planes) ||
+      grid.dims[2] - options.ghost_below - options.ghost_above < 2)
+    throw InputError("contour: ghost planes (" + std::to_string(options.ghost_below) + " below, " +
+                     std::to_string(options.ghost_above) + " above) need a slab of at least two other planes");
+  if ((options.ghost_below || options.ghost_above) && options.coarsen)
+    throw InputError("contour: coarsening a slab with ghost planes is not supported");
   if (point_keys && options.coarsen)
     throw InputError("contour: coarsened points have no edge keys (streamed contouring does not coarsen yet)");
   if (options.total_planes && (options.first_plane < 0 || options.first_plane + grid.dims[2] > options.total_planes))

@@ -20,10 +20,10 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
                              ContourStats* stats, StreamStats* stream_stats) {
-  if (options.normals != ContourNormals::None)
-    throw InputError("contour --memory-limit: normals read across slab borders; use --normals none for now");
-  if (options.coarsen || options.curvature)
-    throw InputError("contour --memory-limit: coarsening and curvature are not streamed yet");
+  if (options.normals == ContourNormals::Average)
+    throw InputError("contour --memory-limit: averaged normals sum triangles of two slabs; use --normals gradient "
+                     "or none");
+  if (options.coarsen) throw InputError("contour --memory-limit: coarsening is not streamed yet");
   if (options.backend != Backend::Cpu) throw InputError("contour --memory-limit: streaming runs on the CPU backend");
   if (options.weld == ContourWeld::VertexWeld)
     throw InputError("contour --memory-limit: VERTEX-WELD has no keys to merge slabs by; use --weld keyreduce");
@@ -34,24 +34,30 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
       throw InputError("contour: grid has " + std::to_string(head.dims[a]) + " point(s) along axis " + "xyz"[a] +
                        " (need at least 2)");
   const std::size_t plane_bytes = static_cast<std::size_t>(nx * ny) * scalar_size(head.type);
+  // Gradient normals and curvature take central differences across a
+  // slab's border: each slab reads a ghost plane on either side.
+  const bool ghosts = options.normals == ContourNormals::Gradient || options.curvature;
+  const Id ghost_planes = ghosts ? 2 : 0;
   const Id fit = static_cast<Id>(memory_limit / plane_bytes);
-  if (fit < 2)
-    throw LimitError("contour --memory-limit " + std::to_string(memory_limit) + " bytes holds fewer than two " +
-                     std::to_string(nx) + " x " + std::to_string(ny) + " planes (" + std::to_string(2 * plane_bytes) +
-                     " bytes needed)");
-  const Id planes = std::min(fit, nz);
+  if (fit < 2 + ghost_planes)
+    throw LimitError("contour --memory-limit " + std::to_string(memory_limit) + " bytes holds fewer than " +
+                     std::string(ghosts ? "four " : "two ") + std::to_string(nx) + " x " + std::to_string(ny) +
+                     " planes (" + std::to_string((2 + ghost_planes) * plane_bytes) + " bytes needed" +
+                     (ghosts ? ", two of them ghost planes for the derivatives" : "") + ")");
+  const Id planes = std::min(fit - ghost_planes, nz);
   const Id n_iso = static_cast<Id>(options.isovalues.size());
   const std::uint64_t per_iso = 3ull * static_cast<std::uint64_t>(nx * ny * nz);
 
   StreamStats ss;
   ss.planes_per_slab = planes;
-  ss.slab_bytes = static_cast<std::size_t>(planes) * plane_bytes;
+  ss.slab_bytes = static_cast<std::size_t>(std::min(planes + ghost_planes, nz)) * plane_bytes;
   ContourStats total;
   // Every slab's points (global keys, positions, scalars), one after the
   // other, and its triangles as indices into that list, per isovalue so that
   // the isovalues' triangles end up one after the other, as in one contour.
   std::vector<std::uint64_t> keys;
-  std::vector<float> points, scalars;
+  std::vector<float> points;
+  std::vector<Field> fields;  // every point field of the slabs (scalars, normals, curvature), concatenated
   std::vector<std::vector<std::uint32_t>> corners(static_cast<std::size_t>(n_iso));
   ImageGrid slab;
   slab.spacing = head.spacing;
@@ -61,12 +67,15 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   opt.total_planes = nz;
   for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
     const Id count = std::min(planes, nz - k0);
+    const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
     auto t0 = Clock::now();
-    slab.allocate({nx, ny, count}, head.type);
-    source.read_planes(k0, count, slab.bytes.data());
+    slab.allocate({nx, ny, below + count + above}, head.type);
+    source.read_planes(k0 - below, below + count + above, slab.bytes.data());
     ss.read += seconds_since(t0);
     t0 = Clock::now();
-    opt.first_plane = k0;
+    opt.first_plane = k0 - below;
+    opt.ghost_below = below;
+    opt.ghost_above = above;
     std::vector<std::uint64_t> slab_keys;
     ContourStats st;
     const SurfaceMesh m = contour(slab, opt, &st, &slab_keys);
@@ -79,7 +88,10 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
       throw LimitError("contour --memory-limit: more than 2^32 - 1 points before merging");
     keys.insert(keys.end(), slab_keys.begin(), slab_keys.end());
     points.insert(points.end(), m.points.begin(), m.points.end());
-    if (options.scalars) scalars.insert(scalars.end(), m.point_fields[0].values.begin(), m.point_fields[0].values.end());
+    if (fields.empty())
+      for (const Field& f : m.point_fields) fields.push_back(Field{f.name, f.components, {}});
+    for (std::size_t i = 0; i < fields.size(); ++i)
+      fields[i].values.insert(fields[i].values.end(), m.point_fields[i].values.begin(), m.point_fields[i].values.end());
     for (Id t = 0; t < m.num_cells(); ++t) {
       auto& dst = corners[static_cast<std::size_t>(slab_keys[m.connectivity[3 * t]] / per_iso)];
       for (int c = 0; c < 3; ++c) dst.push_back(static_cast<std::uint32_t>(base + m.connectivity[3 * t + c]));
@@ -97,13 +109,16 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   SurfaceMesh mesh;
   const Id unique = g.num_groups();
   mesh.points.resize(static_cast<std::size_t>(3 * unique));
-  Field f{head.name, 1, std::vector<float>(options.scalars ? static_cast<std::size_t>(unique) : 0)};
+  for (const Field& f : fields)
+    mesh.point_fields.push_back(Field{f.name, f.components, std::vector<float>(static_cast<std::size_t>(unique * f.components))});
   parallel::for_each(unique, [&](Id p) {
     const Id first = g.order[g.offsets[p]];
     for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
-    if (options.scalars) f.values[p] = scalars[first];
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+      const int c = fields[i].components;
+      std::copy_n(fields[i].values.begin() + c * first, c, mesh.point_fields[i].values.begin() + c * p);
+    }
   });
-  if (options.scalars) mesh.point_fields.push_back(std::move(f));
   std::size_t total_corners = 0;
   for (const auto& c : corners) total_corners += c.size();
   mesh.connectivity.resize(total_corners);

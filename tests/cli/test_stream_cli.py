@@ -75,6 +75,21 @@ def nrrd_streamed():
     assert "plane by plane" in p.stderr and not os.path.exists(part + "2.ply"), p.stderr
 
 
+def derivatives_streamed():
+    """--normals gradient and --curvature: central differences across slab
+    borders read a ghost plane on either side, so the file is still
+    byte-identical (without the ghosts the border points' normals differ)."""
+    whole, part = os.path.join(D, "dw.vtp"), os.path.join(D, "dp.vtp")
+    args = ["--iso", 90.5, "--iso", 40.25, "--normals", "gradient", "--curvature", "-q"]
+    run("contour", RAW, *DIMS, "-o", whole, *args)
+    for limit in (VOLUME // 4, 5 * N * N * 4):  # a quarter; then 3 planes and the two ghosts per slab
+        run("contour", RAW, *DIMS, "-o", part, *args, "--memory-limit", limit, "--report", part + ".json")
+        assert open(whole, "rb").read() == open(part, "rb").read(), f"limit {limit}: streamed derivatives differ"
+    assert report(part + ".json")["stream"]["slabs"] > 100
+    p = run("contour", RAW, *DIMS, "-o", part, *args, "--memory-limit", 3 * N * N * 4, expect=1)
+    assert "fewer than four" in p.stderr and "ghost planes" in p.stderr, p.stderr
+
+
 def refusals():
     p = run("contour", RAW, *DIMS, "-o", os.path.join(D, "x.ply"), "--iso", 9, "--memory-limit", "10", expect=1)
     assert "fewer than two" in p.stderr
@@ -87,5 +102,6 @@ def refusals():
 check("streamed contour equals the in-memory one byte for byte (one and two isovalues)", identical_output)
 check("a quarter-volume limit keeps peak memory near the limit plus the mesh", bounded_memory)
 check("--memory-limit streams an uncompressed NRRD; gzip refused by name", nrrd_streamed)
+check("gradient normals and curvature streamed with ghost planes: byte-identical", derivatives_streamed)
 check("limits too small, bad sizes and unsupported options are refused", refusals)
 finish()

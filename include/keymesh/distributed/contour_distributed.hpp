@@ -40,8 +40,9 @@ struct ContourPiece {
 void require_distributable(const ImageGrid& header, const generate::ContourOptions& options, int ranks);
 
 // Collective: every rank calls it with its own source of the same volume.
-// Supports what contour_streamed supports (--normals none, scalars, several
-// isovalues, --weld keyreduce); the rest is refused by name.
+// Supports scalars, several isovalues, --weld keyreduce, --normals gradient
+// and --curvature (ghost planes) and --normals average (partial sums merged
+// at the owner); coarsening, VERTEX-WELD and the GPU are refused by name.
 ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options);
 
 // Collective: rank 0 returns the whole mesh (points in global id order,

@@ -63,6 +63,12 @@ struct ContourOptions {
   // global edge ids of the whole grid (see contour_stream.hpp).
   Id first_plane = 0;
   Id total_planes = 0;
+  // Slabs only: the grid's first `ghost_below` and last `ghost_above` planes
+  // (0 or 1 each) are ghosts: samples the derivatives need (gradient
+  // normals, curvature: central differences across the slab's border), in
+  // no generated cell. A slab with ghosts gives the bits of the whole grid.
+  Id ghost_below = 0;
+  Id ghost_above = 0;
   // Unstructured grids only: the point field to contour (empty: the first
   // one-component point field). Every point field is carried, interpolated.
   std::string array;

@@ -8,9 +8,11 @@
 // give the triangles in voxel order, and a shared plane's points are
 // computed from the same samples by both slabs.
 //
-// Supported: any scalar type, several isovalues, the interpolated scalar.
-// Refused by name for now: normals (gradients and averages read across slab
-// borders), coarsening, curvature, the GPU.
+// Supported: any scalar type, several isovalues, the interpolated scalar,
+// gradient normals and mean curvature (each slab reads a ghost plane on
+// either side for the central differences, so they too are bit-identical).
+// Refused by name for now: averaged normals (a shared point's triangles lie
+// in two slabs), coarsening, the GPU.
 #include <cstddef>
 #include <memory>
 
