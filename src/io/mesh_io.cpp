@@ -10,7 +10,7 @@
 namespace keymesh::io {
 
 namespace {
-constexpr const char* kAccepted = ".ply, .obj, .stl, .vtp";
+constexpr const char* kAccepted = ".ply, .obj, .stl, .vtp; .pvtp to read";
 
 [[noreturn]] void unknown_extension(const std::string& path, const std::string& ext) {
   throw InputError(path + ": unknown mesh file extension '" + ext + "' (accepted: " + kAccepted + ")");
@@ -23,6 +23,7 @@ SurfaceMesh read_mesh(const std::string& path) {
   if (ext == ".obj") return read_obj(path);
   if (ext == ".stl") return read_stl(path);
   if (ext == ".vtp") return read_vtp(path);
+  if (ext == ".pvtp") return read_pvtp(path);
   unknown_extension(path, ext);
 }
 

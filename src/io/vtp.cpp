@@ -1,6 +1,8 @@
 #include "keymesh/io/vtp.hpp"
 
+#include <algorithm>
 #include <bit>
+#include <filesystem>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -60,7 +62,11 @@ SurfaceMesh read_vtp(const std::string& path) {
   return parse_vtp(data, path);
 }
 
-SurfaceMesh parse_vtp(std::string_view data, const std::string& path) {
+SurfaceMesh parse_vtp(std::string_view data, const std::string& path) { return parse_vtp(data, path, nullptr); }
+
+SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vector<std::int64_t>* global_ids) {
+  if (global_ids) global_ids->clear();
+  bool every_piece_has_ids = true;
   ParsedXml xml = parse_xml(data, path);
   const XmlNode& root = *xml.root;
   const Context ctx = file_context(xml, path, "PolyData");
@@ -94,7 +100,9 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path) {
 
     // Point data: every numeric array with one tuple per point.
     std::vector<Field> fields;
+    bool piece_has_ids = false;
     if (const XmlNode* pd = piece.child("PointData"); pd && npts > 0) {
+      const std::string* ids_name = pd->attr("GlobalIds");
       for (const auto& c : pd->children) {
         if (c->name != "DataArray") continue;
         const std::string* t = c->attr("type");
@@ -105,6 +113,18 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path) {
           throw InputError(path + ": PointData array '" + (name ? *name : std::string()) + "' holds " +
                            std::to_string(a.count()) + " values for " + std::to_string(npts) + " points x " +
                            std::to_string(a.components) + " components");
+        if (global_ids && ids_name && name && *name == *ids_name && a.components == 1) {
+          // The piece's global point ids (exact integers, not a float field).
+          for (std::size_t i = 0; i < a.count(); ++i) {
+            std::int64_t v = 0;
+            if (!a.as_int(i, v) || v < 0)
+              throw InputError(path + ": GlobalIds array '" + *name + "' holds a non-integer or negative id at " +
+                               std::to_string(i));
+            global_ids->push_back(v);
+          }
+          piece_has_ids = true;
+          continue;
+        }
         Field f{name ? *name : std::string("array"), a.components, std::vector<float>(a.count())};
         for (std::size_t i = 0; i < a.count(); ++i) f.values[i] = static_cast<float>(a.as_double(i));
         fields.push_back(std::move(f));
@@ -119,6 +139,7 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path) {
           if (!taken && f.name == *marked && f.components == 3) f.name = "Normals";
       }
     }
+    if (npts > 0) every_piece_has_ids = every_piece_has_ids && piece_has_ids;
     // Fields present in every piece survive; a piece without points adds nothing.
     if (first_piece) {
       mesh.point_fields = std::move(fields);
@@ -175,7 +196,120 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path) {
   }
   if (mesh.offsets.size() == 1) mesh.offsets.clear();
   compact_offsets(mesh);
+  if (global_ids && !every_piece_has_ids) global_ids->clear();
   return mesh;
+}
+
+SurfaceMesh read_pvtp(const std::string& path) {
+  const std::string index = read_whole_file(path);
+  ParsedXml xml = parse_xml(index, path);
+  const XmlNode* root = xml.root.get();
+  const std::string* type = root ? root->attr("type") : nullptr;
+  const XmlNode* ppoly = root ? root->child("PPolyData") : nullptr;
+  if (!type || *type != "PPolyData" || !ppoly) throw InputError(path + ": not a VTK PPolyData index (.pvtp)");
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  // Every piece, with its global point ids when it has them.
+  std::vector<SurfaceMesh> pieces;
+  std::vector<std::vector<std::int64_t>> ids;
+  for (const auto& c : ppoly->children) {
+    if (c->name != "Piece") continue;
+    const std::string* source = c->attr("Source");
+    if (!source || source->empty()) throw InputError(path + ": <Piece> without a Source");
+    std::filesystem::path p(*source);
+    if (p.is_relative()) p = dir / p;
+    const std::string data = read_whole_file(p.string());
+    ids.emplace_back();
+    pieces.push_back(parse_vtp(data, p.string(), &ids.back()));
+  }
+  if (pieces.empty()) throw InputError(path + ": the index lists no pieces");
+  bool welded = true;
+  std::int64_t max_id = -1;
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    if (pieces[i].num_points() > 0 && ids[i].empty()) welded = false;
+    for (std::int64_t v : ids[i]) max_id = std::max(max_id, v);
+  }
+  SurfaceMesh out;
+  // Fields every piece with points has (name and components), in the first's order.
+  std::vector<Field> fields;
+  const SurfaceMesh* first = nullptr;
+  for (const SurfaceMesh& m : pieces)
+    if (m.num_points() > 0) {
+      first = &m;
+      break;
+    }
+  if (first)
+    for (const Field& f : first->point_fields) {
+      bool everywhere = true;
+      for (const SurfaceMesh& m : pieces) {
+        if (m.num_points() == 0) continue;
+        bool has = false;
+        for (const Field& g : m.point_fields) has = has || (g.name == f.name && g.components == f.components);
+        everywhere = everywhere && has;
+      }
+      if (everywhere) fields.push_back(Field{f.name, f.components, {}});
+    }
+  auto field_of = [](const SurfaceMesh& m, const Field& like) -> const Field* {
+    for (const Field& g : m.point_fields)
+      if (g.name == like.name && g.components == like.components) return &g;
+    return nullptr;
+  };
+  bool polygons = false;
+  for (const SurfaceMesh& m : pieces) polygons = polygons || !m.all_triangles();
+  if (polygons) out.offsets.push_back(0);
+  auto add_cells = [&](const SurfaceMesh& m, auto&& id_of) {
+    for (Id c = 0; c < m.num_cells(); ++c) {
+      for (std::uint64_t k = m.cell_begin(c); k < m.cell_end(c); ++k) out.connectivity.push_back(id_of(m.connectivity[k]));
+      if (polygons) out.offsets.push_back(out.connectivity.size());
+    }
+  };
+  if (welded && max_id >= 0) {
+    // Welded by the ids the pieces carry (no positions compared): point g of
+    // the whole mesh is the piece point with global id g; every copy of a
+    // shared point must agree on its position.
+    if (static_cast<std::uint64_t>(max_id) >= std::numeric_limits<PointIndex>::max())
+      throw LimitError(path + ": global point id " + std::to_string(max_id) + " exceeds 2^32 - 2");
+    // Ids are dense (0 .. distinct points - 1): one past what the pieces
+    // hold is refused before anything of that size is allocated.
+    std::uint64_t held = 0;
+    for (const SurfaceMesh& m : pieces) held += static_cast<std::uint64_t>(m.num_points());
+    if (static_cast<std::uint64_t>(max_id) >= held)
+      throw InputError(path + ": global point id " + std::to_string(max_id) + " but the pieces hold " +
+                       std::to_string(held) + " points");
+    const std::size_t n = static_cast<std::size_t>(max_id) + 1;
+    std::vector<std::uint8_t> seen(n, 0);
+    out.points.assign(3 * n, 0.0f);
+    for (Field& f : fields) f.values.assign(n * static_cast<std::size_t>(f.components), 0.0f);
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      const SurfaceMesh& m = pieces[i];
+      for (Id p = 0; p < m.num_points(); ++p) {
+        const std::size_t g = static_cast<std::size_t>(ids[i][static_cast<std::size_t>(p)]);
+        if (seen[g] && !std::equal(m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3, out.points.begin() + 3 * g))
+          throw InputError(path + ": pieces disagree on the position of global point " + std::to_string(g));
+        seen[g] = 1;
+        std::copy_n(m.points.begin() + 3 * p, 3, out.points.begin() + 3 * g);
+        for (Field& f : fields) {
+          const Field* src = field_of(m, f);
+          std::copy_n(src->values.begin() + f.components * p, f.components, f.values.begin() + f.components * g);
+        }
+      }
+      add_cells(m, [&](PointIndex local) { return static_cast<PointIndex>(ids[i][local]); });
+    }
+    for (std::size_t g = 0; g < n; ++g)
+      if (!seen[g]) throw InputError(path + ": no piece holds global point " + std::to_string(g));
+  } else {
+    // No ids: the pieces side by side, as a multi-piece .vtp reads.
+    for (const SurfaceMesh& m : pieces) {
+      const std::uint64_t base = out.points.size() / 3;
+      if (base + static_cast<std::uint64_t>(m.num_points()) > std::numeric_limits<PointIndex>::max())
+        throw LimitError(path + ": more than 2^32 - 1 points");
+      out.points.insert(out.points.end(), m.points.begin(), m.points.end());
+      for (Field& f : fields)
+        if (const Field* src = field_of(m, f)) f.values.insert(f.values.end(), src->values.begin(), src->values.end());
+      add_cells(m, [&](PointIndex local) { return static_cast<PointIndex>(base + local); });
+    }
+  }
+  out.point_fields = std::move(fields);
+  return out;
 }
 
 namespace {

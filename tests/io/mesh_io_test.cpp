@@ -679,3 +679,43 @@ TEST(MeshIoTest, EmptyMeshRoundTrips) {
     EXPECT_EQ(r.num_cells(), 0) << ext;
   }
 }
+
+// ---- .pvtp: pieces welded by their global point ids -------------------------------
+
+// A square of two triangles split into two pieces that share the diagonal's
+// two points (global ids 1 and 2), as a distributed run writes them.
+TEST(PvtpTest, PiecesWeldByGlobalIdsNotPositions) {
+  TempDir dir;
+  SurfaceMesh a, b;
+  a.points = {0, 0, 0, 1, 0, 0, 0, 1, 0};  // global 0, 1, 2
+  a.connectivity = {0, 1, 2};
+  a.point_fields.push_back({"s", 1, {10, 11, 12}});
+  b.points = {0, 1, 0, 1, 0, 0, 1, 1, 0};  // global 2, 1, 3
+  b.connectivity = {1, 2, 0};
+  b.point_fields.push_back({"s", 1, {12, 11, 13}});
+  const std::vector<std::uint64_t> ia = {0, 1, 2}, ib = {2, 1, 3};
+  io::write_vtp(a, dir.file("sq_0.vtp"), &ia);
+  io::write_vtp(b, dir.file("sq_1.vtp"), &ib);
+  io::write_pvtp(dir.file("sq.pvtp"), a, {"sq_0.vtp", "sq_1.vtp"}, true);
+  const SurfaceMesh m = io::read_mesh(dir.file("sq.pvtp"));
+  EXPECT_EQ(m.points, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}));
+  EXPECT_EQ(m.connectivity, (std::vector<PointIndex>{0, 1, 2, 1, 3, 2}));
+  ASSERT_EQ(m.point_fields.size(), 1u);  // the ids are not a field
+  EXPECT_EQ(m.point_fields[0].values, (std::vector<float>{10, 11, 12, 13}));
+  // Copies that disagree on a position, ids past the points held, a missing piece.
+  SurfaceMesh moved = b;
+  moved.points[0] = 0.5f;
+  io::write_vtp(moved, dir.file("sq_1.vtp"), &ib);
+  EXPECT_THROW(io::read_mesh(dir.file("sq.pvtp")), InputError);
+  const std::vector<std::uint64_t> far = {2, 1, 1000000000};
+  io::write_vtp(b, dir.file("sq_1.vtp"), &far);
+  EXPECT_THROW(io::read_mesh(dir.file("sq.pvtp")), InputError);
+  fs::remove(dir.file("sq_1.vtp"));
+  EXPECT_THROW(io::read_mesh(dir.file("sq.pvtp")), InputError);
+  // Pieces without ids sit side by side (3 + 3 points: nothing welded).
+  io::write_vtp(b, dir.file("sq_1.vtp"));
+  io::write_vtp(a, dir.file("sq_0.vtp"));
+  EXPECT_EQ(io::read_mesh(dir.file("sq.pvtp")).num_points(), 6);
+  write_text(dir.file("not.pvtp"), "<VTKFile type=\"PolyData\"/>");
+  EXPECT_THROW(io::read_mesh(dir.file("not.pvtp")), InputError);
+}

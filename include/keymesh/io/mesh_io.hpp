@@ -9,7 +9,8 @@
 //        point fields as PointData arrays, "Normals" marked as normals).
 // Read:  the same four formats (ascii and binary PLY, ascii and binary STL
 //        with points welded by exact position, .vtp as written by keymesh,
-//        VTK and ParaView: ascii, base64, appended raw, zlib or not).
+//        VTK and ParaView: ascii, base64, appended raw, zlib or not), and
+//        .pvtp indexes (pieces welded by their GlobalIds; see vtp.hpp).
 #include <string>
 
 #include "keymesh/mesh/surface_mesh.hpp"

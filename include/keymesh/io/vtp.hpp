@@ -25,6 +25,17 @@ namespace keymesh::io {
 
 SurfaceMesh read_vtp(const std::string& path);
 SurfaceMesh parse_vtp(std::string_view data, const std::string& path);
+// With `global_ids`: an integer PointData array marked GlobalIds is returned
+// there (one id per point, pieces concatenated; empty unless every piece
+// with points has one) instead of becoming a float field.
+SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vector<std::int64_t>* global_ids);
+
+// A ParaView parallel PolyData index (.pvtp) and its pieces (Source paths
+// relative to the index). When every piece carries GlobalIds (as
+// `mpirun ... keymesh contour -o X.pvtp` writes them) the pieces are welded
+// by those ids, not by position: point g of the result is global point g,
+// and copies must agree bit for bit. Otherwise the pieces are concatenated.
+SurfaceMesh read_pvtp(const std::string& path);
 void write_vtp(const SurfaceMesh& mesh, const std::string& path);
 // With an Int64 PointData array "GlobalPointIds" marked GlobalIds (a piece
 // of a distributed mesh: its points' ids in the whole mesh).
