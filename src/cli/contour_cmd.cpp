@@ -268,6 +268,8 @@ Register reg{Command{
                                  {"weld", stats.weld},
                                  {"fields", stats.fields}};
           r["peak_rss_mib"] = peak_rss_mib();
+          if (opt.backend == generate::Backend::Cuda)
+            r["device_peak_mib"] = static_cast<double>(stats.device_peak_bytes) / (1 << 20);
           write_report(o->common.report_path, r);
         }
         return 0;

@@ -391,13 +391,24 @@ SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& opt, 
     cudaStream_t s;
     ~StreamGuard() { cudaStreamDestroy(s); }
   } guard{stream};
+  // Peak device memory: the stream-ordered pool's high-water mark, reset
+  // here (only resetting to zero is allowed) and read when done.
+  int device = 0;
+  check(cudaGetDevice(&device), "querying the device");
+  cudaMemPool_t pool;
+  check(cudaDeviceGetDefaultMemPool(&pool, device), "querying the memory pool");
+  unsigned long long high = 0;  // cuuint64_t (the attribute is passed as void*)
+  check(cudaMemPoolSetAttribute(pool, cudaMemPoolAttrUsedMemHigh, &high), "resetting the pool's high-water mark");
   const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * opt.isovalues.size();
-  return visit_scalars(grid, [&](const auto* samples) {
+  SurfaceMesh mesh = visit_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
     if (key_range <= std::numeric_limits<std::uint32_t>::max())
       return contour_typed<std::uint32_t, T>(grid, samples, opt, st, stream);
     return contour_typed<std::uint64_t, T>(grid, samples, opt, st, stream);
   });
+  check(cudaMemPoolGetAttribute(pool, cudaMemPoolAttrUsedMemHigh, &high), "reading the pool's high-water mark");
+  st.device_peak_bytes = static_cast<std::uint64_t>(high);
+  return mesh;
 }
 
 }  // namespace keymesh::cuda

@@ -56,6 +56,20 @@ TEST(CudaContour, SphereMatchesTheCpuBitForBit) {
   }
 }
 
+// The report's peak device memory: at least the samples (uploaded whole),
+// and bounded (the soup, sort buffers and mesh are a few times the output).
+TEST(CudaContour, ReportsPeakDeviceMemory) {
+  SKIP_WITHOUT_GPU();
+  const ImageGrid g = generate::spherical_distance(96);
+  ContourOptions o;
+  o.isovalues = {40.5};
+  o.backend = generate::Backend::Cuda;
+  generate::ContourStats st;
+  const SurfaceMesh m = generate::contour(g, o, &st);
+  EXPECT_GE(st.device_peak_bytes, g.bytes.size());
+  EXPECT_LT(st.device_peak_bytes, g.bytes.size() + 200 * static_cast<std::uint64_t>(m.num_cells()) * 12 + (64u << 20));
+}
+
 TEST(CudaContour, EveryScalarTypeAndNoise) {
   SKIP_WITHOUT_GPU();
   std::mt19937 rng(9);

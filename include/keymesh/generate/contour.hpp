@@ -84,6 +84,9 @@ struct ContourStats {
   Id triangles_before_coarsening = 0;
   Id soup_points = 0;     // triangle corners (pairs) before welding
   int key_bits = 0;       // width of the keys used (32 or 64)
+  // --backend cuda: the high-water mark of the device memory pool during the
+  // contour (samples, soup, sort buffers, mesh), in bytes; 0 on the CPU.
+  std::uint64_t device_peak_bytes = 0;
 };
 
 // Throws InputError for an empty isovalue list, a non-finite isovalue or a
