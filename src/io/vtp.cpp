@@ -395,25 +395,28 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
       }
     }
   };
-  for (const Field& f : mesh.point_fields) write_floats(f.values);
-  if (global_point_ids) {
-    append_le(buf, static_cast<std::uint64_t>(8 * global_point_ids->size()));
-    for (std::uint64_t id : *global_point_ids) {
-      append_le(buf, static_cast<std::int64_t>(id));
-      flush(false);
+  // An Int64 block: its byte count, then the values converted a chunk at a
+  // time (little-endian), written with one call per chunk.
+  auto write_int64s = [&](std::uint64_t count, auto&& value_at) {
+    append_le(buf, static_cast<std::uint64_t>(8 * count));
+    flush(true);
+    std::vector<std::int64_t> chunk(static_cast<std::size_t>(std::min<std::uint64_t>(count, 1 << 16)));
+    for (std::uint64_t at = 0; at < count; at += chunk.size()) {
+      const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), count - at));
+      for (std::size_t i = 0; i < n; ++i) {
+        std::int64_t v = static_cast<std::int64_t>(value_at(at + i));
+        if constexpr (std::endian::native == std::endian::big) v = byteswap_value(v);
+        chunk[i] = v;
+      }
+      file.write(chunk.data(), 8 * n);
     }
-  }
+  };
+  for (const Field& f : mesh.point_fields) write_floats(f.values);
+  if (global_point_ids)
+    write_int64s(global_point_ids->size(), [&](std::uint64_t i) { return (*global_point_ids)[i]; });
   write_floats(mesh.points);
-  append_le(buf, static_cast<std::uint64_t>(8 * mesh.connectivity.size()));
-  for (PointIndex id : mesh.connectivity) {
-    append_le(buf, static_cast<std::int64_t>(id));
-    flush(false);
-  }
-  append_le(buf, static_cast<std::uint64_t>(8 * static_cast<std::uint64_t>(cells)));
-  for (Id c = 0; c < cells; ++c) {
-    append_le(buf, static_cast<std::int64_t>(mesh.cell_end(c)));
-    flush(false);
-  }
+  write_int64s(mesh.connectivity.size(), [&](std::uint64_t i) { return mesh.connectivity[i]; });
+  write_int64s(static_cast<std::uint64_t>(cells), [&](std::uint64_t c) { return mesh.cell_end(static_cast<Id>(c)); });
   buf += "\n  </AppendedData>\n</VTKFile>\n";
   flush(true);
   file.commit();
