@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -20,9 +21,6 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
                              ContourStats* stats, StreamStats* stream_stats) {
-  if (options.normals == ContourNormals::Average)
-    throw InputError("contour --memory-limit: averaged normals sum triangles of two slabs; use --normals gradient "
-                     "or none");
   if (options.coarsen) throw InputError("contour --memory-limit: coarsening is not streamed yet");
   if (options.backend != Backend::Cpu) throw InputError("contour --memory-limit: streaming runs on the CPU backend");
   if (options.weld == ContourWeld::VertexWeld)
@@ -65,6 +63,14 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   slab.name = head.name;
   ContourOptions opt = options;
   opt.total_planes = nz;
+  // Averaged normals: each slab's points carry the sum of their triangles'
+  // normals (KEY-REDUCE's merge within the slab, in triangle order); the
+  // merge across slabs adds a shared point's sums, and the transform
+  // normalises once. Equal to the in-memory normals within float rounding
+  // (a different summation order), not bit for bit.
+  const bool average = options.normals == ContourNormals::Average;
+  if (average) opt.normals = ContourNormals::None;
+  std::vector<float> normal_sums;
   for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
     const Id count = std::min(planes, nz - k0);
     const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
@@ -92,6 +98,14 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
       for (const Field& f : m.point_fields) fields.push_back(Field{f.name, f.components, {}});
     for (std::size_t i = 0; i < fields.size(); ++i)
       fields[i].values.insert(fields[i].values.end(), m.point_fields[i].values.begin(), m.point_fields[i].values.end());
+    if (average) {
+      normal_sums.resize(normal_sums.size() + 3 * static_cast<std::size_t>(m.num_points()), 0.0f);
+      auto* sum = reinterpret_cast<Vec3f*>(normal_sums.data() + 3 * base);
+      for (Id t = 0; t < m.num_cells(); ++t) {
+        const Vec3f f = triangle_normal(m.points.data(), m.connectivity.data(), t);
+        for (int c = 0; c < 3; ++c) sum[m.connectivity[3 * t + c]] = add(sum[m.connectivity[3 * t + c]], f);
+      }
+    }
     for (Id t = 0; t < m.num_cells(); ++t) {
       auto& dst = corners[static_cast<std::size_t>(slab_keys[m.connectivity[3 * t]] / per_iso)];
       for (int c = 0; c < 3; ++c) dst.push_back(static_cast<std::uint32_t>(base + m.connectivity[3 * t + c]));
@@ -111,14 +125,23 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   mesh.points.resize(static_cast<std::size_t>(3 * unique));
   for (const Field& f : fields)
     mesh.point_fields.push_back(Field{f.name, f.components, std::vector<float>(static_cast<std::size_t>(unique * f.components))});
+  Field normals{"Normals", 3, std::vector<float>(average ? static_cast<std::size_t>(3 * unique) : 0)};
   parallel::for_each(unique, [&](Id p) {
     const Id first = g.order[g.offsets[p]];
+    if (average) {
+      // The merge across slabs, in slab order, then the transform.
+      const auto* part = reinterpret_cast<const Vec3f*>(normal_sums.data());
+      Vec3f total{0, 0, 0};
+      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) total = add(total, part[g.order[j]]);
+      reinterpret_cast<Vec3f*>(normals.values.data())[p] = unit(total);
+    }
     for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
     for (std::size_t i = 0; i < fields.size(); ++i) {
       const int c = fields[i].components;
       std::copy_n(fields[i].values.begin() + c * first, c, mesh.point_fields[i].values.begin() + c * p);
     }
   });
+  if (average) mesh.point_fields.push_back(std::move(normals));
   std::size_t total_corners = 0;
   for (const auto& c : corners) total_corners += c.size();
   mesh.connectivity.resize(total_corners);

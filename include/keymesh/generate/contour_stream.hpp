@@ -11,8 +11,10 @@
 // Supported: any scalar type, several isovalues, the interpolated scalar,
 // gradient normals and mean curvature (each slab reads a ghost plane on
 // either side for the central differences, so they too are bit-identical).
-// Refused by name for now: averaged normals (a shared point's triangles lie
-// in two slabs), coarsening, the GPU.
+// Averaged normals: each slab's partial sums per point, added across slabs
+// by the merge and normalised once; equal to the in-memory run within float
+// rounding (not bit for bit: the summation order differs).
+// Refused by name for now: coarsening, the GPU.
 #include <cstddef>
 #include <memory>
 
