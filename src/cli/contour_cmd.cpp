@@ -97,8 +97,8 @@ Register reg{Command{
           ->check(CLI::NonNegativeNumber);
       cmd.add_option("--memory-limit", o->memory_limit,
                      "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
-                     "the output is byte-identical; raw (--dims), .nrrd/.nhdr or .nii with uncompressed samples, "
-                     "--normals none so far");
+                     "the output is byte-identical (averaged normals: within float rounding); raw (--dims), "
+                     ".nrrd/.nhdr or .nii with uncompressed samples; no --coarsen");
       cmd.add_flag("--gather", o->gather,
                    "under mpirun: gather the whole mesh on rank 0 into one file (the default unless OUT is .pvtp, "
                    "which writes one OUT_<rank>.vtp piece per rank with GlobalPointIds)");
