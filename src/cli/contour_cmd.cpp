@@ -51,6 +51,7 @@ struct ContourCli {
   std::string array;  // tet grids: the point field to contour
   std::string memory_limit;  // stream the volume in slabs
   bool gather = false;       // under mpirun: one file from rank 0
+  bool balance = false;      // under mpirun: slabs by work
   // Raw input description.
   std::vector<long long> dims;
   std::string type = "float32";
@@ -102,6 +103,9 @@ Register reg{Command{
       cmd.add_flag("--gather", o->gather,
                    "under mpirun: gather the whole mesh on rank 0 into one file (the default unless OUT is .pvtp, "
                    "which writes one OUT_<rank>.vtp piece per rank with GlobalPointIds)");
+      cmd.add_flag("--balance", o->balance,
+                   "under mpirun: move the slab boundaries so that every rank gets about the same number of "
+                   "triangles (counted on the equal split first); the output is the same");
       add_common_options(cmd, o->common);
       return [o]() {
         for (double iso : o->isovalues)
@@ -166,6 +170,7 @@ Register reg{Command{
           job.raw_given = is_raw;
           job.options = opt;
           job.gather = o->gather;
+          job.balance = o->balance;
           job.quiet = o->common.quiet;
           job.threads = threads;
           job.weld = o->weld;

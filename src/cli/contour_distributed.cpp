@@ -25,7 +25,8 @@ nlohmann::json rank_json(const distributed::RankStats& s) {
           {"points", s.points},                 {"points_owned", s.points_owned},
           {"triangles", s.triangles},           {"keys_requested", s.keys_requested},
           {"bytes_sent", s.bytes_sent},         {"read", s.read},
-          {"contour", s.contour},               {"wait", s.wait},
+          {"balance", s.balance},               {"contour", s.contour},
+          {"wait", s.wait},
           {"exchange", s.exchange},
           {"output", s.output}};
 }
@@ -51,7 +52,7 @@ int run_distributed_contour(const DistributedContourJob& job) {
     if (rank == 0) std::fprintf(stderr, "keymesh: %s\n", e.what());
     return 1;
   }
-  distributed::ContourPiece piece = timer.run("contour", [&] { return distributed::contour_piece(*source, job.options); });
+  distributed::ContourPiece piece = timer.run("contour", [&] { return distributed::contour_piece(*source, job.options, job.balance); });
   SurfaceMesh whole;
   double total_points = static_cast<double>(piece.numbering.total);
   if (pieces) {

@@ -14,6 +14,7 @@ struct DistributedContourJob {
   bool raw_given = false;  // raw input described by --dims ...; otherwise .nrrd/.nhdr/.nii
   generate::ContourOptions options;
   bool gather = false;  // --gather: one file written by rank 0
+  bool balance = false; // --balance: slab boundaries by work, not by layer count
   bool quiet = false;
   int threads = 1;
   std::string weld, normals;  // as given, for the report

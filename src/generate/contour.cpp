@@ -365,4 +365,28 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   });
 }
 
+std::vector<Id> triangles_per_layer(const ImageGrid& grid, const ContourOptions& options) {
+  for (int a = 0; a < 3; ++a)
+    if (grid.dims[a] < 2) throw InputError("triangles_per_layer: need at least 2 points along every axis");
+  const auto& table = marching_cubes_table();
+  return visit_scalars(grid, [&](const auto* samples) {
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
+    const GridShape s = shape_of(grid);
+    std::vector<Id> per_row(static_cast<std::size_t>((s.ny - 1) * (s.nz - 1)), 0);
+    InsideBits bits;
+    for (double iso : options.isovalues) {
+      classify(samples, s, InsideTest<T>(iso), bits);
+      parallel::for_each_dynamic((s.ny - 1) * (s.nz - 1), [&](Id r) {
+        Id count = 0;
+        for_each_cut_voxel(bits, s, r % (s.ny - 1), r / (s.ny - 1),
+                           [&](Id, unsigned cube_case) { count += table.triangle_count[cube_case]; });
+        per_row[r] += count;
+      }, 8);
+    }
+    std::vector<Id> layers(static_cast<std::size_t>(s.nz - 1), 0);
+    for (Id r = 0; r < static_cast<Id>(per_row.size()); ++r) layers[r / (s.ny - 1)] += per_row[r];
+    return layers;
+  });
+}
+
 }  // namespace keymesh::generate

@@ -152,6 +152,24 @@ def pieces_merge_to_the_same_mesh():
         print(f"        -np {P}: {len(ref_pts)} points ({copies} held twice on shared planes), {len(merged)} triangles")
 
 
+def balanced_slabs():
+    """--balance moves the slab boundaries by triangle counts: the file stays
+    byte-identical, and the busiest rank holds fewer triangles than with
+    equal layer counts (the sphere's top and bottom slabs are nearly empty)."""
+    ref = open(REF, "rb").read()
+    for P in (3, 4, 7):
+        even, bal = os.path.join(D, f"even{P}.ply"), os.path.join(D, f"bal{P}.ply")
+        mpirun(P, "contour", SPHERE, *DIMS, *ISOS, "-o", even, "-q", "--report", even + ".json")
+        mpirun(P, "contour", SPHERE, *DIMS, *ISOS, "-o", bal, "-q", "--balance", "--report", bal + ".json")
+        assert open(bal, "rb").read() == ref, f"-np {P} --balance: file differs"
+        e, b = report(even + ".json")["distributed"], report(bal + ".json")["distributed"]
+        assert b["triangle_imbalance"] < e["triangle_imbalance"], (P, b["triangle_imbalance"], e["triangle_imbalance"])
+        slabs = b["per_rank"]
+        assert slabs[0]["first_plane"] == 0 and slabs[-1]["first_plane"] + slabs[-1]["planes"] == N
+        for a, c in zip(slabs, slabs[1:]):
+            assert c["first_plane"] == a["first_plane"] + a["planes"] - 1 and a["planes"] >= 2, (a, c)
+
+
 def keymesh_reads_its_pieces():
     """keymesh's own .pvtp reader welds the pieces by GlobalPointIds: `check`
     finds the closed sphere, and `convert` to .ply gives the gathered file
@@ -222,9 +240,10 @@ def derivatives_with_ghost_planes():
     ref = os.path.join(D, "deriv_ref.vtp")
     run("contour", SPHERE, *args, "-o", ref)
     for P in (2, 3, 5):
-        out = os.path.join(D, f"deriv{P}.vtp")
-        mpirun(P, "contour", SPHERE, *args, "-o", out)
-        assert open(out, "rb").read() == open(ref, "rb").read(), f"-np {P}: derivatives differ"
+        for balance in ([], ["--balance"]):  # moved boundaries: held planes copied, the rest read
+            out = os.path.join(D, f"deriv{P}.vtp")
+            mpirun(P, "contour", SPHERE, *args, "-o", out, *balance)
+            assert open(out, "rb").read() == open(ref, "rb").read(), f"-np {P} {balance}: derivatives differ"
 
 
 def nrrd_and_nifti_read_by_slab():
@@ -275,6 +294,7 @@ check("distributed sphere is a closed 2-manifold, no duplicate point at slab bor
 check("uint16 big-endian noise on an odd grid, -np 3 and 7: byte-identical", odd_grid_many_ranks)
 check(".pvtp pieces read by VTK and merged by GlobalPointIds equal the single-process mesh",
       pieces_merge_to_the_same_mesh)
+check("--balance: slabs by triangle counts, byte-identical, busiest rank lighter (-np 3, 4, 7)", balanced_slabs)
 check("keymesh reads its .pvtp: closed sphere, converts to the gathered file byte for byte", keymesh_reads_its_pieces)
 check("--normals average: partial sums merged at the owner; normals within rounding of one process",
       averaged_normals_merge_across_ranks)

@@ -22,9 +22,10 @@ struct RankStats {
   double first_plane = 0, planes = 0;        // its slab
   double points = 0, points_owned = 0, triangles = 0;
   double keys_requested = 0, bytes_sent = 0; // in the key exchange
-  // Seconds: reading the slab, contouring it, waiting for the slowest rank
+  // Seconds: reading the slab, balancing (counting its layers' triangles and
+  // agreeing on new boundaries, with balance), contouring it, waiting for the slowest rank
   // (load imbalance), the key exchange itself, writing or gathering.
-  double read = 0, contour = 0, wait = 0, exchange = 0, output = 0;
+  double read = 0, balance = 0, contour = 0, wait = 0, exchange = 0, output = 0;
 };
 
 struct ContourPiece {
@@ -43,7 +44,11 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 // Supports scalars, several isovalues, --weld keyreduce, --normals gradient
 // and --curvature (ghost planes) and --normals average (partial sums merged
 // at the owner); coarsening, VERTEX-WELD and the GPU are refused by name.
-ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options);
+// With `balance`, the slab boundaries move so that every rank gets about the
+// same work (triangles per layer counted on the equal split first, then
+// shared); without, every rank gets the same number of voxel layers. The
+// output is the same either way.
+ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options, bool balance);
 
 // Collective: rank 0 returns the whole mesh (points in global id order,
 // triangles isovalue by isovalue in rank order: the single-process file),

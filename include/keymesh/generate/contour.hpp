@@ -97,4 +97,10 @@ struct ContourStats {
 SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats = nullptr,
                     std::vector<std::uint64_t>* point_keys = nullptr);
 
+// Voxel grids: the triangles marching cubes makes in each voxel layer
+// (layer k between planes k and k + 1), summed over the isovalues, from the
+// classification pass alone (no soup, no weld): what a distributed run
+// balances its slabs by.
+std::vector<Id> triangles_per_layer(const ImageGrid& grid, const ContourOptions& options);
+
 }  // namespace keymesh::generate
