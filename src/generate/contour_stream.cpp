@@ -131,9 +131,9 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
     if (average) {
       // The merge across slabs, in slab order, then the transform.
       const auto* part = reinterpret_cast<const Vec3f*>(normal_sums.data());
-      Vec3f total{0, 0, 0};
-      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) total = add(total, part[g.order[j]]);
-      reinterpret_cast<Vec3f*>(normals.values.data())[p] = unit(total);
+      Vec3f merged{0, 0, 0};
+      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) merged = add(merged, part[g.order[j]]);
+      reinterpret_cast<Vec3f*>(normals.values.data())[p] = unit(merged);
     }
     for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
     for (std::size_t i = 0; i < fields.size(); ++i) {

@@ -402,13 +402,13 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
     flush(true);
     std::vector<std::int64_t> chunk(static_cast<std::size_t>(std::min<std::uint64_t>(count, 1 << 16)));
     for (std::uint64_t at = 0; at < count; at += chunk.size()) {
-      const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), count - at));
-      for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t len = static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), count - at));
+      for (std::size_t i = 0; i < len; ++i) {
         std::int64_t v = static_cast<std::int64_t>(value_at(at + i));
         if constexpr (std::endian::native == std::endian::big) v = byteswap_value(v);
         chunk[i] = v;
       }
-      file.write(chunk.data(), 8 * n);
+      file.write(chunk.data(), 8 * len);
     }
   };
   for (const Field& f : mesh.point_fields) write_floats(f.values);
