@@ -7,8 +7,10 @@ suite under ASan/UBSan and TSan.
 
 Usage: sanitized_cli.py BUILD-ASAN-QUICK/keymesh (with ASAN_OPTIONS set)."""
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 KEYMESH = os.path.abspath(sys.argv[1])
@@ -28,35 +30,28 @@ for script in ("cli/test_hardening.py", "cli/test_contour_cli.py"):
         failed.append(script)
         print(p.stdout[-4000:], p.stderr[-4000:])
 
+EXTENSIONS = {"den": ".den", "legacy_vtk": ".vtk", "nifti": ".nii", "nrrd": ".nrrd", "obj": ".obj", "ply": ".ply",
+              "stl": ".stl", "vti": ".vti", "vtp": ".vtp", "vtu": ".vtu"}  # raw: headerless, nothing to parse
 replayed = 0
-for root in (os.path.join(HERE, "fuzz", "corpus"), os.path.join(HERE, "fuzz", "regressions")):
-    for folder, _, files in sorted(os.walk(root)):
-        target = os.path.basename(folder)
-        if target == "raw":
-            continue  # headerless: nothing for `info` to parse
-        ext = {"den": ".den", "legacy_vtk": ".vtk", "nifti": ".nii", "nrrd": ".nrrd", "obj": ".obj", "ply": ".ply",
-               "stl": ".stl", "vti": ".vti", "vtp": ".vtp", "vtu": ".vtu"}.get(target)
-        if not ext:
-            continue
-        for name in sorted(files):
-            src = os.path.join(folder, name)
-            # `info` picks the reader by extension: give the file its format's.
-            path = src if src.endswith(ext) or src.endswith(ext + ".gz") else None
-            if path is None:
-                link = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"keymesh-sanitized-{os.getpid()}{ext}")
-                with open(src, "rb") as a, open(link, "wb") as b:
-                    b.write(a.read())
-                path = link
-            p = subprocess.run([KEYMESH, "info", path], env=env, stdin=subprocess.DEVNULL, capture_output=True,
-                               text=True, timeout=120)
-            replayed += 1
-            if p.returncode not in (0, 1) or "Sanitizer" in p.stderr or "runtime error" in p.stderr:
-                failed.append(src)
-                print(f"sanitized: {src}: exit {p.returncode}\n{p.stderr[-3000:]}")
-link = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"keymesh-sanitized-{os.getpid()}")
-for ext in (".den", ".vtk", ".nii", ".nrrd", ".obj", ".ply", ".stl", ".vti", ".vtp", ".vtu"):
-    if os.path.exists(link + ext):
-        os.remove(link + ext)
+with tempfile.TemporaryDirectory(prefix="keymesh-sanitized-") as tmp:
+    for root in (os.path.join(HERE, "fuzz", "corpus"), os.path.join(HERE, "fuzz", "regressions")):
+        for folder, _, files in sorted(os.walk(root)):
+            ext = EXTENSIONS.get(os.path.basename(folder))
+            if not ext:
+                continue
+            for name in sorted(files):
+                src = os.path.join(folder, name)
+                # `info` picks the reader by extension: give the file its format's.
+                path = src
+                if not (src.endswith(ext) or src.endswith(ext + ".gz")):
+                    path = os.path.join(tmp, "input" + ext)
+                    shutil.copyfile(src, path)
+                p = subprocess.run([KEYMESH, "info", path], env=env, stdin=subprocess.DEVNULL, capture_output=True,
+                                   text=True, timeout=120)
+                replayed += 1
+                if p.returncode not in (0, 1) or "Sanitizer" in p.stderr or "runtime error" in p.stderr:
+                    failed.append(src)
+                    print(f"sanitized: {src}: exit {p.returncode}\n{p.stderr[-3000:]}")
 print(f"sanitized: {replayed} corpus and regression files read by `keymesh info`")
 if failed:
     print(f"sanitized: FAILED: {', '.join(failed)}")

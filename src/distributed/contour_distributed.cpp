@@ -116,10 +116,16 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   // Rank q's voxel layers [bounds[q], bounds[q + 1]) need planes bounds[q] .. bounds[q + 1].
   std::vector<Id> bounds(static_cast<std::size_t>(P) + 1);
   for (int q = 0; q <= P; ++q) bounds[q] = (nz - 1) * q / P;
+  // Planes [first, first + count) of the volume, read by this rank.
+  auto new_slab = [&](Id count) {
+    ImageGrid g;
+    g.spacing = head.spacing;
+    g.origin = head.origin;
+    g.name = head.name;
+    g.allocate({nx, ny, count}, head.type);
+    return g;
+  };
   ImageGrid slab;
-  slab.spacing = head.spacing;
-  slab.origin = head.origin;
-  slab.name = head.name;
   // With balance: read the equal slab, count its layers' triangles, share
   // the counts, and move the boundaries so that every rank gets the same
   // work; the planes already read are kept, only the rest is read.
@@ -127,7 +133,7 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   auto t0 = Clock::now();
   if (balance && P > 1) {
     const Id lo0 = bounds[r], hi0 = bounds[r + 1];
-    slab.allocate({nx, ny, hi0 - lo0 + 1}, head.type);
+    slab = new_slab(hi0 - lo0 + 1);
     source.read_planes(lo0, hi0 - lo0 + 1, slab.bytes.data());
     st.read = seconds_since(t0);
     t0 = Clock::now();
@@ -159,11 +165,7 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
     const Id first = lo - below, last = hi + above;
     if (first != held_lo || last != held_hi) {
       ImageGrid held = std::move(slab);
-      slab = ImageGrid{};
-      slab.spacing = head.spacing;
-      slab.origin = head.origin;
-      slab.name = head.name;
-      slab.allocate({nx, ny, last - first + 1}, head.type);
+      slab = new_slab(last - first + 1);
       const std::size_t plane = static_cast<std::size_t>(nxy) * scalar_size(head.type);
       const Id keep_lo = std::max(first, held_lo), keep_hi = std::min(last, held_hi);
       if (keep_lo <= keep_hi) {

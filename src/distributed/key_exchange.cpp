@@ -103,7 +103,7 @@ GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
           owner.push_back(q);
         }
 
-  // 3. Route every key held but not owned to its owner (all-to-all by key
+  // 4. Route every key held but not owned to its owner (all-to-all by key
   //    range), which answers with the key's global id.
   std::vector<int> send_counts(static_cast<std::size_t>(P), 0), recv_counts(static_cast<std::size_t>(P), 0);
   for (int q : owner) ++send_counts[static_cast<std::size_t>(q)];

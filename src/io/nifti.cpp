@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "keymesh/io/volume_formats.hpp"
 
@@ -162,27 +163,45 @@ ImageGrid read_nifti(const std::string& path) {
     in.read(grid.data(), grid.bytes.size(), "voxel data");
   }
   if (swap) detail::swap_samples(grid);
-  const double slope = layout.scale_slope, inter = layout.scale_inter;
   if (layout.scaled()) {
-    // Scaled data: the real values are slope * stored + inter, as float
-    // (float64 input stays float64).
+    // Scaled data: the real values are slope * stored + inter.
     ImageGrid scaled;
-    scaled.allocate(dims, type == ScalarType::Float64 ? ScalarType::Float64 : ScalarType::Float32);
+    scaled.allocate(dims, detail::scaled_type(type));
     scaled.spacing = grid.spacing;
     scaled.name = grid.name;
-    visit_scalars(grid, [&](const auto* s) {
-      visit_scalars(scaled, [&](const auto* d_const) {
-        using D = std::remove_cv_t<std::remove_pointer_t<decltype(d_const)>>;
-        D* d = const_cast<D*>(d_const);
-        for (Id i = 0; i < grid.num_points(); ++i)
-          d[i] = static_cast<D>(static_cast<double>(slope) * static_cast<double>(s[i]) + static_cast<double>(inter));
-        return 0;
-      });
-      return 0;
-    });
+    detail::scale_samples(type, grid.bytes.data(), scaled.bytes.data(), static_cast<std::uint64_t>(grid.num_points()),
+                          layout.scale_slope, layout.scale_inter);
     return scaled;
   }
   return grid;
 }
+
+namespace detail {
+
+ScalarType scaled_type(ScalarType stored_type) {
+  return stored_type == ScalarType::Float64 ? ScalarType::Float64 : ScalarType::Float32;
+}
+
+void scale_samples(ScalarType stored_type, const std::byte* stored, std::byte* out, std::uint64_t n, double slope,
+                   double inter) {
+  // Typed views of both buffers, dispatched by visit_scalars.
+  ImageGrid in, to;
+  in.dims = to.dims = {static_cast<Id>(n), 1, 1};
+  in.type = stored_type;
+  in.external = stored;
+  to.type = scaled_type(stored_type);
+  to.external = out;
+  visit_scalars(in, [&](const auto* s) {
+    visit_scalars(to, [&](const auto* d_const) {
+      using D = std::remove_cv_t<std::remove_pointer_t<decltype(d_const)>>;
+      D* d = const_cast<D*>(d_const);
+      for (std::uint64_t i = 0; i < n; ++i) d[i] = static_cast<D>(slope * static_cast<double>(s[i]) + inter);
+      return 0;
+    });
+    return 0;
+  });
+}
+
+}  // namespace detail
 
 }  // namespace keymesh::io

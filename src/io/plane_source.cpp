@@ -2,7 +2,6 @@
 
 #include <bit>
 #include <cctype>
-#include <type_traits>
 #include <vector>
 #include <string>
 #include <utility>
@@ -23,7 +22,7 @@ class RawPlanes : public generate::PlaneSource {
     head_.spacing = o.spacing;
     head_.origin = o.origin;
     // Scaled samples (NIfTI scl_slope/scl_inter) come out as float, as read_nifti gives them.
-    if (scaled()) head_.type = o.type == ScalarType::Float64 ? ScalarType::Float64 : ScalarType::Float32;
+    if (scaled()) head_.type = detail::scaled_type(o.type);
     const std::uint64_t bytes = detail::checked_byte_count(o.dims, o.type, path_);
     const std::uint64_t have = detail::file_size_or_throw(path_);
     if (o.header_bytes < 0 || static_cast<std::uint64_t>(o.header_bytes) > have ||
@@ -40,14 +39,7 @@ class RawPlanes : public generate::PlaneSource {
       const std::uint64_t n = static_cast<std::uint64_t>(head_.dims[0] * head_.dims[1]) * static_cast<std::uint64_t>(count);
       std::vector<std::byte> stored(n * scalar_size(options_.type));
       read_stored(first, count, stored.data());
-      visit_type(options_.type, stored.data(), [&](const auto* s) {
-        visit_type(head_.type, out, [&](const auto* d_const) {
-          using D = std::remove_cv_t<std::remove_pointer_t<decltype(d_const)>>;
-          D* d = const_cast<D*>(d_const);
-          for (std::uint64_t i = 0; i < n; ++i)
-            d[i] = static_cast<D>(slope_ * static_cast<double>(s[i]) + inter_);
-        });
-      });
+      detail::scale_samples(options_.type, stored.data(), out, n, slope_, inter_);
       return;
     }
     read_stored(first, count, out);
@@ -55,21 +47,6 @@ class RawPlanes : public generate::PlaneSource {
 
  private:
   bool scaled() const { return !(slope_ == 1 && inter_ == 0); }
-
-  // Dispatches on a scalar type for a typed pointer to the samples at p.
-  template <class F>
-  static void visit_type(ScalarType t, const std::byte* p, F&& f) {
-    switch (t) {
-      case ScalarType::UInt8: f(reinterpret_cast<const std::uint8_t*>(p)); break;
-      case ScalarType::Int8: f(reinterpret_cast<const std::int8_t*>(p)); break;
-      case ScalarType::UInt16: f(reinterpret_cast<const std::uint16_t*>(p)); break;
-      case ScalarType::Int16: f(reinterpret_cast<const std::int16_t*>(p)); break;
-      case ScalarType::Int32: f(reinterpret_cast<const std::int32_t*>(p)); break;
-      case ScalarType::Float32: f(reinterpret_cast<const float*>(p)); break;
-      case ScalarType::Float64: f(reinterpret_cast<const double*>(p)); break;
-      default: throw InputError("plane source: unsupported scalar type");
-    }
-  }
 
   void read_stored(Id first, Id count, std::byte* out) {
     const std::uint64_t size = scalar_size(options_.type);

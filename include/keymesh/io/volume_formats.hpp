@@ -66,6 +66,12 @@ std::uint64_t checked_byte_count(std::array<Id, 3> dims, ScalarType type, const 
 // early or is corrupt, or (unless allow_plain) is not gzip data at all.
 std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
                                        const std::string& path, const std::string& what, bool allow_plain);
+// NIfTI scaling: value = slope * stored + inter, computed in double and
+// stored as float32 (float64 input stays float64: scaled_type). `out` holds
+// n samples of scaled_type(stored_type).
+ScalarType scaled_type(ScalarType stored_type);
+void scale_samples(ScalarType stored_type, const std::byte* stored, std::byte* out, std::uint64_t n, double slope,
+                   double inter);
 // Moves samples read by read_gz_growing into grid (dims already checked).
 void adopt_samples(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, std::vector<std::byte> samples);
 }  // namespace detail
