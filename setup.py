@@ -35,19 +35,24 @@ class CMakeBuild(build_ext):
         configure += shlex.split(os.environ.get("KEYMESH_CMAKE_ARGS", ""))
         subprocess.check_call(configure)
         jobs = os.environ.get("KEYMESH_JOBS", str(os.cpu_count() or 1))
-        subprocess.check_call(["cmake", "--build", str(tree), "--target", "keymesh_python", "-j", jobs])
+        subprocess.check_call(["cmake", "--build", str(tree), "--target", "keymesh_python", "keymesh", "-j", jobs])
         built = sorted((tree / "python" / "keymesh").glob("_keymesh*.so"))
         if not built:
             raise RuntimeError("CMake did not build keymesh._keymesh (is pybind11-dev installed?)")
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(built[0], target)
+        # The command itself, for `python -m keymesh` (keymesh/__main__.py).
+        exe = target.parent / "bin" / "keymesh"
+        exe.parent.mkdir(exist_ok=True)
+        shutil.copyfile(tree / "keymesh", exe)
+        exe.chmod(0o755)
 
 
 BUILD_BASE.mkdir(exist_ok=True)
 setup(
     packages=["keymesh"],
     package_dir={"keymesh": "python/keymesh"},
-    package_data={"keymesh": ["*.pyi", "py.typed"]},
+    package_data={"keymesh": ["*.pyi", "py.typed", "bin/keymesh"]},
     ext_modules=[CMakeExtension("keymesh._keymesh")],
     cmdclass={"build_ext": CMakeBuild},
     options={"build": {"build_base": str(BUILD_BASE)}, "egg_info": {"egg_base": str(BUILD_BASE)}},

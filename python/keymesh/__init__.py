@@ -28,10 +28,13 @@ import numpy as np
 
 from ._keymesh import Error, LimitError, Volume
 from . import _keymesh as _ext
+from ._grid import CellCounts, Grid, grid_from_parts as _grid
+from ._operations import coarsen, dual, incidence, quality, subdivide, tetrahedralize
+from ._skimage_compat import marching_cubes
 
 __all__ = [
-    "Mesh", "Volume", "Error", "LimitError",
-    "contour", "key_reduce", "check", "read", "write",
+    "Mesh", "Volume", "Error", "LimitError", "Grid", "contour", "key_reduce", "check", "read", "write", "marching_cubes",
+    "tetrahedralize", "subdivide", "dual", "quality", "coarsen", "incidence", "from_vtk", "from_meshio",
 ]
 
 __version__ = "0.1.0"
@@ -41,7 +44,7 @@ __version__ = "0.1.0"
 last_contour_info: Dict[str, Any] = {}
 
 
-class Mesh:
+class Mesh(CellCounts):
     """A surface mesh: points, cells and point fields, as numpy arrays.
 
     Attributes:
@@ -68,16 +71,6 @@ class Mesh:
         self.offsets = offsets
         self.point_data = {} if point_data is None else dict(point_data)
 
-    @property
-    def n_points(self) -> int:
-        """Number of points."""
-        return int(len(self.points))
-
-    @property
-    def n_cells(self) -> int:
-        """Number of cells."""
-        return int(len(self.offsets) - 1) if self.offsets is not None else int(len(self.cells))
-
     def __repr__(self) -> str:
         fields = ", ".join(f"{k}{tuple(np.shape(v))}" for k, v in self.point_data.items())
         return f"keymesh.Mesh({self.n_points} points, {self.n_cells} cells, point_data: [{fields}])"
@@ -90,97 +83,33 @@ class Mesh:
         c = np.asarray(self.cells)
         return [c[o[i]:o[i + 1]] for i in range(len(o) - 1)]
 
-    # -- meshio ---------------------------------------------------------
+    # -- VTK and meshio (keymesh._interop says which arrays are shared) --
     def to_meshio(self):
-        """A meshio.Mesh (needs python3-meshio): triangles as "triangle"
-        cells, other polygons grouped by size ("quad", "polygon")."""
-        import meshio
-
-        if self.offsets is None:
-            blocks = [("triangle", np.asarray(self.cells))]
-        else:
-            sizes = np.diff(np.asarray(self.offsets))
-            flat = np.asarray(self.cells)
-            blocks = []
-            for size in np.unique(sizes):
-                rows = np.nonzero(sizes == size)[0]
-                idx = np.asarray(self.offsets)[rows][:, None] + np.arange(size)[None, :]
-                kind = {3: "triangle", 4: "quad"}.get(int(size), "polygon")
-                blocks.append((kind, flat[idx]))
-        return meshio.Mesh(np.asarray(self.points), blocks,
-                           point_data={k: np.asarray(v) for k, v in self.point_data.items()})
+        """A meshio.Mesh over the same arrays (needs python3-meshio):
+        triangles as "triangle" cells, other polygons grouped by size."""
+        from . import _interop
+        return _interop.mesh_to_meshio(self)
 
     @classmethod
     def from_meshio(cls, mesh) -> "Mesh":
-        """A Mesh from a meshio.Mesh's triangle, quad and polygon cells
-        (other cell types, e.g. lines or tetrahedra, are refused)."""
-        polys = []
-        for block in mesh.cells:
-            if block.type not in ("triangle", "quad") and not block.type.startswith("polygon"):
-                raise ValueError(f"from_meshio: cell type {block.type!r} is not a surface polygon")
-            polys.append(np.asarray(block.data))
-        data = {k: np.asarray(v) for k, v in mesh.point_data.items()}
-        if all(p.shape[1] == 3 for p in polys):
-            cells = np.concatenate(polys) if polys else np.zeros((0, 3), np.int64)
-            return cls(np.asarray(mesh.points, dtype=np.float32), cells, data)
-        sizes = np.concatenate([np.full(len(p), p.shape[1]) for p in polys])
-        offsets = np.concatenate([[0], np.cumsum(sizes)])
-        flat = np.concatenate([p.reshape(-1) for p in polys])
-        return cls(np.asarray(mesh.points, dtype=np.float32), flat, data, offsets)
+        """A Mesh over a meshio.Mesh's triangle, quad and polygon cells
+        (other cell types are refused: use keymesh.from_meshio for grids)."""
+        from . import _interop
+        return _interop.mesh_from_meshio(cls, mesh)
 
-    # -- VTK --------------------------------------------------------------
     def to_vtk(self):
-        """A vtkPolyData (needs python3-vtk9), point fields as point data
-        ("Normals" set as the normals)."""
-        from vtkmodules.util import numpy_support as ns
-        from vtkmodules.vtkCommonCore import vtkPoints
-        from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
-
-        pts = vtkPoints()
-        pts.SetData(ns.numpy_to_vtk(np.ascontiguousarray(self.points, dtype=np.float32), deep=True))
-        if self.offsets is None:
-            conn = np.ascontiguousarray(np.asarray(self.cells).reshape(-1), dtype=np.int64)
-            offs = np.arange(0, len(conn) + 1, 3, dtype=np.int64)
-        else:
-            conn = np.ascontiguousarray(self.cells, dtype=np.int64)
-            offs = np.ascontiguousarray(self.offsets, dtype=np.int64)
-        polys = vtkCellArray()
-        polys.SetData(ns.numpy_to_vtkIdTypeArray(offs, deep=True), ns.numpy_to_vtkIdTypeArray(conn, deep=True))
-        poly = vtkPolyData()
-        poly.SetPoints(pts)
-        poly.SetPolys(polys)
-        for name, values in self.point_data.items():
-            arr = ns.numpy_to_vtk(np.ascontiguousarray(values, dtype=np.float32), deep=True)
-            arr.SetName(name)
-            if name == "Normals" and np.ndim(values) == 2 and np.shape(values)[1] == 3:
-                poly.GetPointData().SetNormals(arr)
-            else:
-                poly.GetPointData().AddArray(arr)
-        return poly
+        """A vtkPolyData (needs python3-vtk9) sharing the points, ids and
+        point fields ("Normals" set as the normals); only the offsets of a
+        triangle mesh are new."""
+        from . import _interop
+        return _interop.mesh_to_vtk(self)
 
     @classmethod
     def from_vtk(cls, poly) -> "Mesh":
-        """A Mesh from a vtkPolyData's points, polygons and point arrays
-        (triangle strips, lines and vertices are refused)."""
-        from vtkmodules.util import numpy_support as ns
-
-        if poly.GetNumberOfStrips() or poly.GetNumberOfLines() or poly.GetNumberOfVerts():
-            raise ValueError("from_vtk: only polygons are supported (triangulate strips first)")
-        n = poly.GetNumberOfPoints()
-        points = (ns.vtk_to_numpy(poly.GetPoints().GetData()).astype(np.float32)
-                  if n else np.zeros((0, 3), np.float32))
-        polys = poly.GetPolys()
-        offs = ns.vtk_to_numpy(polys.GetOffsetsArray()).astype(np.int64)
-        conn = ns.vtk_to_numpy(polys.GetConnectivityArray()).astype(np.int64)
-        data = {}
-        pd = poly.GetPointData()
-        for i in range(pd.GetNumberOfArrays()):
-            a = pd.GetArray(i)
-            if a is not None and a.GetName():
-                data[a.GetName()] = ns.vtk_to_numpy(a).copy()
-        if len(offs) <= 1 or np.all(np.diff(offs) == 3):
-            return cls(points, conn.reshape(-1, 3), data)
-        return cls(points, conn, data, offs)
+        """A Mesh viewing a vtkPolyData's points, polygons and point arrays
+        (no copy; strips, lines and vertices are refused)."""
+        from . import _interop
+        return _interop.mesh_from_vtk(cls, poly)
 
 
 def _isovalues(iso: Union[float, Sequence[float]]) -> list:
@@ -321,23 +250,26 @@ def check(mesh: Mesh, threads: int = 0) -> Dict[str, Any]:
 
 def read(path: Any, dims: Optional[Sequence[int]] = None, dtype: Any = None,
          spacing: Optional[Sequence[float]] = None, origin: Optional[Sequence[float]] = None,
-         endian: str = "little", header_bytes: int = 0) -> Union[Mesh, Volume]:
+         endian: str = "little", header_bytes: int = 0) -> Union[Mesh, Grid, Volume]:
     """Reads a file, by extension.
 
     Volumes (.vti, .nrrd, .nhdr, .nii, .nii.gz, .den; .raw with dims=(nx,
     ny, nz) and dtype, optionally spacing, origin, endian, header_bytes)
     give a keymesh.Volume: ``.array`` is a (nx, ny, nz) view of the samples
     (axis 0 = x, no copy), with ``.spacing`` and ``.origin``.
-    Surface meshes (.vtp, .ply, .obj, .stl) give a Mesh.
+    Surface meshes (.vtp, .ply, .obj, .stl) give a Mesh; unstructured grids
+    (.vtu, legacy .vtk) a Grid.
     Malformed files raise keymesh.Error (a ValueError) naming the file.
     """
     kind, obj = _ext.read(str(path), dims, dtype, spacing, origin, endian, int(header_bytes))
+    if kind == "grid":
+        return _grid(obj)
     return obj if kind == "volume" else _mesh(obj)
 
 
-def write(obj: Union[Mesh, Volume, np.ndarray], path: Any,
+def write(obj: Union[Mesh, Grid, Volume, np.ndarray], path: Any,
           spacing: Sequence[float] = (1.0, 1.0, 1.0), origin: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
-    """Writes a Mesh (.vtp, .ply, .obj, .stl) or a volume (.vti, .nrrd, .raw).
+    """Writes a Mesh (.vtp, .ply, .obj, .stl), a Grid (.vtu, .vtk) or a volume (.vti, .nrrd, .raw).
 
     A volume is a keymesh.Volume or a 3-D numpy array (axis 0 = x; spacing
     and origin per axis apply to arrays only). Files are written under a
@@ -345,6 +277,8 @@ def write(obj: Union[Mesh, Volume, np.ndarray], path: Any,
     """
     if isinstance(obj, Volume):
         _ext.write_volume(obj, str(path))
+    elif isinstance(obj, Grid):
+        _ext.write_grid(obj, str(path))
     elif isinstance(obj, np.ndarray):
         _ext.write_volume(Volume(obj, spacing, origin), str(path))
     elif hasattr(obj, "points") and hasattr(obj, "cells"):
@@ -353,11 +287,15 @@ def write(obj: Union[Mesh, Volume, np.ndarray], path: Any,
         raise TypeError(f"write: expected a keymesh.Mesh, keymesh.Volume or numpy array, got {type(obj).__name__}")
 
 
-def from_meshio(mesh) -> Mesh:
-    """Same as Mesh.from_meshio."""
-    return Mesh.from_meshio(mesh)
+def from_meshio(mesh) -> Union[Mesh, Grid]:
+    """A Mesh when every cell block of the meshio.Mesh is a surface polygon,
+    else a Grid; the arrays are shared, not copied."""
+    from . import _interop
+    return _interop.from_meshio(mesh, Mesh, Grid)
 
 
-def from_vtk(poly) -> Mesh:
-    """Same as Mesh.from_vtk."""
-    return Mesh.from_vtk(poly)
+def from_vtk(obj) -> Union[Mesh, Grid]:
+    """A Mesh from a vtkPolyData, a Grid from a vtkUnstructuredGrid, viewing
+    VTK's arrays (no copy)."""
+    from . import _interop
+    return _interop.from_vtk(obj, Mesh, Grid)

@@ -11,8 +11,10 @@
 #include <utility>
 #include <vector>
 
+#include "keymesh/core/progress.hpp"
 #include "keymesh/mesh/image_grid.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
+#include "keymesh/mesh/unstructured_grid.hpp"
 #include "keymesh/parallel/threads.hpp"
 
 namespace keymesh::python {
@@ -45,6 +47,24 @@ class ThreadScope {
   int previous_;
 };
 
+// The library's progress hook for one call, made while the GIL is held and
+// installed (on the calling thread) once it is released: at every stage the
+// library reports, it takes the GIL back, checks for signals (Ctrl-C raises
+// KeyboardInterrupt: the C++ call unwinds and the exception reaches Python)
+// and calls the user's progress(stage, fraction) if one was given; an
+// exception from the callback abandons the call the same way.
+class PythonProgress {
+ public:
+  explicit PythonProgress(py::object callback);
+  // Reports the stage from the GIL-holding side (before or after a call).
+  void operator()(const char* stage, double fraction) const;
+  // Installs the hook; construct inside the gil_scoped_release block.
+  progress::ScopedHook install() const;
+
+ private:
+  py::object callback_;
+};
+
 // ValueError unless threads >= 0.
 void check_threads(int threads);
 
@@ -70,6 +90,12 @@ py::tuple mesh_to_python(SurfaceMesh&& mesh);
 // Copies (and converts) a Python Mesh's arrays; ValueError on bad shapes or ids.
 SurfaceMesh mesh_from_python(const py::handle& mesh);
 
+// UnstructuredGrid <-> (points, cells, offsets, cell_types, cell_type,
+// point_data, cell_data) of a Python Grid; uniform grids give cells of shape
+// (m, corners per cell) and offsets/cell_types None.
+py::tuple grid_to_python(UnstructuredGrid&& grid);
+UnstructuredGrid grid_from_python(const py::handle& grid);
+
 // A volume owned by the module (keymesh.Volume): contour reads it without a copy.
 struct Volume {
   ImageGrid grid;
@@ -81,5 +107,7 @@ void register_contour(py::module_& m);
 void register_key_reduce(py::module_& m);
 void register_io(py::module_& m);
 void register_check(py::module_& m);
+void register_marching_cubes(py::module_& m);
+void register_operations(py::module_& m);
 
 }  // namespace keymesh::python

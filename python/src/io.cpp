@@ -3,6 +3,7 @@
 #include <cctype>
 
 #include "common.hpp"
+#include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/volume_io.hpp"
 
@@ -19,9 +20,18 @@ bool is_volume_path(std::string path) {
   return false;
 }
 
-// Returns ("volume", Volume) or ("mesh", (points, cells, offsets, point_data)).
+// Returns ("volume", Volume), ("grid", grid parts) or ("mesh", (points,
+// cells, offsets, point_data)).
 py::tuple read(const std::string& path, const py::object& dims, const py::object& dtype, const py::object& spacing,
                const py::object& origin, const std::string& endian, Id header_bytes) {
+  if (io::is_grid_file(path)) {
+    UnstructuredGrid grid;
+    {
+      py::gil_scoped_release release;
+      grid = io::read_grid(path);
+    }
+    return py::make_tuple("grid", grid_to_python(std::move(grid)));
+  }
   if (!is_volume_path(path)) {
     SurfaceMesh mesh;
     {
@@ -59,6 +69,12 @@ void write_mesh(const py::handle& mesh_obj, const std::string& path) {
   io::write_mesh(mesh, path);
 }
 
+void write_grid(const py::handle& grid_obj, const std::string& path) {
+  const UnstructuredGrid grid = grid_from_python(grid_obj);
+  py::gil_scoped_release release;
+  io::write_grid(grid, path);
+}
+
 void write_volume(const Volume& volume, const std::string& path) {
   py::gil_scoped_release release;
   io::write_volume(volume.grid, path);
@@ -71,6 +87,7 @@ void register_io(py::module_& m) {
         py::arg("spacing") = py::none(), py::arg("origin") = py::none(), py::arg("endian") = "little",
         py::arg("header_bytes") = 0, "Reads a volume or a surface mesh file. Use keymesh.read.");
   m.def("write_mesh", &write_mesh, py::arg("mesh"), py::arg("path"), "Writes a Mesh (.vtp .ply .obj .stl).");
+  m.def("write_grid", &write_grid, py::arg("grid"), py::arg("path"), "Writes a Grid (.vtu .vtk).");
   m.def("write_volume", &write_volume, py::arg("volume"), py::arg("path"), "Writes a Volume (.vti .nrrd .raw).");
 }
 

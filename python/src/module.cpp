@@ -6,6 +6,24 @@
 
 namespace keymesh::python {
 
+PythonProgress::PythonProgress(py::object callback) : callback_(std::move(callback)) {
+  if (!callback_.is_none() && !PyCallable_Check(callback_.ptr()))
+    throw py::type_error("progress must be callable as progress(stage, fraction), got " +
+                         std::string(py::str(py::type::of(callback_).attr("__name__"))));
+}
+
+void PythonProgress::operator()(const char* stage, double fraction) const {
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  if (!callback_.is_none()) callback_(stage, fraction);
+}
+
+progress::ScopedHook PythonProgress::install() const {
+  return progress::ScopedHook([this](const char* stage, double fraction) {
+    py::gil_scoped_acquire gil;
+    (*this)(stage, fraction);
+  });
+}
+
 void check_threads(int threads) {
   if (threads < 0) throw py::value_error("threads must be >= 0 (0 = all cores), got " + std::to_string(threads));
 }
@@ -61,6 +79,8 @@ PYBIND11_MODULE(_keymesh, m) {
   kp::register_key_reduce(m);
   kp::register_io(m);
   kp::register_check(m);
+  kp::register_marching_cubes(m);
+  kp::register_operations(m);
   m.def("thread_count", &keymesh::parallel::thread_count,
         "Worker threads the library uses when a call passes threads=0 (all cores).");
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
@@ -244,6 +245,12 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
   return out;
 }
 
+// Between levels: progress and the chance to abandon (core/progress.hpp).
+void report_level(int level, int levels) {
+  const std::string stage = "subdivide level " + std::to_string(level + 1) + "/" + std::to_string(levels);
+  progress::report(stage.c_str(), static_cast<double>(level) / levels);
+}
+
 }  // namespace
 
 SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) {
@@ -261,7 +268,10 @@ SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) 
       throw InputError("subdivide: point field '" + f.name + "' does not have one tuple per point");
   for (PointIndex id : cur.connectivity)
     if (Id{id} >= cur.num_points()) throw InputError("subdivide: a triangle refers to point " + std::to_string(id) + " out of range");
-  for (int l = 0; l < options.levels; ++l) cur = subdivide_once(cur, options.scheme, options.weld);
+  for (int l = 0; l < options.levels; ++l) {
+    report_level(l, options.levels);
+    cur = subdivide_once(cur, options.scheme, options.weld);
+  }
   return cur;
 }
 
@@ -275,7 +285,10 @@ UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions&
   cur.offsets.clear();
   cur.cell_types.clear();
   cur.uniform_type = CellType::Tetra;
-  for (int l = 0; l < options.levels; ++l) cur = subdivide_tets_once(cur, options.weld);
+  for (int l = 0; l < options.levels; ++l) {
+    report_level(l, options.levels);
+    cur = subdivide_tets_once(cur, options.weld);
+  }
   return cur;
 }
 

@@ -1,0 +1,138 @@
+"""keymesh.marching_cubes: a drop-in for skimage.measure.marching_cubes.
+
+The arguments are checked in scikit-image's order with its exception types
+and messages; the work (classification, triangles, KEY-REDUCE weld, normals,
+values, point numbering, winding) runs in C++ with the GIL released
+(generate/classic_marching_cubes.hpp). Only the scaling by ``spacing`` is
+numpy, done exactly as scikit-image does it so that the dtypes agree (float32
+points at unit spacing, float64 otherwise).
+"""
+from __future__ import annotations
+
+from typing import Any, Callable, Optional, Sequence, Tuple
+
+import numpy as np
+
+from . import _keymesh as _ext
+
+_TABLE_CACHE: list = []
+
+
+def _case_table() -> Optional[np.ndarray]:
+    """scikit-image's classic case table when scikit-image is installed
+    (its faces and normals are then reproduced exactly), else None: keymesh's
+    own table (same points, values and polygons; some cubes split along the
+    other diagonal, which moves the normals of their points)."""
+    if not _TABLE_CACHE:
+        table = None
+        try:
+            from skimage.measure import _marching_cubes_lewiner as mcl
+            from skimage.measure import _marching_cubes_lewiner_luts as luts
+
+            table = np.ascontiguousarray(mcl._to_array(luts.CASESCLASSIC), dtype=np.int8)
+            if table.shape != (256, 16):
+                table = None
+        except Exception:  # not installed, or a layout this code does not know
+            table = None
+        _TABLE_CACHE.append(table)
+    return _TABLE_CACHE[0]
+
+
+def uses_skimage_table() -> bool:
+    """Whether marching_cubes triangulates cubes with scikit-image's table."""
+    return _case_table() is not None
+
+
+def _remove_degenerate_faces(vertices, faces, *arrays):
+    # scikit-image's rule: a face with two equal corners (positions compared
+    # exactly) is dropped and those corners merge into the lower index;
+    # merged points are removed and the faces renumbered (int64).
+    return _ext.remove_degenerate_faces(vertices, faces, list(arrays))
+
+
+def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Sequence[float] = (1., 1., 1.),
+                   gradient_direction: str = 'descent', step_size: int = 1, allow_degenerate: bool = True,
+                   method: str = 'lorensen', mask: Any = None, threads: int = 0,
+                   progress: Optional[Callable[[str, float], Any]] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Marching cubes with scikit-image's arguments and results, welded by edge keys.
+
+    ``verts, faces, normals, values = keymesh.marching_cubes(volume, level, spacing=s)``
+    gives what ``skimage.measure.marching_cubes(volume, level, spacing=s,
+    method='lorensen')`` gives: the same arrays, in the same order, when
+    scikit-image is installed (keymesh then triangulates each cube with
+    scikit-image's classic case table); without it, the same points, values
+    and polygons, some cubes split along the other diagonal (their points'
+    normals then differ).
+
+    Args:
+        volume: (M, N, P) array, converted to float32 (as scikit-image does).
+        level: the isovalue; None: the mid-range 0.5 * (min + max). Inside
+            means value > level (a sample equal to it is outside).
+        spacing: voxel size per array axis; points are array indices times it.
+        gradient_direction: 'descent' (the object is greater than its
+            exterior; a face's right-hand normal then points into the
+            object, to higher values) or 'ascent' (the other winding). The
+            returned normals point to lower values either way.
+        step_size: cubes of step_size voxels along every axis.
+        allow_degenerate: False removes zero-area triangles and merges
+            their coincident points (faces are then int64, as in scikit-image).
+        method: 'lorensen'. 'lewiner' (scikit-image's default, Marching
+            Cubes 33) is refused: it resolves ambiguous cubes with extra
+            tests and interior points that keymesh does not implement.
+        mask: boolean array of the volume's shape; a cube is computed when
+            the mask is set at its far corner (scikit-image's rule).
+        threads: worker threads (keymesh only; 0 = all cores). The result
+            does not depend on it.
+        progress: keymesh only: progress(stage, fraction) between stages;
+            Ctrl-C raises KeyboardInterrupt at the next stage.
+
+    Returns:
+        verts (V, 3) float32 (float64 when spacing is not all ones), faces
+        (F, 3) int32, normals (V, 3) float32 (unit, pointing to lower
+        values), values (V,) float32 (the largest value range of the cubes
+        around each point). No two points share a grid edge.
+
+    Raises:
+        ValueError, RuntimeError, TypeError as scikit-image does for the same
+        arguments (RuntimeError when no surface is found); NotImplementedError
+        for method='lewiner'.
+    """
+    if method == 'lewiner':
+        raise NotImplementedError(
+            "keymesh.marching_cubes: method='lewiner' (Marching Cubes 33: face and interior tests, "
+            "extra points inside ambiguous cubes) is not implemented; method='lorensen' gives "
+            "scikit-image's 'lorensen' result (same points wherever no cube is ambiguous)")
+    if method != 'lorensen':
+        raise ValueError(f"method should be 'lorensen' ('lewiner' is not implemented), got {method!r}")
+    if not isinstance(volume, np.ndarray) or (volume.ndim != 3):
+        raise ValueError('Input volume should be a 3D numpy array.')
+    if volume.shape[0] < 2 or volume.shape[1] < 2 or volume.shape[2] < 2:
+        raise ValueError("Input array must be at least 2x2x2.")
+    volume = np.ascontiguousarray(volume, np.float32)
+    if level is None:
+        level = 0.5 * (volume.min() + volume.max())
+    else:
+        level = float(level)
+        if level < volume.min() or level > volume.max():
+            raise ValueError("Surface level must be within volume data range.")
+    if len(spacing) != 3:
+        raise ValueError("`spacing` must consist of three floats.")
+    step_size = int(step_size)
+    if step_size < 1:
+        raise ValueError('step_size must be at least one.')
+    if mask is not None:
+        if not mask.shape == volume.shape:
+            raise ValueError('volume and mask must have the same shape.')
+        mask = np.ascontiguousarray(mask, dtype=bool).view(np.uint8)
+    if gradient_direction not in ('descent', 'ascent'):
+        raise ValueError("Incorrect input %s in `gradient_direction`, see docstring." % (gradient_direction))
+
+    vertices, faces, normals, values = _ext.marching_cubes(
+        volume, float(level), _case_table(), step_size, mask, gradient_direction == 'descent', int(threads), progress)
+    if not len(vertices):
+        raise RuntimeError('No surface found at the given iso value.')
+    if not np.array_equal(spacing, (1, 1, 1)):
+        vertices = vertices * np.r_[spacing]
+    if allow_degenerate:
+        return vertices, faces, normals, values
+    return _remove_degenerate_faces(vertices.astype(np.float32), faces, normals, values)

@@ -1,0 +1,212 @@
+"""keymesh.marching_cubes against skimage.measure.marching_cubes(method='lorensen').
+
+The volumes here are new to the project's tests: a gyroid, a sum of random
+Gaussian blobs, an anisotropic integer-valued ellipsoid (samples equal to the
+level: the strict 'value > level' rule and degenerate triangles), and a
+random uint8 volume. With scikit-image's case table (found when scikit-image
+is installed) the four arrays must be scikit-image's exactly: same order,
+same bits (normals within 1e-5 where float32 sums could round differently).
+With keymesh's own table the points and values stay exact and the polygons
+the same; only diagonals (and so some normals) move.
+"""
+import numpy as np
+import pytest
+
+import keymesh
+from keymesh import _skimage_compat
+from conftest import match_points
+
+measure = pytest.importorskip("skimage.measure")
+
+
+def gyroid(shape=(29, 33, 31)):
+    i, j, k = np.indices(shape, dtype=np.float64)
+    x, y, z = i * 0.37, j * 0.29, k * 0.41
+    return np.sin(x) * np.cos(y) + np.sin(y) * np.cos(z) + np.sin(z) * np.cos(x)
+
+
+def blobs(shape=(36, 27, 32), seed=11, count=9):
+    rng = np.random.default_rng(seed)
+    idx = np.indices(shape, dtype=np.float64)
+    f = np.zeros(shape)
+    for _ in range(count):
+        c = rng.uniform(0, 1, 3) * np.array(shape)
+        r = rng.uniform(2.5, 6.0)
+        f += np.exp(-sum((idx[a] - c[a]) ** 2 for a in range(3)) / (2 * r * r))
+    return f.astype(np.float32)
+
+
+def integer_ellipsoid(shape=(25, 30, 21)):
+    i, j, k = np.indices(shape, dtype=np.float64)
+    d = ((i - 12) / 1.0) ** 2 + ((j - 14.5) / 1.3) ** 2 + ((k - 10) / 0.8) ** 2
+    return np.floor(d).astype(np.int16)
+
+
+def random_uint8(shape=(19, 23, 17), seed=5):
+    return np.random.default_rng(seed).integers(0, 256, shape, dtype=np.uint8)
+
+
+VOLUMES = {
+    "gyroid": (gyroid, 0.173),
+    "blobs": (blobs, 0.41),
+    "ellipsoid": (integer_ellipsoid, 81.0),   # many samples equal the level
+    "uint8": (random_uint8, 128.0),
+}
+
+need_table = pytest.mark.skipif(not _skimage_compat.uses_skimage_table(),
+                                reason="scikit-image's case table is not importable")
+
+
+def assert_same(ours, theirs, exact_normals=False):
+    names = ("verts", "faces", "normals", "values")
+    for name, a, b in zip(names, ours, theirs):
+        assert a.dtype == b.dtype, (name, a.dtype, b.dtype)
+        assert a.shape == b.shape, (name, a.shape, b.shape)
+    assert np.array_equal(ours[0], theirs[0]), np.abs(ours[0] - theirs[0]).max()
+    assert np.array_equal(ours[1], theirs[1])
+    assert np.abs(ours[2] - theirs[2]).max(initial=0) <= (0 if exact_normals else 1e-5)
+    assert np.array_equal(ours[3], theirs[3])
+
+
+@need_table
+@pytest.mark.parametrize("name", sorted(VOLUMES))
+@pytest.mark.parametrize("spacing", [(1.0, 1.0, 1.0), (0.5, 1.25, 2.0)])
+@pytest.mark.parametrize("direction", ["descent", "ascent"])
+def test_identical_to_skimage(name, spacing, direction):
+    make, level = VOLUMES[name]
+    v = make()
+    ours = keymesh.marching_cubes(v, level, spacing=spacing, gradient_direction=direction)
+    theirs = measure.marching_cubes(v, level, spacing=spacing, gradient_direction=direction, method="lorensen")
+    assert_same(ours, theirs)
+
+
+@need_table
+@pytest.mark.parametrize("name", ["gyroid", "blobs", "uint8"])
+@pytest.mark.parametrize("step", [2, 3, 5])
+def test_step_size(name, step):
+    make, level = VOLUMES[name]
+    v = make()
+    ours = keymesh.marching_cubes(v, level, step_size=step)
+    theirs = measure.marching_cubes(v, level, step_size=step, method="lorensen")
+    assert_same(ours, theirs)
+
+
+@need_table
+@pytest.mark.parametrize("name", ["gyroid", "blobs", "ellipsoid"])
+@pytest.mark.parametrize("step", [1, 2])
+def test_mask(name, step):
+    make, level = VOLUMES[name]
+    v = make()
+    rng = np.random.default_rng(17)
+    mask = rng.random(v.shape) < 0.6
+    mask[: v.shape[0] // 3] = False          # an open cut as well as random holes
+    ours = keymesh.marching_cubes(v, level, mask=mask, step_size=step)
+    theirs = measure.marching_cubes(v, level, mask=mask, step_size=step, method="lorensen")
+    assert_same(ours, theirs)
+
+
+@need_table
+@pytest.mark.parametrize("name", ["ellipsoid", "uint8", "gyroid"])
+def test_level_none_and_no_degenerate(name):
+    make, level = VOLUMES[name]
+    v = make()
+    assert_same(keymesh.marching_cubes(v), measure.marching_cubes(v, method="lorensen"))
+    ours = keymesh.marching_cubes(v, level, spacing=(1, 2, 3), allow_degenerate=False)
+    theirs = measure.marching_cubes(v, level, spacing=(1, 2, 3), allow_degenerate=False, method="lorensen")
+    assert_same(ours, theirs)
+
+
+@pytest.mark.parametrize("name", ["gyroid", "blobs"])  # no sample equals the level: points are distinct
+def test_keymesh_table_same_points_values_and_polygons(name, monkeypatch):
+    """Without scikit-image's table: the points (matched by position) and
+    their values are the same, as are the face count and the surface's
+    topology; only the diagonals inside cubes may differ."""
+    make, level = VOLUMES[name]
+    v = make()
+    theirs = measure.marching_cubes(v, level, method="lorensen")
+    monkeypatch.setattr(_skimage_compat, "_TABLE_CACHE", [None])
+    verts, faces, normals, values = keymesh.marching_cubes(v, level)
+    p = match_points(verts, theirs[0], tol=0)
+    assert np.array_equal(values, theirs[3][p])
+    assert faces.shape == theirs[1].shape
+    ours_check = keymesh.check(keymesh.Mesh(verts, faces))
+    theirs_check = keymesh.check(keymesh.Mesh(theirs[0], theirs[1]))
+    for key in ("edges", "boundary_edges", "nonmanifold_edges", "euler_characteristic", "components"):
+        assert ours_check[key] == theirs_check[key], key
+    # the normals still point the same way (to lower values)
+    assert np.all(np.einsum("ij,ij->i", normals, theirs[2][p]) > 0.5)
+
+
+@pytest.mark.parametrize("name", sorted(VOLUMES))
+def test_welded_and_thread_independent(name):
+    make, level = VOLUMES[name]
+    v = make()
+    one = keymesh.marching_cubes(v, level, threads=1)
+    two = keymesh.marching_cubes(v, level, threads=2)
+    for a, b in zip(one, two):
+        assert np.array_equal(a, b)
+    verts, faces = one[0], one[1]
+    if name in ("gyroid", "blobs"):  # no sample equals the level: no two points coincide
+        assert len(np.unique(verts, axis=0)) == len(verts)
+    assert faces.min() == 0 and faces.max() == len(verts) - 1
+    # one point per grid edge whose samples straddle the level (value > level inside)
+    inside = np.asarray(v, np.float32) > level
+    crossings = sum(int(np.count_nonzero(np.diff(inside, axis=a))) for a in range(3))
+    assert len(verts) == crossings
+
+
+def test_faces_face_lower_values_with_descent():
+    """'descent' (the default) winds triangles so that their right-hand
+    normal points to higher values: on a ball of high values inside, the
+    right-hand normals point inwards, and the returned normals outwards."""
+    i, j, k = np.indices((30, 30, 30), dtype=np.float64)
+    ball = 20.0 - np.sqrt((i - 14.6) ** 2 + (j - 15.2) ** 2 + (k - 14.1) ** 2)
+    verts, faces, normals, _ = keymesh.marching_cubes(ball, 10.0)
+    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    face_n = np.cross(b - a, c - a)
+    outward = (a + b + c) / 3 - np.array([14.6, 15.2, 14.1])
+    assert np.all(np.einsum("ij,ij->i", face_n, outward) < 0)
+    radial = verts - np.array([14.6, 15.2, 14.1])
+    assert np.all(np.einsum("ij,ij->i", normals, radial) > 0)
+
+
+BAD_ARGUMENTS = [
+    ("2-D volume", lambda v: ((v[0],), {})),
+    ("list volume", lambda v: ((v.tolist(), 0.2), {})),
+    ("too small", lambda v: ((v[:1], 0.2), {})),
+    ("level above", lambda v: ((v, 99.0), {})),
+    ("level below", lambda v: ((v, -99.0), {})),
+    ("level text", lambda v: ((v, "abc"), {})),
+    ("level object", lambda v: ((v, object()), {})),
+    ("spacing 2", lambda v: ((v, 0.2), {"spacing": (1, 1)})),
+    ("spacing number", lambda v: ((v, 0.2), {"spacing": 1.0})),
+    ("step 0", lambda v: ((v, 0.2), {"step_size": 0})),
+    ("step text", lambda v: ((v, 0.2), {"step_size": "x"})),
+    ("mask shape", lambda v: ((v, 0.2), {"mask": np.ones((2, 2, 2), bool)})),
+    ("mask list", lambda v: ((v, 0.2), {"mask": [[[True]]]})),
+    ("direction", lambda v: ((v, 0.2), {"gradient_direction": "up"})),
+    ("method", lambda v: ((v, 0.2), {"method": "cubes"})),
+    ("no surface", lambda v: ((v, float(np.float32(v).max())), {})),
+]
+
+
+@pytest.mark.parametrize("label,make_args", BAD_ARGUMENTS, ids=[b[0] for b in BAD_ARGUMENTS])
+def test_bad_arguments_raise_skimage_types(label, make_args):
+    v = gyroid((8, 9, 10))
+    args, kwargs = make_args(v)
+    theirs = ours = None
+    try:
+        measure.marching_cubes(*args, **{"method": "lorensen", **kwargs})
+    except Exception as e:  # noqa: BLE001 - the type is what is compared
+        theirs = type(e)
+    try:
+        keymesh.marching_cubes(*args, **kwargs)
+    except Exception as e:  # noqa: BLE001
+        ours = type(e)
+    assert theirs is not None, "scikit-image accepted it"
+    assert ours is theirs, (ours, theirs)
+
+
+def test_lewiner_is_refused_by_name():
+    with pytest.raises(NotImplementedError, match="lewiner"):
+        keymesh.marching_cubes(gyroid((8, 8, 8)), 0.1, method="lewiner")
