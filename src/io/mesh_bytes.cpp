@@ -307,6 +307,11 @@ void validate_mesh(const SurfaceMesh& mesh, const std::string& path) {
     if (f.components < 1 || f.values.size() != n * std::uint64_t(f.components))
       throw InputError(path + ": point field '" + f.name + "' has " + std::to_string(f.values.size()) +
                        " values for " + std::to_string(n) + " points x " + std::to_string(f.components) + " components");
+  const std::uint64_t cells = static_cast<std::uint64_t>(mesh.num_cells());
+  for (const Field& f : mesh.cell_fields)
+    if (f.components < 1 || f.values.size() != cells * std::uint64_t(f.components))
+      throw InputError(path + ": cell field '" + f.name + "' has " + std::to_string(f.values.size()) +
+                       " values for " + std::to_string(cells) + " cells x " + std::to_string(f.components) + " components");
 }
 
 void compact_offsets(SurfaceMesh& mesh) {

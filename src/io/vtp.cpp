@@ -340,7 +340,7 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
   const Id n = mesh.num_points();
   const Id cells = mesh.num_cells();
 
-  // Appended blocks in file order: point fields, points, connectivity, offsets.
+  // Appended blocks in file order: point fields, cell fields, points, connectivity, offsets.
   std::uint64_t offset = 0;
   auto block = [&](std::uint64_t bytes) {
     const std::uint64_t at = offset;
@@ -360,6 +360,13 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
     x += "        <DataArray type=\"Int64\" Name=\"GlobalPointIds\" format=\"appended\" offset=\"" +
          block(8 * global_point_ids->size()) + "\"/>\n";
   x += "      </PointData>\n";
+  if (!mesh.cell_fields.empty()) {
+    x += "      <CellData>\n";
+    for (const Field& f : mesh.cell_fields)
+      x += "        <DataArray type=\"Float32\" Name=\"" + xml_escape(f.name) + "\" NumberOfComponents=\"" +
+           std::to_string(f.components) + "\" format=\"appended\" offset=\"" + block(4 * f.values.size()) + "\"/>\n";
+    x += "      </CellData>\n";
+  }
   x += "      <Points>\n";
   x += "        <DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"" +
        block(4 * mesh.points.size()) + "\"/>\n";
@@ -414,6 +421,7 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
   for (const Field& f : mesh.point_fields) write_floats(f.values);
   if (global_point_ids)
     write_int64s(global_point_ids->size(), [&](std::uint64_t i) { return (*global_point_ids)[i]; });
+  for (const Field& f : mesh.cell_fields) write_floats(f.values);
   write_floats(mesh.points);
   write_int64s(mesh.connectivity.size(), [&](std::uint64_t i) { return mesh.connectivity[i]; });
   write_int64s(static_cast<std::uint64_t>(cells), [&](std::uint64_t c) { return mesh.cell_end(static_cast<Id>(c)); });

@@ -23,6 +23,9 @@ struct SurfaceMesh {
   // cell is a triangle (the common case: no offsets array is stored).
   std::vector<std::uint64_t> offsets;
   std::vector<Field> point_fields;
+  // One tuple per cell (e.g. a label map's boundary_labels). Written by the
+  // .vtp writer as CellData; the other formats have no place for them.
+  std::vector<Field> cell_fields;
 
   Id num_points() const { return static_cast<Id>(points.size() / 3); }
   Id num_cells() const {
@@ -35,6 +38,11 @@ struct SurfaceMesh {
 
   const Field* find_point_field(const std::string& name) const {
     for (const auto& f : point_fields)
+      if (f.name == name) return &f;
+    return nullptr;
+  }
+  const Field* find_cell_field(const std::string& name) const {
+    for (const auto& f : cell_fields)
       if (f.name == name) return &f;
     return nullptr;
   }

@@ -1,0 +1,101 @@
+#pragma once
+// Surfaces of a label map (a segmentation: one integer region id per grid
+// point), welded by history keys: the map step of a generator writes keys
+// and KEY-REDUCE (partition_dense) connects them.
+//
+// The volume is treated as padded with one layer of background all round,
+// so every region's surface is closed, also where a label touches the grid's
+// border (vtkDiscreteFlyingEdges3D leaves those surfaces open there).
+// Labels not selected (LabelOptions::labels) count as background.
+//
+// Methods:
+//  - SurfaceNets (default): the dual of the label boundaries. A point per
+//    grid cell (the cube between 8 samples) whose corners carry more than one
+//    label, keyed by the cell, placed at the cell's centre before smoothing;
+//    a quad (two triangles) per grid edge whose two end labels differ, keyed
+//    by that edge, its corners the 4 cells around the edge. Every interface
+//    is written once; points are shared by every label meeting in the cell.
+//    Unsmoothed, a region's surface is the boundary of the union of its
+//    voxels (unit cubes centred on its grid points): its enclosed volume is
+//    the voxel count times the voxel volume.
+//  - DiscreteMarchingCubes: each label's indicator (value == label)
+//    contoured at 0.5 by keymesh's marching cubes (generate/contour.hpp):
+//    points at edge midpoints keyed by the edge, so labels sharing an edge
+//    share its point; one label gives the points and triangles of
+//    vtkDiscreteFlyingEdges3D. An interface is written once per side.
+//
+// Cell fields:
+//  - boundary_labels (2 components): the two labels across the face,
+//    smaller first (PyVista's contour_labels convention).
+//  - label (with per_label or DiscreteMarchingCubes): the region whose
+//    surface the face belongs to.
+// Orientation: without per_label, surface nets faces have their normal
+// pointing from boundary_labels[0] (smaller) to boundary_labels[1]; in
+// per-label surfaces and discrete MC, normals point out of `label`.
+//
+// per_label: each selected label's closed surface, with its own points
+// (labels in increasing order). Surface nets then gives a cell one point per
+// loop the label's boundary makes on the cell's faces (per polygon of the
+// marching cubes table, whose face rule keeps the label's voxels apart across
+// face diagonals), so each surface is the dual of the label's discrete
+// marching cubes surface and a closed 2-manifold: the label's voxels count as
+// 6-connected (faces only), the rest as 26-connected. Its Euler
+// characteristic is 2 x the region's Euler number at that connectivity
+// (skimage.measure.euler_number(region, connectivity=1)), for both methods.
+// A cell with several loops places each loop's point at the centroid of its
+// cut edges' midpoints instead of the cell centre.
+//
+// Guarantees: deterministic, bit-identical output at any thread count.
+// Refused (InputError, naming the volume): float samples, labels that are
+// not exactly representable as float32 (|v| > 2^24), more than
+// kMaxDistinctLabels distinct values, fewer than 1 point along an axis.
+#include <cstdint>
+#include <vector>
+
+#include "keymesh/mesh/image_grid.hpp"
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh::generate {
+
+enum class LabelMethod { SurfaceNets, DiscreteMarchingCubes };
+
+// Distinct values a volume may hold, background included (label indices are
+// 16-bit inside the generator).
+constexpr Id kMaxDistinctLabels = 65536;
+// Largest |label|: boundary_labels is a float32 field.
+constexpr std::int64_t kMaxLabelMagnitude = 16777216;
+
+struct LabelOptions {
+  LabelMethod method = LabelMethod::SurfaceNets;
+  std::vector<std::int64_t> labels;  // labels to extract; empty: every label but the background
+  std::int64_t background = 0;
+  bool per_label = false;
+  // Smoothing of the welded mesh (generate/label_smoothing.hpp): 0 = off.
+  int smooth_iterations = 16;
+  double relaxation = 0.5;
+};
+
+struct LabelPairCount {
+  std::int64_t first = 0, second = 0;  // first < second
+  Id points = 0;                       // distinct points of the faces of this pair
+  Id faces = 0;                        // triangles
+};
+
+struct LabelStats {
+  double scan = 0;      // distinct labels, padded label-index volume
+  double generate = 0;  // map step: keys of the soup
+  double weld = 0;      // KEY-REDUCE partition
+  double smooth = 0;
+  Id distinct_labels = 0;   // in the volume, background counted
+  Id surfaces = 0;          // labels extracted
+  Id soup_corners = 0;      // triangle corners before welding
+};
+
+SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats = nullptr);
+
+// Faces and distinct points per label pair of a mesh with a boundary_labels
+// cell field, in increasing (first, second): two KEY-REDUCE partitions (the
+// faces by pair, then the corners by (pair, point)). Empty without the field.
+std::vector<LabelPairCount> label_pair_counts(const SurfaceMesh& mesh);
+
+}  // namespace keymesh::generate

@@ -1,0 +1,327 @@
+// Surface nets on a label map (see keymesh/generate/labels.hpp): the map step
+// writes, for every grid edge whose end labels differ, a quad of four cell
+// keys (the cells around the edge) and the edge's label pair; KEY-REDUCE's
+// dense plan turns the keys into points (one per cell met) and the index map
+// into the triangle list. Quads are written in grid order, so the output
+// depends on the volume alone (any thread count gives the same bits).
+#include <array>
+#include <chrono>
+#include <limits>
+#include <string>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/marching_cubes_table.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/scan.hpp"
+#include "label_volume.hpp"
+
+namespace keymesh::generate::detail {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The loops a cell's label boundary makes on the cell's faces: the polygons
+// of the marching cubes case table (generate/marching_cubes_table.hpp, whose
+// face rule keeps the label's corners apart across a face diagonal). The
+// cube edges one polygon cuts form one loop; a cell gets one point per loop,
+// so a per-label surface is the dual of the label's marching cubes surface
+// and a closed 2-manifold like it (one point per cell would pinch where
+// voxels meet along an edge or a corner, or where a tunnel crosses a cell).
+struct CellLoops {
+  std::array<std::array<std::uint8_t, 12>, 256> loop_of;  // loop of each cut cube edge
+  std::array<std::uint8_t, 256> loops;
+  std::array<std::array<std::uint8_t, 3>, 8> edge_at;  // cube edge from corner c along axis a
+};
+
+const CellLoops& cell_loops() {
+  static const CellLoops table = [] {
+    const auto& mc = marching_cubes_table();
+    CellLoops t{};
+    for (int e = 0; e < 12; ++e) t.edge_at[mc.edges[e].corner0][mc.edges[e].axis] = static_cast<std::uint8_t>(e);
+    for (int c = 0; c < 256; ++c) {
+      // Union-find over the cube edges of each triangle: a polygon's fan.
+      std::array<int, 12> parent;
+      for (int e = 0; e < 12; ++e) parent[e] = e;
+      auto find = [&](int e) {
+        while (parent[e] != e) e = parent[e] = parent[parent[e]];
+        return e;
+      };
+      std::array<bool, 12> cut{};
+      for (int k = 0; k < 3 * mc.triangle_count[c]; ++k) cut[mc.triangle_edges[c][k]] = true;
+      for (int tri = 0; tri < mc.triangle_count[c]; ++tri) {
+        const auto* e = &mc.triangle_edges[c][3 * tri];
+        parent[find(e[1])] = find(e[0]);
+        parent[find(e[2])] = find(e[0]);
+      }
+      std::array<int, 12> id;
+      id.fill(-1);
+      int next = 0;
+      for (int e = 0; e < 12; ++e) {
+        if (!cut[e]) continue;
+        const int r = find(e);
+        if (id[r] < 0) id[r] = next++;
+        t.loop_of[c][e] = static_cast<std::uint8_t>(id[r]);
+      }
+      t.loops[c] = static_cast<std::uint8_t>(next);
+    }
+    return t;
+  }();
+  return table;
+}
+
+// A box of the padded grid: points [lo, lo + dims) per axis. The cells of
+// the box are the cubes between its points.
+struct Box {
+  std::array<Id, 3> lo{}, dims{};
+  Id cx() const { return dims[0] - 1; }
+  Id cxy() const { return (dims[0] - 1) * (dims[1] - 1); }
+  Id cells() const { return cxy() * (dims[2] - 1); }
+};
+
+// Everything one run of the generator writes, before welding.
+template <class K>
+struct Soup {
+  std::vector<K> keys;                // 6 per quad: triangles (C00, C10, C11), (C00, C11, C01)
+  std::vector<std::uint32_t> pair;    // per quad: first << 16 | second
+  std::vector<std::uint32_t> side;    // per quad (per_label only): the label index of the surface
+};
+
+// Labels of the 8 corners of the cell whose first corner is padded point p.
+struct CellCorners {
+  const LabelVolume& v;
+  std::array<Id, 8> offset;
+  explicit CellCorners(const LabelVolume& vol) : v(vol) {
+    for (int c = 0; c < 8; ++c) offset[c] = (c & 1) + ((c >> 1) & 1) * vol.dims[0] + ((c >> 2) & 1) * vol.nxy;
+  }
+  unsigned case_of(Id p, LabelIndex l) const {
+    unsigned m = 0;
+    for (int c = 0; c < 8; ++c) m |= static_cast<unsigned>(v.index[static_cast<std::size_t>(p + offset[c])] == l) << c;
+    return m;
+  }
+  int distinct(Id p) const {
+    LabelIndex seen[8];
+    int n = 0;
+    for (int c = 0; c < 8; ++c) {
+      const LabelIndex l = v.index[static_cast<std::size_t>(p + offset[c])];
+      bool dup = false;
+      for (int i = 0; i < n; ++i) dup = dup || seen[i] == l;
+      if (!dup) seen[n++] = l;
+    }
+    return n;
+  }
+};
+
+// The map step over the edges of `box` (every edge between two of its
+// points). With `only` < 0: every edge whose labels differ, keyed by cell
+// (network); otherwise only edges with exactly one end of label `only`,
+// keyed by 4 * cell + piece (that label's closed surface).
+template <class K>
+void generate_quads(const LabelVolume& vol, const Box& box, int only, Soup<K>& soup) {
+  const auto& loops = cell_loops();
+  const Id rows = box.dims[1] * box.dims[2];
+  const Id cstride[3] = {1, box.cx(), box.cxy()};
+  const Id pstride[3] = {1, vol.dims[0], vol.nxy};
+  const LabelIndex* L = vol.index.data();
+  const CellCorners corners(vol);
+  // Visits the edges of row r whose quads are written: f(i, axis, lo_end_label, hi_end_label).
+  auto visit_row = [&](Id r, auto&& f) {
+    const Id j = r % box.dims[1], k = r / box.dims[1];
+    const Id row_first = vol.at(box.lo[0], box.lo[1] + j, box.lo[2] + k);
+    const bool y_ok = j + 1 < box.dims[1], z_ok = k + 1 < box.dims[2];
+    for (Id i = 0; i < box.dims[0]; ++i) {
+      const Id p = row_first + i;
+      const LabelIndex a = L[p];
+      const LabelIndex ends[3] = {i + 1 < box.dims[0] ? L[p + 1] : a, y_ok ? L[p + pstride[1]] : a,
+                                  z_ok ? L[p + pstride[2]] : a};
+      for (int axis = 0; axis < 3; ++axis) {
+        const LabelIndex b = ends[axis];
+        if (a == b) continue;
+        if (only >= 0 && a != only && b != only) continue;
+        f(i, j, k, axis, a, b);
+      }
+    }
+  };
+  std::vector<Id> row_offsets(static_cast<std::size_t>(rows + 1), 0);
+  parallel::for_each_dynamic(rows, [&](Id r) {
+    Id count = 0;
+    visit_row(r, [&](Id, Id, Id, int, LabelIndex, LabelIndex) { ++count; });
+    row_offsets[r] = count;
+  }, 16);
+  const Id quads = parallel::exclusive_scan(row_offsets.data(), row_offsets.data(), rows + 1);
+  if (6 * quads > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("labels: " + std::to_string(2 * quads) + " triangles exceed the supported 1431655765");
+  soup.keys.resize(static_cast<std::size_t>(6 * quads));
+  soup.pair.resize(static_cast<std::size_t>(quads));
+  parallel::for_each_dynamic(rows, [&](Id r) {
+    Id q = row_offsets[r];
+    visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      const Id cell = i + j * cstride[1] + k * cstride[2];  // the cell whose first corner is p
+      // The four cells around the edge, counter-clockwise seen from +axis.
+      Id c[4] = {cell, cell - cstride[u], cell - cstride[u] - cstride[v], cell - cstride[v]};
+      K key[4];
+      if (only < 0) {
+        for (int m = 0; m < 4; ++m) key[m] = static_cast<K>(c[m]);
+      } else {
+        // The edge as a cube edge of each cell around it, and its loop there.
+        const Id p = vol.at(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k);
+        const int st[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        for (int m = 0; m < 4; ++m) {
+          const Id first = p - st[m][0] * pstride[u] - st[m][1] * pstride[v];
+          const unsigned cube = corners.case_of(first, static_cast<LabelIndex>(only));
+          const int corner0 = (st[m][0] << u) | (st[m][1] << v);
+          key[m] = static_cast<K>(4 * c[m] + loops.loop_of[cube][loops.edge_at[corner0][axis]]);
+        }
+      }
+      // Normal +axis points from a to b: keep the order when a is the
+      // smaller label (network) or the surface's label (per label).
+      const bool keep = only < 0 ? a < b : a == only;
+      K* o = soup.keys.data() + 6 * q;
+      if (keep) {
+        o[0] = key[0], o[1] = key[1], o[2] = key[2], o[3] = key[0], o[4] = key[2], o[5] = key[3];
+      } else {
+        o[0] = key[0], o[1] = key[3], o[2] = key[2], o[3] = key[0], o[4] = key[2], o[5] = key[1];
+      }
+      const LabelIndex lo = a < b ? a : b, hi = a < b ? b : a;
+      soup.pair[static_cast<std::size_t>(q)] = (std::uint32_t{lo} << 16) | hi;
+      ++q;
+    });
+  }, 16);
+}
+
+// Appends the welded points of one run: positions, junction and border
+// flags, from each point's key (cell, or 4 * cell + piece).
+template <class K>
+void append_points(const LabelVolume& vol, const Box& box, int only, const std::vector<K>& point_keys,
+                   LabelSurface& out) {
+  const auto& loops = cell_loops();
+  const auto& mc = marching_cubes_table();
+  const CellCorners corners(vol);
+  const Id base = static_cast<Id>(out.junction.size());
+  const Id n = static_cast<Id>(point_keys.size());
+  out.mesh.points.resize(static_cast<std::size_t>(3 * (base + n)));
+  out.cell_centre.resize(static_cast<std::size_t>(3 * (base + n)));
+  out.junction.resize(static_cast<std::size_t>(base + n));
+  out.border_axes.resize(static_cast<std::size_t>(base + n));
+  parallel::for_each(n, [&](Id pt) {
+    const Id key = static_cast<Id>(point_keys[static_cast<std::size_t>(pt)]);
+    const Id cell = only < 0 ? key : key / 4;
+    const Id local[3] = {cell % box.cx(), (cell / box.cx()) % (box.dims[1] - 1), cell / box.cxy()};
+    const Id g[3] = {box.lo[0] + local[0], box.lo[1] + local[1], box.lo[2] + local[2]};
+    const Id first = vol.at(g[0], g[1], g[2]);
+    double offset[3] = {0, 0, 0};
+    if (only >= 0) {
+      // A cell with several loops: each loop's point sits at the centroid
+      // of its cut edges' midpoints (its marching cubes polygon), so the
+      // points do not coincide; a single loop keeps the cell centre.
+      const unsigned cube = corners.case_of(first, static_cast<LabelIndex>(only));
+      if (loops.loops[cube] > 1) {
+        const int loop = static_cast<int>(key % 4);
+        int count = 0;
+        double sum[3] = {0, 0, 0};
+        for (int e = 0; e < 12; ++e) {
+          const auto& ce = mc.edges[e];
+          if (((cube >> ce.corner0) & 1) == ((cube >> ce.corner1) & 1) || loops.loop_of[cube][e] != loop) continue;
+          ++count;
+          const double mid[3] = {ce.dx + (ce.axis == 0 ? 0.5 : 0.0), ce.dy + (ce.axis == 1 ? 0.5 : 0.0),
+                                 ce.dz + (ce.axis == 2 ? 0.5 : 0.0)};
+          for (int a = 0; a < 3; ++a) sum[a] += mid[a] - 0.5;
+        }
+        for (int a = 0; a < 3; ++a) offset[a] = sum[a] / count;
+      }
+    }
+    std::uint8_t border = 0;
+    const std::size_t at = static_cast<std::size_t>(base + pt);
+    for (int a = 0; a < 3; ++a) {
+      const double centre = vol.coord(a, static_cast<double>(g[a]) + 0.5);
+      out.cell_centre[3 * at + a] = static_cast<float>(centre);
+      out.mesh.points[3 * at + a] = static_cast<float>(centre + offset[a] * vol.spacing[a]);
+      if (g[a] == 0 || g[a] == vol.dims[a] - 2) border |= static_cast<std::uint8_t>(1u << a);
+    }
+    out.border_axes[at] = border;
+    out.junction[at] = corners.distinct(first) >= 3;
+  }, 1024);
+}
+
+// Welds one soup (dense plan over the box's keys) and appends it to `out`.
+template <class K>
+void weld_and_append(const LabelVolume& vol, const Box& box, int only, Soup<K>& soup, LabelSurface& out) {
+  const K range = static_cast<K>(only < 0 ? box.cells() : 4 * box.cells());
+  auto groups = keyreduce::partition_dense(soup.keys.data(), static_cast<Id>(soup.keys.size()), range,
+                                           keyreduce::Order::Skip);
+  const std::uint32_t base = static_cast<std::uint32_t>(out.junction.size());
+  const std::size_t c0 = out.mesh.connectivity.size();
+  out.mesh.connectivity.resize(c0 + groups.index_map.size());
+  parallel::for_each(static_cast<Id>(groups.index_map.size()),
+                     [&](Id i) { out.mesh.connectivity[c0 + static_cast<std::size_t>(i)] = base + groups.index_map[i]; });
+  for (std::uint32_t pq : soup.pair) {
+    out.pair.push_back(pq);
+    out.pair.push_back(pq);
+  }
+  append_points(vol, box, only, groups.unique_keys, out);
+}
+
+Box whole(const LabelVolume& vol) { return Box{{0, 0, 0}, vol.dims}; }
+
+// The label's voxels' box grown by one point each way: every edge with an
+// end of the label, and every cell around such an edge, lies in it.
+Box box_of(const LabelVolume& vol, std::size_t s) {
+  Box b;
+  for (int a = 0; a < 3; ++a) {
+    b.lo[a] = vol.box[s][a] - 1;
+    b.dims[a] = vol.box[s][3 + a] - vol.box[s][a] + 3;
+  }
+  return b;
+}
+
+template <class K>
+void network(const LabelVolume& vol, LabelSurface& out, LabelStats& st) {
+  Soup<K> soup;
+  const Box box = whole(vol);
+  auto t0 = Clock::now();
+  generate_quads<K>(vol, box, -1, soup);
+  st.generate += seconds_since(t0);
+  st.soup_corners = static_cast<Id>(soup.keys.size());
+  t0 = Clock::now();
+  weld_and_append(vol, box, -1, soup, out);
+  st.weld += seconds_since(t0);
+}
+
+// One closed surface per selected label, each welded on its own box; the
+// labels run in parallel and are appended in label order.
+void per_label(const LabelVolume& vol, LabelSurface& out, LabelStats& st) {
+  const std::size_t n = vol.selected.size();
+  std::vector<LabelSurface> parts(n);
+  auto t0 = Clock::now();
+  parallel::for_each_dynamic(static_cast<Id>(n), [&](Id s) {
+    const Box box = box_of(vol, static_cast<std::size_t>(s));
+    Soup<std::uint64_t> soup;
+    generate_quads(vol, box, vol.selected[static_cast<std::size_t>(s)], soup);
+    weld_and_append(vol, box, vol.selected[static_cast<std::size_t>(s)], soup, parts[static_cast<std::size_t>(s)]);
+    parts[static_cast<std::size_t>(s)].mesh.cell_fields.push_back(
+        Field{"label", 1, std::vector<float>(soup.pair.size() * 2, static_cast<float>(vol.values[vol.selected[s]]))});
+  }, 1);
+  st.generate += seconds_since(t0);
+  for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());
+  append_surfaces(parts, out);
+}
+
+}  // namespace
+
+LabelSurface surface_nets(const LabelVolume& volume, bool per_label_surfaces, LabelStats& stats) {
+  LabelSurface out;
+  out.quads = true;
+  if (per_label_surfaces) {
+    per_label(volume, out, stats);
+  } else if (static_cast<std::uint64_t>(whole(volume).cells()) <= std::numeric_limits<std::uint32_t>::max()) {
+    network<std::uint32_t>(volume, out, stats);
+  } else {
+    network<std::uint64_t>(volume, out, stats);
+  }
+  return out;
+}
+
+}  // namespace keymesh::generate::detail
