@@ -47,9 +47,9 @@
 // nets only): where one loop of each of two neighbouring cells crosses their
 // shared face twice (an ambiguous face whose two arcs join up in both
 // cells), the two arcs' quads share one dual edge, which then has 4 faces
-// (2 each way; the surface stays closed and oriented). Rare: 1 edge in the
-// 1,405 voxels of label 4 in tests/cli/test_labels_cli.py. Discrete
-// marching cubes has no such exception.
+// (2 each way; the surface stays closed and oriented). Rare: 1 such edge in
+// the 4 labels (2,184 voxels) of tests/cli/test_labels_cli.py's volume.
+// Discrete marching cubes has no such exception.
 //
 // Guarantees: deterministic, bit-identical output at any thread count.
 // Refused (InputError, naming the volume): float samples, labels that are
