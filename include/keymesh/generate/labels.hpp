@@ -48,7 +48,7 @@
 // shared face twice (an ambiguous face whose two arcs join up in both
 // cells), the two arcs' quads share one dual edge, which then has 4 faces
 // (2 each way; the surface stays closed and oriented). Rare: 1 such edge in
-// the 4 labels (2,184 voxels) of tests/cli/test_labels_cli.py's volume.
+// the 4 labels (1,405 voxels) of tests/cli/test_labels_cli.py's volume.
 // Discrete marching cubes has no such exception.
 //
 // Guarantees: deterministic, bit-identical output at any thread count.
