@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "keymesh/core/progress.hpp"
+
 namespace keymesh::cli {
 
 // Options every compute subcommand shares.
@@ -56,9 +58,14 @@ class StageTimer {
 
 // Progress lines on stderr ("keymesh: reading X"), only for work expected to
 // take over about a second and never with --quiet.
+// The library's progress hook (core/progress.hpp) is installed for the
+// Progress object's lifetime: the stages long operations report are said
+// the same way, so the CLI and Python's progress= see the same stages.
 class Progress {
  public:
-  Progress(bool quiet, bool large) : quiet_(quiet), enabled_(!quiet && large) {}
+  Progress(bool quiet, bool large)
+      : quiet_(quiet), enabled_(!quiet && large),
+        hook_([this](const char* stage, double) { say(stage); }) {}
   void say(const std::string& line) const;
   // Turns progress on once the work is known to be large (never with --quiet).
   void enable_if(bool large) { enabled_ = !quiet_ && (enabled_ || large); }
@@ -66,6 +73,7 @@ class Progress {
  private:
   bool quiet_;
   bool enabled_;
+  progress::ScopedHook hook_;
 };
 
 // Writes the report atomically (temporary file, then rename).
