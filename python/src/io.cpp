@@ -11,9 +11,12 @@ namespace keymesh::python {
 
 namespace {
 
-bool is_volume_path(std::string path) {
+// Surface meshes by extension; grids by io::is_grid_file; everything else
+// (a folder included) is left to io::read_volume, whose format table names
+// what it accepts when it does not know the file.
+bool is_mesh_path(std::string path) {
   std::transform(path.begin(), path.end(), path.begin(), [](unsigned char c) { return std::tolower(c); });
-  for (const char* ext : {".vti", ".nrrd", ".nhdr", ".nii", ".nii.gz", ".den", ".raw"}) {
+  for (const char* ext : {".vtp", ".pvtp", ".ply", ".obj", ".stl"}) {
     const std::string e(ext);
     if (path.size() >= e.size() && path.compare(path.size() - e.size(), e.size(), e) == 0) return true;
   }
@@ -32,7 +35,7 @@ py::tuple read(const std::string& path, const py::object& dims, const py::object
     }
     return py::make_tuple("grid", grid_to_python(std::move(grid)));
   }
-  if (!is_volume_path(path)) {
+  if (is_mesh_path(path) && dims.is_none() && dtype.is_none()) {
     SurfaceMesh mesh;
     {
       py::gil_scoped_release release;

@@ -221,3 +221,28 @@ def test_ctrl_c_interrupts_cleanly(surface):
         keymesh.subdivide(surface, 3, progress=press_ctrl_c)
     assert len(calls) == 1
     assert keymesh.subdivide(surface, 1).n_cells == 4 * surface.n_cells
+
+
+def test_tetrahedralize_a_hexahedral_grid():
+    """A Grid of VTK hexahedra (a 3 x 2 x 2 block of unit-ish cells built here
+    by hand) goes through the same call: 5 or 24 tets per hexahedron, total
+    volume that of the block, cell fields carried to the children."""
+    nx, ny, nz = 4, 3, 3
+    i, j, k = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    pts = np.stack([i * 1.5, j * 1.0, k * 0.5], axis=-1).reshape(-1, 3).astype(np.float32)
+    pid = lambda a, b, c: (a * ny + b) * nz + c
+    hexes = []
+    for a in range(nx - 1):
+        for b in range(ny - 1):
+            for c in range(nz - 1):
+                hexes.append([pid(a, b, c), pid(a + 1, b, c), pid(a + 1, b + 1, c), pid(a, b + 1, c),
+                              pid(a, b, c + 1), pid(a + 1, b, c + 1), pid(a + 1, b + 1, c + 1), pid(a, b + 1, c + 1)])
+    hexes = np.array(hexes, np.int64)
+    label = np.arange(len(hexes), dtype=np.float32)
+    grid = keymesh.Grid(pts, hexes, cell_type=12, cell_data={"label": label})
+    for scheme in (5, 24):
+        tets = keymesh.tetrahedralize(grid, scheme)
+        assert tets.n_cells == scheme * len(hexes)
+        vol = tet_volumes(tets)
+        assert np.all(vol > 0) and np.isclose(vol.sum(), 4.5 * 2.0 * 1.0, rtol=1e-5)
+        assert np.array_equal(tets.cell_data["label"], np.repeat(label, scheme))
