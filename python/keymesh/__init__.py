@@ -299,3 +299,6 @@ def from_vtk(obj) -> Union[Mesh, Grid]:
     VTK's arrays (no copy)."""
     from . import _interop
     return _interop.from_vtk(obj, Mesh, Grid)
+
+from ._labels import LabelMesh, contour_labels  # noqa: E402  (label maps: python/keymesh/_labels.py)
+__all__ += ["contour_labels", "LabelMesh"]

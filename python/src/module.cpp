@@ -68,6 +68,8 @@ void register_errors(py::module_& m) {
   });
 }
 
+void register_labels(py::module_& m);  // labels.cpp
+
 }  // namespace keymesh::python
 
 PYBIND11_MODULE(_keymesh, m) {
@@ -81,6 +83,7 @@ PYBIND11_MODULE(_keymesh, m) {
   kp::register_check(m);
   kp::register_marching_cubes(m);
   kp::register_operations(m);
+  kp::register_labels(m);
   m.def("thread_count", &keymesh::parallel::thread_count,
         "Worker threads the library uses when a call passes threads=0 (all cores).");
 }

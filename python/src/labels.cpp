@@ -1,0 +1,88 @@
+// keymesh.contour_labels: surfaces of a label map (generate/labels.hpp) over a
+// numpy integer volume or a keymesh.Volume. Axis 0 is x, as in contour; the
+// library reads the samples x-fastest, so a C-ordered array is copied once
+// into Fortran order (labels are small integers: the copy is cheap next to
+// the generator).
+#include "common.hpp"
+#include "keymesh/generate/labels.hpp"
+
+namespace keymesh::python {
+
+namespace {
+
+generate::LabelMethod parse_method(const std::string& s) {
+  if (s == "surface_nets" || s == "surfacenets") return generate::LabelMethod::SurfaceNets;
+  if (s == "discrete_marching_cubes" || s == "discrete-mc") return generate::LabelMethod::DiscreteMarchingCubes;
+  throw py::value_error("method must be 'surface_nets' or 'discrete_marching_cubes', got '" + s + "'");
+}
+
+py::tuple contour_labels(const py::object& volume, const py::object& spacing, const py::object& origin,
+                         const std::string& method, const std::vector<std::int64_t>& labels,
+                         std::int64_t background, bool per_label, int smoothing_iterations, double relaxation,
+                         int threads) {
+  check_threads(threads);
+  generate::LabelOptions opt;
+  opt.method = parse_method(method);
+  opt.labels = labels;
+  opt.background = background;
+  opt.per_label = per_label;
+  opt.smooth_iterations = smoothing_iterations;
+  opt.relaxation = relaxation;
+  const ImageGrid* grid = nullptr;
+  ImageGrid view;
+  py::array array;
+  if (py::isinstance<Volume>(volume)) {
+    grid = &volume.cast<Volume&>().grid;
+  } else {
+    array = py::array::ensure(volume);
+    if (!array) throw py::type_error("volume must be a 3-D numpy array or a keymesh.Volume");
+    if (array.ndim() != 3)
+      throw py::value_error("volume must be 3-D (axis 0 = x), got ndim=" + std::to_string(array.ndim()));
+    view.type = scalar_type_of(array.dtype(), "volume");
+    if (!array.dtype().attr("isnative").cast<bool>())
+      array = array.attr("astype")(array.dtype().attr("newbyteorder")("="));
+    array = py::array::ensure(array, py::array::f_style);
+    const auto s = spacing.is_none() ? std::array<double, 3>{1, 1, 1} : triple(spacing, "spacing");
+    const auto o = origin.is_none() ? std::array<double, 3>{0, 0, 0} : triple(origin, "origin");
+    for (int a = 0; a < 3; ++a) view.dims[a] = array.shape(a);
+    view.spacing = s;
+    view.origin = o;
+    view.external = static_cast<const std::byte*>(array.data());
+    grid = &view;
+  }
+  SurfaceMesh mesh;
+  generate::LabelStats stats;
+  {
+    py::gil_scoped_release release;
+    ThreadScope scope(threads);
+    mesh = generate::contour_labels(*grid, opt, &stats);
+  }
+  py::dict cell_data;
+  for (Field& f : mesh.cell_fields) {
+    const auto n = static_cast<py::ssize_t>(f.values.size() / static_cast<std::size_t>(f.components));
+    cell_data[py::str(f.name)] = f.components == 1 ? adopt(std::move(f.values), {n})
+                                                   : adopt(std::move(f.values), {n, f.components});
+  }
+  mesh.cell_fields.clear();
+  py::dict info;
+  info["scan"] = stats.scan;
+  info["generate"] = stats.generate;
+  info["weld"] = stats.weld;
+  info["smooth"] = stats.smooth;
+  info["distinct_labels"] = stats.distinct_labels;
+  info["surfaces"] = stats.surfaces;
+  return py::make_tuple(mesh_to_python(std::move(mesh)), cell_data, info);
+}
+
+}  // namespace
+
+void register_labels(py::module_& m) {
+  m.def("contour_labels", &contour_labels, py::arg("volume"), py::arg("spacing") = py::none(),
+        py::arg("origin") = py::none(), py::arg("method") = "surface_nets",
+        py::arg("labels") = std::vector<std::int64_t>{}, py::arg("background") = 0, py::arg("per_label") = false,
+        py::arg("smoothing_iterations") = 16, py::arg("relaxation") = 0.5, py::arg("threads") = 0,
+        "Surfaces of a label map; returns ((points, cells, offsets, point_data), cell_data, info). "
+        "Use keymesh.contour_labels, which wraps this in a Mesh.");
+}
+
+}  // namespace keymesh::python
