@@ -76,7 +76,7 @@ long long file_size(const std::string& path) {
 bool is_mesh_path(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".vtp" || ext == ".pvtp";
+  return ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".vtp" || ext == ".pvtp" || ext == ".glb";
 }
 
 std::vector<Command>& registry() {

@@ -1,6 +1,7 @@
 #include "keymesh/io/mesh_io.hpp"
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/io/gltf.hpp"
 #include "keymesh/io/mesh_bytes.hpp"
 #include "keymesh/io/obj.hpp"
 #include "keymesh/io/ply.hpp"
@@ -10,7 +11,7 @@
 namespace keymesh::io {
 
 namespace {
-constexpr const char* kAccepted = ".ply, .obj, .stl, .vtp; .pvtp to read";
+constexpr const char* kAccepted = ".ply, .obj, .stl, .vtp; .pvtp to read; .glb to write";
 
 [[noreturn]] void unknown_extension(const std::string& path, const std::string& ext) {
   throw InputError(path + ": unknown mesh file extension '" + ext + "' (accepted: " + kAccepted + ")");
@@ -33,6 +34,7 @@ void write_mesh(const SurfaceMesh& mesh, const std::string& path) {
   if (ext == ".obj") return write_obj(mesh, path);
   if (ext == ".stl") return write_stl(mesh, path);
   if (ext == ".vtp") return write_vtp(mesh, path);
+  if (ext == ".glb") return write_gltf_binary(mesh, path);
   unknown_extension(path, ext);
 }
 
