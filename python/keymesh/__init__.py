@@ -253,7 +253,7 @@ def read(path: Any, dims: Optional[Sequence[int]] = None, dtype: Any = None,
          endian: str = "little", header_bytes: int = 0) -> Union[Mesh, Grid, Volume]:
     """Reads a file, by extension.
 
-    Volumes (.vti, .nrrd, .nhdr, .nii, .nii.gz, .den; .raw with dims=(nx,
+    Volumes (.vti, .nrrd, .nhdr, .nii, .nii.gz, .den, a DICOM or Zarr folder; .raw with dims=(nx,
     ny, nz) and dtype, optionally spacing, origin, endian, header_bytes)
     give a keymesh.Volume: ``.array`` is a (nx, ny, nz) view of the samples
     (axis 0 = x, no copy), with ``.spacing`` and ``.origin``.

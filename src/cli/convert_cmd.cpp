@@ -1,7 +1,9 @@
 // keymesh convert IN -o OUT: one file format to another of the same kind:
 // unstructured grids (.vtu .vtk), surface meshes (.ply .obj .stl .vtp) or
-// volumes (read: .vti .nrrd .nhdr .nii .nii.gz .den; written: .vti .nrrd .raw).
+// volumes (read: .vti .nrrd .nhdr .nii .nii.gz .den, DICOM and Zarr folders;
+// written: .vti .nrrd .raw).
 #include <cstdio>
+#include <filesystem>
 
 #include "command.hpp"
 #include "keymesh/io/grid_io.hpp"
@@ -29,6 +31,8 @@ const char* kind_name(Kind k) {
 // grid reader names any other dataset type it finds).
 Kind kind_of(const std::string& path, bool output) {
   const std::string ext = io::mesh_bytes::lower_extension(path);
+  std::error_code ec;
+  if (!output && std::filesystem::is_directory(path, ec)) return Kind::Volume;  // a DICOM or Zarr folder
   if (ext == ".vtu" || ext == ".vtk") return Kind::Grid;
   if (is_mesh_path(path)) return Kind::Surface;
   if (ext == ".vti" || ext == ".nrrd" || ext == ".raw") return Kind::Volume;

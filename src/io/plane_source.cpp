@@ -1,12 +1,16 @@
 #include "keymesh/io/plane_source.hpp"
 
 #include <bit>
+#include <filesystem>
 #include <cctype>
 #include <vector>
 #include <string>
 #include <utility>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/io/dicom.hpp"
+#include "keymesh/io/gzip_plane_reader.hpp"
+#include "keymesh/io/zarr.hpp"
 #include "keymesh/io/volume_formats.hpp"
 
 namespace keymesh::io {
@@ -17,12 +21,7 @@ class RawPlanes : public generate::PlaneSource {
  public:
   RawPlanes(std::string path, const RawOptions& o, double slope = 1, double inter = 0)
       : path_(std::move(path)), options_(o), slope_(slope), inter_(inter) {
-    head_.dims = o.dims;
-    head_.type = o.type;
-    head_.spacing = o.spacing;
-    head_.origin = o.origin;
-    // Scaled samples (NIfTI scl_slope/scl_inter) come out as float, as read_nifti gives them.
-    if (scaled()) head_.type = detail::scaled_type(o.type);
+    set_header(o);
     const std::uint64_t bytes = detail::checked_byte_count(o.dims, o.type, path_);
     const std::uint64_t have = detail::file_size_or_throw(path_);
     if (o.header_bytes < 0 || static_cast<std::uint64_t>(o.header_bytes) > have ||
@@ -31,6 +30,16 @@ class RawPlanes : public generate::PlaneSource {
                        std::to_string(o.dims[1]) + "x" + std::to_string(o.dims[2]) + " " + scalar_type_name(o.type) +
                        " samples after " + std::to_string(o.header_bytes) + " header bytes need " +
                        std::to_string(bytes + static_cast<std::uint64_t>(o.header_bytes)));
+  }
+  // gzip-compressed samples, inflated once in order (see GzipPlaneReader):
+  // the stream starts at file_offset and its first `skip` bytes are header.
+  RawPlanes(std::string path, const RawOptions& o, std::uint64_t file_offset, std::uint64_t skip, double slope,
+            double inter)
+      : path_(std::move(path)), options_(o), slope_(slope), inter_(inter) {
+    set_header(o);
+    detail::checked_byte_count(o.dims, o.type, path_);
+    gzip_ = std::make_unique<GzipPlaneReader>(path_, file_offset, skip,
+                                              static_cast<std::uint64_t>(o.dims[0] * o.dims[1]) * scalar_size(o.type));
   }
   const ImageGrid& header() const override { return head_; }
   void read_planes(Id first, Id count, std::byte* out) override {
@@ -46,12 +55,23 @@ class RawPlanes : public generate::PlaneSource {
   }
 
  private:
+  void set_header(const RawOptions& o) {
+    head_.dims = o.dims;
+    head_.type = o.type;
+    head_.spacing = o.spacing;
+    head_.origin = o.origin;
+    // Scaled samples (NIfTI scl_slope/scl_inter) come out as float, as read_nifti gives them.
+    if (scaled()) head_.type = detail::scaled_type(o.type);
+  }
+
   bool scaled() const { return !(slope_ == 1 && inter_ == 0); }
 
   void read_stored(Id first, Id count, std::byte* out) {
     const std::uint64_t size = scalar_size(options_.type);
     const std::uint64_t plane = static_cast<std::uint64_t>(head_.dims[0] * head_.dims[1]) * size;
-    detail::read_exact(path_, static_cast<std::uint64_t>(options_.header_bytes) + plane * static_cast<std::uint64_t>(first),
+    if (gzip_) gzip_->read(first, count, out);
+    else
+      detail::read_exact(path_, static_cast<std::uint64_t>(options_.header_bytes) + plane * static_cast<std::uint64_t>(first),
                        out, plane * static_cast<std::uint64_t>(count), "planes " + std::to_string(first) + ".." +
                                                                          std::to_string(first + count - 1));
     if (options_.big_endian != (std::endian::native == std::endian::big) && size > 1) {
@@ -65,6 +85,7 @@ class RawPlanes : public generate::PlaneSource {
   RawOptions options_;
   double slope_, inter_;
   ImageGrid head_;
+  std::unique_ptr<GzipPlaneReader> gzip_;
 };
 
 }  // namespace
@@ -75,6 +96,8 @@ std::unique_ptr<generate::PlaneSource> open_raw_planes(const std::string& path, 
 
 std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw) {
   if (raw) return open_raw_planes(path, *raw);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return is_zarr_folder(path) ? open_zarr(path) : open_dicom_series(path);
   auto lower_ext = [&](std::size_t n) {
     if (path.size() < n) return std::string();
     std::string e = path.substr(path.size() - n);
@@ -82,15 +105,40 @@ std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& pat
     return e;
   };
   VolumeLayout layout;
+  const bool nifti = lower_ext(4) == ".nii" || lower_ext(7) == ".nii.gz";
   if (lower_ext(5) == ".nrrd" || lower_ext(5) == ".nhdr") layout = nrrd_layout(path);
-  else if (lower_ext(4) == ".nii" || lower_ext(7) == ".nii.gz") layout = nifti_layout(path);
+  else if (nifti) layout = nifti_layout(path);
+  else if (lower_ext(4) == ".vti") layout = vti_layout(path);
   else
-    throw InputError(path + ": cannot be read plane by plane (raw with --dims, .nrrd/.nhdr or .nii with "
-                     "uncompressed samples can; convert with `keymesh convert " + path + " out.nrrd`)");
+    throw InputError(path + ": cannot be read plane by plane (raw with --dims, .nrrd/.nhdr, .nii/.nii.gz, .vti "
+                     "with raw appended data, a DICOM or Zarr folder can; convert with `keymesh convert " + path +
+                     " out.nrrd`)");
+  if (layout.compressed == "gzip") {
+    // A .nii.gz is one gzip stream holding the header too; a gzip NRRD's
+    // stream starts at its data offset.
+    const auto at = static_cast<std::uint64_t>(layout.raw.header_bytes);
+    return std::make_unique<RawPlanes>(layout.data_path, layout.raw, nifti ? 0 : at, nifti ? at : 0,
+                                       layout.scale_slope, layout.scale_inter);
+  }
   if (!layout.compressed.empty())
-    throw InputError(path + ": " + layout.compressed + "-compressed samples cannot be read plane by plane "
-                     "(decompress it, e.g. `keymesh convert " + path + " out.nrrd`)");
+    throw InputError(path + ": " + layout.compressed + " samples cannot be read plane by plane "
+                     "(convert it, e.g. `keymesh convert " + path + " out.nrrd`)");
   return std::make_unique<RawPlanes>(layout.data_path, layout.raw, layout.scale_slope, layout.scale_inter);
+}
+
+}  // namespace keymesh::io
+
+namespace keymesh::io {
+
+ImageGrid read_all_planes(generate::PlaneSource& source) {
+  const ImageGrid& head = source.header();
+  ImageGrid grid;
+  grid.spacing = head.spacing;
+  grid.origin = head.origin;
+  grid.name = head.name;
+  grid.allocate(head.dims, head.type);
+  source.read_planes(0, head.dims[2], grid.bytes.data());
+  return grid;
 }
 
 }  // namespace keymesh::io

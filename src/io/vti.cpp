@@ -71,8 +71,10 @@ namespace {
 // head up to the AppendedData marker, in which case only an uncompressed
 // raw appended array can be read (straight from the file into the grid)
 // and anything else returns nullopt.
+// With `layout`, a raw appended uncompressed array is not read: where its
+// samples lie is filled in instead (vti_layout).
 std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& data, bool head_only,
-                                   std::uint64_t file_bytes) {
+                                   std::uint64_t file_bytes, VolumeLayout* layout = nullptr) {
   const ParsedXml xml = parse_xml(data, path);
   const Context ctx = file_context(xml, path, "ImageData");
   const XmlNode* image = xml.root->child("ImageData");
@@ -148,6 +150,11 @@ std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& d
     if (at + hs > file_bytes || need > file_bytes - at - hs)
       throw InputError(path + ": file holds " + std::to_string(file_bytes) + " bytes, the point array needs " +
                        std::to_string(need) + " at offset " + std::to_string(at + hs));
+    if (layout) {
+      layout->data_path = path;
+      layout->raw = RawOptions{dims, type, spacing, origin, ctx.big_endian, static_cast<Id>(at + hs)};
+      return std::nullopt;
+    }
     detail::allocate_checked(grid, dims, type, path);
     detail::read_exact(path, at + hs, grid.data(), grid.bytes.size(), "the point array");
     if (ctx.big_endian) detail::swap_samples(grid);
@@ -193,6 +200,15 @@ ImageGrid read_vti(const std::string& path) {
   if (!head.empty())
     if (auto grid = parse_vti(path, head, true, file_bytes)) return std::move(*grid);
   return std::move(*parse_vti(path, mesh_bytes::read_whole_file(path), false, file_bytes));
+}
+
+VolumeLayout vti_layout(const std::string& path) {
+  VolumeLayout layout;
+  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+  const std::string head = appended_head(path, file_bytes);
+  if (!head.empty()) parse_vti(path, head, true, file_bytes, &layout);
+  if (layout.data_path.empty()) layout.compressed = "inline, base64 or zlib-compressed .vti";
+  return layout;
 }
 
 void write_vti(const ImageGrid& grid, const std::string& path) {

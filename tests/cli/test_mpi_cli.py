@@ -270,8 +270,12 @@ def nrrd_and_nifti_read_by_slab():
 
 def refusals():
     out = os.path.join(D, "refused.ply")
-    vti = os.path.join(D, "s.vti")
-    run("generate", "sphere", "--size", 16, "-o", vti, "-q")
+    vti = os.path.join(D, "s.vti")  # ascii samples: no offset to read a plane at
+    with open(vti, "w") as f:
+        f.write('<?xml version="1.0"?>\n<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian">\n'
+                '<ImageData WholeExtent="0 3 0 3 0 3" Origin="0 0 0" Spacing="1 1 1"><Piece Extent="0 3 0 3 0 3">'
+                '<PointData Scalars="s"><DataArray type="Float32" Name="s" format="ascii">'
+                + " ".join(str(i % 11) for i in range(64)) + '</DataArray></PointData></Piece></ImageData></VTKFile>\n')
     p = mpirun(2, "contour", vti, "--iso", 5.5, "-o", out, expect=1)
     assert "plane by plane" in p.stderr and p.stderr.count("plane by plane") == 1, p.stderr
     p = mpirun(2, "subdivide", REF, "-o", out, expect=2)

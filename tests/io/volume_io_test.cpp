@@ -925,17 +925,46 @@ TEST_F(VolumeIo, PlanesOfNrrdEqualTheReader) {
   expect_planes_equal_reader(file("p.raw", "HEAD!" + sample_bytes<std::uint16_t>(true)), &o);
 }
 
-TEST_F(VolumeIo, PlanesRefusedByNameWhenCompressedOrNotAVolumeFile) {
-  const std::string gz = file("g.nrrd", nrrd_header("float", "encoding: gzip") + gzip_bytes(sample_bytes<float>()));
-  expect_refused([&] { open_volume_planes(gz, nullptr); }, gz, "plane by plane");
-  Nifti n;
-  const std::string niigz = file("g.nii.gz", gzip_bytes(n.file(false, sample_bytes<float>())));
-  expect_refused([&] { open_volume_planes(niigz, nullptr); }, niigz, "plane by plane");
+TEST_F(VolumeIo, PlanesRefusedByNameWhenNotReadableByOffset) {
   const std::string vti = file("v.vti", "<VTKFile/>");
   expect_refused([&] { open_volume_planes(vti, nullptr); }, vti, "plane by plane");
+  const std::string den = file("v.den", "not a den");
+  expect_refused([&] { open_volume_planes(den, nullptr); }, den, "plane by plane");
   // The header's checks still apply: a body shorter than declared.
   const std::string short_body = file("s.nrrd", nrrd_header("float", "encoding: raw") + "abc");
   expect_refused([&] { open_volume_planes(short_body, nullptr); }, short_body, "declares");
+}
+
+// gzip NRRD and .nii.gz are inflated forward once; reads that go back (a
+// kept plane, or a rewind) give the planes read_volume gives.
+TEST_F(VolumeIo, GzipPlanesEqualTheWholeVolumeInAnyReadOrder) {
+  const std::string gz = file("g.nrrd", nrrd_header("float", "encoding: gzip") + gzip_bytes(sample_bytes<float>()));
+  Nifti n;
+  n.slope = 2, n.inter = -1;
+  const std::string niigz = file("g.nii.gz", gzip_bytes(n.file(false, sample_bytes<float>())));
+  for (const std::string& p : {gz, niigz}) {
+    const ImageGrid whole = read_volume(p);
+    auto source = open_volume_planes(p, nullptr);
+    ASSERT_EQ(source->header().dims, whole.dims) << p;
+    ASSERT_EQ(source->header().type, whole.type) << p;
+    const std::size_t plane = static_cast<std::size_t>(whole.dims[0] * whole.dims[1]) * scalar_size(whole.type);
+    const auto* want = static_cast<const std::byte*>(whole.data());
+    std::vector<std::byte> got(2 * plane);
+    auto expect_planes = [&](Id first, Id count) {
+      source->read_planes(first, count, got.data());
+      EXPECT_EQ(0, std::memcmp(got.data(), want + first * plane, count * plane)) << p << " planes " << first << "+" << count;
+    };
+    expect_planes(1, 1);  // skips plane 0
+    expect_planes(0, 1);  // behind the stream: rewinds
+    expect_planes(0, 2);  // plane 0 kept, plane 1 inflated
+    expect_planes(1, 1);  // kept
+  }
+  // Cut short: the read that meets the end names the file.
+  const std::string data = gzip_bytes(sample_bytes<float>());
+  const std::string cut = file("cut.nrrd", nrrd_header("float", "encoding: gzip") + data.substr(0, data.size() / 2));
+  auto source = open_volume_planes(cut, nullptr);
+  std::vector<std::byte> out(static_cast<std::size_t>(kCount) * 4);
+  expect_refused([&] { source->read_planes(0, 2, out.data()); }, cut, "gzip data ends");
 }
 
 }  // namespace

@@ -20,6 +20,12 @@ std::unique_ptr<generate::PlaneSource> open_raw_planes(const std::string& path, 
 // planes read at their offset (NIfTI scl_slope/scl_inter applied as
 // read_volume applies them). Anything else, or gzip-compressed samples:
 // InputError naming the file and what to do.
+// A folder is a Zarr array or OME-Zarr image (io/zarr.hpp) when it holds
+// Zarr metadata, else a DICOM series (io/dicom.hpp).
 std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw);
+
+// Every plane of the source into one grid: how read_volume reads the formats
+// whose reader is a plane source (DICOM series, Zarr).
+ImageGrid read_all_planes(generate::PlaneSource& source);
 
 }  // namespace keymesh::io

@@ -26,6 +26,10 @@ struct VolumeLayout {
 };
 VolumeLayout nrrd_layout(const std::string& path);
 VolumeLayout nifti_layout(const std::string& path);
+// A .vti whose point array is appended raw and uncompressed (ParaView's
+// default for large images); otherwise `compressed` says why it cannot be
+// read by offset.
+VolumeLayout vti_layout(const std::string& path);
 
 ImageGrid read_raw(const std::string& path, const RawOptions& options);
 void write_raw(const ImageGrid& grid, const std::string& path);  // native little-endian samples only

@@ -1,0 +1,265 @@
+#include "keymesh/io/dicom.hpp"
+
+#include <gdcmImage.h>
+#include <gdcmImageReader.h>
+#include <gdcmScanner.h>
+#include <gdcmTrace.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/io/volume_formats.hpp"
+
+namespace keymesh::io {
+
+namespace {
+
+const gdcm::Tag kSeriesUid(0x0020, 0x000e), kPosition(0x0020, 0x0032), kOrientation(0x0020, 0x0037),
+    kPixelSpacing(0x0028, 0x0030), kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kSamples(0x0028, 0x0002),
+    kBitsAllocated(0x0028, 0x0100), kSigned(0x0028, 0x0103), kFrames(0x0028, 0x0008), kSlope(0x0028, 0x1053),
+    kIntercept(0x0028, 0x1052);
+
+// A decimal-string (DS/IS) value of `count` numbers separated by '\'; empty
+// when absent or malformed (the callers say which).
+std::optional<std::vector<double>> numbers(const char* text, std::size_t count) {
+  if (!text) return std::nullopt;
+  std::vector<double> out;
+  const char* p = text;
+  while (out.size() < count) {
+    char* end = nullptr;
+    const double v = std::strtod(p, &end);
+    if (end == p || !std::isfinite(v)) return std::nullopt;
+    out.push_back(v);
+    while (*end == ' ') ++end;
+    if (*end == '\\') ++end;
+    else if (out.size() < count) return std::nullopt;
+    p = end;
+  }
+  while (*p == ' ') ++p;
+  if (*p != '\0') return std::nullopt;
+  return out;
+}
+
+// One slice's header, as the scanner read it.
+struct Slice {
+  std::string file;
+  std::string series;
+  std::array<double, 3> position{0, 0, 0};
+  double along_normal = 0;
+  double slope = 1, intercept = 0;
+};
+
+std::string name_of(const std::string& file) { return std::filesystem::path(file).filename().string(); }
+
+class DicomPlanes : public generate::PlaneSource {
+ public:
+  explicit DicomPlanes(const std::string& folder) : folder_(folder) {
+    // GDCM prints its own warnings on stderr; keymesh reports what matters.
+    gdcm::Trace::WarningOff();
+    gdcm::Trace::ErrorOff();
+    gdcm::Trace::DebugOff();
+    std::vector<std::string> files;
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name.empty() || name[0] == '.' || name == "DICOMDIR" || !entry.is_regular_file(ec)) continue;
+      files.push_back(entry.path().string());
+    }
+    if (ec) throw InputError(folder + ": cannot list the folder: " + ec.message());
+    if (files.empty()) throw InputError(folder + ": folder holds no file (expected the DICOM slices of one series)");
+    std::sort(files.begin(), files.end());
+
+    gdcm::Scanner scanner;
+    for (const gdcm::Tag& t : {kSeriesUid, kPosition, kOrientation, kPixelSpacing, kRows, kColumns, kSamples,
+                               kBitsAllocated, kSigned, kFrames, kSlope, kIntercept})
+      scanner.AddTag(t);
+    if (!scanner.Scan(files)) throw InputError(folder + ": cannot scan the DICOM files");
+    auto fail = [&](const std::string& file, const std::string& what) {
+      return InputError(folder + ": " + name_of(file) + ": " + what);
+    };
+    auto value = [&](const std::string& file, const gdcm::Tag& t) -> const char* {
+      return scanner.GetValue(file.c_str(), t);
+    };
+    auto integer = [&](const std::string& file, const gdcm::Tag& t, const char* what, long fallback) -> long {
+      const char* v = value(file, t);
+      if (!v) {
+        if (fallback >= 0) return fallback;
+        throw fail(file, std::string("no ") + what);
+      }
+      auto n = numbers(v, 1);
+      if (!n || (*n)[0] != std::floor((*n)[0])) throw fail(file, std::string("bad ") + what + " '" + v + "'");
+      return static_cast<long>((*n)[0]);
+    };
+
+    // The first file sets what every other slice must match.
+    const std::string& first = files.front();
+    std::string orientation_text, spacing_text;
+    long rows = 0, columns = 0, bits = 0, is_signed = 0;
+    std::array<double, 3> normal{0, 0, 1};
+    for (const std::string& f : files) {
+      if (!scanner.IsKey(f.c_str())) throw fail(f, "not a DICOM file (every file of the folder must be a slice)");
+      const long samples = integer(f, kSamples, "SamplesPerPixel", 1);
+      if (samples != 1) throw fail(f, "SamplesPerPixel " + std::to_string(samples) + " (only one-sample grey images)");
+      if (integer(f, kFrames, "NumberOfFrames", 1) != 1)
+        throw fail(f, "a multi-frame image (only folders of single-frame slices are read)");
+      const long r = integer(f, kRows, "Rows", -1), c = integer(f, kColumns, "Columns", -1);
+      const long b = integer(f, kBitsAllocated, "BitsAllocated", -1), s = integer(f, kSigned, "PixelRepresentation", 0);
+      const char* uid = value(f, kSeriesUid);
+      const char* orient = value(f, kOrientation);
+      const char* spacing = value(f, kPixelSpacing);
+      Slice slice{f, uid ? uid : "", {0, 0, 0}, 0, 1, 0};
+      if (f == first) {
+        rows = r, columns = c, bits = b, is_signed = s;
+        orientation_text = orient ? orient : "";
+        spacing_text = spacing ? spacing : "";
+        if (r < 1 || c < 1) throw fail(f, "image of " + std::to_string(r) + " rows and " + std::to_string(c) + " columns");
+      } else {
+        const Slice& ref = slices_.front();
+        if (slice.series != ref.series)
+          throw fail(f, "SeriesInstanceUID " + slice.series + " differs from " + name_of(first) + "'s " + ref.series +
+                            " (a mixed series: keep one series per folder)");
+        if (r != rows || c != columns)
+          throw fail(f, std::to_string(c) + " x " + std::to_string(r) + " pixels, " + name_of(first) + " has " +
+                            std::to_string(columns) + " x " + std::to_string(rows) + " (a mixed series)");
+        if (b != bits || s != is_signed)
+          throw fail(f, "pixel format differs from " + name_of(first) + "'s (BitsAllocated / PixelRepresentation)");
+        auto a = numbers(orient, 6), o = numbers(orientation_text.c_str(), 6);
+        bool same = a.has_value() == o.has_value();
+        for (int k = 0; same && a && k < 6; ++k) same = std::abs((*a)[k] - (*o)[k]) <= 1e-4;
+        if (!same)
+          throw fail(f, "ImageOrientationPatient '" + std::string(orient ? orient : "") + "' differs from " +
+                            name_of(first) + "'s '" + orientation_text + "' (a mixed series)");
+        auto p = numbers(spacing, 2), q = numbers(spacing_text.c_str(), 2);
+        same = p.has_value() == q.has_value();
+        for (int k = 0; same && p && k < 2; ++k) same = std::abs((*p)[k] - (*q)[k]) <= 1e-6 * std::abs((*q)[k]);
+        if (!same)
+          throw fail(f, "PixelSpacing '" + std::string(spacing ? spacing : "") + "' differs from " + name_of(first) +
+                            "'s '" + spacing_text + "' (a mixed series)");
+      }
+      if (const char* pos = value(f, kPosition)) {
+        auto p = numbers(pos, 3);
+        if (!p) throw fail(f, std::string("bad ImagePositionPatient '") + pos + "'");
+        slice.position = {(*p)[0], (*p)[1], (*p)[2]};
+      } else if (files.size() > 1) {
+        throw fail(f, "no ImagePositionPatient: the slices cannot be ordered");
+      }
+      if (const char* v = value(f, kSlope)) {
+        auto n = numbers(v, 1);
+        if (!n || (*n)[0] == 0) throw fail(f, std::string("bad RescaleSlope '") + v + "'");
+        slice.slope = (*n)[0];
+      }
+      if (const char* v = value(f, kIntercept)) {
+        auto n = numbers(v, 1);
+        if (!n) throw fail(f, std::string("bad RescaleIntercept '") + v + "'");
+        slice.intercept = (*n)[0];
+      }
+      slices_.push_back(slice);
+    }
+
+    if (!orientation_text.empty()) {
+      auto o = numbers(orientation_text.c_str(), 6);
+      if (!o) throw fail(first, "bad ImageOrientationPatient '" + orientation_text + "'");
+      const double* r = o->data();
+      const double* c = o->data() + 3;
+      normal = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0]};
+      const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+      if (!(len > 0.5)) throw fail(first, "ImageOrientationPatient '" + orientation_text + "' has parallel axes");
+      for (double& x : normal) x /= len;
+    } else if (files.size() > 1) {
+      throw fail(first, "no ImageOrientationPatient: the slices cannot be ordered");
+    }
+    for (Slice& s : slices_)
+      s.along_normal = s.position[0] * normal[0] + s.position[1] * normal[1] + s.position[2] * normal[2];
+    std::stable_sort(slices_.begin(), slices_.end(),
+                     [](const Slice& a, const Slice& b) { return a.along_normal < b.along_normal; });
+
+    double step = 1;
+    const std::size_t n = slices_.size();
+    if (n > 1) {
+      step = (slices_.back().along_normal - slices_.front().along_normal) / static_cast<double>(n - 1);
+      // The gap furthest from the mean step names where a slice is missing.
+      std::size_t worst = 1;
+      auto gap = [&](std::size_t k) { return slices_[k].along_normal - slices_[k - 1].along_normal; };
+      for (std::size_t k = 1; k < n; ++k) {
+        if (gap(k) <= 1e-6 * std::max(1.0, std::abs(step)))
+          throw InputError(folder + ": " + name_of(slices_[k - 1].file) + " and " + name_of(slices_[k].file) +
+                           " lie at the same position (two series, or a repeated slice)");
+        if (std::abs(gap(k) - step) > std::abs(gap(worst) - step)) worst = k;
+      }
+      if (std::abs(gap(worst) - step) > 1e-3 * step)
+        throw InputError(folder + ": uneven slice spacing: " + name_of(slices_[worst - 1].file) + " to " +
+                         name_of(slices_[worst].file) + " is " + std::to_string(gap(worst)) +
+                         " mm, the series averages " + std::to_string(step) + " mm (missing slices?)");
+    }
+
+    std::array<double, 2> pixel{1, 1};  // rows apart (y), columns apart (x)
+    if (!spacing_text.empty()) {
+      auto p = numbers(spacing_text.c_str(), 2);
+      if (!p || !((*p)[0] > 0) || !((*p)[1] > 0)) throw fail(first, "bad PixelSpacing '" + spacing_text + "'");
+      pixel = {(*p)[0], (*p)[1]};
+    }
+    if (bits == 8) stored_ = is_signed ? ScalarType::Int8 : ScalarType::UInt8;
+    else if (bits == 16) stored_ = is_signed ? ScalarType::Int16 : ScalarType::UInt16;
+    else if (bits == 32 && is_signed) stored_ = ScalarType::Int32;
+    else
+      throw fail(first, "BitsAllocated " + std::to_string(bits) + (is_signed ? " signed" : " unsigned") +
+                            " is not supported (8 or 16 bits, or signed 32)");
+    for (const Slice& s : slices_) scaled_ = scaled_ || s.slope != 1 || s.intercept != 0;
+
+    head_.dims = {columns, rows, static_cast<Id>(n)};
+    head_.spacing = {pixel[1], pixel[0], step};
+    head_.origin = slices_.front().position;
+    head_.type = scaled_ ? detail::scaled_type(stored_) : stored_;
+    head_.name = "scalars";
+    detail::checked_byte_count(head_.dims, head_.type, folder);
+  }
+
+  const ImageGrid& header() const override { return head_; }
+
+  void read_planes(Id first, Id count, std::byte* out) override {
+    const std::size_t plane = static_cast<std::size_t>(head_.dims[0] * head_.dims[1]);
+    std::vector<char> stored(plane * scalar_size(stored_));
+    for (Id k = 0; k < count; ++k) {
+      const Slice& s = slices_[static_cast<std::size_t>(first + k)];
+      gdcm::ImageReader reader;
+      reader.SetFileName(s.file.c_str());
+      if (!reader.Read()) throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
+      const gdcm::Image& image = reader.GetImage();
+      const gdcm::PixelFormat& pf = image.GetPixelFormat();
+      if (image.GetColumns() != head_.dims[0] || image.GetRows() != head_.dims[1] || pf.GetSamplesPerPixel() != 1 ||
+          pf.GetBitsAllocated() != 8 * scalar_size(stored_) || image.GetBufferLength() != stored.size())
+        throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data of " + std::to_string(image.GetBufferLength()) +
+                         " bytes, the header declares " + std::to_string(stored.size()));
+      if (!image.GetBuffer(stored.data()))
+        throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot decode its pixel data");
+      std::byte* dst = out + static_cast<std::size_t>(k) * plane * scalar_size(head_.type);
+      if (scaled_)
+        detail::scale_samples(stored_, reinterpret_cast<const std::byte*>(stored.data()), dst, plane, s.slope,
+                              s.intercept);
+      else
+        std::copy_n(reinterpret_cast<const std::byte*>(stored.data()), stored.size(), dst);
+    }
+  }
+
+ private:
+  std::string folder_;
+  std::vector<Slice> slices_;
+  ScalarType stored_ = ScalarType::UInt16;
+  bool scaled_ = false;
+  ImageGrid head_;
+};
+
+}  // namespace
+
+std::unique_ptr<generate::PlaneSource> open_dicom_series(const std::string& folder) {
+  return std::make_unique<DicomPlanes>(folder);
+}
+
+}  // namespace keymesh::io

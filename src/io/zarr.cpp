@@ -1,0 +1,331 @@
+#include "keymesh/io/zarr.hpp"
+
+#include <blosc.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/io/mesh_bytes.hpp"
+#include "keymesh/io/volume_formats.hpp"
+
+namespace keymesh::io {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// A decoded chunk larger than this is refused: it would be allocated whole.
+constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;
+
+json read_json(const std::string& file, const std::string& folder) {
+  const std::string text = mesh_bytes::read_whole_file(file);
+  try {
+    return json::parse(text);
+  } catch (const json::exception& e) {
+    throw InputError(folder + ": " + fs::path(file).filename().string() + " is not valid JSON (" + e.what() + ")");
+  }
+}
+
+bool path_exists(const fs::path& p) {
+  std::error_code ec;
+  return fs::exists(p, ec);
+}
+
+enum class Codec { None, Zlib, Blosc };
+
+// The scale and translation of one OME coordinateTransformations list.
+void apply_transforms(const json& list, std::vector<double>& scale, std::vector<double>& shift,
+                      const std::string& folder) {
+  if (!list.is_array()) return;
+  for (const json& t : list) {
+    if (!t.is_object() || !t.contains("type")) continue;
+    const std::string type = t["type"].is_string() ? t["type"].get<std::string>() : "";
+    const char* key = type == "scale" ? "scale" : type == "translation" ? "translation" : nullptr;
+    if (!key) continue;
+    if (!t.contains(key)) continue;  // a transform given by "path" is not supported: ignored
+    const json& v = t[key];
+    if (!v.is_array() || v.size() != scale.size())
+      throw InputError(folder + ": OME " + type + " has " + std::to_string(v.is_array() ? v.size() : 0) +
+                       " entries for " + std::to_string(scale.size()) + " axes");
+    for (std::size_t a = 0; a < scale.size(); ++a) {
+      if (!v[a].is_number()) throw InputError(folder + ": OME " + type + " entry is not a number");
+      const double x = v[a].get<double>();
+      if (type == "scale") {
+        scale[a] *= x;
+        shift[a] *= x;
+      } else {
+        shift[a] += x;
+      }
+    }
+  }
+}
+
+class ZarrPlanes : public generate::PlaneSource {
+ public:
+  explicit ZarrPlanes(const std::string& folder) : folder_(folder) {
+    fs::path array = folder;
+    const json* level_transforms = nullptr;
+    const json* multiscale = nullptr;
+    json group;
+    if (!path_exists(array / ".zarray")) {
+      if (!path_exists(array / ".zattrs"))
+        throw InputError(folder + ": not a Zarr array (no .zarray) nor an OME-Zarr image (no .zattrs)");
+      group = read_json((array / ".zattrs").string(), folder);
+      if (!group.contains("multiscales") || !group["multiscales"].is_array() || group["multiscales"].empty())
+        throw InputError(folder + ": .zattrs has no OME multiscales (give the folder of a Zarr array)");
+      multiscale = &group["multiscales"][0];
+      if (!multiscale->contains("datasets") || !(*multiscale)["datasets"].is_array() ||
+          (*multiscale)["datasets"].empty() || !(*multiscale)["datasets"][0].contains("path") ||
+          !(*multiscale)["datasets"][0]["path"].is_string())
+        throw InputError(folder + ": OME multiscales lists no dataset path");
+      const json& level = (*multiscale)["datasets"][0];
+      level_transforms = level.contains("coordinateTransformations") ? &level["coordinateTransformations"] : nullptr;
+      array /= level["path"].get<std::string>();
+      if (!path_exists(array / ".zarray"))
+        throw InputError(folder + ": OME level '" + level["path"].get<std::string>() + "' has no .zarray");
+    } else if (path_exists(array.parent_path() / ".zattrs")) {
+      // A level's own folder: its transforms are in the image's .zattrs.
+      group = read_json((array.parent_path() / ".zattrs").string(), folder);
+      if (group.contains("multiscales") && group["multiscales"].is_array() && !group["multiscales"].empty()) {
+        const json& ms = group["multiscales"][0];
+        if (ms.contains("datasets") && ms["datasets"].is_array())
+          for (const json& level : ms["datasets"])
+            if (level.contains("path") && level["path"] == array.filename().string()) {
+              multiscale = &ms;
+              if (level.contains("coordinateTransformations")) level_transforms = &level["coordinateTransformations"];
+            }
+      }
+    }
+    array_ = array.string();
+    parse_zarray(read_json((array / ".zarray").string(), folder));
+
+    // Spacing and origin of the last three axes from the OME transforms.
+    std::vector<double> scale(shape_.size(), 1.0), shift(shape_.size(), 0.0);
+    if (level_transforms) apply_transforms(*level_transforms, scale, shift, folder);
+    if (multiscale && multiscale->contains("coordinateTransformations"))
+      apply_transforms((*multiscale)["coordinateTransformations"], scale, shift, folder);
+    if (multiscale && multiscale->contains("axes") && (*multiscale)["axes"].is_array()) {
+      const json& axes = (*multiscale)["axes"];
+      if (axes.size() != shape_.size())
+        throw InputError(folder + ": OME axes name " + std::to_string(axes.size()) + " axes, the array has " +
+                         std::to_string(shape_.size()));
+      for (std::size_t a = shape_.size() - 3; a < shape_.size(); ++a)
+        if (axes[a].is_object() && axes[a].contains("type") && axes[a]["type"] != "space")
+          throw InputError(folder + ": OME axis " + axes[a].value("name", std::string("?")) +
+                           " of the last three is not a space axis");
+    }
+    const std::size_t n = shape_.size();
+    for (int a = 0; a < 3; ++a) {
+      head_.spacing[a] = scale[n - 1 - a];
+      head_.origin[a] = shift[n - 1 - a];
+      if (!(head_.spacing[a] > 0) || !std::isfinite(head_.spacing[a]) || !std::isfinite(head_.origin[a]))
+        throw InputError(folder + ": OME scale " + std::to_string(head_.spacing[a]) + " of axis " +
+                         std::to_string(n - 1 - a) + " must be a positive finite number");
+    }
+  }
+
+  const ImageGrid& header() const override { return head_; }
+
+  void read_planes(Id first, Id count, std::byte* out) override {
+    const std::size_t n = shape_.size();
+    const Id nx = head_.dims[0], ny = head_.dims[1];
+    const Id cz = chunks_[n - 3], cy = chunks_[n - 2], cx = chunks_[n - 1];
+    const std::size_t size = scalar_size(head_.type);
+    std::vector<std::byte> chunk(static_cast<std::size_t>(chunk_bytes_));
+    for (Id iz = first / cz; iz * cz < first + count; ++iz)
+      for (Id iy = 0; iy * cy < ny; ++iy)
+        for (Id ix = 0; ix * cx < nx; ++ix) {
+          decode_chunk({iz, iy, ix}, chunk);
+          const Id z0 = std::max(first, iz * cz), z1 = std::min(first + count, (iz + 1) * cz);
+          const Id y1 = std::min(ny, (iy + 1) * cy), x1 = std::min(nx, (ix + 1) * cx);
+          const std::size_t run = static_cast<std::size_t>(x1 - ix * cx) * size;
+          for (Id z = z0; z < z1; ++z)
+            for (Id y = iy * cy; y < y1; ++y) {
+              const std::size_t src = static_cast<std::size_t>(((z - iz * cz) * cy + (y - iy * cy)) * cx) * size;
+              const std::size_t dst = static_cast<std::size_t>(((z - first) * ny + y) * nx + ix * cx) * size;
+              std::memcpy(out + dst, chunk.data() + src, run);
+            }
+        }
+    if (swap_) {
+      const std::size_t total = static_cast<std::size_t>(count * nx * ny) * size;
+      for (std::size_t i = 0; i < total; i += size) std::reverse(out + i, out + i + size);
+    }
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(folder_ + ": .zarray: " + what); }
+
+  void parse_zarray(const json& z) {
+    if (!z.is_object() || z.value("zarr_format", 0) != 2) fail("zarr_format is not 2 (only Zarr v2 is read)");
+    if (!z.contains("shape") || !z["shape"].is_array() || !z.contains("chunks") || !z["chunks"].is_array() ||
+        z["shape"].size() != z["chunks"].size())
+      fail("shape and chunks must be lists of one length");
+    for (std::size_t a = 0; a < z["shape"].size(); ++a) {
+      const json &s = z["shape"][a], &c = z["chunks"][a];
+      if (!s.is_number_integer() || !c.is_number_integer() || s.get<std::int64_t>() < 1 || c.get<std::int64_t>() < 1)
+        fail("shape and chunks must hold positive integers");
+      shape_.push_back(s.get<Id>());
+      chunks_.push_back(c.get<Id>());
+    }
+    const std::size_t n = shape_.size();
+    if (n < 3) fail(std::to_string(n) + " dimensions (a volume needs 3)");
+    for (std::size_t a = 0; a + 3 < n; ++a)
+      if (shape_[a] != 1) fail("axis " + std::to_string(a) + " has size " + std::to_string(shape_[a]) +
+                               " (only the last three axes may be longer than 1)");
+    if (z.value("order", std::string("C")) != "C") fail("order is not C (Fortran-order arrays are not read)");
+    if (z.contains("filters") && !z["filters"].is_null() && !(z["filters"].is_array() && z["filters"].empty()))
+      fail("filters are not supported (" + z["filters"].dump() + ")");
+    const std::string sep = z.value("dimension_separator", std::string("."));
+    if (sep != "." && sep != "/") fail("dimension_separator '" + sep + "'");
+    separator_ = sep[0];
+
+    if (!z.contains("dtype") || !z["dtype"].is_string()) fail("dtype is not a simple type string");
+    const std::string dtype = z["dtype"].get<std::string>();
+    const std::string kind = dtype.size() == 3 ? dtype.substr(1) : "";
+    const char order = dtype.empty() ? '?' : dtype[0];
+    ScalarType type;
+    if (kind == "u1") type = ScalarType::UInt8;
+    else if (kind == "i1") type = ScalarType::Int8;
+    else if (kind == "u2") type = ScalarType::UInt16;
+    else if (kind == "i2") type = ScalarType::Int16;
+    else if (kind == "i4") type = ScalarType::Int32;
+    else if (kind == "f4") type = ScalarType::Float32;
+    else if (kind == "f8") type = ScalarType::Float64;
+    else fail("dtype '" + dtype + "' is not supported (u1 i1 u2 i2 i4 f4 f8)");
+    if (order != '<' && order != '>' && order != '|') fail("dtype '" + dtype + "' has no byte order");
+    swap_ = scalar_size(type) > 1 && (order == '>') != (std::endian::native == std::endian::big);
+
+    if (z.contains("compressor") && !z["compressor"].is_null()) {
+      const json& c = z["compressor"];
+      const std::string id = c.is_object() ? c.value("id", std::string()) : std::string();
+      if (id == "zlib" || id == "gzip") codec_ = Codec::Zlib;
+      else if (id == "blosc") codec_ = Codec::Blosc;
+      else fail("compressor '" + id + "' is not supported (none, zlib, gzip, blosc)");
+    }
+
+    head_.dims = {shape_[n - 1], shape_[n - 2], shape_[n - 3]};
+    head_.type = type;
+    detail::checked_byte_count(head_.dims, type, folder_);
+    std::uint64_t elements = 1;
+    for (Id c : chunks_) {
+      if (elements > kMaxChunkBytes / static_cast<std::uint64_t>(c)) elements = kMaxChunkBytes + 1;
+      else elements *= static_cast<std::uint64_t>(c);
+    }
+    chunk_bytes_ = elements * scalar_size(type);
+    if (elements > kMaxChunkBytes || chunk_bytes_ > kMaxChunkBytes)
+      throw LimitError(folder_ + ": .zarray: chunks past 1 GiB decoded are not supported");
+
+    // fill_value, stored as the array's type in native byte order.
+    fill_.assign(scalar_size(type), std::byte{0});
+    if (z.contains("fill_value") && !z["fill_value"].is_null()) {
+      const json& f = z["fill_value"];
+      double v = 0;
+      if (f.is_number()) v = f.get<double>();
+      else if (f == "NaN") v = std::numeric_limits<double>::quiet_NaN();
+      else if (f == "Infinity") v = std::numeric_limits<double>::infinity();
+      else if (f == "-Infinity") v = -std::numeric_limits<double>::infinity();
+      else fail("fill_value " + f.dump() + " is not a number");
+      ImageGrid one;
+      one.dims = {1, 1, 1};
+      one.type = type;
+      one.external = fill_.data();
+      visit_scalars(one, [&](const auto* p) {
+        using T = std::remove_cv_t<std::remove_pointer_t<decltype(p)>>;
+        if constexpr (std::is_integral_v<T>) {
+          if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
+                v <= static_cast<double>(std::numeric_limits<T>::max()) && v == std::floor(v)))
+            fail("fill_value " + f.dump() + " does not fit dtype '" + dtype + "'");
+        }
+        const T t = static_cast<T>(v);
+        std::memcpy(fill_.data(), &t, sizeof t);
+        return 0;
+      });
+      if (swap_) std::reverse(fill_.begin(), fill_.end());  // read_planes swaps every sample back
+    }
+  }
+
+  // The chunk (z, y, x) of the last three axes (index 0 on the others),
+  // decoded into `out` (chunk_bytes_), or filled when its file is absent.
+  void decode_chunk(std::array<Id, 3> index, std::vector<std::byte>& out) const {
+    std::string key;
+    for (std::size_t a = 0; a + 3 < shape_.size(); ++a) key += std::string("0") + separator_;
+    key += std::to_string(index[0]) + separator_ + std::to_string(index[1]) + separator_ + std::to_string(index[2]);
+    const fs::path file = fs::path(array_) / key;
+    if (!path_exists(file)) {
+      for (std::size_t i = 0; i < out.size(); i += fill_.size()) std::memcpy(out.data() + i, fill_.data(), fill_.size());
+      return;
+    }
+    const std::string data = mesh_bytes::read_whole_file(file.string());
+    auto bad = [&](const std::string& what) { return InputError(folder_ + ": chunk " + key + ": " + what); };
+    switch (codec_) {
+      case Codec::None:
+        if (data.size() != out.size())
+          throw bad("holds " + std::to_string(data.size()) + " bytes, the chunk shape needs " + std::to_string(out.size()));
+        std::memcpy(out.data(), data.data(), out.size());
+        return;
+      case Codec::Zlib: {
+        z_stream s{};
+        if (inflateInit2(&s, 15 + 32) != Z_OK) throw bad("zlib cannot start");  // 32: zlib or gzip header
+        s.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+        s.avail_in = static_cast<uInt>(data.size());
+        s.next_out = reinterpret_cast<Bytef*>(out.data());
+        s.avail_out = static_cast<uInt>(out.size());
+        const int rc = inflate(&s, Z_FINISH);
+        const std::uint64_t got = s.total_out;
+        inflateEnd(&s);
+        if (data.size() > std::numeric_limits<uInt>::max() || rc != Z_STREAM_END || got != out.size())
+          throw bad(rc == Z_STREAM_END || rc == Z_BUF_ERROR
+                        ? "inflates to " + std::string(rc == Z_BUF_ERROR && got == out.size() ? "more than " : "") +
+                              std::to_string(got) + " bytes, the chunk shape needs " + std::to_string(out.size())
+                        : "corrupt zlib/gzip data");
+        return;
+      }
+      case Codec::Blosc: {
+        std::size_t nbytes = 0;
+        if (blosc_cbuffer_validate(data.data(), data.size(), &nbytes) != 0) throw bad("corrupt blosc data");
+        if (nbytes != out.size())
+          throw bad("blosc data holds " + std::to_string(nbytes) + " bytes, the chunk shape needs " +
+                    std::to_string(out.size()));
+        if (blosc_decompress_ctx(data.data(), out.data(), out.size(), 1) != static_cast<int>(out.size()))
+          throw bad("corrupt blosc data");
+        return;
+      }
+    }
+  }
+
+  std::string folder_, array_;
+  std::vector<Id> shape_, chunks_;
+  char separator_ = '.';
+  Codec codec_ = Codec::None;
+  bool swap_ = false;
+  std::uint64_t chunk_bytes_ = 0;
+  std::vector<std::byte> fill_;
+  ImageGrid head_;
+};
+
+}  // namespace
+
+bool is_zarr_folder(const std::string& folder) {
+  const fs::path p(folder);
+  std::string name = p.filename().empty() ? p.parent_path().filename().string() : p.filename().string();
+  std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+  return path_exists(p / ".zarray") || path_exists(p / ".zattrs") || path_exists(p / ".zgroup") ||
+         (name.size() > 5 && name.compare(name.size() - 5, 5, ".zarr") == 0);
+}
+
+std::unique_ptr<generate::PlaneSource> open_zarr(const std::string& folder) {
+  return std::make_unique<ZarrPlanes>(folder);
+}
+
+}  // namespace keymesh::io
