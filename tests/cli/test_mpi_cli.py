@@ -259,7 +259,20 @@ def nrrd_and_nifti_read_by_slab():
                 b"spacings: 1 2 0.5\n\n" + vol.astype(">i2").tobytes())
     nii = os.path.join(D, "v.nii")
     write_nifti(nii, vol, 0.25, 10.0)
-    for path, iso in ((nrrd, 0.5), (nii, 10.125)):
+    # gzip (each rank inflates up to its slab) and a Zarr folder (chunk rows).
+    import gzip
+    import zlib
+    niigz = nii + ".gz"
+    with open(nii, "rb") as f, open(niigz, "wb") as g:
+        g.write(gzip.compress(f.read()))
+    zarr = os.path.join(D, "v.zarr")
+    os.makedirs(zarr, exist_ok=True)
+    with open(os.path.join(zarr, ".zarray"), "w") as f:
+        f.write('{"zarr_format": 2, "shape": [19, 16, 13], "chunks": [19, 16, 13], "dtype": "<i2", '
+                '"compressor": {"id": "zlib", "level": 1}, "fill_value": 0, "order": "C", "filters": null}')
+    with open(os.path.join(zarr, "0.0.0"), "wb") as f:
+        f.write(zlib.compress(vol.astype("<i2").tobytes()))
+    for path, iso in ((nrrd, 0.5), (nii, 10.125), (niigz, 10.125), (zarr, 0.5)):
         ref = os.path.join(D, "slab_ref.ply")
         run("contour", path, "--iso", iso, "-o", ref, "-q")
         for P in (2, 3):
@@ -304,7 +317,8 @@ check("--normals average: partial sums merged at the owner; normals within round
       averaged_normals_merge_across_ranks)
 check("gradient normals and curvature with ghost planes: byte-identical at -np 2, 3, 5",
       derivatives_with_ghost_planes)
-check(".nrrd (big-endian) and scaled .nii read by slab: byte-identical at -np 2 and 3", nrrd_and_nifti_read_by_slab)
+check(".nrrd (big-endian), scaled .nii and .nii.gz, a Zarr folder read by slab: byte-identical at -np 2 and 3",
+      nrrd_and_nifti_read_by_slab)
 check("refused by name: .vti input, other commands, coarsening, --gather with .pvtp, too many ranks, "
       "unwritable pieces", refusals)
 finish()
