@@ -104,6 +104,23 @@ def dicom_contours_like_nrrd():
     assert same_bytes(a, c), "streamed DICOM contour differs"
 
 
+def dicom_compressed_like_uncompressed():
+    """The series re-encoded RLE Lossless by pydicom: GDCM decodes it to the
+    same samples as the uncompressed files."""
+    import pydicom
+    from pydicom.uid import RLELossless
+    folder = os.path.join(D, "ct_rle")
+    shutil.copytree(os.path.join(D, "ct"), folder)
+    for name in os.listdir(folder):
+        ds = pydicom.dcmread(os.path.join(folder, name))
+        ds.compress(RLELossless)
+        ds.save_as(os.path.join(folder, name))
+    a, b = os.path.join(D, "rle.nrrd"), os.path.join(D, "plain.nrrd")
+    run("convert", folder, "-o", a, "-q")
+    run("convert", os.path.join(D, "ct"), "-o", b, "-q")
+    assert same_bytes(a, b), "RLE-compressed series reads differently"
+
+
 def dicom_oblique_and_unscaled():
     """Slices along a tilted normal: the step is the distance along it; slope 1
     / intercept 0 keep the stored int16 samples."""
@@ -403,6 +420,7 @@ def glb_from_contour_and_convert():
 if have("pydicom"):
     check("DICOM series reads back equal: slope/intercept, spacing, origin", dicom_reads_back_equal)
     check("DICOM series contours byte-identical to the same array in .nrrd, streamed too", dicom_contours_like_nrrd)
+    check("DICOM RLE Lossless series (decoded by GDCM) reads like the uncompressed one", dicom_compressed_like_uncompressed)
     check("DICOM oblique orientation, unscaled int16", dicom_oblique_and_unscaled)
     check("mixed series, sizes, orientations, uneven spacing, junk refused by name", dicom_mixed_series_refused)
 if have("zarr") and have("numcodecs"):
