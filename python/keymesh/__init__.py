@@ -269,7 +269,7 @@ def read(path: Any, dims: Optional[Sequence[int]] = None, dtype: Any = None,
 
 def write(obj: Union[Mesh, Grid, Volume, np.ndarray], path: Any,
           spacing: Sequence[float] = (1.0, 1.0, 1.0), origin: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
-    """Writes a Mesh (.vtp, .ply, .obj, .stl), a Grid (.vtu, .vtk) or a volume (.vti, .nrrd, .raw).
+    """Writes a Mesh (.vtp, .ply, .obj, .stl, .glb), a Grid (.vtu, .vtk) or a volume (.vti, .nrrd, .raw).
 
     A volume is a keymesh.Volume or a 3-D numpy array (axis 0 = x; spacing
     and origin per axis apply to arrays only). Files are written under a
