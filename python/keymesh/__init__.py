@@ -139,7 +139,8 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
             origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0),
             normals: Optional[str] = "average", weld: str = "keyreduce",
-            coarsen: bool = False, curvature: bool = False, threads: int = 0) -> Mesh:
+            coarsen: bool = False, curvature: bool = False, threads: int = 0,
+            progress: Optional[Any] = None) -> Mesh:
     """Isosurface of a 3-D volume: marching cubes, points welded by edge keys.
 
     Args:
@@ -174,6 +175,10 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             gradient and Hessian: (|g|^2 tr H - g^T H g) / (2 |g|^3), 1/r on
             a sphere of a distance field (values growing outward).
         threads: worker threads, 0 = all cores. Output is identical for any count.
+        progress: progress(stage, fraction), called at the start and the end
+            (the library's contour does not report its stages yet); Ctrl-C
+            during the call raises KeyboardInterrupt when the contour
+            returns (its stages are not interruptible yet).
 
     Returns:
         Mesh with points (n, 3) float32, cells (m, 3) uint32 and point_data
@@ -200,7 +205,7 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         if origin is not None and tuple(map(float, origin)) == (0.0, 0.0, 0.0):
             origin = None
     parts, info = _ext.contour(volume, _isovalues(iso), spacing, origin, normals, weld, bool(coarsen),
-                               bool(curvature), _threads(threads))
+                               bool(curvature), _threads(threads), progress)
     last_contour_info.clear()
     last_contour_info.update(info)
     return _mesh(parts)

@@ -58,8 +58,9 @@ void swap_x_z(SurfaceMesh& mesh) {
 
 py::tuple contour(const py::object& volume, const std::vector<double>& isovalues, const py::object& spacing,
                   const py::object& origin, const std::string& normals, const std::string& weld, bool coarsen,
-                  bool curvature, int threads) {
+                  bool curvature, int threads, const py::object& callback) {
   check_threads(threads);
+  const PythonProgress progress(callback);
   if (isovalues.empty()) throw py::value_error("iso: give at least one isovalue");
   for (double v : isovalues)
     if (!std::isfinite(v)) throw py::value_error("iso must be finite, got " + std::string(py::repr(py::float_(v))));
@@ -109,6 +110,8 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   {
     py::gil_scoped_release release;
     ThreadScope scope(threads);
+    auto hook = progress.install();
+    progress::report("contour", 0.0);
     auto t0 = Clock::now();
     // The array's memory is read in place (C- or Fortran-contiguous, native
     // byte order by now); `array` keeps it alive until the call returns.
@@ -120,6 +123,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
     t0 = Clock::now();
     if (reversed) swap_x_z(mesh);
     mirror_s = seconds_since(t0);
+    progress::report("contour", 1.0);
     copy.bytes = {};
   }
   info["copy"] = copy_s;
@@ -142,6 +146,7 @@ void register_contour(py::module_& m) {
   m.def("contour", &contour, py::arg("volume"), py::arg("isovalues"), py::arg("spacing") = py::none(),
         py::arg("origin") = py::none(), py::arg("normals") = "average", py::arg("weld") = "keyreduce",
         py::arg("coarsen") = false, py::arg("curvature") = false, py::arg("threads") = 0,
+        py::arg("progress") = py::none(),
         "Marching cubes welded by KEY-REDUCE; returns ((points, cells, offsets, point_data), timings). "
         "Use keymesh.contour, which wraps this in a Mesh.");
 }

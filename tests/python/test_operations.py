@@ -246,3 +246,9 @@ def test_tetrahedralize_a_hexahedral_grid():
         vol = tet_volumes(tets)
         assert np.all(vol > 0) and np.isclose(vol.sum(), 4.5 * 2.0 * 1.0, rtol=1e-5)
         assert np.array_equal(tets.cell_data["label"], np.repeat(label, scheme))
+
+
+def test_contour_reports_start_and_end(ball):
+    seen = []
+    mesh = keymesh.contour(ball, 8.3, progress=lambda s, f: seen.append((s, f)))
+    assert seen == [("contour", 0.0), ("contour", 1.0)] and mesh.n_cells > 0
