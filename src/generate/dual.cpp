@@ -7,6 +7,7 @@
 
 #include "keymesh/analyze/incidence.hpp"
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/progress.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/scan.hpp"
 
@@ -67,6 +68,7 @@ void fans_of(const SurfaceMesh& m, const analyze::PointCells& pc, Id p, std::vec
 SurfaceMesh dual(const SurfaceMesh& m, DualStats* stats) {
   const analyze::PointCells pc = analyze::point_cells(m);
   const Id V = m.num_points(), F = m.num_cells();
+  progress::report("dual: fans", 0.0);
   // Pass 1: per point, the polygons and points it contributes, and whether
   // it needs its own dual point (an open fan).
   std::vector<Id> poly_count(static_cast<std::size_t>(V + 1), 0), corner_count(static_cast<std::size_t>(V + 1), 0),
@@ -134,6 +136,7 @@ SurfaceMesh dual(const SurfaceMesh& m, DualStats* stats) {
         const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
       });
+  progress::report("dual: polygons", 0.5);
   // Pass 2: the polygons, point by point (so in input point order).
   out.connectivity.resize(static_cast<std::size_t>(corners));
   out.offsets.resize(static_cast<std::size_t>(polys + 1));

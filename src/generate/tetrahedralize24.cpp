@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
@@ -94,6 +95,7 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
     return static_cast<std::uint64_t>((i + (c & 1)) + nx * (j + ((c >> 1) & 1)) + nxy * (k + ((c >> 2) & 1)));
   };
   // Face f of voxel v: 3 * (its lower corner) + its normal axis.
+  progress::report("tetrahedralize 24: face keys", 0.1);
   std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
   parallel::for_each(cells, [&](Id v) {
     const std::uint64_t p0 = cell_corner(v, 0);
@@ -113,7 +115,9 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
       xyz[x] = static_cast<float>(s / 4);
     }
   };
+  progress::report("tetrahedralize 24: weld face centres", 0.25);
   const FaceGroups g = group_faces<std::uint64_t>(keys, true, std::uint64_t(3 * N), 0, vertex_weld, face_centre);
+  progress::report("tetrahedralize 24: points", 0.5);
   keys = {};
   const Id F = static_cast<Id>(g.first.size());
   UnstructuredGrid out;
@@ -141,6 +145,7 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
     }
     average_fields(corners.point_fields, out.point_fields, N + F + v, ids, 8);
   });
+  progress::report("tetrahedralize 24: tets", 0.7);
   out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
   const float* Q = out.points.data();
   out.connectivity.visit_mut([&](auto conn) {

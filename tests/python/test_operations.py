@@ -252,3 +252,12 @@ def test_contour_reports_start_and_end(ball):
     seen = []
     mesh = keymesh.contour(ball, 8.3, progress=lambda s, f: seen.append((s, f)))
     assert seen == [("contour", 0.0), ("contour", 1.0)] and mesh.n_cells > 0
+
+
+def test_tetrahedralize_and_dual_report_stages(surface):
+    seen = []
+    keymesh.tetrahedralize(np.zeros((5, 4, 3), np.float32), 24, progress=lambda s, f: seen.append(s))
+    assert "tetrahedralize 24: weld face centres" in seen and seen[-1] == "tetrahedralize"
+    seen.clear()
+    keymesh.dual(surface, progress=lambda s, f: seen.append(s))
+    assert seen == ["dual", "dual: fans", "dual: polygons", "dual"]
