@@ -39,48 +39,50 @@ struct Stencils {
 Stencils build_stencils(const LabelSurface& s) {
   const auto& conn = s.mesh.connectivity;
   const Id points = static_cast<Id>(s.junction.size());
-  // Directed edges: from[e] -> to[e].
-  std::vector<std::uint32_t> from, to;
-  auto add = [&](std::uint32_t a, std::uint32_t b) {
-    from.push_back(a), to.push_back(b);
-    from.push_back(b), to.push_back(a);
-  };
-  if (s.quads) {
-    for (std::size_t q = 0; q + 5 < conn.size(); q += 6) {
-      add(conn[q], conn[q + 1]);
-      add(conn[q + 1], conn[q + 2]);
-      add(conn[q + 4], conn[q + 5]);
-      add(conn[q + 5], conn[q + 3]);
+  // Directed edges, both ways: pair e runs from[e] -> to[e]. Surface nets
+  // quads give their 4 sides (6 corners per quad), triangles their 3 edges.
+  const int per = s.quads ? 4 : 3;
+  const Id items = static_cast<Id>(conn.size()) / (s.quads ? 6 : 3);
+  std::vector<std::uint32_t> from(static_cast<std::size_t>(2 * per * items)), to(from.size());
+  parallel::for_each(items, [&](Id q) {
+    static constexpr int quad_sides[4][2] = {{0, 1}, {1, 2}, {4, 5}, {5, 3}};
+    static constexpr int tri_sides[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+    const std::uint32_t* c = conn.data() + q * (s.quads ? 6 : 3);
+    for (int k = 0; k < per; ++k) {
+      const int* side = s.quads ? quad_sides[k] : tri_sides[k];
+      const std::size_t e = static_cast<std::size_t>(2 * (per * q + k));
+      from[e] = c[side[0]], to[e] = c[side[1]];
+      from[e + 1] = c[side[1]], to[e + 1] = c[side[0]];
     }
-  } else {
-    for (std::size_t t = 0; t + 2 < conn.size(); t += 3) {
-      add(conn[t], conn[t + 1]);
-      add(conn[t + 1], conn[t + 2]);
-      add(conn[t + 2], conn[t]);
-    }
-  }
+  });
   const auto groups = keyreduce::partition_dense(from.data(), static_cast<Id>(from.size()),
                                                  static_cast<std::uint32_t>(points), keyreduce::Order::Build);
-  Stencils st;
-  st.offsets.assign(static_cast<std::size_t>(points + 1), 0);
-  std::vector<std::vector<std::uint32_t>> lists(static_cast<std::size_t>(points));
+  // Each group's neighbours sorted and deduplicated in place (in `to`'s
+  // grouped copy), junctions keeping only their junction neighbours; then
+  // counted, scanned and packed.
+  std::vector<std::uint32_t> grouped(from.size());
+  std::vector<Id> count(static_cast<std::size_t>(points + 1), 0);
   parallel::for_each(groups.num_groups(), [&](Id g) {
     const std::uint32_t p = groups.unique_keys[static_cast<std::size_t>(g)];
-    auto& list = lists[p];
-    for (Id j = groups.offsets[g]; j < groups.offsets[g + 1]; ++j) list.push_back(to[groups.order[j]]);
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-    // Junctions: only the junction neighbours.
+    std::uint32_t* b = grouped.data() + groups.offsets[g];
+    std::uint32_t* e = grouped.data() + groups.offsets[g + 1];
+    for (Id j = groups.offsets[g]; j < groups.offsets[g + 1]; ++j) grouped[static_cast<std::size_t>(j)] = to[groups.order[j]];
+    std::sort(b, e);
+    e = std::unique(b, e);
     if (s.junction[p]) {
-      list.erase(std::remove_if(list.begin(), list.end(), [&](std::uint32_t q) { return !s.junction[q]; }), list.end());
-      if (list.size() < 2) list.clear();
+      e = std::remove_if(b, e, [&](std::uint32_t q) { return !s.junction[q]; });
+      if (e - b < 2) e = b;
     }
+    count[p] = e - b;
   }, 256);
-  for (Id p = 0; p < points; ++p) st.offsets[p + 1] = st.offsets[p] + static_cast<Id>(lists[p].size());
+  Stencils st;
+  st.offsets.assign(static_cast<std::size_t>(points + 1), 0);
+  for (Id p = 0; p < points; ++p) st.offsets[p + 1] = st.offsets[p] + count[p];
   st.neighbours.resize(static_cast<std::size_t>(st.offsets[points]));
-  parallel::for_each(points, [&](Id p) {
-    std::copy(lists[p].begin(), lists[p].end(), st.neighbours.begin() + st.offsets[p]);
-  }, 1024);
+  parallel::for_each(groups.num_groups(), [&](Id g) {
+    const std::uint32_t p = groups.unique_keys[static_cast<std::size_t>(g)];
+    std::copy_n(grouped.data() + groups.offsets[g], count[p], st.neighbours.begin() + st.offsets[p]);
+  }, 256);
   return st;
 }
 
