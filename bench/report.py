@@ -626,6 +626,21 @@ class Report:
         save(fig, "keymesh-vs-peers.png", "Peer median / keymesh KEY-REDUCE median, per dataset (log scale)")
         return made
 
+    def labels_table(self):
+        rows = [r for r in self.rows if r.get("bench") == "labels"]
+        if not rows:
+            return []
+        fe = next((r for r in rows if r["case"].startswith("vtk")), None)
+        body = [[r["case"], r["threads"], f"{r['seconds']:.3f}", f"{r['points']:,}" if "points" in r else "",
+                 f"{r['triangles']:,}" if "triangles" in r else "",
+                 f"{fe['seconds'] / r['seconds']:.1f}×" if fe and not r["case"].startswith(("vtk", "smoothing")) else "",
+                 r["loadavg"]] for r in rows]
+        return ["## Label maps (issue 18)", "",
+                f"`bench/labels_bench.py`: the AAL atlas ({rows[0]['labels']} labels, all of them), in one process: "
+                "`keymesh.contour_labels` without smoothing against vtkDiscreteFlyingEdges3D with one contour value "
+                "per label; the smoothing stage alone below. Medians after a warm-up.", "",
+                table(["case", "thr", "seconds", "points", "triangles", "VTK / keymesh", "load"], body), ""]
+
     def write(self, path, plotdir):
         plots = self.plots(plotdir)
         parts = (self.header() + self.headlines() + self.table1() + self.table2() +
@@ -637,7 +652,7 @@ class Report:
                                "`bench/ops_bench --op tet24`: face centres keyed by the face (KEY-REDUCE) or welded "
                                "by coordinates (VERTEX-WELD); run up to 128³ (49 M tets). Data-independent: the "
                                "MRI row times the same grid shape.", PAPER_T4) +
-                 self.table5_6() + self.losses() + self.skipped() + self.figures(plots))
+                 self.table5_6() + self.labels_table() + self.losses() + self.skipped() + self.figures(plots))
         with open(path, "w") as f:
             f.write("\n".join(parts).rstrip() + "\n")
         return path

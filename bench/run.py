@@ -208,6 +208,12 @@ def main():
             for r in part:
                 r["dataset"] = name
             rows += part
+        progress("label maps: the AAL atlas, keymesh.contour_labels vs vtkDiscreteFlyingEdges3D (labels_bench.py)")
+        try:
+            rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "labels_bench.py"), "--json", "--threads",
+                              str(threads_all), "--repeat", str(peer_reps)], {"PYTHONPATH": os.path.join(a.build, "python")})
+        except SystemExit as e:
+            rows.append(skipped("labels_bench.py", str(e)))
         progress("pictures (Figures 8-10), rendered off-screen with VTK")
         rows += figures(keymesh, work, "head128" if a.quick else names[-1], a.quick)
     seconds = time.time() - t_start
