@@ -10,7 +10,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -230,7 +232,17 @@ class DicomPlanes : public generate::PlaneSource {
       const Slice& s = slices_[static_cast<std::size_t>(first + k)];
       gdcm::ImageReader reader;
       reader.SetFileName(s.file.c_str());
-      if (!reader.Read()) throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
+      // GDCM reads a file cut inside its pixel data without failing and
+      // only warns; the warning is caught so that no slice of garbage passes.
+      gdcm_warnings_.str("");
+      gdcm::Trace::SetWarningStream(gdcm_warnings_);
+      gdcm::Trace::WarningOn();
+      const bool read = reader.Read();
+      gdcm::Trace::WarningOff();
+      gdcm::Trace::SetWarningStream(std::cerr);
+      if (!read) throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
+      if (gdcm_warnings_.str().find("Incomplete Pixel Data") != std::string::npos)
+        throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data ends early (a truncated file)");
       const gdcm::Image& image = reader.GetImage();
       const gdcm::PixelFormat& pf = image.GetPixelFormat();
       if (image.GetColumns() != head_.dims[0] || image.GetRows() != head_.dims[1] || pf.GetSamplesPerPixel() != 1 ||
@@ -251,6 +263,7 @@ class DicomPlanes : public generate::PlaneSource {
  private:
   std::string folder_;
   std::vector<Slice> slices_;
+  std::ostringstream gdcm_warnings_;
   ScalarType stored_ = ScalarType::UInt16;
   bool scaled_ = false;
   ImageGrid head_;

@@ -168,6 +168,12 @@ def dicom_mixed_series_refused():
         f.write("not a slice\n")
     refused(junk, ["notes.txt", "not a DICOM file"])
 
+    cut = os.path.join(D, "cut")  # a slice whose pixel data ends early
+    write_dicom_series(cut, STORED, names=[f"s{k}" for k in range(STORED.shape[0])], shuffle=False)
+    with open(os.path.join(cut, "s6"), "r+b") as f:
+        f.truncate(os.path.getsize(os.path.join(cut, "s6")) - 100)
+    refused(cut, ["s6"])
+
     empty = os.path.join(D, "empty")
     os.makedirs(empty)
     refused(empty, ["no file"])
@@ -310,6 +316,14 @@ def zarr_refused_by_name():
     refused("toolong", {"compressor": {"id": "zlib", "level": 1}}, ["chunk 0.0.0", "more than"],
             chunk=zlib.compress(bytes(200)))
     refused("v3", {"zarr_format": 3}, ["zarr_format"])
+    # Sizes no machine holds are refused before anything is allocated.
+    refused("huge", {"shape": [2 ** 40, 2 ** 40, 2 ** 40], "chunks": [1, 1, 1]}, ["overflow"])
+    refused("bigchunk", {"chunks": [2 ** 20, 2 ** 20, 2 ** 20]}, ["chunks past 1 GiB"])
+    bad = os.path.join(D, "notjson.zarr")
+    os.makedirs(bad)
+    with open(os.path.join(bad, ".zarray"), "w") as f:
+        f.write('{"zarr_format": 2, "shape": [2, 3')
+    convert_refused(bad, os.path.join(D, "notjson.nrrd"), [".zarray is not valid JSON"])
 
 
 # ------------------------------------------- .vti and gzip NIfTI streams ----
