@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/huge_pages.hpp"
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
@@ -19,6 +20,8 @@
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/weld/vertex_weld.hpp"
+#include "contour_rows.hpp"
+#include "voxel_bits.hpp"
 
 namespace keymesh::generate {
 
@@ -42,84 +45,6 @@ GridShape shape_of(const ImageGrid& g) {
   s.stride[1] = s.nx;
   s.stride[2] = s.nxy;
   return s;
-}
-
-// Inside bits of every grid row (j, k), one bit per sample, plus one zero
-// word of padding so that "bit i + 1" can always be read.
-struct InsideBits {
-  Id words_per_row = 0;
-  std::vector<std::uint64_t> words;
-  const std::uint64_t* row(Id j, Id k, Id ny) const { return words.data() + (k * ny + j) * words_per_row; }
-};
-
-template <class T>
-void classify(const T* samples, const GridShape& s, const InsideTest<T>& test, InsideBits& bits) {
-  bits.words_per_row = (s.nx + 63) / 64 + 1;
-  bits.words.assign(static_cast<std::size_t>(bits.words_per_row * s.ny * s.nz), 0);
-  const Id rows = s.ny * s.nz;
-  const Id full = s.nx / 64;
-  const Id wpr = bits.words_per_row;
-  parallel::for_each(rows, [&](Id r) {
-    const T* in = samples + r * s.nx;
-    std::uint64_t* out = bits.words.data() + r * wpr;
-    if (test.none) return;
-    if (test.all) {
-      for (Id i = 0; i < s.nx; ++i) out[i >> 6] |= std::uint64_t{1} << (i & 63);
-      return;
-    }
-    const T thr = test.threshold;
-    for (Id q = 0; q < full; ++q) {
-      // Compare into bytes (a loop the compiler vectorizes), then pack each
-      // 8 bytes of 0/1 into 8 bits with one multiply: byte i lands on bit
-      // 56 + i of the product, with no carries between the terms.
-      const T* v = in + 64 * q;
-      alignas(64) std::uint8_t flag[64];
-      for (int b = 0; b < 64; ++b) flag[b] = static_cast<std::uint8_t>(v[b] >= thr);
-      std::uint64_t w = 0;
-      for (int g = 0; g < 8; ++g) {
-        std::uint64_t x;
-        std::memcpy(&x, flag + 8 * g, 8);
-        w |= ((x * 0x0102040810204080ull) >> 56) << (8 * g);
-      }
-      out[q] = w;
-    }
-    std::uint64_t w = 0;
-    for (Id i = 64 * full; i < s.nx; ++i) w |= static_cast<std::uint64_t>(in[i] >= thr) << (i & 63);
-    if (s.nx % 64) out[full] = w;
-  }, 64);
-}
-
-// Visits every voxel of voxel row (j, k) whose corners are not all on one
-// side, in increasing i, calling f(i, cube_case). Whole 64-voxel words with
-// no sign change are skipped with a few bit operations.
-template <class F>
-void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, F&& f) {
-  const std::uint64_t* r00 = bits.row(j, k, s.ny);
-  const std::uint64_t* r10 = bits.row(j + 1, k, s.ny);
-  const std::uint64_t* r01 = bits.row(j, k + 1, s.ny);
-  const std::uint64_t* r11 = bits.row(j + 1, k + 1, s.ny);
-  const Id voxels = s.nx - 1;
-  const Id words = (voxels + 63) / 64;
-  for (Id q = 0; q < words; ++q) {
-    const std::uint64_t a = r00[q], b = r10[q], c = r01[q], d = r11[q];
-    // Bits of corner i + 1: shift the next word in.
-    const std::uint64_t a1 = (a >> 1) | (r00[q + 1] << 63);
-    const std::uint64_t b1 = (b >> 1) | (r10[q + 1] << 63);
-    const std::uint64_t c1 = (c >> 1) | (r01[q + 1] << 63);
-    const std::uint64_t d1 = (d >> 1) | (r11[q + 1] << 63);
-    std::uint64_t active = (a ^ b) | (a ^ c) | (a ^ d) | (a ^ a1) | (a ^ b1) | (a ^ c1) | (a ^ d1);
-    const Id left = voxels - 64 * q;
-    if (left < 64) active &= (std::uint64_t{1} << left) - 1;
-    while (active) {
-      const int bit = std::countr_zero(active);
-      active &= active - 1;
-      const unsigned cube_case = static_cast<unsigned>(((a >> bit) & 1) | (((a1 >> bit) & 1) << 1) |
-                                                       (((b >> bit) & 1) << 2) | (((b1 >> bit) & 1) << 3) |
-                                                       (((c >> bit) & 1) << 4) | (((c1 >> bit) & 1) << 5) |
-                                                       (((d >> bit) & 1) << 6) | (((d1 >> bit) & 1) << 7));
-      f(64 * q + bit, cube_case);
-    }
-  }
 }
 
 // Voxel slabs per block of the soup handed to keyreduce::reduce_blocked: a
@@ -183,7 +108,7 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, Id k_begin, Id k_en
 // scattered block by block (keyreduce::reduce_blocked), with no pair order;
 // otherwise (VERTEX-WELD's groups) reduced over the groups' pair order.
 template <class K>
-void average_normals(const keyreduce::Groups<K>& groups, const std::vector<Id>* blocks, const SurfaceMesh& mesh,
+void average_normals(const keyreduce::Groups<K>* groups, const std::vector<Id>* blocks, const SurfaceMesh& mesh,
                      std::vector<float>& normals) {
   const float* P = mesh.points.data();
   const PointIndex* C = mesh.connectivity.data();
@@ -201,12 +126,159 @@ void average_normals(const keyreduce::Groups<K>& groups, const std::vector<Id>* 
   std::vector<Vec3f> face(mesh.num_cells());
   parallel::for_each(mesh.num_cells(), [&](Id t) { face[t] = face_normal(t); });
   keyreduce::reduce(
-      groups, [&](Id pair) { return face[pair / 3]; }, add, [&](Vec3f sum, Id) { return unit(sum); }, out);
+      *groups, [&](Id pair) { return face[pair / 3]; }, add, [&](Vec3f sum, Id) { return unit(sum); }, out);
 }
 
+// Where each point's values go: the mesh's arrays (null when not asked
+// for), written at the point's id. One writer for both plans, so a point's
+// bytes do not depend on how its id was found.
+struct PointArrays {
+  float* xyz = nullptr;
+  float* scalar = nullptr;
+  float* gradient_normal = nullptr;
+  float* curvature = nullptr;
+  std::uint64_t* key = nullptr;     // global edge key (point_keys)
+  std::uint64_t* coarse = nullptr;  // coarse key: the edge's end nearest the crossing
+};
+
+template <class T>
+struct PointWriter {
+  const EdgeInterpolator<T>& interp;
+  const GridShape& s;
+  PointArrays out;
+  std::uint64_t total_per_iso = 0;  // keys per isovalue of the whole grid (3 N_total)
+  std::uint64_t key_shift = 0;      // 3 nxy * first plane: the slab's first key in the whole grid
+
+  void operator()(Id id, const typename EdgeInterpolator<T>::Point& p, Id iso_index) const {
+    if (out.xyz) interp.position(p, out.xyz + 3 * id);
+    if (out.scalar) out.scalar[id] = interp.scalar(p);
+    if (out.gradient_normal) interp.gradient_normal(p, out.gradient_normal + 3 * id);
+    if (out.curvature) out.curvature[id] = interp.mean_curvature(p);
+    if (out.key)
+      out.key[id] = static_cast<std::uint64_t>(iso_index) * total_per_iso + 3 * static_cast<std::uint64_t>(p.p0) +
+                    static_cast<std::uint64_t>(p.axis) + key_shift;
+    if (out.coarse)
+      out.coarse[id] = static_cast<std::uint64_t>(iso_index * s.n + p.p0 + (p.t >= 0.5 ? s.stride[p.axis] : 0));
+  }
+};
+
+// The mesh's point arrays, sized for `points`, and the writer filling them.
+template <class T>
+PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
+                              const GridShape& s, const ContourOptions& opt, std::vector<std::uint64_t>* point_keys,
+                              std::vector<std::uint64_t>& coarse, bool write_xyz) {
+  PointWriter<T> w{interp, s, {}, 0, 0};
+  // Output arrays at their final size, with huge pages asked for before
+  // they are first touched (a host process such as Python has none by default).
+  auto field = [&](const std::string& name, int components) {
+    mesh.point_fields.push_back(Field{name, components, {}});
+    auto& values = mesh.point_fields.back().values;
+    resize_with_huge_pages(values, static_cast<std::size_t>(components * points));
+    return values.data();
+  };
+  if (write_xyz) {
+    resize_with_huge_pages(mesh.points, static_cast<std::size_t>(3 * points));
+    w.out.xyz = mesh.points.data();
+  }
+  if (opt.scalars) w.out.scalar = field(grid.name, 1);
+  if (opt.normals == ContourNormals::Gradient) w.out.gradient_normal = field("Normals", 3);
+  if (opt.curvature) w.out.curvature = field("mean_curvature", 1);
+  if (point_keys) {
+    // Global keys: the slab's edges renumbered as edges of the whole grid.
+    point_keys->resize(static_cast<std::size_t>(points));
+    w.out.key = point_keys->data();
+    w.total_per_iso = 3ull * static_cast<std::uint64_t>(s.nxy) *
+                      static_cast<std::uint64_t>(opt.total_planes ? opt.total_planes : s.nz);
+    w.key_shift = 3ull * static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(s.k_offset);
+  }
+  if (opt.coarsen) {
+    coarse.resize(static_cast<std::size_t>(points));
+    w.out.coarse = coarse.data();
+  }
+  return w;
+}
+
+// Averaged normals (when asked for) and coarsening, after the points and
+// triangles are written.
+template <class K>
+void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduce::Groups<K>* vertex_weld_groups,
+                    const std::vector<Id>& blocks, const std::vector<std::uint64_t>& coarse, std::uint64_t coarse_range,
+                    ContourStats& st) {
+  const bool average = opt.normals == ContourNormals::Average;
+  if (average && !opt.coarsen) {
+    auto t0 = Clock::now();
+    Field f{"Normals", 3, {}};
+    average_normals(vertex_weld_groups, vertex_weld_groups ? nullptr : &blocks, mesh, f.values);
+    mesh.point_fields.push_back(std::move(f));
+    st.fields += seconds_since(t0);
+  }
+  if (opt.coarsen) {
+    auto t0 = Clock::now();
+    st.triangles_before_coarsening = mesh.num_cells();
+    mesh = coarsen(mesh, coarse, coarse_range);
+    if (average) generate::average_normals(mesh);
+    st.coarsen += seconds_since(t0);
+  }
+}
+
+// The structured plan (contour_rows.hpp): classify every isovalue, count and
+// scan rows, then write points and triangles at their final ids. No soup.
+template <class T>
+SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
+                         std::vector<std::uint64_t>* point_keys) {
+  GridShape s = shape_of(grid);
+  s.k_offset = opt.total_planes ? opt.first_plane : 0;
+  const Id n_iso = static_cast<Id>(opt.isovalues.size());
+  const EdgeInterpolator<T> interp{samples, s, opt.isovalues.data(), 3 * s.n};
+  const Id kb = opt.ghost_below, ke = s.nz - 1 - opt.ghost_above;
+  st.key_bits = 3 * s.n * n_iso <= Id{std::numeric_limits<std::uint32_t>::max()} ? 32 : 64;
+
+  std::vector<InsideBits> bits(static_cast<std::size_t>(n_iso));
+  std::vector<RowCounts> rows(static_cast<std::size_t>(n_iso));
+  std::vector<Id> blocks;  // slab blocks of the triangles, for averaging
+  Id points = 0, triangles = 0;
+  for (Id iso = 0; iso < n_iso; ++iso) {
+    auto t0 = Clock::now();
+    classify(samples, s, InsideTest<T>(opt.isovalues[iso]), bits[iso]);
+    st.classify += seconds_since(t0);
+    t0 = Clock::now();
+    count_rows(bits[iso], s, kb, ke, points, triangles, rows[iso]);
+    const RowCounts& rc = rows[iso];
+    for (Id k = 0; k < ke - kb; k += kSlabsPerBlock) blocks.push_back(3 * rc.triangle_first[k * (s.ny - 1)]);
+    points = rc.point_first.back();
+    triangles = rc.triangle_first.back();
+    st.weld += seconds_since(t0);
+  }
+  blocks.push_back(3 * triangles);
+  st.soup_points = 3 * triangles;
+  if (3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("contour: " + std::to_string(triangles) +
+                     " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
+
+  SurfaceMesh mesh;
+  auto t0 = Clock::now();
+  resize_with_huge_pages(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
+  for (Id iso = 0; iso < n_iso; ++iso) write_triangles(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data());
+  st.generate += seconds_since(t0);
+
+  t0 = Clock::now();
+  std::vector<std::uint64_t> coarse;
+  const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse, true);
+  for (Id iso = 0; iso < n_iso; ++iso)
+    for_each_row_point(bits[iso], s, kb, ke, rows[iso], [&](Id id, Id i, Id j, Id k, int axis) {
+      write(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
+    });
+  st.fields += seconds_since(t0);
+  bits.clear();
+  finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n), st);
+  return mesh;
+}
+
+// The soup plans: every triangle corner written as its edge key, then
+// grouped by KEY-REDUCE's sort plan, or by coordinates (VERTEX-WELD).
 template <class K, class T>
-SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
-                          std::vector<std::uint64_t>* point_keys) {
+SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
+                         std::vector<std::uint64_t>* point_keys) {
   GridShape s = shape_of(grid);
   s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
@@ -236,12 +308,9 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
     blocks.push_back(corners);
     st.soup_points = corners;
     auto t0 = Clock::now();
-    // KEY-REDUCE's groups are averaged by slab blocks and need no pair order.
-    const auto order = keyreduce::Order::Skip;
-    if (opt.weld == ContourWeld::KeyReduce || opt.weld == ContourWeld::KeyReduceSort) {
-      groups = opt.weld == ContourWeld::KeyReduce
-                   ? keyreduce::partition_dense(soup.data(), corners, key_range, order)
-                   : keyreduce::partition_sort(soup.data(), corners, parallel::bits_needed<K>(key_range - 1), order);
+    if (opt.weld == ContourWeld::KeyReduceSort) {
+      groups = keyreduce::partition_sort(soup.data(), corners, parallel::bits_needed<K>(key_range - 1),
+                                         keyreduce::Order::Skip);
       mesh.connectivity = std::move(groups.index_map);  // the index map is the triangle list
     } else {
       // VERTEX-WELD: the soup a plain marching cubes writes, a position per
@@ -266,58 +335,19 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* samples, const Contour
   auto t0 = Clock::now();
   const Id points = groups.num_groups();
   const K* point_key = groups.unique_keys.data();
-  if (point_keys) {
-    // Global keys: the slab's edges renumbered as edges of the whole grid.
-    const std::uint64_t local_per_iso = static_cast<std::uint64_t>(keys_per_iso);
-    const std::uint64_t total_per_iso = 3ull * static_cast<std::uint64_t>(s.nxy) *
-                                        static_cast<std::uint64_t>(opt.total_planes ? opt.total_planes : s.nz);
-    const std::uint64_t shift = 3ull * static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(s.k_offset);
-    point_keys->resize(static_cast<std::size_t>(points));
-    parallel::for_each(points, [&](Id p) {
-      const std::uint64_t k = point_key[p];
-      (*point_keys)[p] = (k / local_per_iso) * total_per_iso + k % local_per_iso + shift;
-    });
-  }
-  if (mesh.points.empty()) {
-    mesh.points.resize(3 * points);
-    parallel::for_each(points, [&](Id p) { interp.position(interp.locate(point_key[p]), &mesh.points[3 * p]); });
-  }
-  if (opt.scalars) {
-    Field f{grid.name, 1, std::vector<float>(points)};
-    parallel::for_each(points, [&](Id p) { f.values[p] = interp.scalar(interp.locate(point_key[p])); });
-    mesh.point_fields.push_back(std::move(f));
-  }
-  if (opt.normals == ContourNormals::Gradient) {
-    Field f{"Normals", 3, std::vector<float>(3 * points)};
-    parallel::for_each(points, [&](Id p) { interp.gradient_normal(interp.locate(point_key[p]), &f.values[3 * p]); });
-    mesh.point_fields.push_back(std::move(f));
-  }
-  if (opt.curvature) {
-    Field f{"mean_curvature", 1, std::vector<float>(points)};
-    parallel::for_each(points, [&](Id p) { f.values[p] = interp.mean_curvature(interp.locate(point_key[p])); });
-    mesh.point_fields.push_back(std::move(f));
-  }
-  if (average && !opt.coarsen) {
-    Field f{"Normals", 3, {}};
-    average_normals(groups, opt.weld == ContourWeld::VertexWeld ? nullptr : &blocks, mesh, f.values);
-    mesh.point_fields.push_back(std::move(f));
-  }
+  std::vector<std::uint64_t> coarse;
+  const bool welded_by_position = !mesh.points.empty() || points == 0;
+  const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse,
+                                              !welded_by_position);
+  parallel::for_each(points, [&](Id p) {
+    const std::uint64_t key = point_key[p];
+    const Id iso_index = static_cast<Id>(key / static_cast<std::uint64_t>(keys_per_iso));
+    write(p, interp.locate(key), iso_index);
+  });
   st.fields += seconds_since(t0);
-  if (opt.coarsen) {
-    t0 = Clock::now();
-    // The coarse key: the edge's end point nearest to the crossing (the far
-    // end from t = 0.5 on), per isovalue.
-    std::vector<std::uint64_t> coarse(static_cast<std::size_t>(points));
-    parallel::for_each(points, [&](Id p) {
-      const auto e = interp.locate(point_key[p]);
-      const Id iso_index = static_cast<Id>(static_cast<std::uint64_t>(point_key[p]) / static_cast<std::uint64_t>(keys_per_iso));
-      coarse[p] = static_cast<std::uint64_t>(iso_index * s.n + e.p0 + (e.t >= 0.5 ? s.stride[e.axis] : 0));
-    });
-    st.triangles_before_coarsening = mesh.num_cells();
-    mesh = coarsen(mesh, coarse, static_cast<std::uint64_t>(n_iso * s.n));
-    if (average) generate::average_normals(mesh);
-    st.coarsen += seconds_since(t0);
-  }
+  const bool vertex_weld = opt.weld == ContourWeld::VertexWeld;
+  finish_contour<K>(mesh, opt, vertex_weld ? &groups : nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n),
+                    st);
   return mesh;
 }
 
@@ -359,9 +389,10 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * options.isovalues.size();
   return visit_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
+    if (options.weld == ContourWeld::KeyReduce) return contour_rows<T>(grid, samples, options, st, point_keys);
     if (key_range <= std::numeric_limits<std::uint32_t>::max())
-      return contour_typed<std::uint32_t, T>(grid, samples, options, st, point_keys);
-    return contour_typed<std::uint64_t, T>(grid, samples, options, st, point_keys);
+      return contour_soup<std::uint32_t, T>(grid, samples, options, st, point_keys);
+    return contour_soup<std::uint64_t, T>(grid, samples, options, st, point_keys);
   });
 }
 

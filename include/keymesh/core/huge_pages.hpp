@@ -9,11 +9,33 @@
 // glibc.malloc.hugetlb=1 is set, which must happen before the process
 // starts: executables call this first thing in main() and are re-executed
 // once with the tunable added (KEYMESH_HUGE_PAGES=0 turns it off).
+#include <cstddef>
+#include <vector>
+
 namespace keymesh {
 
 // Re-executes the current program with glibc.malloc.hugetlb=1 added to
 // GLIBC_TUNABLES unless it is already there or disabled; returns normally
 // when nothing needs doing or the re-exec failed (then nothing changes).
 void reexec_with_huge_pages(int argc, char** argv);
+
+// Asks the kernel for transparent huge pages on the 2 MiB-aligned part of
+// [data, data + bytes) (madvise(MADV_HUGEPAGE); no-op for small ranges,
+// sanitizer builds, or when KEYMESH_HUGE_PAGES=0). Effective only on pages
+// not yet touched: call it between allocation and first write. This is
+// what a host process that was not started with the tunable (Python) needs:
+// the kernel's THP mode here is `madvise`.
+void advise_huge_pages(void* data, std::size_t bytes);
+
+// Sizes `v` to n elements with huge pages asked for before the first touch
+// (reserve, advise, then resize).
+template <class T>
+void resize_with_huge_pages(std::vector<T>& v, std::size_t n) {
+  if (n > v.capacity()) {
+    v.reserve(n);
+    advise_huge_pages(v.data(), n * sizeof(T));
+  }
+  v.resize(n);
+}
 
 }  // namespace keymesh

@@ -74,14 +74,24 @@ struct EdgeInterpolator {
       iso_index = edge / keys_per_iso;
       edge -= iso_index * keys_per_iso;
     }
+    const Id p0 = edge / 3;
+    const Id k = p0 / s.nxy;
+    const Id rem = p0 - k * s.nxy;
+    const Id j = rem / s.nx;
+    return at(p0, rem - j * s.nx, j, k, static_cast<int>(edge - 3 * p0), iso_index);
+  }
+
+  // The point on the edge from grid point p0 = (i, j, k) along `axis`, when
+  // its grid coordinates are known (no divisions): what locate() returns for
+  // the edge's key.
+  KEYMESH_HD Point at(Id p0, Id i, Id j, Id k, int axis, Id iso_index) const {
     Point p{};
-    p.p0 = edge / 3;
-    p.axis = static_cast<int>(edge - 3 * p.p0);
+    p.p0 = p0;
+    p.axis = axis;
     p.iso = isovalues[iso_index];
-    p.ijk[2] = p.p0 / s.nxy;
-    const Id rem = p.p0 - p.ijk[2] * s.nxy;
-    p.ijk[1] = rem / s.nx;
-    p.ijk[0] = rem - p.ijk[1] * s.nx;
+    p.ijk[0] = i;
+    p.ijk[1] = j;
+    p.ijk[2] = k;
     const double v0 = static_cast<double>(samples[p.p0]);
     const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
     const double t = (p.iso - v0) / (v1 - v0);

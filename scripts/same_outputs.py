@@ -1,0 +1,98 @@
+#!/usr/bin/env python3
+"""Proves that a change left keymesh's outputs alone: runs the main commands
+and formats with two builds and compares every output file byte for byte.
+
+    python3 scripts/same_outputs.py --before /path/to/old/keymesh --after build/keymesh [--keep DIR]
+
+Inputs are built-in (`keymesh generate`) or from Debian packages the Makefile
+installs (brainsmall.den from libvolpack1-dev, ch2.nii.gz from mricron-data).
+Each case runs with --threads 1 and --threads 2 under the new build too, so
+the comparison also shows thread-count independence. Exits 1 and lists the
+files that differ; 0 when every file is identical.
+"""
+import argparse
+import filecmp
+import os
+import subprocess
+import sys
+import tempfile
+
+BRAIN = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"
+HEAD = "/usr/share/mricron/templates/ch2.nii.gz"
+
+# (name, arguments after the command name; {in:NAME} is an input, {out} the output path)
+CASES = [
+    ("sphere-ply", "contour {in:s96.vti} -o {out}.ply --iso 46.3"),
+    ("sphere-vtp-avg", "contour {in:s96.vti} -o {out}.vtp --iso 46.3 --normals average"),
+    ("sphere-grad-curv", "contour {in:s96.vti} -o {out}.vtp --iso 46.3 --normals gradient --curvature"),
+    ("sphere-isos", "contour {in:s96.vti} -o {out}.vtp --iso 10.5 --iso 30.2 --iso 47.001 --normals average"),
+    ("sphere-coarsen", "contour {in:s96.vti} -o {out}.vtp --iso 46.3 --coarsen --normals average"),
+    ("sphere-sort", "contour {in:s96.vti} -o {out}.ply --iso 46.3 --weld keyreduce-sort"),
+    ("sphere-vweld", "contour {in:s96.vti} -o {out}.ply --iso 46.3 --weld vertexweld --normals average"),
+    ("sphere-obj", "contour {in:s96.vti} -o {out}.obj --iso 46.3"),
+    ("sphere-stl", "contour {in:s96.vti} -o {out}.stl --iso 46.3"),
+    ("sphere-stream", "contour {in:s96.nrrd} -o {out}.vtp --iso 46.3 --normals gradient --curvature --memory-limit 1M"),
+    ("brain-den", "contour " + BRAIN + " -o {out}.vtp --iso 37.3 --normals average"),
+    ("brain-den-coarsen", "contour " + BRAIN + " -o {out}.ply --iso 37.3 --coarsen"),
+    ("head-nii", "contour " + HEAD + " -o {out}.vtp --iso 90.5 --iso 40.5 --normals gradient"),
+    ("head-nii-stream", "contour " + HEAD + " -o {out}.ply --iso 90.5 --memory-limit 4M"),
+    ("tets", "tetrahedralize {in:s24.vti} -o {out}.vtu"),
+    ("tets24", "tetrahedralize {in:s24.vti} -o {out}.vtu --scheme 24"),
+    ("tet-contour", "contour {in:tets} -o {out}.vtp --iso 9.3 --normals average"),
+    ("subdivide", "subdivide {in:tets} -o {out}.vtu"),
+    ("dual", "dual {in:sphere-ply} -o {out}.vtp"),
+    ("convert-vtk", "convert {in:sphere-ply} {out}.vtk"),
+]
+
+
+def run(keymesh, args, check=True):
+    return subprocess.run([keymesh] + args, check=check, capture_output=True, text=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--before", required=True)
+    ap.add_argument("--after", required=True)
+    ap.add_argument("--keep", help="write outputs here instead of a temporary folder")
+    a = ap.parse_args()
+    tmp = a.keep or tempfile.mkdtemp(prefix="keymesh-same-")
+    os.makedirs(tmp, exist_ok=True)
+    inputs = os.path.join(tmp, "inputs")
+    os.makedirs(inputs, exist_ok=True)
+    run(a.before, ["generate", "sphere", "--size", "96", "-o", os.path.join(inputs, "s96.vti"), "-q"])
+    run(a.before, ["convert", os.path.join(inputs, "s96.vti"), os.path.join(inputs, "s96.nrrd")])
+    run(a.before, ["generate", "sphere", "--size", "24", "-o", os.path.join(inputs, "s24.vti"), "-q"])
+    produced = {}  # (case, build) -> output file, for cases whose output is a later case's input
+    differ = []
+    compared = 0
+    for name, template in CASES:
+        suffix = template.split("{out}")[1].split()[0]
+        outs = {}
+        for build, exe, threads in (("before", a.before, "2"), ("after", a.after, "1"), ("after2", a.after, "2")):
+            args = template
+            for key in [k.split("}")[0] for k in template.split("{in:")[1:]]:
+                path = produced[(key, build)] if (key, build) in produced else os.path.join(inputs, key)
+                args = args.replace("{in:" + key + "}", path)
+            outs[build] = os.path.join(tmp, f"{name}.{build}") + suffix
+            args = args.replace("{out}" + suffix, outs[build]).split()
+            if not template.startswith("convert"):
+                args += ["--threads", threads, "-q"]
+            r = run(exe, args, check=False)
+            if r.returncode != 0:
+                print(f"FAIL  {name} ({build}): exit {r.returncode}: {r.stderr.strip()}")
+                differ.append(f"{name} ({build})")
+                break
+            produced[(name, build)] = outs[build]
+        else:
+            for build in ("after", "after2"):
+                compared += 1
+                same = filecmp.cmp(outs["before"], outs[build], shallow=False)
+                print(f"{'same ' if same else 'DIFF '} {name:20s} {os.path.basename(outs[build])}")
+                if not same:
+                    differ.append(f"{name} ({build})")
+    print(f"{compared - len(differ)} identical, {len(differ)} differ" + (": " + ", ".join(differ) if differ else ""))
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,215 @@
+#pragma once
+// KEY-REDUCE's structured plan for marching cubes (count, scan, write): the
+// partition of the edge keys computed from the classification alone, so the
+// soup of keys is never written.
+//
+// On a voxel grid the keys are implicit edge ids, 3 * point_id + axis, and
+// the set of keys the soup would hold is known before the soup exists: it is
+// the set of cut edges (every cut edge of a voxel is a corner of one of its
+// triangles). KEY-REDUCE's dense plan numbers the present keys by their rank
+// in key order; here that rank is computed from counts instead of a bitmap of
+// the soup:
+//   1. count  every grid row (j, k) counts its cut x, y and z edges (keys
+//             3p, 3p+1, 3p+2 of its points p) and every voxel row its
+//             triangles;
+//   2. scan   exclusive prefix sums give each row the id of its first point
+//             and of its first triangle (rows in key order: k, then j);
+//   3. write  every row writes its points at their final ids, every voxel
+//             row its triangles with final point ids: the rank of edge
+//             (i, axis) in row r is the row's first id plus the cut edges of
+//             the row before it, read off the row's cut bits with popcounts.
+// The ids, hence the points, the triangles and every byte of the output, are
+// those of the dense and sort plans (key order); a test holds them equal.
+// Memory: the inside bits (one bit per sample) and two offsets per row, then
+// the output arrays at their final size, each written once.
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+#include "keymesh/core/types.hpp"
+#include "keymesh/generate/marching_cubes_table.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/scan.hpp"
+#include "voxel_bits.hpp"
+
+namespace keymesh::generate {
+
+// The cut edges whose first point lies in grid row (j, k), one bit per i, by
+// axis: x (i, i+1), y (j, j+1), z (k, k+1). Planes above `last_plane` add no
+// z edge (the slab's top plane, or the plane below a ghost).
+struct RowCuts {
+  const std::uint64_t* in = nullptr;      // row (j, k)
+  const std::uint64_t* next_y = nullptr;  // row (j + 1, k), or null on the last row
+  const std::uint64_t* next_z = nullptr;  // row (j, k + 1), or null on the last plane
+  Id data_words = 0;                      // words holding samples: ceil(nx / 64)
+  Id last_x_word = 0;                     // the word of sample nx - 1, which starts no x edge
+  std::uint64_t last_x_mask = 0;          // ~bit of sample nx - 1 in that word
+
+  RowCuts(const InsideBits& bits, const GridShape& s, Id j, Id k, Id last_plane) {
+    in = bits.row(j, k, s.ny);
+    next_y = j + 1 < s.ny ? bits.row(j + 1, k, s.ny) : nullptr;
+    next_z = k < last_plane ? bits.row(j, k + 1, s.ny) : nullptr;
+    data_words = (s.nx + 63) / 64;
+    last_x_word = (s.nx - 1) / 64;
+    last_x_mask = ~(std::uint64_t{1} << ((s.nx - 1) % 64));
+  }
+
+  struct Words {
+    std::uint64_t x = 0, y = 0, z = 0;
+    int count() const { return std::popcount(x) + std::popcount(y) + std::popcount(z); }
+  };
+
+  // Word q (zero past the samples).
+  Words word(Id q) const {
+    Words w;
+    if (q >= data_words) return w;
+    const std::uint64_t a = in[q];
+    w.x = a ^ ((a >> 1) | (in[q + 1] << 63));
+    if (q == last_x_word) w.x &= last_x_mask;
+    if (next_y) w.y = a ^ next_y[q];
+    if (next_z) w.z = a ^ next_z[q];
+    return w;
+  }
+
+  Id count() const {
+    Id c = 0;
+    for (Id q = 0; q < data_words; ++q) c += word(q).count();
+    return c;
+  }
+
+  // Calls f(i, x, y, z) for every i where an edge starts that is cut, in
+  // increasing i; x, y, z (0 or 1) say which of its three edges are.
+  template <class F>
+  void for_each_position(F&& f) const {
+    for (Id q = 0; q < data_words; ++q) {
+      const Words w = word(q);
+      std::uint64_t any = w.x | w.y | w.z;
+      while (any) {
+        const int b = std::countr_zero(any);
+        any &= any - 1;
+        f(64 * q + b, static_cast<std::uint32_t>((w.x >> b) & 1), static_cast<std::uint32_t>((w.y >> b) & 1),
+          static_cast<std::uint32_t>((w.z >> b) & 1));
+      }
+    }
+  }
+};
+
+// The point ids of one grid row's cut edges, by axis and i: ids[axis][i] is
+// the id of edge (i, axis) when that edge is cut (other entries are stale).
+// Filled from the row's cut bits in one pass over its cut positions, in key
+// order (i, then axis), so each id is the row's first id plus a running count.
+// The arrays are a view of the caller's scratch (3 nx ids).
+struct RowIds {
+  std::uint32_t* ids[3];
+
+  RowIds(std::uint32_t* scratch, Id nx) : ids{scratch, scratch + nx, scratch + 2 * nx} {}
+
+  void fill(const RowCuts& cuts, Id first) {
+    auto id = static_cast<std::uint32_t>(first);
+    // Branch-free: every axis gets the running id, which moves on past the
+    // edges that are cut.
+    cuts.for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+      ids[0][i] = id;
+      ids[1][i] = id + x;
+      ids[2][i] = id + x + y;
+      id += x + y + z;
+    });
+  }
+};
+
+// Point and triangle counts of one isovalue's rows, and their prefix sums.
+struct RowCounts {
+  std::vector<Id> point_first;     // grid rows (j, k), k in [kb, ke]: first point id; one more at the end
+  std::vector<Id> triangle_first;  // voxel rows (j, k), j < ny - 1, k in [kb, ke): first triangle
+};
+
+// Counts rows of planes [kb, ke] (voxel layers [kb, ke)) and scans them, ids
+// starting at `first_point` and `first_triangle`.
+inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, Id first_point, Id first_triangle,
+                       RowCounts& rc) {
+  const auto& table = marching_cubes_table();
+  const Id grid_rows = s.ny * (ke - kb + 1);
+  const Id voxel_rows = (s.ny - 1) * (ke - kb);
+  rc.point_first.assign(static_cast<std::size_t>(grid_rows + 1), 0);
+  rc.triangle_first.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
+  parallel::for_each_dynamic(grid_rows, [&](Id r) {
+    const Id j = r % s.ny, k = kb + r / s.ny;
+    rc.point_first[r] = RowCuts(bits, s, j, k, ke).count();
+    if (j + 1 < s.ny && k < ke) {
+      Id t = 0;
+      for_each_cut_voxel(bits, s, j, k, [&](Id, unsigned cube_case) { t += table.triangle_count[cube_case]; });
+      rc.triangle_first[(k - kb) * (s.ny - 1) + j] = t;
+    }
+  }, 8);
+  parallel::exclusive_scan(rc.point_first.data(), rc.point_first.data(), grid_rows + 1);
+  parallel::exclusive_scan(rc.triangle_first.data(), rc.triangle_first.data(), voxel_rows + 1);
+  if (first_point || first_triangle) {  // a later isovalue: ids follow the earlier ones'
+    parallel::for_each(grid_rows + 1, [&](Id r) { rc.point_first[r] += first_point; });
+    parallel::for_each(voxel_rows + 1, [&](Id r) { rc.triangle_first[r] += first_triangle; });
+  }
+}
+
+// Writes the triangles of voxel rows (j, k), k in [kb, ke), with final point
+// ids, to connectivity (3 per triangle) at their scanned offsets. A voxel's
+// 12 edges lie in grid rows (j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1);
+// their ids come from those rows' RowIds. Voxel rows are taken in runs of
+// consecutive j, so rows j + 1 of one voxel row are rows j of the next.
+inline void write_triangles(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc,
+                            PointIndex* connectivity) {
+  const auto& table = marching_cubes_table();
+  const Id layers = ke - kb;
+  constexpr Id kRun = 16;  // voxel rows per task
+  const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun;
+  parallel::for_each_dynamic(layers * runs_per_layer, [&](Id task) {
+    const Id k = kb + task / runs_per_layer;
+    const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
+    auto first = [&](Id j, Id k_) { return rc.point_first[(k_ - kb) * s.ny + j]; };
+    // Rows (j, k), (j, k + 1) of the current voxel row, and the next j's,
+    // in this thread's scratch.
+    thread_local std::vector<std::uint32_t> scratch;
+    if (static_cast<Id>(scratch.size()) < 12 * s.nx) scratch.resize(static_cast<std::size_t>(12 * s.nx));
+    RowIds lo[2] = {RowIds(scratch.data(), s.nx), RowIds(scratch.data() + 3 * s.nx, s.nx)};
+    RowIds hi[2] = {RowIds(scratch.data() + 6 * s.nx, s.nx), RowIds(scratch.data() + 9 * s.nx, s.nx)};
+    lo[0].fill(RowCuts(bits, s, j_begin, k, ke), first(j_begin, k));
+    lo[1].fill(RowCuts(bits, s, j_begin, k + 1, ke), first(j_begin, k + 1));
+    for (Id j = j_begin; j < j_end; ++j) {
+      hi[0].fill(RowCuts(bits, s, j + 1, k, ke), first(j + 1, k));
+      hi[1].fill(RowCuts(bits, s, j + 1, k + 1, ke), first(j + 1, k + 1));
+      // Cube edge e's id at voxel i is edge_ids[e][i]: its row's array for
+      // its axis, shifted by its x offset.
+      const std::uint32_t* edge_ids[12];
+      for (int e = 0; e < 12; ++e) {
+        const auto& ce = table.edges[e];
+        const RowIds& row = ce.dz ? (ce.dy ? hi[1] : lo[1]) : (ce.dy ? hi[0] : lo[0]);
+        edge_ids[e] = row.ids[ce.axis] + ce.dx;
+      }
+      PointIndex* out = connectivity + 3 * rc.triangle_first[(k - kb) * (s.ny - 1) + j];
+      for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
+        const int corners = 3 * table.triangle_count[cube_case];
+        const auto& edges = table.triangle_edges[cube_case];
+        for (int c = 0; c < corners; ++c) *out++ = edge_ids[edges[c]][i];
+      });
+      std::swap(lo[0], hi[0]);
+      std::swap(lo[1], hi[1]);
+    }
+  }, 1);
+}
+
+// Calls emit(id, i, j, k, axis) for every cut edge of grid rows of planes
+// [kb, ke], id its point id (key order).
+template <class Emit>
+void for_each_row_point(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc, Emit&& emit) {
+  const Id grid_rows = s.ny * (ke - kb + 1);
+  parallel::for_each_dynamic(grid_rows, [&](Id r) {
+    const Id j = r % s.ny, k = kb + r / s.ny;
+    Id id = rc.point_first[r];
+    RowCuts(bits, s, j, k, ke).for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+      if (x) emit(id++, i, j, k, 0);
+      if (y) emit(id++, i, j, k, 1);
+      if (z) emit(id++, i, j, k, 2);
+    });
+  }, 8);
+}
+
+}  // namespace keymesh::generate
