@@ -35,13 +35,14 @@ CASES = [
     ("brain-den", "contour " + BRAIN + " -o {out}.vtp --iso 37.3 --normals average"),
     ("brain-den-coarsen", "contour " + BRAIN + " -o {out}.ply --iso 37.3 --coarsen"),
     ("head-nii", "contour " + HEAD + " -o {out}.vtp --iso 90.5 --iso 40.5 --normals gradient"),
-    ("head-nii-stream", "contour " + HEAD + " -o {out}.ply --iso 90.5 --memory-limit 4M"),
+    ("head-nrrd-stream", "contour {in:head.nrrd} -o {out}.ply --iso 90.5 --memory-limit 4M"),
     ("tets", "tetrahedralize {in:s24.vti} -o {out}.vtu"),
     ("tets24", "tetrahedralize {in:s24.vti} -o {out}.vtu --scheme 24"),
     ("tet-contour", "contour {in:tets} -o {out}.vtp --iso 9.3 --normals average"),
     ("subdivide", "subdivide {in:tets} -o {out}.vtu"),
     ("dual", "dual {in:sphere-ply} -o {out}.vtp"),
-    ("convert-vtk", "convert {in:sphere-ply} {out}.vtk"),
+    ("convert-vtk", "convert {in:tets} -o {out}.vtk"),
+    ("convert-vtp", "convert {in:sphere-vtp-avg} -o {out}.ply"),
 ]
 
 
@@ -60,7 +61,8 @@ def main():
     inputs = os.path.join(tmp, "inputs")
     os.makedirs(inputs, exist_ok=True)
     run(a.before, ["generate", "sphere", "--size", "96", "-o", os.path.join(inputs, "s96.vti"), "-q"])
-    run(a.before, ["convert", os.path.join(inputs, "s96.vti"), os.path.join(inputs, "s96.nrrd")])
+    run(a.before, ["convert", os.path.join(inputs, "s96.vti"), "-o", os.path.join(inputs, "s96.nrrd"), "-q"])
+    run(a.before, ["convert", HEAD, "-o", os.path.join(inputs, "head.nrrd"), "-q"])
     run(a.before, ["generate", "sphere", "--size", "24", "-o", os.path.join(inputs, "s24.vti"), "-q"])
     produced = {}  # (case, build) -> output file, for cases whose output is a later case's input
     differ = []
@@ -75,8 +77,7 @@ def main():
                 args = args.replace("{in:" + key + "}", path)
             outs[build] = os.path.join(tmp, f"{name}.{build}") + suffix
             args = args.replace("{out}" + suffix, outs[build]).split()
-            if not template.startswith("convert"):
-                args += ["--threads", threads, "-q"]
+            args += ["--threads", threads, "-q"]
             r = run(exe, args, check=False)
             if r.returncode != 0:
                 print(f"FAIL  {name} ({build}): exit {r.returncode}: {r.stderr.strip()}")
