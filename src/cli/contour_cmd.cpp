@@ -66,11 +66,11 @@ Register reg{Command{
     [](CLI::App& cmd) -> std::function<int()> {
       auto o = std::make_shared<ContourCli>();
       cmd.add_option("input", o->input,
-                     "volume: .vti .nrrd .nhdr .nii .nii.gz .den, or raw with --dims; "
+                     "volume: .vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or Zarr folder, or raw with --dims; "
                      "or a tetrahedral grid: .vtu, .vtk (UNSTRUCTURED_GRID)")
           ->required();
       cmd.add_option("--array", o->array, "tet grids: the point field to contour (default: the first scalar field)");
-      cmd.add_option("-o,--output", o->output, "output mesh (.vtp .ply .obj .stl; under mpirun also .pvtp: one piece per rank)")->required();
+      cmd.add_option("-o,--output", o->output, "output mesh (.vtp .ply .obj .stl .glb; under mpirun also .pvtp: one piece per rank)")->required();
       cmd.add_option("--iso", o->isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
       cmd.add_option("--weld", o->weld,
                      "how to connect the soup: keyreduce (edge keys, dense plan: direct addressing; default), "

@@ -46,12 +46,12 @@ struct ConvertCli {
 };
 
 Register reg{Command{
-    "convert", "rewrite a grid (.vtu .vtk), surface (.ply .obj .stl .vtp) or volume (.vti .nrrd .raw) in another format",
+    "convert", "rewrite a grid (.vtu .vtk), surface (.ply .obj .stl .vtp; .glb out) or volume (.vti .nrrd .raw) in another format",
     [](CLI::App& cmd) -> std::function<int()> {
       auto o = std::make_shared<ConvertCli>();
       cmd.add_option("input", o->input,
                      "unstructured grid (.vtu .vtk), surface mesh (.ply .obj .stl .vtp) or volume "
-                     "(.vti .nrrd .nhdr .nii .nii.gz .den)")
+                     "(.vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or Zarr folder)")
           ->required();
       cmd.add_option("-o,--output", o->output, "output file of the same kind (volumes: .vti .nrrd .raw)")->required();
       add_common_options(cmd, o->common);

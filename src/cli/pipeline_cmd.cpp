@@ -30,7 +30,7 @@ Register reg{Command{
     "pipeline", "contour, then optionally coarsen, subdivide and take the dual, in memory (the paper's Figure 8)",
     [](CLI::App& cmd) -> std::function<int()> {
       auto o = std::make_shared<PipelineCli>();
-      cmd.add_option("input", o->input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den) or tet grid (.vtu .vtk)")
+      cmd.add_option("input", o->input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or tet grid (.vtu .vtk)")
           ->required();
       cmd.add_option("-o,--output", o->output, "output surface (.vtp .ply .obj; .stl without --dual)")->required();
       cmd.add_option("--iso", o->isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);

@@ -22,7 +22,7 @@ Register reg{Command{
     "tetrahedralize", "split the voxels of a volume (or the hexahedra of a .vtu/.vtk) into tetrahedra",
     [](CLI::App& cmd) -> std::function<int()> {
       auto o = std::make_shared<TetrahedralizeCli>();
-      cmd.add_option("input", o->input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den) or hexahedral grid (.vtu .vtk)")
+      cmd.add_option("input", o->input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or hexahedral grid (.vtu .vtk)")
           ->required();
       cmd.add_option("-o,--output", o->output, "output tetrahedral grid (.vtu or .vtk)")->required();
       cmd.add_option("--scheme", o->scheme,
