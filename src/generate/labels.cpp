@@ -7,6 +7,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/progress.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -30,7 +31,9 @@ SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, L
   LabelStats& st = stats ? *stats : local;
   st = LabelStats{};
   auto t0 = Clock::now();
+  progress::report("scan labels", 0.0);
   const detail::LabelVolume vol = detail::scan_labels(grid, options);
+  progress::report(options.method == LabelMethod::SurfaceNets ? "surface nets" : "discrete marching cubes", 0.1);
   st.scan = seconds_since(t0);
   st.distinct_labels = vol.distinct_in_grid;
   st.surfaces = static_cast<Id>(vol.selected.size());
@@ -39,6 +42,7 @@ SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, L
                                      ? detail::surface_nets(vol, options.per_label, st)
                                      : detail::discrete_marching_cubes(vol, options.per_label, st);
   t0 = Clock::now();
+  if (options.smooth_iterations > 0) progress::report("smooth", 0.6);
   detail::smooth_label_surface(surface, vol, options.method, options.smooth_iterations, options.relaxation);
   st.smooth = seconds_since(t0);
 

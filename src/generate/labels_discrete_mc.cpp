@@ -11,6 +11,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/progress.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
@@ -44,6 +45,9 @@ LabelTriangles contour_one_label(const LabelVolume& vol, std::size_t s) {
       std::uint8_t* out = ind + (k * dims[1] + j) * dims[0];
       for (Id i = 0; i < dims[0]; ++i) out[i] = in[i] == label;
     }
+  // The labels' contours run on worker threads; only contour_labels reports
+  // progress (on the calling thread), not each label's marching cubes.
+  const progress::ScopedHook silent{progress::Hook{}};
   ContourOptions opt;
   opt.isovalues = {0.5};
   opt.scalars = false;
