@@ -15,11 +15,13 @@
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "mesh_measures.hpp"
 
 using namespace keymesh;
 using generate::ContourNormals;
 using generate::ContourOptions;
 using generate::ContourWeld;
+using test::enclosed_volume;
 
 namespace {
 
@@ -29,21 +31,6 @@ ContourOptions iso(double v, ContourNormals normals = ContourNormals::None, Cont
   o.normals = normals;
   o.weld = weld;
   return o;
-}
-
-// Signed volume enclosed by a closed triangle mesh (divergence theorem):
-// positive when the triangles face outward.
-double enclosed_volume(const SurfaceMesh& m) {
-  double v = 0;
-  for (Id t = 0; t < m.num_cells(); ++t) {
-    const float* a = &m.points[3 * m.connectivity[3 * t]];
-    const float* b = &m.points[3 * m.connectivity[3 * t + 1]];
-    const float* c = &m.points[3 * m.connectivity[3 * t + 2]];
-    v += (double(a[0]) * (double(b[1]) * c[2] - double(b[2]) * c[1]) -
-          double(a[1]) * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
-          double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0])) / 6.0;
-  }
-  return v;
 }
 
 // Every directed edge used once and its reverse once: consistent winding.

@@ -7,8 +7,10 @@
 #include "keymesh/analyze/topology.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "mesh_measures.hpp"
 
 using namespace keymesh;
+using test::enclosed_volume;
 
 namespace {
 
@@ -22,17 +24,6 @@ ImageGrid label_map(std::array<Id, 3> n, F&& f) {
     for (Id j = 0; j < n[1]; ++j)
       for (Id i = 0; i < n[0]; ++i) v[i + n[0] * (j + n[1] * k)] = static_cast<std::uint8_t>(f(i, j, k));
   return g;
-}
-
-double enclosed_volume(const SurfaceMesh& m) {
-  double v = 0;
-  for (Id t = 0; t < m.num_cells(); ++t) {
-    const float* a = &m.points[3 * m.connectivity[3 * t]];
-    const float* b = &m.points[3 * m.connectivity[3 * t + 1]];
-    const float* c = &m.points[3 * m.connectivity[3 * t + 2]];
-    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  return v / 6;
 }
 
 generate::LabelOptions unsmoothed(generate::LabelMethod method = generate::LabelMethod::SurfaceNets) {
