@@ -74,6 +74,46 @@ void apply_transforms(const json& list, std::vector<double>& scale, std::vector<
 class ZarrPlanes : public generate::PlaneSource {
  public:
   explicit ZarrPlanes(const std::string& folder) : folder_(folder) {
+    // A metadata value of the wrong JSON type (a string where a number is
+    // due) surfaces as nlohmann's type_error: named as bad metadata.
+    try {
+      parse_metadata();
+    } catch (const json::exception& e) {
+      throw InputError(folder + ": Zarr metadata of an unexpected type (" + e.what() + ")");
+    }
+  }
+
+  const ImageGrid& header() const override { return head_; }
+
+  void read_planes(Id first, Id count, std::byte* out) override {
+    const std::size_t n = shape_.size();
+    const Id nx = head_.dims[0], ny = head_.dims[1];
+    const Id cz = chunks_[n - 3], cy = chunks_[n - 2], cx = chunks_[n - 1];
+    const std::size_t size = scalar_size(head_.type);
+    std::vector<std::byte> chunk(static_cast<std::size_t>(chunk_bytes_));
+    for (Id iz = first / cz; iz * cz < first + count; ++iz)
+      for (Id iy = 0; iy * cy < ny; ++iy)
+        for (Id ix = 0; ix * cx < nx; ++ix) {
+          decode_chunk({iz, iy, ix}, chunk);
+          const Id z0 = std::max(first, iz * cz), z1 = std::min(first + count, (iz + 1) * cz);
+          const Id y1 = std::min(ny, (iy + 1) * cy), x1 = std::min(nx, (ix + 1) * cx);
+          const std::size_t run = static_cast<std::size_t>(x1 - ix * cx) * size;
+          for (Id z = z0; z < z1; ++z)
+            for (Id y = iy * cy; y < y1; ++y) {
+              const std::size_t src = static_cast<std::size_t>(((z - iz * cz) * cy + (y - iy * cy)) * cx) * size;
+              const std::size_t dst = static_cast<std::size_t>(((z - first) * ny + y) * nx + ix * cx) * size;
+              std::memcpy(out + dst, chunk.data() + src, run);
+            }
+        }
+    if (swap_) {
+      const std::size_t total = static_cast<std::size_t>(count * nx * ny) * size;
+      for (std::size_t i = 0; i < total; i += size) std::reverse(out + i, out + i + size);
+    }
+  }
+
+ private:
+  void parse_metadata() {
+    const std::string& folder = folder_;
     fs::path array = folder;
     const json* level_transforms = nullptr;
     const json* multiscale = nullptr;
@@ -135,35 +175,6 @@ class ZarrPlanes : public generate::PlaneSource {
     }
   }
 
-  const ImageGrid& header() const override { return head_; }
-
-  void read_planes(Id first, Id count, std::byte* out) override {
-    const std::size_t n = shape_.size();
-    const Id nx = head_.dims[0], ny = head_.dims[1];
-    const Id cz = chunks_[n - 3], cy = chunks_[n - 2], cx = chunks_[n - 1];
-    const std::size_t size = scalar_size(head_.type);
-    std::vector<std::byte> chunk(static_cast<std::size_t>(chunk_bytes_));
-    for (Id iz = first / cz; iz * cz < first + count; ++iz)
-      for (Id iy = 0; iy * cy < ny; ++iy)
-        for (Id ix = 0; ix * cx < nx; ++ix) {
-          decode_chunk({iz, iy, ix}, chunk);
-          const Id z0 = std::max(first, iz * cz), z1 = std::min(first + count, (iz + 1) * cz);
-          const Id y1 = std::min(ny, (iy + 1) * cy), x1 = std::min(nx, (ix + 1) * cx);
-          const std::size_t run = static_cast<std::size_t>(x1 - ix * cx) * size;
-          for (Id z = z0; z < z1; ++z)
-            for (Id y = iy * cy; y < y1; ++y) {
-              const std::size_t src = static_cast<std::size_t>(((z - iz * cz) * cy + (y - iy * cy)) * cx) * size;
-              const std::size_t dst = static_cast<std::size_t>(((z - first) * ny + y) * nx + ix * cx) * size;
-              std::memcpy(out + dst, chunk.data() + src, run);
-            }
-        }
-    if (swap_) {
-      const std::size_t total = static_cast<std::size_t>(count * nx * ny) * size;
-      for (std::size_t i = 0; i < total; i += size) std::reverse(out + i, out + i + size);
-    }
-  }
-
- private:
   [[noreturn]] void fail(const std::string& what) const { throw InputError(folder_ + ": .zarray: " + what); }
 
   void parse_zarray(const json& z) {
@@ -189,6 +200,11 @@ class ZarrPlanes : public generate::PlaneSource {
     const std::string sep = z.value("dimension_separator", std::string("."));
     if (sep != "." && sep != "/") fail("dimension_separator '" + sep + "'");
     separator_ = sep[0];
+    // zarr's NestedDirectoryStore wrote '/'-separated chunks before the
+    // key existed: reading them as '.' would find no chunk and return an
+    // array of fill_value.
+    std::error_code ec;
+    if (!z.contains("dimension_separator") && fs::is_directory(fs::path(array_) / "0", ec)) separator_ = '/';
 
     if (!z.contains("dtype") || !z["dtype"].is_string()) fail("dtype is not a simple type string");
     const std::string dtype = z["dtype"].get<std::string>();
