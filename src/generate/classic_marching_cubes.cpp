@@ -84,6 +84,20 @@ int classic_corner_of_bits(int bits) {
   return -1;
 }
 
+// parallel::for_each over [0, n) in up to 8 consecutive blocks, reporting
+// `stage` after each (at fractions f0..f1), so that a large volume's long
+// stages can be followed and abandoned between blocks (core/progress.hpp:
+// never from inside the parallel loop). Same work, same result.
+template <class F>
+void for_each_reporting(Id n, const char* stage, double f0, double f1, Id min_per_chunk, F&& f) {
+  const Id blocks = std::clamp<Id>(n / 256, 1, 8);
+  for (Id b = 0; b < blocks; ++b) {
+    const Id lo = n * b / blocks, hi = n * (b + 1) / blocks;
+    parallel::for_each(hi - lo, [&](Id i) { f(lo + i); }, min_per_chunk);
+    progress::report(stage, f0 + (f1 - f0) * static_cast<double>(b + 1) / static_cast<double>(blocks));
+  }
+}
+
 }  // namespace
 
 ClassicTable classic_table() {
@@ -125,7 +139,7 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
   g.pz = g.cz + 1;
   const double level = o.level;
 
-  progress::report("marching cubes: classify", 0.0);
+  progress::report("marching cubes: inside", 0.0);
   // 0. Which coarse points are inside (one byte each): the cases below are
   // read from these instead of from eight samples per cube, twice.
   std::vector<std::uint8_t> above(static_cast<std::size_t>(g.px * g.py * g.pz));
@@ -141,7 +155,7 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
   std::vector<std::uint64_t> row_first(static_cast<std::size_t>(rows) + 1, 0);
   int triangles_of_case[256];
   for (int c = 0; c < 256; ++c) triangles_of_case[c] = triangle_count(table, c);
-  parallel::for_each(rows, [&](Id r) {
+  for_each_reporting(rows, "marching cubes: classify", 0.0, 0.25, 1, [&](Id r) {
     const Id Y = r % g.cy, Z = r / g.cy;
     std::uint64_t n = 0;
     for (Id X = 0; X < g.cx; ++X) {
@@ -149,7 +163,7 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
       n += static_cast<std::uint64_t>(triangles_of_case[cube_case(above, g, X, Y, Z)]);
     }
     row_first[r] = n;
-  }, 1);
+  });
   const std::uint64_t triangles = parallel::exclusive_scan(row_first.data(), row_first.data(), rows);
   row_first[rows] = triangles;
   constexpr std::uint64_t kMaxCorners = std::numeric_limits<std::int32_t>::max();
@@ -157,11 +171,10 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
     throw LimitError("marching cubes: " + std::to_string(triangles) + " triangles exceed the 2^31 - 1 corners of int32 faces");
   const Id corners = static_cast<Id>(3 * triangles);
 
-  progress::report("marching cubes: generate", 0.25);
   // 2. The soup, in scikit-image's order: every corner's edge key, and where
   // it came from (cube index * 16 + classic edge) for the reduction.
   std::vector<std::uint64_t> keys(static_cast<std::size_t>(corners)), origin(static_cast<std::size_t>(corners));
-  parallel::for_each(rows, [&](Id r) {
+  for_each_reporting(rows, "marching cubes: generate", 0.25, 0.5, 1, [&](Id r) {
     const Id Y = r % g.cy, Z = r / g.cy;
     const Id y = Y * g.step, z = Z * g.step;
     std::uint64_t at = 3 * row_first[r];
@@ -179,7 +192,7 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
         ++at;
       }
     }
-  }, 1);
+  });
 
   progress::report("marching cubes: weld", 0.5);
   // 3. KEY-REDUCE: one group per edge; pairs in scan order within a group.
@@ -203,7 +216,7 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
   });
   first_use = {};
 
-  progress::report("marching cubes: points", 0.7);
+  progress::report("marching cubes: number points", 0.6);
   // 5. Per point: position from its edge, normal and value from its corners.
   ClassicMarchingCubes out;
   out.vertices.resize(static_cast<std::size_t>(3 * points));
@@ -221,7 +234,7 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
           if (b != a && kCorner[k][b] != kCorner[c][b]) same = false;
         if (same) (kCorner[k][a] == 0 ? g_low[c][a] : g_high[c][a]) = k;
       }
-  parallel::for_each(points, [&](Id p) {
+  for_each_reporting(points, "marching cubes: points", 0.7, 0.95, 256, [&](Id p) {
     const std::uint64_t key = groups.unique_keys[p];
     const int axis = static_cast<int>(key % 3);
     const Id point = static_cast<Id>(key / 3);
@@ -279,9 +292,8 @@ ClassicMarchingCubes classic_marching_cubes(const float* volume, std::array<Id, 
       out.normals[3 * at + a] = static_cast<float>(static_cast<double>(n[2 - a]) * length);
     }
     out.values[at] = value;
-  }, 256);
+  });
 
-  progress::report("marching cubes: faces", 0.95);
   // 6. Faces: the index map renumbered; "descent" reverses every triangle.
   out.faces.resize(static_cast<std::size_t>(corners));
   parallel::for_each(static_cast<Id>(triangles), [&](Id t) {

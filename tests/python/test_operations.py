@@ -191,8 +191,13 @@ def test_progress_reports_stages(surface):
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
     assert [s for s, _ in seen][:3] == ["subdivide level 1/3", "subdivide level 2/3", "subdivide level 3/3"]
     seen.clear()
-    keymesh.marching_cubes(sphere_field(), 10.5, progress=lambda s, f: seen.append(s))
-    assert seen[0].startswith("marching cubes") and seen[-1] == "marching cubes"
+    keymesh.marching_cubes(sphere_field((64, 70, 66), (30.2, 33.1, 31.7)), 20.5,
+                           progress=lambda s, f: seen.append((s, f)))
+    stages = [s for s, _ in seen]
+    assert stages[0].startswith("marching cubes") and stages[-1] == "marching cubes"
+    assert stages.count("marching cubes: classify") == 8       # long stages report per block
+    fractions = [f for _, f in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
 
 
 def test_callback_exception_abandons_the_call(surface):
