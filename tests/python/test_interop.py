@@ -126,3 +126,35 @@ def test_from_vtk_refuses_other_types():
 
     with pytest.raises(TypeError, match="vtkImageData"):
         keymesh.from_vtk(vtkImageData())
+
+
+def test_shared_arrays_outlive_their_first_owner():
+    """The VTK object keeps the numpy memory it views alive after the Mesh
+    or Grid is gone, and the views from_vtk returns keep VTK's arrays alive
+    after the VTK object is gone (no dangling memory either way)."""
+    import gc
+
+    from vtkmodules.vtkFiltersCore import vtkCleanPolyData
+
+    i, j, k = np.indices((20, 21, 22), dtype=np.float32)
+    mesh = keymesh.contour(np.sqrt((i - 9.7) ** 2 + (j - 10.2) ** 2 + (k - 11.1) ** 2), 6.5)
+    points, cells = mesh.points.copy(), np.asarray(mesh.cells, np.int64).copy()
+    poly = mesh.to_vtk()
+    del mesh
+    gc.collect()
+    junk = [np.full(len(points) * 3, 7.0, np.float32) for _ in range(20)]  # reuse freed memory, if any
+    clean = vtkCleanPolyData()
+    clean.SetInputData(poly)
+    clean.Update()
+    out = clean.GetOutput()   # VTK reads the shared memory (it renumbers points by first use)
+    assert out.GetNumberOfPoints() == len(points) and out.GetNumberOfCells() == len(cells)
+    assert np.array_equal(np.unique(vtk_np.vtk_to_numpy(out.GetPoints().GetData()), axis=0),
+                          np.unique(points, axis=0))
+    assert np.array_equal(vtk_np.vtk_to_numpy(poly.GetPoints().GetData()), points)
+    assert np.array_equal(vtk_np.vtk_to_numpy(poly.GetPolys().GetConnectivityArray()), cells.reshape(-1))
+    back = keymesh.from_vtk(poly)
+    del poly, clean, out
+    gc.collect()
+    junk += [np.full(len(points) * 3, 7.0, np.float32) for _ in range(20)]
+    assert np.array_equal(back.points, points) and np.array_equal(np.asarray(back.cells, np.int64), cells)
+    assert keymesh.check(back)["closed_manifold"]
