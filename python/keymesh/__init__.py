@@ -299,11 +299,21 @@ def from_meshio(mesh) -> Union[Mesh, Grid]:
     return _interop.from_meshio(mesh, Mesh, Grid)
 
 
-def from_vtk(obj) -> Union[Mesh, Grid]:
+def from_vtk(obj) -> Union[Mesh, Grid, Volume]:
     """A Mesh from a vtkPolyData, a Grid from a vtkUnstructuredGrid, viewing
-    VTK's arrays (no copy)."""
+    VTK's arrays (no copy); a Volume from a vtkImageData (its point scalars
+    copied once into the Volume)."""
     from . import _interop
-    return _interop.from_vtk(obj, Mesh, Grid)
+    return _interop.from_vtk(obj, Mesh, Grid, Volume)
+
+
+def _volume_to_vtk(self):
+    """A vtkImageData whose point scalars view this Volume's samples (no copy)."""
+    from . import _interop
+    return _interop.volume_to_vtk(self)
+
+
+Volume.to_vtk = _volume_to_vtk
 
 from ._labels import LabelMesh, contour_labels  # noqa: E402  (label maps: python/keymesh/_labels.py)
 __all__ += ["contour_labels", "LabelMesh"]

@@ -10,7 +10,8 @@ What is shared and what is copied, and why:
   grid are new arrays, m + 1 ids and m bytes. Other dtypes are converted
   (a copy) because VTK needs them as such.
 - from_vtk: every array is a numpy view of VTK's memory (vtk_to_numpy);
-  the views keep the VTK arrays alive. Triangle and tet connectivity is
+  the views keep the VTK arrays alive. A vtkImageData becomes a Volume,
+  which owns its samples: one copy (Volume.to_vtk shares them the other way). Triangle and tet connectivity is
   reshaped (a view) to (m, 3) / (m, 4).
 - meshio: meshio.Mesh and its CellBlocks keep the arrays given (no copy) both
   ways; polygon meshes of mixed sizes are regrouped by size (a gather).
@@ -272,14 +273,48 @@ def grid_from_meshio(cls, m):
     return cls(np.asarray(m.points), flat, offsets=offsets, cell_types=types, point_data=data, cell_data=cd)
 
 
-def from_vtk(obj, mesh_cls, grid_cls):
-    """A Mesh from a vtkPolyData, a Grid from a vtkUnstructuredGrid."""
+# -- image data (volumes) --------------------------------------------------
+
+def volume_to_vtk(volume):
+    """A vtkImageData whose point scalars view the Volume's samples (x
+    fastest in both, so no copy); the VTK array keeps the Volume alive."""
+    from vtkmodules.util import numpy_support as ns
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+
+    image = vtkImageData()
+    image.SetDimensions(*volume.shape)
+    image.SetSpacing(*volume.spacing)
+    image.SetOrigin(*volume.origin)
+    samples = volume.array.reshape(-1, order="F")   # a view: the array is Fortran-ordered
+    scalars = ns.numpy_to_vtk(samples, deep=False)
+    scalars.SetName(volume.name)
+    image.GetPointData().SetScalars(scalars)
+    return image
+
+
+def volume_from_vtk(volume_cls, image):
+    """A keymesh.Volume from a vtkImageData's point scalars (one copy: a
+    Volume owns its samples), spacing and origin."""
+    from vtkmodules.util import numpy_support as ns
+
+    scalars = image.GetPointData().GetScalars()
+    if scalars is None or scalars.GetNumberOfComponents() != 1:
+        raise ValueError("from_vtk: the vtkImageData needs one-component point scalars")
+    dims = image.GetDimensions()
+    samples = ns.vtk_to_numpy(scalars).reshape(dims, order="F")
+    return volume_cls(samples, image.GetSpacing(), image.GetOrigin(), scalars.GetName() or "scalars")
+
+
+def from_vtk(obj, mesh_cls, grid_cls, volume_cls):
+    """A Mesh from a vtkPolyData, a Grid from a vtkUnstructuredGrid, a Volume from a vtkImageData."""
     name = obj.GetClassName() if hasattr(obj, "GetClassName") else type(obj).__name__
     if name == "vtkPolyData":
         return mesh_from_vtk(mesh_cls, obj)
     if name == "vtkUnstructuredGrid":
         return grid_from_vtk(grid_cls, obj)
-    raise TypeError(f"from_vtk: expected a vtkPolyData or vtkUnstructuredGrid, got {name}")
+    if name in ("vtkImageData", "vtkStructuredPoints"):
+        return volume_from_vtk(volume_cls, obj)
+    raise TypeError(f"from_vtk: expected a vtkPolyData, vtkUnstructuredGrid or vtkImageData, got {name}")
 
 
 def from_meshio(m, mesh_cls, grid_cls):
