@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "command.hpp"
+#include "keymesh/io/output_transaction.hpp"
 #include "keymesh/analyze/topology.hpp"
 #include "keymesh/io/mesh_io.hpp"
 
@@ -57,6 +58,8 @@ Register reg{Command{
           write_report(o->common.report_path, r);
         }
         if (o->expect_closed && !t.closed_manifold) {
+          // The check itself ran: its report is written though the exit is 1.
+          if (io::OutputTransaction* outputs = io::OutputTransaction::current()) outputs->commit();
           std::fprintf(stderr, "keymesh: %s is not a closed 2-manifold\n", o->input.c_str());
           return 1;
         }

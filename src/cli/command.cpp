@@ -1,23 +1,78 @@
 #include "command.hpp"
 
 #include <sys/resource.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
 
+#include "keymesh/core/work_estimate.hpp"
 #include "keymesh/io/atomic_file.hpp"
+#include "keymesh/io/input_file.hpp"
 #include "keymesh/parallel/threads.hpp"
 
 namespace keymesh::cli {
 
 void add_common_options(CLI::App& cmd, CommonOptions& common) {
-  cmd.add_option("--threads", common.threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  cmd.add_option("--threads", common.threads,
+                 "worker threads, 0.." + std::to_string(parallel::kMaxThreads) + " (0 = all cores)")
+      ->check(CLI::Range(0, parallel::kMaxThreads));
   cmd.add_option("--report", common.report_path, "write a JSON report of counts and per-stage seconds");
   cmd.add_flag("--quiet,-q", common.quiet, "no progress messages on stderr");
+  cmd.add_option("--max-memory", common.max_memory,
+                 "refuse work estimated to need more than SIZE bytes (e.g. 8G; default: this machine's memory, "
+                 "or the address-space limit when lower)")
+      ->check(size_validator());
   cmd.add_option("--backend", common.backend, "cpu (threads) or cuda (NVIDIA GPU; output identical to cpu)")
       ->check(CLI::IsMember({"cpu", "cuda"}));
+}
+
+bool parse_size(const std::string& text, std::size_t& out) {
+  // Digits only: std::stoull would accept "-5" and wrap it to 2^64 - 5.
+  std::size_t digits = 0;
+  while (digits < text.size() && std::isdigit(static_cast<unsigned char>(text[digits]))) ++digits;
+  if (digits == 0 || digits > 20) return false;
+  unsigned long long v = 0;
+  try {
+    v = std::stoull(text.substr(0, digits));
+  } catch (...) {
+    return false;
+  }
+  const std::string unit = text.substr(digits);
+  int shift = 0;
+  if (unit == "K" || unit == "k" || unit == "KiB") shift = 10;
+  else if (unit == "M" || unit == "MiB") shift = 20;
+  else if (unit == "G" || unit == "GiB") shift = 30;
+  else if (unit == "T" || unit == "TiB") shift = 40;
+  else if (!unit.empty()) return false;
+  if (v > (~0ull >> shift)) return false;
+  out = static_cast<std::size_t>(v << shift);
+  return out > 0;
+}
+
+CLI::Validator size_validator() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        std::size_t bytes = 0;
+        return parse_size(text, bytes) ? std::string()
+                                       : "'" + text + "' is not a size (a positive number of bytes, or e.g. 64K, "
+                                                      "512M, 2G)";
+      },
+      "SIZE");
+}
+
+std::uint64_t memory_budget(const CommonOptions& common) {
+  std::size_t bytes = 0;
+  if (!common.max_memory.empty() && parse_size(common.max_memory, bytes)) return bytes;
+  return default_memory_budget();
+}
+
+std::uint64_t field_components(const std::vector<Field>& fields) {
+  std::uint64_t n = 0;
+  for (const Field& f : fields) n += static_cast<std::uint64_t>(std::max(f.components, 0));
+  return n;
 }
 
 int require_cpu_backend(const CommonOptions& common, const char* what) {
@@ -77,6 +132,50 @@ bool is_mesh_path(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".vtp" || ext == ".pvtp" || ext == ".glb";
+}
+
+namespace {
+// /dev/null given as both -o and --report is fine: a device is written in place.
+bool is_device(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode));
+}
+}  // namespace
+
+// The (option, path) pairs a command was given: its inputs first.
+std::vector<std::pair<std::string, std::string>> given_paths(const CLI::App& cmd, bool outputs) {
+  std::vector<std::pair<std::string, std::string>> paths;
+  for (const char* name : {"input", "mesh", "file", "--output", "--report"}) {
+    if (!outputs && name[0] == '-') break;
+    if (const CLI::Option* opt = cmd.get_option_no_throw(name))
+      for (const std::string& value : opt->results())
+        if (!value.empty()) paths.emplace_back(opt->get_name(), value);
+  }
+  return paths;
+}
+
+std::string error_line(const CLI::App* cmd, const std::string& message) {
+  if (!cmd) return message;
+  const auto paths = given_paths(*cmd, true);
+  for (const auto& [option, path] : paths)
+    if (message.find(path) != std::string::npos) return message;
+  const auto inputs = given_paths(*cmd, false);
+  return inputs.empty() ? message : inputs.front().second + ": " + message;
+}
+
+int refuse_shared_paths(const CLI::App& cmd) {
+  std::vector<std::pair<std::string, std::string>> paths;  // (option, path)
+  for (auto& [option, path] : given_paths(cmd, true))
+    if (!is_device(path)) paths.emplace_back(option, path);
+  for (std::size_t i = 0; i < paths.size(); ++i)
+    for (std::size_t j = i + 1; j < paths.size(); ++j)
+      if (io::same_file(paths[i].second, paths[j].second)) {
+        std::fprintf(stderr, "keymesh %s: %s %s and %s %s name the same file\n", cmd.get_name().c_str(),
+                     paths[i].first.c_str(), paths[i].second.c_str(), paths[j].first.c_str(),
+                     paths[j].second.c_str());
+        return 2;
+      }
+  return 0;
 }
 
 std::vector<Command>& registry() {

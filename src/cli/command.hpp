@@ -4,12 +4,15 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "keymesh/core/progress.hpp"
+#include "keymesh/core/work_estimate.hpp"
+#include "keymesh/mesh/surface_mesh.hpp"
 
 namespace keymesh::cli {
 
@@ -19,7 +22,21 @@ struct CommonOptions {
   std::string report_path;  // --report
   bool quiet = false;       // --quiet
   std::string backend = "cpu";  // --backend cpu|cuda
+  std::string max_memory;       // --max-memory SIZE; empty: the machine's memory
 };
+
+// "123", "64K", "256M", "2G" (powers of 1024; also KiB, MiB, GiB, T, TiB) ->
+// bytes; false for anything else, zero and values past 2^64 - 1 included.
+bool parse_size(const std::string& text, std::size_t& out);
+
+// A CLI11 check for options that take a size: refused with exit 2 otherwise.
+CLI::Validator size_validator();
+
+// Float values per point of a mesh's fields (for work estimates).
+std::uint64_t field_components(const std::vector<Field>& fields);
+
+// Bytes the command may use: --max-memory, or default_memory_budget().
+std::uint64_t memory_budget(const CommonOptions& common);
 
 // For subcommands with no GPU path yet: 0 when --backend is cpu, otherwise
 // prints why and returns 1 (refused by name, as the backend contract says).
@@ -87,6 +104,19 @@ long long file_size(const std::string& path);
 
 // True when the path's extension names a mesh format (.ply .obj .stl .vtp).
 bool is_mesh_path(const std::string& path);
+
+// Refuses (exit 2, one line) a command whose input, -o/--output and --report
+// name the same file in any pair: compared by device and inode, and for
+// outputs that do not exist yet by resolved directory and name. Looks for
+// the options by name (positional "input", "mesh" or "file"; "--output",
+// "--report"), so a new subcommand that uses these names is covered.
+int refuse_shared_paths(const CLI::App& cmd);
+
+// The error line for a failure of `cmd`: the message as it is when it names
+// one of the command's paths, otherwise prefixed with the input path
+// ("quality: cell 0 is not a triangle" -> "<file>: quality: cell 0 ..."), so
+// every line says which file it concerns.
+std::string error_line(const CLI::App* cmd, const std::string& message);
 
 // A subcommand: set up its options on `app`, and the function run when chosen.
 struct Command {

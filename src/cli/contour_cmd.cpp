@@ -19,27 +19,6 @@ namespace keymesh::cli {
 
 namespace {
 
-// "123", "64K", "256M", "2G" (powers of 1024) -> bytes.
-bool parse_size(const std::string& text, std::size_t& out) {
-  if (text.empty()) return false;
-  std::size_t pos = 0;
-  unsigned long long v = 0;
-  try {
-    v = std::stoull(text, &pos);
-  } catch (...) {
-    return false;
-  }
-  const std::string unit = text.substr(pos);
-  int shift = 0;
-  if (unit == "K" || unit == "k" || unit == "KiB") shift = 10;
-  else if (unit == "M" || unit == "MiB") shift = 20;
-  else if (unit == "G" || unit == "GiB") shift = 30;
-  else if (!unit.empty()) return false;
-  if (v > (~0ull >> shift)) return false;
-  out = static_cast<std::size_t>(v << shift);
-  return out > 0;
-}
-
 struct ContourCli {
   std::string input, output;
   std::vector<double> isovalues;
@@ -89,7 +68,18 @@ Register reg{Command{
                    "merge the points nearest to one grid point (key = nearest input point on the edge), "
                    "averaging positions and fields; drop collapsed triangles");
       auto* dims = cmd.add_option("--dims", o->dims, "raw input: points along x y z")->expected(3);
-      cmd.add_option("--type", o->type, "raw input: uint8 int8 uint16 int16 int32 float32 float64")->needs(dims);
+      cmd.add_option("--type", o->type, "raw input: uint8 int8 uint16 int16 int32 float32 float64")
+          ->check(CLI::Validator(
+              [](std::string& text) -> std::string {
+                try {
+                  parse_scalar_type(text);
+                  return {};
+                } catch (const std::exception& e) {
+                  return e.what();
+                }
+              },
+              "TYPE"))
+          ->needs(dims);
       cmd.add_option("--spacing", o->spacing, "raw input: voxel spacing x y z")->expected(3)->needs(dims);
       cmd.add_option("--origin", o->origin, "raw input: origin x y z")->expected(3)->needs(dims);
       cmd.add_option("--endian", o->endian, "raw input: little or big")
@@ -99,7 +89,8 @@ Register reg{Command{
       cmd.add_option("--memory-limit", o->memory_limit,
                      "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
                      "the output is byte-identical (averaged normals: within float rounding); raw (--dims), "
-                     ".nrrd/.nhdr or .nii with uncompressed samples; no --coarsen");
+                     ".nrrd/.nhdr or .nii with uncompressed samples; no --coarsen")
+          ->check(size_validator());
       cmd.add_flag("--gather", o->gather,
                    "under mpirun: gather the whole mesh on rank 0 into one file (the default unless OUT is .pvtp, "
                    "which writes one OUT_<rank>.vtp piece per rank with GlobalPointIds)");
@@ -179,11 +170,7 @@ Register reg{Command{
         }
         if (!o->memory_limit.empty()) {
           std::size_t limit = 0;
-          if (!parse_size(o->memory_limit, limit)) {
-            std::fprintf(stderr, "keymesh contour: --memory-limit %s is not a size (e.g. 512M, 2G)\n",
-                         o->memory_limit.c_str());
-            return 2;
-          }
+          parse_size(o->memory_limit, limit);  // checked by its validator
           auto source = io::open_volume_planes(o->input, is_raw ? &raw : nullptr);
           generate::StreamStats ss;
           mesh = timer.run("contour", [&] { return generate::contour_streamed(*source, opt, limit, &stats, &ss); });

@@ -9,6 +9,7 @@
 #include "command.hpp"
 #include "keymesh/core/huge_pages.hpp"
 #include "keymesh/distributed/mpi.hpp"
+#include "keymesh/io/output_transaction.hpp"
 
 int main(int argc, char** argv) {
   keymesh::reexec_with_huge_pages(argc, argv);
@@ -45,9 +46,11 @@ int main(int argc, char** argv) {
                          "(install libopenmpi-dev and rebuild)\n", dist::launched_size());
     return 2;
   }
+  const CLI::App* chosen_command = nullptr;
   try {
     for (auto& [sub, run] : runners)
       if (sub->parsed()) {
+        chosen_command = sub;
         // Only the voxel contour is distributed; the other operations would
         // each run whole on every rank and race on the output.
         if (dist::size() > 1 && sub->get_name() != "contour") {
@@ -57,15 +60,20 @@ int main(int argc, char** argv) {
                          sub->get_name().c_str(), dist::size(), sub->get_name().c_str());
           return 2;
         }
-        return run();
+        if (int rc = keymesh::cli::refuse_shared_paths(*sub)) return rc;
+        // Every file the command writes appears only if it succeeds.
+        keymesh::io::OutputTransaction outputs;
+        const int rc = run();
+        if (rc == 0) outputs.commit();
+        return rc;
       }
     return 2;
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "keymesh: out of memory\n");
+    std::fprintf(stderr, "keymesh: %s\n", keymesh::cli::error_line(chosen_command, "out of memory").c_str());
     if (keymesh::distributed::size() > 1) keymesh::distributed::abort_all(1);  // the other ranks wait on us
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "keymesh: %s\n", e.what());
+    std::fprintf(stderr, "keymesh: %s\n", keymesh::cli::error_line(chosen_command, e.what()).c_str());
     if (keymesh::distributed::size() > 1) keymesh::distributed::abort_all(1);
     return 1;
   }

@@ -12,6 +12,9 @@ namespace keymesh::cli {
 
 namespace {
 
+// Point ids are 32-bit (PointIndex) in the subdivided output.
+constexpr std::uint64_t kMaxPoints = 0xFFFFFFFFull;
+
 struct SubdivideCli {
   std::string input, output;
   int levels = 1;
@@ -56,11 +59,18 @@ Register reg{Command{
         Id points = 0, cells = 0, in_points = 0, in_cells = 0;
         if (grid_in) {
           const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o->input); });
+          check_work(estimate_subdivide_tets(g.num_points(), g.num_cells(), o->levels, field_components(g.point_fields)),
+                     memory_budget(o->common), o->input + ": subdivide --levels " + std::to_string(o->levels),
+                     kMaxPoints);
           const UnstructuredGrid s = timer.run("subdivide", [&] { return generate::subdivide(g, opt); });
           timer.run("write", [&] { io::write_grid(s, o->output); });
           in_points = g.num_points(), in_cells = g.num_cells(), points = s.num_points(), cells = s.num_cells();
         } else {
           const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o->input); });
+          check_work(estimate_subdivide_triangles(m.num_points(), m.num_cells(), o->levels,
+                                                  field_components(m.point_fields)),
+                     memory_budget(o->common), o->input + ": subdivide --levels " + std::to_string(o->levels),
+                     kMaxPoints, kMaxPoints / 3);
           const SurfaceMesh s = timer.run("subdivide", [&] { return generate::subdivide(m, opt); });
           timer.run("write", [&] { io::write_mesh(s, o->output); });
           in_points = m.num_points(), in_cells = m.num_cells(), points = s.num_points(), cells = s.num_cells();

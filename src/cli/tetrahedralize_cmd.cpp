@@ -1,5 +1,6 @@
 // keymesh tetrahedralize IN -o OUT.vtu --scheme 5|24: hexahedra (voxels of a
 // volume, or hexahedral cells of a .vtu/.vtk) split into tetrahedra.
+#include <algorithm>
 #include <cstdio>
 
 #include "command.hpp"
@@ -44,6 +45,9 @@ Register reg{Command{
         nlohmann::json r;
         if (io::is_grid_file(o->input)) {
           const UnstructuredGrid hexes = timer.run("read", [&] { return io::read_grid(o->input); });
+          check_work(estimate_tetrahedralize(hexes.num_points(), hexes.num_cells(), o->scheme,
+                                             field_components(hexes.point_fields)),
+                     memory_budget(o->common), o->input + ": tetrahedralize --scheme " + std::to_string(o->scheme));
           tets = timer.run("tetrahedralize", [&] {
             return o->scheme == 24 ? generate::tetrahedralize24(hexes, o->weld == "vertexweld")
                                    : generate::tetrahedralize5(hexes);
@@ -51,6 +55,13 @@ Register reg{Command{
           r["input_cells"] = hexes.num_cells();
         } else {
           const ImageGrid grid = timer.run("read", [&] { return io::read_volume(o->input); });
+          const auto voxels = [&] {
+            std::uint64_t n = 1;
+            for (Id d : grid.dims) n = saturating_mul(n, static_cast<std::uint64_t>(std::max<Id>(d - 1, 0)));
+            return n;
+          }();
+          check_work(estimate_tetrahedralize(static_cast<std::uint64_t>(grid.num_points()), voxels, o->scheme, 1),
+                     memory_budget(o->common), o->input + ": tetrahedralize --scheme " + std::to_string(o->scheme));
           progress.enable_if(grid.num_points() > (1ll << 24));
           progress.say("tetrahedralizing " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
                        std::to_string(grid.dims[2]));

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
 namespace keymesh {
 
@@ -44,6 +46,29 @@ ScalarType parse_scalar_type(const std::string& raw) {
   if (t == "float64" || t == "double" || t == "f64") return ScalarType::Float64;
   throw InputError("unknown scalar type '" + raw +
                    "' (expected uint8, int8, uint16, int16, int32, float32 or float64)");
+}
+
+void check_float32_geometry(const std::array<Id, 3>& dims, const std::array<double, 3>& origin,
+                            const std::array<double, 3>& spacing, const std::string& what) {
+  constexpr double kMax = std::numeric_limits<float>::max();
+  const char* axis = "xyz";
+  auto text = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return std::string(b);
+  };
+  for (int a = 0; a < 3; ++a) {
+    if (!(std::fabs(origin[a]) <= kMax))
+      throw InputError(what + ": origin " + axis[a] + " = " + text(origin[a]) + " is not a finite float32");
+    if (!(std::fabs(spacing[a]) <= kMax))
+      throw InputError(what + ": spacing " + axis[a] + " = " + text(spacing[a]) + " is not a finite float32");
+    // The far corner; the points between lie between it and the origin.
+    const double last = origin[a] + spacing[a] * static_cast<double>(std::max<Id>(dims[a] - 1, 0));
+    if (!(std::fabs(last) <= kMax))
+      throw InputError(what + ": point " + std::to_string(std::max<Id>(dims[a] - 1, 0)) + " along " + axis[a] +
+                       " lies at " + text(last) + " (origin " + text(origin[a]) + " + spacing " + text(spacing[a]) +
+                       " x " + std::to_string(std::max<Id>(dims[a] - 1, 0)) + "), past float32's range");
+  }
 }
 
 void ImageGrid::allocate(std::array<Id, 3> new_dims, ScalarType new_type) {

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/io/output_transaction.hpp"
 
 namespace keymesh::io {
 
@@ -53,6 +54,12 @@ void AtomicFile::commit() {
   if (rc != 0) throw InputError(path_ + ": write failed: " + errno_text());
   if (in_place_) {
     committed_ = true;
+    return;
+  }
+  if (OutputTransaction* outputs = OutputTransaction::current()) {
+    // Renamed with the command's other outputs once it has succeeded.
+    committed_ = true;
+    outputs->stage(temp_path_, path_);
     return;
   }
   if (std::rename(temp_path_.c_str(), path_.c_str()) != 0)

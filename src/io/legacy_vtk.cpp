@@ -6,13 +6,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
+#include "keymesh/io/input_file.hpp"
 #include "keymesh/io/mesh_bytes.hpp"
 
 namespace keymesh::io {
@@ -260,14 +260,15 @@ std::string read_attributes(Reader& r, std::int64_t tuples, std::vector<Field>& 
 }  // namespace
 
 std::string legacy_vtk_dataset(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+  InputFile file(path);
+  std::FILE* in = file.stream();
   std::string line;
   auto get = [&] {
     // Header lines are short: a file whose first bytes hold no newline is not legacy VTK.
     line.clear();
-    char c = 0;
-    while (line.size() < 1024 && in.get(c) && c != '\n') line.push_back(c);
-    return bool(in) || !line.empty();
+    int c = 0;
+    while (line.size() < 1024 && (c = std::fgetc(in)) != EOF && c != '\n') line.push_back(static_cast<char>(c));
+    return c != EOF || !line.empty();
   };
   if (!get() || line.rfind("# vtk DataFile", 0) != 0) return "";
   for (int i = 0; i < 3 && get(); ++i) {

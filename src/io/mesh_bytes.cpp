@@ -1,5 +1,7 @@
 #include "keymesh/io/mesh_bytes.hpp"
 
+#include "keymesh/io/input_file.hpp"
+
 #include <zlib.h>
 
 #include <algorithm>
@@ -12,28 +14,7 @@
 
 namespace keymesh::io::mesh_bytes {
 
-std::string read_whole_file(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
-  std::string data;
-  // Reserve the size seek/tell reports (one allocation for a regular file),
-  // but read in chunks rather than trusting it, which fails on pipes.
-  if (std::fseek(f, 0, SEEK_END) == 0) {
-    const long size = std::ftell(f);
-    if (size > 0) data.reserve(static_cast<std::size_t>(size));
-    std::rewind(f);
-  }
-  char buffer[1 << 16];
-  for (;;) {
-    const std::size_t got = std::fread(buffer, 1, sizeof(buffer), f);
-    data.append(buffer, got);
-    if (got < sizeof(buffer)) break;
-  }
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) throw InputError(path + ": read error");
-  return data;
-}
+std::string read_whole_file(const std::string& path) { return InputFile(path).read_all(); }
 
 std::string lower_extension(const std::string& path) {
   const std::size_t slash = path.find_last_of("/\\");
@@ -291,6 +272,11 @@ void validate_mesh(const SurfaceMesh& mesh, const std::string& path) {
   if (mesh.points.size() % 3 != 0)
     throw InputError(path + ": mesh has " + std::to_string(mesh.points.size()) + " point coordinates, not a multiple of 3");
   const std::uint64_t n = mesh.points.size() / 3;
+  // 1e39, inf and nan all end up non-finite as float: refused by name, never written on.
+  for (std::size_t i = 0; i < mesh.points.size(); ++i)
+    if (!std::isfinite(mesh.points[i]))
+      throw InputError(path + ": point " + std::to_string(i / 3) + " has a non-finite coordinate " + "xyz"[i % 3] +
+                       " = " + std::to_string(mesh.points[i]));
   if (!mesh.offsets.empty()) {
     if (mesh.offsets.front() != 0 || mesh.offsets.back() != mesh.connectivity.size())
       throw InputError(path + ": mesh offsets do not span the connectivity");

@@ -18,7 +18,8 @@ constexpr const char* kAccepted = ".ply, .obj, .stl, .vtp; .pvtp to read; .glb t
 }
 }  // namespace
 
-SurfaceMesh read_mesh(const std::string& path) {
+namespace {
+SurfaceMesh read_by_extension(const std::string& path) {
   const std::string ext = mesh_bytes::lower_extension(path);
   if (ext == ".ply") return read_ply(path);
   if (ext == ".obj") return read_obj(path);
@@ -26,6 +27,14 @@ SurfaceMesh read_mesh(const std::string& path) {
   if (ext == ".vtp") return read_vtp(path);
   if (ext == ".pvtp") return read_pvtp(path);
   unknown_extension(path, ext);
+}
+}  // namespace
+
+SurfaceMesh read_mesh(const std::string& path) {
+  SurfaceMesh mesh = read_by_extension(path);
+  // What every operation relies on, non-finite coordinates included.
+  mesh_bytes::validate_mesh(mesh, path);
+  return mesh;
 }
 
 void write_mesh(const SurfaceMesh& mesh, const std::string& path) {

@@ -1,5 +1,6 @@
 // NIfTI-1 single files (.nii, .nii.gz): a 348-byte header, data at
 // vox_offset. Voxel sizes from pixdim; scl_slope/scl_inter applied.
+#include <unistd.h>
 #include <zlib.h>
 
 #include <bit>
@@ -7,18 +8,30 @@
 #include <cstring>
 #include <type_traits>
 
+#include "keymesh/io/input_file.hpp"
 #include "keymesh/io/volume_formats.hpp"
 
 namespace keymesh::io {
 
 namespace {
 
+// zlib over a file opened as every input is (regular files only).
+gzFile open_gz(const std::string& path) {
+  InputFile in(path);
+  const int fd = ::dup(fileno(in.stream()));
+  gzFile gz = fd >= 0 ? gzdopen(fd, "rb") : nullptr;
+  if (!gz) {
+    if (fd >= 0) ::close(fd);
+    throw InputError(path + ": cannot open");
+  }
+  return gz;
+}
+
 // A gzip or plain stream read with zlib (gzread passes plain files through),
 // never further than the caller asks.
 class Stream {
  public:
-  explicit Stream(const std::string& path) : path_(path), gz_(gzopen(path.c_str(), "rb")) {
-    if (!gz_) throw InputError(path + ": cannot open");
+  explicit Stream(const std::string& path) : path_(path), gz_(open_gz(path)) {
     gzbuffer(gz_, 1 << 20);
   }
   ~Stream() { gzclose(gz_); }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "keymesh/io/atomic_file.hpp"
+#include "keymesh/io/input_file.hpp"
 #include "keymesh/io/volume_formats.hpp"
 
 namespace keymesh::io {
@@ -86,14 +87,10 @@ std::vector<std::vector<double>> vectors(const std::string& path, const std::str
 // Reads `size` bytes of gzip data from `path` at `offset` (and no more).
 std::vector<std::byte> read_gzip(const std::string& path, std::uint64_t offset, std::uint64_t file_bytes,
                                  std::uint64_t size) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw InputError(path + ": cannot open");
-  if (fseeko(f, static_cast<off_t>(offset), SEEK_SET) != 0) {
-    std::fclose(f);
+  InputFile in(path);
+  if (fseeko(in.stream(), static_cast<off_t>(offset), SEEK_SET) != 0)
     throw InputError(path + ": cannot seek to the data");
-  }
-  const int fd = dup(fileno(f));
-  std::fclose(f);
+  const int fd = dup(fileno(in.stream()));
   gzFile gz = fd >= 0 ? gzdopen(fd, "rb") : nullptr;
   if (!gz) {
     if (fd >= 0) close(fd);
@@ -113,9 +110,9 @@ std::vector<std::byte> read_gzip(const std::string& path, std::uint64_t offset, 
 }  // namespace
 
 VolumeLayout nrrd_layout(const std::string& path) {
-  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw InputError(path + ": cannot open");
+  InputFile header_file(path);
+  const std::uint64_t file_bytes = header_file.size();
+  std::FILE* f = header_file.stream();
   // The header: text lines up to an empty line (or the end of a .nhdr).
   std::string magic_line;
   std::map<std::string, std::string> field;
@@ -130,7 +127,6 @@ VolumeLayout nrrd_layout(const std::string& path) {
       while ((c = std::fgetc(f)) != EOF && c != '\n') {
         line.push_back(static_cast<char>(c));
         if (line.size() > 65536) {
-          std::fclose(f);
           throw InputError(path + ": NRRD header line too long");
         }
       }
@@ -139,7 +135,6 @@ VolumeLayout nrrd_layout(const std::string& path) {
       if (first) {
         first = false;
         if (line.rfind("NRRD000", 0) != 0) {
-          std::fclose(f);
           throw InputError(path + ": not a NRRD file (no NRRD000x magic)");
         }
         magic_line = line;
@@ -157,14 +152,12 @@ VolumeLayout nrrd_layout(const std::string& path) {
       if (sep != std::string::npos && line.find(": ") == std::string::npos) continue;
       const auto colon = line.find(':');
       if (colon == std::string::npos) {
-        std::fclose(f);
         throw InputError(path + ": malformed NRRD header line '" + line.substr(0, 60) + "'");
       }
       field[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 1));
     }
     data_offset = consumed;
   }
-  std::fclose(f);
   auto get = [&](const std::string& k) -> const std::string* {
     const auto it = field.find(k);
     return it == field.end() ? nullptr : &it->second;
@@ -250,21 +243,18 @@ VolumeLayout nrrd_layout(const std::string& path) {
   if (line_skip) {
     const double v = parse_number(path, "line skip", *line_skip);
     if (v < 0 || v != std::floor(v) || v > 1e12) throw InputError(path + ": NRRD line skip " + *line_skip + " is not supported");
-    std::FILE* d = std::fopen(data_path.c_str(), "rb");
-    if (!d || fseeko(d, static_cast<off_t>(data_offset), SEEK_SET) != 0) {
-      if (d) std::fclose(d);
+    InputFile data_in(data_path);
+    std::FILE* d = data_in.stream();
+    if (fseeko(d, static_cast<off_t>(data_offset), SEEK_SET) != 0)
       throw InputError(path + ": cannot read the NRRD data file '" + data_path + "'");
-    }
     for (double lines = 0; lines < v;) {
       const int c = std::fgetc(d);
       if (c == EOF) {
-        std::fclose(d);
         throw InputError(path + ": NRRD line skip " + *line_skip + " passes the end of '" + data_path + "'");
       }
       ++data_offset;
       if (c == '\n') ++lines;
     }
-    std::fclose(d);
   }
   if (byte_skip) {
     const double v = parse_number(path, "byte skip", *byte_skip);

@@ -23,6 +23,7 @@ class RawPlanes : public generate::PlaneSource {
       : path_(std::move(path)), options_(o), slope_(slope), inter_(inter) {
     set_header(o);
     const std::uint64_t bytes = detail::checked_byte_count(o.dims, o.type, path_);
+    check_float32_geometry(o.dims, o.origin, o.spacing, path_);
     const std::uint64_t have = detail::file_size_or_throw(path_);
     if (o.header_bytes < 0 || static_cast<std::uint64_t>(o.header_bytes) > have ||
         bytes > have - static_cast<std::uint64_t>(o.header_bytes))

@@ -8,32 +8,17 @@
 #include <filesystem>
 
 #include "keymesh/io/atomic_file.hpp"
+#include "keymesh/io/input_file.hpp"
 #include "keymesh/io/volume_formats.hpp"
 
 namespace keymesh::io {
 
 namespace detail {
 
-std::uint64_t file_size_or_throw(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": not a regular file");
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) throw InputError(path + ": cannot read: " + ec.message());
-  return static_cast<std::uint64_t>(size);
-}
+std::uint64_t file_size_or_throw(const std::string& path) { return input_size(path); }
 
 void read_exact(const std::string& path, std::uint64_t offset, void* dst, std::uint64_t size, const std::string& what) {
-  const std::uint64_t have = file_size_or_throw(path);
-  if (offset > have || size > have - offset)
-    throw InputError(path + ": file holds " + std::to_string(have) + " bytes, " + what + " needs " +
-                     std::to_string(offset + size));
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
-  const bool ok = fseeko(f, static_cast<off_t>(offset), SEEK_SET) == 0 &&
-                  std::fread(dst, 1, static_cast<std::size_t>(size), f) == static_cast<std::size_t>(size);
-  std::fclose(f);
-  if (!ok) throw InputError(path + ": read failed (" + what + ")");
+  InputFile(path).read_at(offset, dst, size, what);
 }
 
 void swap_samples(ImageGrid& grid) {

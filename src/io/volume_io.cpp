@@ -20,7 +20,8 @@ bool ends_with(const std::string& path, const std::string& suffix) {
 
 }  // namespace
 
-ImageGrid read_volume(const std::string& path, const RawOptions* raw) {
+namespace {
+ImageGrid read_volume_unchecked(const std::string& path, const RawOptions* raw) {
   if (raw) return read_raw(path, *raw);
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return read_all_planes(*open_volume_planes(path, nullptr));
@@ -31,6 +32,13 @@ ImageGrid read_volume(const std::string& path, const RawOptions* raw) {
   if (ends_with(path, ".nii") || ends_with(path, ".nii.gz")) return read_nifti(path);
   if (ends_with(path, ".den")) return read_den(path);
   throw InputError(path + ": unknown volume format (expected .vti, .nrrd, .nhdr, .nii, .nii.gz, .den, a DICOM or Zarr folder, or .raw with --dims)");
+}
+}  // namespace
+
+ImageGrid read_volume(const std::string& path, const RawOptions* raw) {
+  ImageGrid grid = read_volume_unchecked(path, raw);
+  check_float32_geometry(grid.dims, grid.origin, grid.spacing, path);
+  return grid;
 }
 
 void write_volume(const ImageGrid& grid, const std::string& path) {

@@ -78,6 +78,18 @@ std::string xml_escape(std::string_view s) {
 }
 
 
+XmlNode::~XmlNode() {
+  // Detach every descendant into a flat list first, so each node is
+  // destroyed with no children left and the recursion stops at one level.
+  std::vector<std::unique_ptr<XmlNode>> pending = std::move(children);
+  while (!pending.empty()) {
+    std::unique_ptr<XmlNode> node = std::move(pending.back());
+    pending.pop_back();
+    for (auto& c : node->children) pending.push_back(std::move(c));
+    node->children.clear();
+  }
+}
+
 bool is_name_char(char c) {
   return !is_space(c) && c != '=' && c != '>' && c != '/' && c != '<' && c != '"' && c != '\'';
 }
@@ -170,7 +182,11 @@ ParsedXml parse_xml(std::string_view doc, const std::string& path) {
       result.appended = doc.substr(pos + 1);
       return result;
     }
-    if (!self_closing) stack.push_back(raw);
+    if (!self_closing) {
+      if (stack.size() >= kMaxXmlDepth)
+        throw fail("elements nested deeper than " + std::to_string(kMaxXmlDepth) + " levels");
+      stack.push_back(raw);
+    }
   }
   if (!result.root) throw InputError(path + ": not an XML file (no root element)");
   if (!stack.empty()) throw InputError(path + ": truncated XML (<" + stack.back()->name + "> not closed)");

@@ -1,6 +1,7 @@
 #include "keymesh/mesh/unstructured_grid.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "keymesh/parallel/for_each.hpp"
@@ -68,6 +69,11 @@ void UnstructuredGrid::validate(const std::string& what, bool check_ids) const {
   auto fail = [&](const std::string& m) { throw InputError(what + ": " + m); };
   if (points.size() % 3 != 0) fail("point coordinates are not a multiple of 3");
   const std::uint64_t np = points.size() / 3;
+  // 1e39, inf and nan all end up non-finite as float: refused by name, never written on.
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!std::isfinite(points[i]))
+      fail("point " + std::to_string(i / 3) + " has a non-finite coordinate " + "xyz"[i % 3] + " = " +
+           std::to_string(points[i]));
   Id nc = 0;
   if (offsets.empty()) {
     const int k = cell_type_size(uniform_type);

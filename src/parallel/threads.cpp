@@ -2,6 +2,11 @@
 
 #include <omp.h>
 
+#include <algorithm>
+#include <string>
+
+#include "keymesh/core/error.hpp"
+
 namespace keymesh::parallel {
 
 namespace {
@@ -9,7 +14,10 @@ int g_threads = 0;  // 0: not set yet, use all cores
 }
 
 int set_thread_count(int threads) {
-  g_threads = threads > 0 ? threads : omp_get_num_procs();
+  if (threads < 0 || threads > kMaxThreads)
+    throw LimitError("thread count " + std::to_string(threads) + " is outside 0.." + std::to_string(kMaxThreads) +
+                     " (0 = all cores)");
+  g_threads = threads > 0 ? threads : std::clamp(omp_get_num_procs(), 1, kMaxThreads);
   omp_set_num_threads(g_threads);
   return g_threads;
 }

@@ -382,4 +382,313 @@ check("NaN and Inf samples never give a non-finite point, normal or field", nonf
 check("non-finite isovalue: exit 2; outside the range: empty mesh, warning, exit 0", isovalues)
 check("degenerate, repeated and non-manifold cells: handled, never a crash", degenerate_meshes_never_crash)
 check("full device, unwritable directory, file-size limit: exit 1, old file intact", outputs_fail_cleanly)
+
+# ---- issue 19: the classes of round two ------------------------------------------------
+
+def km2(*args, timeout=20):
+    """The issue's checker: 2 GiB of address space, 20 s; (rc, stderr lines). Never a signal."""
+    def setup():
+        if not SANITIZED:
+            resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+    p = subprocess.run([KEYMESH, *map(str, args)], capture_output=True, text=True, stdin=subprocess.DEVNULL,
+                       timeout=timeout, preexec_fn=setup)
+    assert p.returncode >= 0, f"keymesh {args}: killed by signal {-p.returncode}\n{p.stderr}"
+    return p.returncode, [line for line in p.stderr.splitlines() if line.strip()]
+
+
+def refused(args, named, code=1, fragment=""):
+    rc, lines = km2(*args)
+    assert rc == code, f"keymesh {args}: exit {rc}, expected {code}\n{lines}"
+    assert len(lines) == 1, f"keymesh {args}: expected one line on stderr, got {lines}"
+    assert named in lines[0] and fragment in lines[0], f"keymesh {args}: '{lines[0]}' lacks '{named}' / '{fragment}'"
+    return lines[0]
+
+
+def small_volume():
+    path = os.path.join(D, "s12.vti")
+    if not os.path.exists(path):
+        run("generate", "sphere", "--size", 12, "-o", path, "-q")
+    return path
+
+
+def small_tets():
+    path = os.path.join(D, "t12.vtu")
+    if not os.path.exists(path):
+        run("tetrahedralize", small_volume(), "-o", path, "-q")
+    return path
+
+
+def deep_xml_and_thread_counts():
+    # Nesting deeper than any stack: refused by name for every XML format.
+    for ext, kind in ((".vtp", "PolyData"), (".vti", "ImageData"), (".vtu", "UnstructuredGrid"),
+                      (".pvtp", "PPolyData")):
+        path = write("deep" + ext, '<VTKFile type="%s">' % kind + "<a>" * 300000)
+        refused(["info", path], path, fragment="nested")
+    wide = write("wide.vtp", '<VTKFile type="PolyData">' + "<a/>" * 200000 + "</VTKFile>")
+    refused(["info", wide], wide)
+    # --threads past the stated maximum (1024) or negative: usage error.
+    vol = small_volume()
+    for n in (100000, 1025, -1):
+        rc, lines = km2("contour", vol, "-o", os.path.join(D, "t.ply"), "--iso", 2.5, "--threads", n, "-q")
+        assert rc == 2 and lines, (n, rc, lines)
+    assert not os.path.exists(os.path.join(D, "t.ply"))
+
+
+def non_regular_inputs_refused():
+    fifo = os.path.join(D, "f.ply")
+    if not os.path.exists(fifo):
+        os.mkfifo(fifo)
+    os.makedirs(os.path.join(D, "d.ply"), exist_ok=True)
+    # A FIFO hangs a reader that opens it blocking; a directory or /dev/zero has
+    # no size. Each must be refused by name, fast, for every kind of reader.
+    for cmd in (["check"], ["info"], ["quality"]):
+        refused(cmd + [fifo], fifo, fragment="not a regular file")
+        refused(cmd + [os.path.join(D, "d.ply")], os.path.join(D, "d.ply"), fragment="not a regular file")
+    for ext in (".ply", ".obj", ".stl", ".vtp", ".vtu", ".vtk", ".vti", ".nrrd", ".nii", ".pvtp"):
+        link = os.path.join(D, "devzero" + ext)
+        if not os.path.islink(link):
+            os.symlink("/dev/zero", link)
+        refused(["info", link], link, fragment="not a regular file")
+        out = os.path.join(D, "zero_out" + (".vtu" if ext in (".vtu", ".vtk") else ".vtp"))
+        cmd = "convert" if ext not in (".vti", ".nrrd", ".nii") else "contour"
+        extra = ["--iso", 1] if cmd == "contour" else []
+        refused([cmd, link, "-o", out, "-q", *extra], link)
+        assert not os.path.exists(out)
+    # A .pvtp whose piece is /dev/zero, or a FIFO, or a directory.
+    for target in ("/dev/zero", fifo, os.path.join(D, "d.ply")):
+        piece = os.path.join(D, "piece_%d.vtp" % abs(hash(target)))
+        if not os.path.islink(piece):
+            os.symlink(target, piece)
+        index = write("idx.pvtp", '<VTKFile type="PPolyData"><PPolyData><PPoints><PDataArray type="Float32" '
+                                  'NumberOfComponents="3"/></PPoints><Piece Source="%s"/></PPolyData></VTKFile>'
+                      % os.path.basename(piece))
+        refused(["check", index], piece, fragment="not a regular file")
+
+
+def failed_runs_leave_every_file_untouched():
+    vol = small_volume()
+    tets = small_tets()
+    surface = os.path.join(D, "surf.ply")
+    run("contour", vol, "-o", surface, "--iso", 2.5, "-q")
+    bad_report = "/nonexistent/dir/r.json"
+    cases = [
+        (["contour", vol, "--iso", 2.5], ".ply"),
+        (["contour", tets, "--iso", 2.5], ".ply"),
+        (["dual", surface], ".vtp"),
+        (["subdivide", surface], ".obj"),
+        (["convert", surface], ".stl"),
+        (["tetrahedralize", vol], ".vtu"),
+        (["pipeline", vol, "--iso", 2.5], ".vtp"),
+    ]
+    for args, ext in cases:
+        keep = write("keep" + ext, "OLD")
+        rc, lines = km2(*args, "-o", keep, "--report", bad_report, "-q")
+        assert rc == 1 and len(lines) == 1 and bad_report in lines[0], (args, rc, lines)
+        with open(keep) as f:
+            assert f.read() == "OLD", f"{args}: the old {keep} was replaced"
+        assert outputs_left(keep) == [os.path.basename(keep)], outputs_left(keep)
+        # A new output is not left behind either.
+        fresh = os.path.join(D, "fresh" + ext)
+        rc, _ = km2(*args, "-o", fresh, "--report", bad_report, "-q")
+        assert rc == 1 and outputs_left(fresh) == [], (args, outputs_left(fresh))
+    # The success path still writes both.
+    out, rep = os.path.join(D, "both.ply"), os.path.join(D, "both.json")
+    run("contour", vol, "-o", out, "--iso", 2.5, "--report", rep, "-q")
+    assert report(rep)["points"] > 0 and os.path.getsize(out) > 0
+
+
+def shared_paths_refused():
+    vol = small_volume()
+    with open(vol, "rb") as f:
+        original = f.read()
+    out = write("same.ply", "OLD")
+    # --report equal to -o, spelled differently, or through a link: exit 2, nothing written.
+    alias = os.path.join(D, ".", "same.ply")
+    hard = os.path.join(D, "hard.ply")
+    if not os.path.exists(hard):
+        os.link(out, hard)
+    for report_path in (out, alias, hard):
+        line = refused(["contour", vol, "-o", out, "--iso", 2.5, "--report", report_path, "-q"], "same file", code=2)
+        with open(out) as f:
+            assert f.read() == "OLD"
+    # A not-yet-existing output named twice through a different spelling.
+    new = os.path.join(D, "new.ply")
+    refused(["contour", vol, "-o", new, "--iso", 2.5, "--report", os.path.join(D, "..", os.path.basename(D), "new.ply"),
+             "-q"], "same file", code=2)
+    assert not os.path.exists(new)
+    # --report or -o equal to the input: the input is never overwritten.
+    link = os.path.join(D, "vol_link.vti")
+    if not os.path.islink(link):
+        os.symlink(vol, link)
+    for args in (["contour", vol, "-o", os.path.join(D, "o.ply"), "--iso", 2.5, "--report", vol],
+                 ["contour", vol, "-o", os.path.join(D, "o.ply"), "--iso", 2.5, "--report", link],
+                 ["convert", vol, "-o", link], ["info", vol, "--report", vol]):
+        refused(args + ["-q"] if args[0] != "info" else args, "same file", code=2)
+        with open(vol, "rb") as f:
+            assert f.read() == original, args
+    # /dev/null twice is fine (a device is written in place).
+    null = os.path.join(D, "null.ply")
+    if not os.path.islink(null):
+        os.symlink("/dev/null", null)
+    rc, _ = km2("contour", vol, "-o", null, "--iso", 2.5, "--report", "/dev/null", "-q")
+    assert rc == 0, rc
+
+
+def nonfinite_geometry_refused():
+    raw = write("g.raw", struct.pack("<512f", *[float(i % 7) for i in range(512)]))
+    base = ["contour", raw, "--dims", 8, 8, 8, "--type", "float32", "--iso", 2.5, "-q"]
+    for opt in (["--origin", "1e39", 0, 0], ["--spacing", "1e38", 1, 1], ["--origin", "3e38", 0, 0, "--spacing", "1e38", 1, 1]):
+        out = os.path.join(D, "inf.ply")
+        refused(base + opt + ["-o", out], raw, fragment="float32")
+        assert not os.path.exists(out)
+    # The same through every header that carries geometry.
+    samples = struct.pack("<64f", *[float(i % 5) for i in range(64)])
+    nrrd_o = write("o.nrrd", b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nencoding: raw\nendian: little\n"
+                              b"space dimension: 3\nspace origin: (1e39,0,0)\n\n" + samples)
+    nrrd_s = write("s.nrrd", b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nencoding: raw\nendian: little\n"
+                              b"spacings: 2e38 1 1\n\n" + samples)
+    vti_o = write("o.vti", vti("0 3 0 3 0 3", '<DataArray type="Float32" Name="f" format="appended" offset="0"/>',
+                               struct.pack("<I", 256) + samples).replace(b'WholeExtent="0 3 0 3 0 3"',
+                                                                          b'WholeExtent="0 3 0 3 0 3" Origin="1e39 0 0"'))
+    vti_s = write("s.vti", vti("0 3 0 3 0 3", '<DataArray type="Float32" Name="f" format="appended" offset="0"/>',
+                               struct.pack("<I", 256) + samples).replace(b'WholeExtent="0 3 0 3 0 3"',
+                                                                          b'WholeExtent="0 3 0 3 0 3" Spacing="2e38 1 1"'))
+    for path in (nrrd_o, nrrd_s, vti_o, vti_s):
+        for cmd, out, extra in (("contour", "c.ply", ["--iso", 2.5]), ("tetrahedralize", "t.vtu", []),
+                                ("convert", "v.nrrd", [])):
+            out = os.path.join(D, out)
+            refused([cmd, path, "-o", out, "-q", *extra], path)
+            assert not os.path.exists(out), (cmd, path)
+    # Meshes and grids with nan, inf, 1e400 or 1e39 coordinates: refused by
+    # name by every command, so nothing non-finite is written and check never
+    # calls such a mesh a manifold.
+    for bad in ("nan", "inf", "-inf", "1e400", "1e39"):
+        tet = "%s 0 0 1 0 0 0 1 0 0 0 1" % bad
+        files = {
+            "bad.ply": "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                       "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+                       + "\n".join(" ".join(tet.split()[3 * i:3 * i + 3]) for i in range(4))
+                       + "\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+            "bad.obj": "".join("v %s\n" % " ".join(tet.split()[3 * i:3 * i + 3]) for i in range(4))
+                       + "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+            "bad.vtp": '<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="4" NumberOfPolys="4"><Points>'
+                       '<DataArray type="Float32" NumberOfComponents="3">%s</DataArray></Points><Polys>'
+                       '<DataArray type="Int32" Name="connectivity">0 2 1 0 1 3 0 3 2 1 2 3</DataArray>'
+                       '<DataArray type="Int32" Name="offsets">3 6 9 12</DataArray></Polys></Piece></PolyData>'
+                       '</VTKFile>' % tet,
+            "bad.stl": "solid s\n" + "".join("facet normal 0 0 0\nouter loop\n" + "".join(
+                "vertex %s\n" % " ".join(tet.split()[3 * v:3 * v + 3]) for v in f) + "endloop\nendfacet\n"
+                for f in ((0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3))) + "endsolid s\n",
+            "bad.vtu": '<VTKFile type="UnstructuredGrid"><UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">'
+                       '<PointData><DataArray type="Float32" Name="s">0 1 2 3</DataArray></PointData>'
+                       '<Points><DataArray type="Float32" NumberOfComponents="3">%s</DataArray></Points><Cells>'
+                       '<DataArray type="Int64" Name="connectivity">0 1 2 3</DataArray>'
+                       '<DataArray type="Int64" Name="offsets">4</DataArray>'
+                       '<DataArray type="UInt8" Name="types">10</DataArray></Cells></Piece></UnstructuredGrid>'
+                       '</VTKFile>' % tet,
+            "bad.vtk": "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n%s\n"
+                       "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS s float\nLOOKUP_TABLE default\n"
+                       "0 1 2 3\n" % tet,
+        }
+        for name, data in files.items():
+            path = write(bad.replace("-", "m") + "_" + name, data)
+            grid = name.endswith((".vtu", ".vtk"))
+            commands = [["info", path]]
+            out_ext = ".vtu" if grid else ".ply"
+            commands += [["convert", path, "-o", os.path.join(D, "nonfin" + out_ext)],
+                         ["subdivide", path, "-o", os.path.join(D, "nonfin" + out_ext)]]
+            if grid:
+                commands += [["contour", path, "-o", os.path.join(D, "nonfin.ply"), "--iso", 1.5],
+                             ["tetrahedralize", path, "-o", os.path.join(D, "nonfin.vtu")]]
+            else:
+                commands += [["check", path], ["quality", path], ["dual", path, "-o", os.path.join(D, "nonfin.vtp")]]
+            for args in commands:
+                refused(args, path, fragment="non-finite")
+                for ext in (".ply", ".vtu", ".vtp"):
+                    assert not os.path.exists(os.path.join(D, "nonfin" + ext)), (bad, name, args)
+
+
+def work_estimated_before_allocation():
+    tets = small_tets()  # 11^3 voxels x 5 = 6655 tets
+    # 6655 * 8^8 tets: refused up front by name, with the sizes, not by the OOM killer.
+    line = refused(["subdivide", tets, "-o", os.path.join(D, "huge.vtu"), "--levels", 8, "-q"], tets,
+                   fragment="points")
+    assert str(6655 * 8 ** 8) in line, line
+    surface = os.path.join(D, "surf8.ply")
+    run("contour", small_volume(), "-o", surface, "--iso", 4.5, "-q")
+    refused(["subdivide", surface, "-o", os.path.join(D, "huge.ply"), "--levels", 8, "-q"], surface)
+    # --max-memory: a small budget refuses what the default allows.
+    rc, _ = km2("tetrahedralize", small_volume(), "-o", os.path.join(D, "ok.vtu"), "-q")
+    assert rc == 0
+    refused(["tetrahedralize", small_volume(), "-o", os.path.join(D, "no.vtu"), "--max-memory", "4K", "-q"],
+            small_volume(), fragment="--max-memory")
+    assert not os.path.exists(os.path.join(D, "no.vtu"))
+    for bad in ("-5", "0", "1X", "99999999999999999999G"):
+        rc, lines = km2("tetrahedralize", small_volume(), "-o", os.path.join(D, "no.vtu"), "--max-memory", bad)
+        assert rc == 2 and lines, (bad, rc, lines)
+
+
+def options_validated_with_exit_2():
+    raw = write("v8.raw", bytes(4 * 512))
+    base = ["contour", raw, "--dims", 8, 8, 8, "-o", os.path.join(D, "m.ply"), "--iso", 0.5]
+    for bad in (["--memory-limit", "-5"], ["--memory-limit", "0"], ["--memory-limit", "5Q"],
+                ["--memory-limit", "18446744073709551616"], ["--type", "float16"], ["--type", "complex"]):
+        rc, lines = km2(*base, *bad)
+        assert rc == 2 and lines, (bad, rc, lines)
+    rc, _ = km2(*base, "--type", "float", "--memory-limit", "64K", "-q")  # aliases and units still accepted
+    assert rc == 0, rc
+
+
+def every_error_names_the_input():
+    vol = small_volume()
+    tets = small_tets()
+    quads = write("quads.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    flat = write("flat.raw", bytes(4 * 8))
+    surface = os.path.join(D, "surf.ply")
+    run("contour", vol, "-o", surface, "--iso", 2.5, "-q")
+    for args, named in (
+            (["quality", quads], quads),
+            (["contour", flat, "--dims", 8, 1, 1, "--type", "float32", "-o", os.path.join(D, "x.ply"), "--iso", 1],
+             flat),
+            (["contour", tets, "-o", os.path.join(D, "x.ply"), "--iso", 1, "--array", "nosuch"], tets),
+            (["subdivide", quads, "-o", os.path.join(D, "x.ply")], quads),
+            (["subdivide", surface, "-o", os.path.join(D, "x.ply"), "--scheme", "bezier"], surface)):
+        refused(args + ["-q"], named)
+
+
+def ply_properties_never_repeat():
+    # A point field named x (and one named like the normals) written to PLY:
+    # each property once, the field renamed field_x, as VTK's reader reads it.
+    vtp = write("named.vtp", '<VTKFile type="PolyData"><PolyData><Piece NumberOfPoints="3" NumberOfPolys="1">'
+                             '<PointData><DataArray type="Float32" Name="x">7 8 9</DataArray>'
+                             '<DataArray type="Float32" Name="nx">4 5 6</DataArray></PointData>'
+                             '<Points><DataArray type="Float32" NumberOfComponents="3">0 0 0 1 0 0 0 1 0</DataArray>'
+                             '</Points><Polys><DataArray type="Int32" Name="connectivity">0 1 2</DataArray>'
+                             '<DataArray type="Int32" Name="offsets">3</DataArray></Polys></Piece></PolyData>'
+                             '</VTKFile>')
+    out = os.path.join(D, "named.ply")
+    run("convert", vtp, "-o", out, "-q")
+    with open(out, "rb") as f:
+        head = f.read().split(b"end_header")[0].decode()
+    props = [line.split()[-1] for line in head.splitlines() if line.startswith("property float")]
+    assert len(props) == len(set(props)), props
+    assert props[:3] == ["x", "y", "z"] and "field_x" in props, props
+    # Coordinates read back are the points, not the field (an independent parse of the body).
+    n = len(props)
+    with open(out, "rb") as f:
+        body = f.read().split(b"end_header\n", 1)[1]
+    rows = [struct.unpack_from("<%df" % n, body, 4 * n * i) for i in range(3)]
+    assert [r[0] for r in rows] == [0.0, 1.0, 0.0], rows
+    assert [r[props.index("field_x")] for r in rows] == [7.0, 8.0, 9.0], rows
+
+
+check("issue 19: XML nested 300,000 deep refused; --threads past 1024: exit 2", deep_xml_and_thread_counts)
+check("issue 19: FIFO, directory, /dev/zero as any input or .pvtp piece: refused by name", non_regular_inputs_refused)
+check("issue 19: a failed run (bad --report) leaves every old file untouched, no new file", failed_runs_leave_every_file_untouched)
+check("issue 19: input, output, report naming one file: exit 2, nothing overwritten", shared_paths_refused)
+check("issue 19: origin/spacing past float32, nan/inf/1e39 coordinates: refused by name", nonfinite_geometry_refused)
+check("issue 19: subdivide --levels 8, --max-memory: work refused before allocation", work_estimated_before_allocation)
+check("issue 19: --memory-limit -5, --type float16: exit 2 from the validators", options_validated_with_exit_2)
+check("issue 19: operation errors name the input file", every_error_names_the_input)
+check("issue 19: the PLY writer never repeats a property", ply_properties_never_repeat)
 finish()

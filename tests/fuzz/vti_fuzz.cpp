@@ -2,6 +2,7 @@
 // (the volume readers take a path).
 #include "fuzz/fuzz_checks.hpp"
 #include "fuzz/fuzz_target.hpp"
+#include "fuzz/xml_mutator.hpp"
 #include "keymesh/io/volume_formats.hpp"
 
 KEYMESH_FUZZ_TARGET(vti) {

@@ -3,7 +3,8 @@
 // over the destination only after everything was written and flushed, so a
 // failure (unwritable directory, full disk, exception while encoding) never
 // leaves a partial file and never destroys an existing one. A destination
-// that is not a regular file (a device, a FIFO) is written in place.
+// that is not a regular file (a device, a FIFO) is written in place. Inside
+// an OutputTransaction the rename waits for the transaction's commit().
 #include <cstddef>
 #include <cstdio>
 #include <string>
@@ -23,7 +24,8 @@ class AtomicFile {
   // Appends bytes; throws InputError naming the path on a write error.
   void write(const void* data, std::size_t size);
   void write(std::string_view text) { write(text.data(), text.size()); }
-  // Flushes, closes and renames onto the destination; throws on failure.
+  // Flushes, closes and renames onto the destination (or stages the rename
+  // with the open OutputTransaction); throws on failure.
   void commit();
 
   const std::string& path() const { return path_; }

@@ -17,7 +17,15 @@ namespace keymesh::io::vtk_xml {
 
 using mesh_bytes::Scalar;
 
+// An element. Children are owned; the destructor frees a subtree with an
+// explicit stack rather than by recursion, so no nesting can overflow the
+// call stack (parse_xml also refuses nesting deeper than kMaxXmlDepth).
 struct XmlNode {
+  XmlNode() = default;
+  XmlNode(const XmlNode&) = delete;
+  XmlNode& operator=(const XmlNode&) = delete;
+  ~XmlNode();
+
   std::string name;
   std::vector<std::pair<std::string, std::string>> attrs;
   std::string text;  // direct text content (not that of children)
@@ -36,6 +44,9 @@ struct XmlNode {
 };
 
 std::string xml_escape(std::string_view s);
+
+// VTK's formats nest six elements deep; anything past this is refused by name.
+inline constexpr std::size_t kMaxXmlDepth = 256;
 
 struct ParsedXml {
   std::unique_ptr<XmlNode> root;

@@ -63,6 +63,13 @@ decltype(auto) visit_scalars(const ImageGrid& grid, F&& f) {
   throw InputError("unknown scalar type");
 }
 
+// Throws InputError "<what>: ..." unless the origin and every grid point
+// origin + spacing * i (0 <= i < dims) have coordinates that are finite in
+// float32, the type every mesh stores its points in: an origin of 1e39 or a
+// spacing of 1e38 would otherwise give a mesh of inf coordinates.
+void check_float32_geometry(const std::array<Id, 3>& dims, const std::array<double, 3>& origin,
+                            const std::array<double, 3>& spacing, const std::string& what);
+
 // Minimum and maximum of the finite samples (NaN and Inf skipped); {0,0} when
 // there are none.
 std::array<double, 2> scalar_range(const ImageGrid& grid);
