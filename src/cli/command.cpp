@@ -17,8 +17,9 @@ namespace keymesh::cli {
 
 void add_common_options(CLI::App& cmd, CommonOptions& common) {
   cmd.add_option("--threads", common.threads,
-                 "worker threads, 0.." + std::to_string(parallel::kMaxThreads) + " (0 = all cores)")
-      ->check(CLI::Range(0, parallel::kMaxThreads));
+                 "worker threads, 0 (all cores) to " + std::to_string(parallel::max_thread_count()) +
+                     " (4 x the hardware threads, at least 64)")
+      ->check(CLI::Range(0, parallel::max_thread_count()));
   cmd.add_option("--report", common.report_path, "write a JSON report of counts and per-stage seconds");
   cmd.add_flag("--quiet,-q", common.quiet, "no progress messages on stderr");
   cmd.add_option("--max-memory", common.max_memory,
@@ -159,8 +160,8 @@ std::string error_line(const CLI::App* cmd, const std::string& message) {
   const auto paths = given_paths(*cmd, true);
   for (const auto& [option, path] : paths)
     if (message.find(path) != std::string::npos) return message;
-  const auto inputs = given_paths(*cmd, false);
-  return inputs.empty() ? message : inputs.front().second + ": " + message;
+  // The input it concerns; a command with none (generate) names its output.
+  return paths.empty() ? message : paths.front().second + ": " + message;
 }
 
 int refuse_shared_paths(const CLI::App& cmd) {

@@ -27,6 +27,11 @@ Register reg{Command{
         const int threads = apply_threads(o->common);
         StageTimer timer;
         Progress progress(o->common.quiet, o->size >= 384);
+        // size^3 float32 samples, held once.
+        const std::uint64_t n = static_cast<std::uint64_t>(o->size);
+        const std::uint64_t points = saturating_mul(saturating_mul(n, n), n);
+        check_work({points, 0, saturating_mul(points, 4)}, memory_budget(o->common),
+                   o->output + ": generate " + o->dataset + " --size " + std::to_string(o->size));
         progress.say("generating the " + std::to_string(o->size) + "^3 spherical distance field");
         const ImageGrid grid = timer.run("generate", [&] { return generate::spherical_distance(o->size); });
         progress.say("writing " + o->output);

@@ -432,6 +432,13 @@ def deep_xml_and_thread_counts():
         rc, lines = km2("contour", vol, "-o", os.path.join(D, "t.ply"), "--iso", 2.5, "--threads", n, "-q")
         assert rc == 2 and lines, (n, rc, lines)
     assert not os.path.exists(os.path.join(D, "t.ply"))
+    # The stated maximum is at least 64, and 64 threads start within 2 GiB of address space.
+    rc, lines = km2("contour", vol, "-o", os.path.join(D, "t.ply"), "--iso", 2.5, "--threads", 64, "-q")
+    assert rc == 0, (rc, lines)
+    # A dataset that cannot fit is refused by size, naming the output, before allocation.
+    big = os.path.join(D, "generated_big.nrrd")
+    refused(["generate", "sphere", "--size", 4000, "-o", big, "-q"], big, fragment="--max-memory")
+    assert not os.path.exists(big)
 
 
 def non_regular_inputs_refused():
@@ -682,7 +689,7 @@ def ply_properties_never_repeat():
     assert [r[props.index("field_x")] for r in rows] == [7.0, 8.0, 9.0], rows
 
 
-check("issue 19: XML nested 300,000 deep refused; --threads past 1024: exit 2", deep_xml_and_thread_counts)
+check("issue 19: XML nested 300,000 deep refused; --threads past the maximum: exit 2; generate too big: refused", deep_xml_and_thread_counts)
 check("issue 19: FIFO, directory, /dev/zero as any input or .pvtp piece: refused by name", non_regular_inputs_refused)
 check("issue 19: a failed run (bad --report) leaves every old file untouched, no new file", failed_runs_leave_every_file_untouched)
 check("issue 19: input, output, report naming one file: exit 2, nothing overwritten", shared_paths_refused)
