@@ -266,3 +266,16 @@ def test_tetrahedralize_and_dual_report_stages(surface):
     seen.clear()
     keymesh.dual(surface, progress=lambda s, f: seen.append(s))
     assert seen == ["dual", "dual: fans", "dual: polygons", "dual"]
+
+
+def test_ctrl_c_stops_marching_cubes_between_blocks():
+    calls = []
+
+    def press_ctrl_c(stage, fraction):
+        calls.append(stage)
+        if stage == "marching cubes: classify" and calls.count(stage) == 2:
+            signal.raise_signal(signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        keymesh.marching_cubes(sphere_field((64, 70, 66), (30.2, 33.1, 31.7)), 20.5, progress=press_ctrl_c)
+    assert calls.count("marching cubes: classify") == 2 and "marching cubes: generate" not in calls
