@@ -4,6 +4,7 @@
 // dense plan turns the keys into points (one per cell met) and the index map
 // into the triangle list. Quads are written in grid order, so the output
 // depends on the volume alone (any thread count gives the same bits).
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <limits>
@@ -84,9 +85,8 @@ struct Box {
 // Everything one run of the generator writes, before welding.
 template <class K>
 struct Soup {
-  std::vector<K> keys;                // 6 per quad: triangles (C00, C10, C11), (C00, C11, C01)
-  std::vector<std::uint32_t> pair;    // per quad: first << 16 | second
-  std::vector<std::uint32_t> side;    // per quad (per_label only): the label index of the surface
+  std::vector<K> keys;                // 3 per triangle (a quad: (C00, C10, C11), (C00, C11, C01))
+  std::vector<std::uint32_t> pair;    // per triangle: first << 16 | second
 };
 
 // Labels of the 8 corners of the cell whose first corner is padded point p.
@@ -114,10 +114,22 @@ struct CellCorners {
   }
 };
 
+// Face points (per-label surface nets only) are keyed after the cell
+// points: 4 * cells + 2 * (3 * cell + normal axis) + arc, the face named by
+// the cell of its lower corner.
+constexpr Id kFaceKeysPerCell = 6;
+
 // The map step over the edges of `box` (every edge between two of its
 // points). With `only` < 0: every edge whose labels differ, keyed by cell
 // (network); otherwise only edges with exactly one end of label `only`,
-// keyed by 4 * cell + piece (that label's closed surface).
+// keyed by 4 * cell + loop (that label's closed surface).
+//
+// Per label, a quad side between two cells is split by a face point where
+// the pinch of labels.hpp would occur: the shared face is ambiguous (the
+// label on one diagonal) and in both cells its two arcs belong to one loop,
+// so that the quads of the face's four edges would all meet on one dual
+// edge. The face point of the arc (around the label's corner of this edge)
+// takes the side instead; the polygon is fanned from its first face point.
 template <class K>
 void generate_quads(const LabelVolume& vol, const Box& box, int only, Soup<K>& soup) {
   const auto& loops = cell_loops();
@@ -126,6 +138,7 @@ void generate_quads(const LabelVolume& vol, const Box& box, int only, Soup<K>& s
   const Id pstride[3] = {1, vol.dims[0], vol.nxy};
   const LabelIndex* L = vol.index.data();
   const CellCorners corners(vol);
+  const Id cells = box.cells();
   // Visits the edges of row r whose quads are written: f(i, axis, lo_end_label, hi_end_label).
   auto visit_row = [&](Id r, auto&& f) {
     const Id j = r % box.dims[1], k = r / box.dims[1];
@@ -144,50 +157,123 @@ void generate_quads(const LabelVolume& vol, const Box& box, int only, Soup<K>& s
       }
     }
   };
+  // The polygon of one edge: its corner keys counter-clockwise seen from
+  // +axis (cells, with face points between some), written to `out` when
+  // given; returns the number of corners.
+  auto polygon = [&](Id i, Id j, Id k, int axis, LabelIndex a, K* out) -> int {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const Id cell = i + j * cstride[1] + k * cstride[2];  // the cell whose first corner is p
+    const int st[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    if (only < 0) {
+      if (out)
+        for (int m = 0; m < 4; ++m) out[m] = static_cast<K>(cell - st[m][0] * cstride[u] - st[m][1] * cstride[v]);
+      return 4;
+    }
+    const Id lp[3] = {i, j, k};  // p in box coordinates
+    const Id p = vol.at(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k);
+    const int up = a == only ? 0 : 1;  // which end of the edge carries the label
+    const auto l = static_cast<LabelIndex>(only);
+    unsigned cube[4];
+    K key[4];
+    for (int m = 0; m < 4; ++m) {
+      const Id first = p - st[m][0] * pstride[u] - st[m][1] * pstride[v];
+      cube[m] = corners.case_of(first, l);
+      const int corner0 = (st[m][0] << u) | (st[m][1] << v);
+      key[m] = static_cast<K>(4 * (cell - st[m][0] * cstride[u] - st[m][1] * cstride[v]) +
+                              loops.loop_of[cube[m]][loops.edge_at[corner0][axis]]);
+    }
+    int n = 0;
+    for (int m = 0; m < 4; ++m) {
+      if (out) out[n] = key[m];
+      ++n;
+      // The face between cell m and cell m + 1: normal along d, its lower
+      // corner the larger of the two cells' first corners.
+      const int m1 = (m + 1) % 4;
+      const int d = st[m][0] != st[m1][0] ? u : v;
+      const int w = d == u ? v : u;  // the face spans axis and w
+      const int fs[2] = {std::min(st[m][0], st[m1][0]), std::min(st[m][1], st[m1][1])};
+      // Face lower corner in box coordinates: p minus the cells' shared offsets.
+      Id f[3] = {lp[0], lp[1], lp[2]};
+      f[u] -= (d == u ? 0 : fs[0]);
+      f[v] -= (d == v ? 0 : fs[1]);
+      // Inside-ness of the face's corners (axis offset oa, w offset ow).
+      auto inside = [&](int oa, int ow) {
+        Id q[3] = {f[0], f[1], f[2]};
+        q[axis] += oa, q[w] += ow;
+        return L[vol.at(box.lo[0] + q[0], box.lo[1] + q[1], box.lo[2] + q[2])] == l;
+      };
+      const bool c00 = inside(0, 0), c10 = inside(1, 0), c01 = inside(0, 1), c11 = inside(1, 1);
+      if (!(c00 == c11 && c10 == c01 && c00 != c10)) continue;  // not ambiguous
+      // The label's corner of this edge on the face, and the other one.
+      const int ow_here = static_cast<int>(lp[w] - f[w]);
+      const int oa_here = up;
+      const int ow_other = 1 - ow_here;
+      // In each cell, the loop of the other arc's edge along axis (from the
+      // other corner's w-side, axis offset 0) against this edge's loop.
+      bool pinch = true;
+      for (int side : {m, m1}) {
+        // The cell's first corner in box coordinates.
+        Id c[3] = {lp[0], lp[1], lp[2]};
+        c[u] -= st[side][0], c[v] -= st[side][1];
+        // The other arc's edge along axis sits at w offset ow_other on the face.
+        int corner_here = 0, corner_other = 0;
+        for (int ax = 0; ax < 3; ++ax) {
+          const Id here = ax == axis ? 0 : (ax == w ? f[w] + ow_here : f[d]) - c[ax];
+          const Id other = ax == axis ? 0 : (ax == w ? f[w] + ow_other : f[d]) - c[ax];
+          corner_here |= static_cast<int>(here) << ax;
+          corner_other |= static_cast<int>(other) << ax;
+        }
+        const unsigned cs = cube[side];
+        pinch = pinch && loops.loop_of[cs][loops.edge_at[corner_here][axis]] ==
+                             loops.loop_of[cs][loops.edge_at[corner_other][axis]];
+      }
+      if (!pinch) continue;
+      // The arc around the label's corner (oa_here, ow_here) of the face.
+      const Id face_cell = f[0] + f[1] * cstride[1] + f[2] * cstride[2];
+      const int arc = (w < axis ? ow_here : oa_here) ? 1 : 0;  // by the face's first spanning axis
+      if (out) out[n] = static_cast<K>(4 * cells + 2 * (3 * face_cell + d) + arc);
+      ++n;
+    }
+    return n;
+  };
   std::vector<Id> row_offsets(static_cast<std::size_t>(rows + 1), 0);
   parallel::for_each_dynamic(rows, [&](Id r) {
     Id count = 0;
-    visit_row(r, [&](Id, Id, Id, int, LabelIndex, LabelIndex) { ++count; });
+    visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex) {
+      count += polygon(i, j, k, axis, a, nullptr) - 2;
+    });
     row_offsets[r] = count;
   }, 16);
-  const Id quads = parallel::exclusive_scan(row_offsets.data(), row_offsets.data(), rows + 1);
-  if (6 * quads > Id{std::numeric_limits<std::uint32_t>::max()})
-    throw LimitError("labels: " + std::to_string(2 * quads) + " triangles exceed the supported 1431655765");
-  soup.keys.resize(static_cast<std::size_t>(6 * quads));
-  soup.pair.resize(static_cast<std::size_t>(quads));
+  const Id triangles = parallel::exclusive_scan(row_offsets.data(), row_offsets.data(), rows + 1);
+  if (3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("labels: " + std::to_string(triangles) + " triangles exceed the supported 1431655765");
+  soup.keys.resize(static_cast<std::size_t>(3 * triangles));
+  soup.pair.resize(static_cast<std::size_t>(triangles));
   parallel::for_each_dynamic(rows, [&](Id r) {
-    Id q = row_offsets[r];
+    Id t = row_offsets[r];
     visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      const Id cell = i + j * cstride[1] + k * cstride[2];  // the cell whose first corner is p
-      // The four cells around the edge, counter-clockwise seen from +axis.
-      Id c[4] = {cell, cell - cstride[u], cell - cstride[u] - cstride[v], cell - cstride[v]};
-      K key[4];
-      if (only < 0) {
-        for (int m = 0; m < 4; ++m) key[m] = static_cast<K>(c[m]);
-      } else {
-        // The edge as a cube edge of each cell around it, and its loop there.
-        const Id p = vol.at(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k);
-        const int st[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-        for (int m = 0; m < 4; ++m) {
-          const Id first = p - st[m][0] * pstride[u] - st[m][1] * pstride[v];
-          const unsigned cube = corners.case_of(first, static_cast<LabelIndex>(only));
-          const int corner0 = (st[m][0] << u) | (st[m][1] << v);
-          key[m] = static_cast<K>(4 * c[m] + loops.loop_of[cube][loops.edge_at[corner0][axis]]);
-        }
-      }
+      K poly[8];
+      const int n = polygon(i, j, k, axis, a, poly);
       // Normal +axis points from a to b: keep the order when a is the
       // smaller label (network) or the surface's label (per label).
-      const bool keep = only < 0 ? a < b : a == only;
-      K* o = soup.keys.data() + 6 * q;
-      if (keep) {
-        o[0] = key[0], o[1] = key[1], o[2] = key[2], o[3] = key[0], o[4] = key[2], o[5] = key[3];
-      } else {
-        o[0] = key[0], o[1] = key[3], o[2] = key[2], o[3] = key[0], o[4] = key[2], o[5] = key[1];
+      if (!(only < 0 ? a < b : a == only)) std::reverse(poly + 1, poly + n);
+      // Fan from the first face point (corners that are face keys), else
+      // the quad's two triangles (C00, C10, C11), (C00, C11, C01).
+      int apex = 0;
+      for (int m = 0; m < n; ++m)
+        if (static_cast<Id>(poly[m]) >= 4 * cells && only >= 0) {
+          apex = m;
+          break;
+        }
+      K* o = soup.keys.data() + 3 * t;
+      for (int m = 1; m + 1 < n; ++m) {
+        *o++ = poly[apex];
+        *o++ = poly[(apex + m) % n];
+        *o++ = poly[(apex + m + 1) % n];
       }
       const LabelIndex lo = a < b ? a : b, hi = a < b ? b : a;
-      soup.pair[static_cast<std::size_t>(q)] = (std::uint32_t{lo} << 16) | hi;
-      ++q;
+      for (int m = 0; m < n - 2; ++m) soup.pair[static_cast<std::size_t>(t + m)] = (std::uint32_t{lo} << 16) | hi;
+      t += n - 2;
     });
   }, 16);
 }
@@ -206,8 +292,34 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
   out.cell_centre.resize(static_cast<std::size_t>(3 * (base + n)));
   out.junction.resize(static_cast<std::size_t>(base + n));
   out.border_axes.resize(static_cast<std::size_t>(base + n));
+  const Id cells = box.cells();
   parallel::for_each(n, [&](Id pt) {
     const Id key = static_cast<Id>(point_keys[static_cast<std::size_t>(pt)]);
+    const std::size_t at = static_cast<std::size_t>(base + pt);
+    if (only >= 0 && key >= 4 * cells) {
+      // A face point: on the face, a quarter spacing from the label's corner
+      // of its arc towards the face's centre.
+      const Id fk = key - 4 * cells, arc = fk % 2, face = fk / 2;
+      const int d = static_cast<int>(face % 3);
+      const Id fc = face / 3;
+      const Id f[3] = {box.lo[0] + fc % box.cx(), box.lo[1] + (fc / box.cx()) % (box.dims[1] - 1),
+                       box.lo[2] + fc / box.cxy()};
+      const int s1 = d == 0 ? 1 : 0, s2 = d == 2 ? 1 : 2;  // spanning axes, s1 < s2
+      const bool c00 = vol.index[static_cast<std::size_t>(vol.at(f[0], f[1], f[2]))] == only;
+      // The arc's corner: offsets along s1 and s2.
+      const int o1 = static_cast<int>(arc), o2 = c00 ? o1 : 1 - o1;
+      for (int a = 0; a < 3; ++a) {
+        double g = static_cast<double>(f[a]);
+        if (a == s1) g += o1 ? 0.75 : 0.25;
+        if (a == s2) g += o2 ? 0.75 : 0.25;
+        const double x = vol.coord(a, g);
+        out.mesh.points[3 * at + a] = static_cast<float>(x);
+        out.cell_centre[3 * at + a] = static_cast<float>(x);
+      }
+      out.border_axes[at] = 0;
+      out.junction[at] = corners.distinct(vol.at(f[0], f[1], f[2])) >= 3;  // the cell whose first corner is f
+      return;
+    }
     const Id cell = only < 0 ? key : key / 4;
     const Id local[3] = {cell % box.cx(), (cell / box.cx()) % (box.dims[1] - 1), cell / box.cxy()};
     const Id g[3] = {box.lo[0] + local[0], box.lo[1] + local[1], box.lo[2] + local[2]};
@@ -234,7 +346,6 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
       }
     }
     std::uint8_t border = 0;
-    const std::size_t at = static_cast<std::size_t>(base + pt);
     for (int a = 0; a < 3; ++a) {
       const double centre = vol.coord(a, static_cast<double>(g[a]) + 0.5);
       out.cell_centre[3 * at + a] = static_cast<float>(centre);
@@ -249,7 +360,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
 // Welds one soup (dense plan over the box's keys) and appends it to `out`.
 template <class K>
 void weld_and_append(const LabelVolume& vol, const Box& box, int only, Soup<K>& soup, LabelSurface& out) {
-  const K range = static_cast<K>(only < 0 ? box.cells() : 4 * box.cells());
+  const K range = static_cast<K>(only < 0 ? box.cells() : (4 + kFaceKeysPerCell) * box.cells());
   auto groups = keyreduce::partition_dense(soup.keys.data(), static_cast<Id>(soup.keys.size()), range,
                                            keyreduce::Order::Skip);
   const std::uint32_t base = static_cast<std::uint32_t>(out.junction.size());
@@ -257,10 +368,7 @@ void weld_and_append(const LabelVolume& vol, const Box& box, int only, Soup<K>& 
   out.mesh.connectivity.resize(c0 + groups.index_map.size());
   parallel::for_each(static_cast<Id>(groups.index_map.size()),
                      [&](Id i) { out.mesh.connectivity[c0 + static_cast<std::size_t>(i)] = base + groups.index_map[i]; });
-  for (std::uint32_t pq : soup.pair) {
-    out.pair.push_back(pq);
-    out.pair.push_back(pq);
-  }
+  out.pair.insert(out.pair.end(), soup.pair.begin(), soup.pair.end());
   append_points(vol, box, only, groups.unique_keys, out);
 }
 
@@ -302,7 +410,7 @@ void per_label(const LabelVolume& vol, LabelSurface& out, LabelStats& st) {
     generate_quads(vol, box, vol.selected[static_cast<std::size_t>(s)], soup);
     weld_and_append(vol, box, vol.selected[static_cast<std::size_t>(s)], soup, parts[static_cast<std::size_t>(s)]);
     parts[static_cast<std::size_t>(s)].mesh.cell_fields.push_back(
-        Field{"label", 1, std::vector<float>(soup.pair.size() * 2, static_cast<float>(vol.values[vol.selected[s]]))});
+        Field{"label", 1, std::vector<float>(soup.pair.size(), static_cast<float>(vol.values[vol.selected[s]]))});
   }, 1);
   st.generate += seconds_since(t0);
   for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());
@@ -313,7 +421,7 @@ void per_label(const LabelVolume& vol, LabelSurface& out, LabelStats& st) {
 
 LabelSurface surface_nets(const LabelVolume& volume, bool per_label_surfaces, LabelStats& stats) {
   LabelSurface out;
-  out.quads = true;
+  out.quads = !per_label_surfaces;  // per label, face points make some polygons longer than quads
   if (per_label_surfaces) {
     per_label(volume, out, stats);
   } else if (static_cast<std::uint64_t>(whole(volume).cells()) <= std::numeric_limits<std::uint32_t>::max()) {
