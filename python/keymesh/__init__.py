@@ -165,7 +165,7 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             default), "gradient" (interpolated central differences) or
             "none"/None. Normals point to lower values, and so do the
             triangles' right-hand-rule normals.
-        weld: "keyreduce" (dense plan, default), "keyreduce-sort" or
+        weld: "keyreduce" (structured plan, default), "keyreduce-sort" or
             "vertexweld" (the paper's coordinate-sort baseline); all give
             the same mesh.
         coarsen: merge the points nearest to one grid point (the key of a

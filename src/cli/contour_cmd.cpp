@@ -52,7 +52,7 @@ Register reg{Command{
       cmd.add_option("-o,--output", o->output, "output mesh (.vtp .ply .obj .stl .glb; under mpirun also .pvtp: one piece per rank)")->required();
       cmd.add_option("--iso", o->isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
       cmd.add_option("--weld", o->weld,
-                     "how to connect the soup: keyreduce (edge keys, dense plan: direct addressing; default), "
+                     "how to connect the soup: keyreduce (edge keys, structured plan: cut edges counted per row, no soup; default), "
                      "keyreduce-sort (KEY-REDUCE with the sort plan), "
                      "or vertexweld (coordinates, the paper's baseline)")
           ->check(CLI::IsMember({"keyreduce", "keyreduce-sort", "vertexweld"}));

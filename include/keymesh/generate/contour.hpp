@@ -3,10 +3,11 @@
 //
 // Every triangle corner is keyed by the implicit id of the grid edge it lies
 // on, 3 * point_id + axis (plus iso_index * 3 * N when several isovalues are
-// contoured at once). KEY-REDUCE groups the corners by key by direct
-// addressing (the key range is known, so no sort), its index map is the
-// connected triangle list, and every point's position and fields are computed
-// once per unique edge from the edge's two samples.
+// contoured at once). KEY-REDUCE groups the corners by key; by default with
+// its structured plan, which numbers the cut edges by counting them per grid
+// row (no sort, no soup: src/generate/contour_rows.hpp), so triangles are
+// written with their final point ids, and every point's position and fields
+// are computed once per unique edge from the edge's two samples.
 //
 // Guarantees:
 //  - inside means value >= iso; NaN samples are outside. A point is created
@@ -29,8 +30,9 @@ namespace keymesh::generate {
 
 enum class ContourNormals { None, Gradient, Average };
 // How the corners of the triangle soup become connected points:
-//  - KeyReduce:     KEY-REDUCE, dense plan: the key range is known, so groups
-//                   are found by direct addressing, no sort (default);
+//  - KeyReduce:     KEY-REDUCE, structured plan: the cut edges are counted per
+//                   grid row and numbered by prefix sums, so no soup is written
+//                   and nothing is sorted (default);
 //  - KeyReduceSort: KEY-REDUCE, sort plan (radix sort of the significant key bits);
 //  - VertexWeld:    the soup of positions, welded by coordinates (the baseline).
 // All three give the same mesh; the two KEY-REDUCE plans the same point order.
