@@ -3,7 +3,7 @@
 //   contour_bench --size 512 --threads 2 --reps 5
 //                 [--weld keyreduce|keyreduce-sort|vertexweld]
 //                 [--normals none|gradient|average] [--iso V] [--grid voxel|tet5]
-//                 [--file VOLUME]
+//                 [--file VOLUME] [--iso V1,V2,...]
 // --file contours a volume file (any format keymesh::io::read_volume reads:
 // .vti .nrrd .nii(.gz) .den) instead of generating the sphere; --iso is then
 // required and "size" reports the largest dimension.
@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   int threads = 0, reps = 5;
   std::string weld = "keyreduce", normals = "none", grid_kind = "voxel", file;
   double iso = -1;
+  std::vector<double> isos;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--size") size = std::atoll(argv[i + 1]);
@@ -41,7 +42,16 @@ int main(int argc, char** argv) {
     else if (a == "--reps") reps = std::atoi(argv[i + 1]);
     else if (a == "--weld") weld = argv[i + 1];
     else if (a == "--normals") normals = argv[i + 1];
-    else if (a == "--iso") iso = std::atof(argv[i + 1]);
+    else if (a == "--iso") {
+      // One isovalue, or several separated by commas (contoured in one call).
+      isos.clear();
+      for (std::string rest = argv[i + 1]; !rest.empty();) {
+        const auto comma = rest.find(',');
+        isos.push_back(std::atof(rest.substr(0, comma).c_str()));
+        rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+      }
+      iso = isos.empty() ? -1 : isos.front();
+    }
     else if (a == "--grid") grid_kind = argv[i + 1];
     else if (a == "--file") file = argv[i + 1];
     else {
@@ -68,7 +78,7 @@ int main(int argc, char** argv) {
     build = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   generate::ContourOptions opt;
-  opt.isovalues = {iso};
+  opt.isovalues = isos.size() > 1 ? isos : std::vector<double>{iso};
   opt.weld = weld == "vertexweld"       ? generate::ContourWeld::VertexWeld
              : weld == "keyreduce-sort" ? generate::ContourWeld::KeyReduceSort
                                         : generate::ContourWeld::KeyReduce;

@@ -96,6 +96,16 @@ def cases(names):
             raise SystemExit(f"unknown case {name}")
 
 
+def write_nrrd(path, v):
+    """A raw, attached-header .nrrd of a (nz, ny, nx) array (x fastest)."""
+    kind = {np.dtype(np.uint8): "uint8", np.dtype(np.float32): "float"}[v.dtype]
+    nz, ny, nx = v.shape
+    with open(path, "wb") as f:
+        f.write(f"NRRD0004\ntype: {kind}\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n"
+                f"endian: little\n\n".encode())
+        f.write(np.ascontiguousarray(v).tobytes())
+
+
 def timed(fn, reps):
     fn()  # warm-up: code paths, thread pools
     times = []
@@ -121,6 +131,7 @@ def main():
     ap.add_argument("--single-isos", action="store_true",
                     help="also time each isovalue of multi-isovalue cases alone (the sum is reported)")
     ap.add_argument("--json", help="append one JSON line per measurement to this file")
+    ap.add_argument("--dump", help="also write each case's volume to DIR/CASE.nrrd (for bench/contour_bench)")
     a = ap.parse_args()
     tools = a.tools.split(",")
     huge = "glibc.malloc.hugetlb=1" in os.environ.get("GLIBC_TUNABLES", "")
@@ -146,10 +157,15 @@ def main():
                 out.write(json.dumps(r) + "\n")
                 out.flush()
 
+        dump = None
+        if a.dump:
+            dump = os.path.join(a.dump, name + ".nrrd")
+            if not os.path.exists(dump):
+                write_nrrd(dump, v)
         if "keymesh" in tools:
             grid = v.T  # shape (nx, ny, nz), Fortran order: keymesh's axis 0 = x, read in place
             times, m = timed(lambda: keymesh.contour(grid, isos, normals="none", threads=a.threads), a.reps)
-            record("keymesh", times, m.n_points, m.n_cells, {"stages": dict(keymesh.last_contour_info)})
+            record("keymesh", times, m.n_points, m.n_cells, {"stages": dict(keymesh.last_contour_info), "dump": dump})
             if a.single_isos and len(isos) > 1:
                 total = 0.0
                 for iso in isos:

@@ -29,16 +29,18 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SYSTEM_PYTHON = "/usr/bin/python3"
 
 
-def env_hugepages():
+def env_hugepages(huge_pages=True):
     env = dict(os.environ)
     t = env.get("GLIBC_TUNABLES", "")
-    if "glibc.malloc.hugetlb" not in t:
+    if huge_pages and "glibc.malloc.hugetlb" not in t:
         env["GLIBC_TUNABLES"] = (t + ":" if t else "") + "glibc.malloc.hugetlb=1"
+    if not huge_pages:
+        env["GLIBC_TUNABLES"] = ":".join(x for x in t.split(":") if x and "glibc.malloc.hugetlb" not in x)
     return env
 
 
-def run_json(cmd, extra_env=None):
-    env = env_hugepages()
+def run_json(cmd, extra_env=None, huge_pages=True):
+    env = env_hugepages(huge_pages)
     env.update(extra_env or {})
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
@@ -214,6 +216,7 @@ def main():
                               str(threads_all), "--repeat", str(peer_reps)], {"PYTHONPATH": os.path.join(a.build, "python")})
         except SystemExit as e:
             rows.append(skipped("labels_bench.py", str(e)))
+        rows += dense_rows(bench, a.build, threads_all, peer_reps, work, a.quick)
         progress("pictures (Figures 8-10), rendered off-screen with VTK")
         rows += figures(keymesh, work, "head128" if a.quick else names[-1], a.quick)
     seconds = time.time() - t_start
@@ -246,6 +249,32 @@ VTK_CONTOUR_PEERS = "vtkFlyingEdges3D,vtkMarchingCubes,vtkCleanPolyData"
 # other builds (load average 4-5): full 17.5 min, QUICK 2.1 min, plus the
 # build; printed at the start so that a user knows what to expect.
 EXPECTED_MINUTES = {"quick": 2, "full": 18}
+
+
+def dense_rows(bench, build, threads, reps, work, quick):
+    """Issue 17's real and dense volumes (bench/dense.py): keymesh.contour and
+    vtkFlyingEdges3D in one Python process on the same arrays, with huge pages
+    (glibc.malloc.hugetlb=1) and with the default malloc of a Python process;
+    then the C++ harness (contour_bench) on the same volumes written as .nrrd."""
+    cases = "brain,brain8,head256" if quick else "brain,brain8,noise,head256,sphere512"
+    dense = os.path.join(HERE, "dense.py")
+    env = {"PYTHONPATH": os.path.join(build, "python")}
+    rows = []
+    for huge in (True, False):
+        progress(f"dense volumes {cases}: keymesh.contour vs vtkFlyingEdges3D, huge pages {huge}")
+        try:
+            rows += run_json([SYSTEM_PYTHON, dense, "--threads", str(threads), "--reps", str(reps), "--cases", cases,
+                              "--single-isos"] + (["--dump", work] if huge else []), env, huge_pages=huge)
+        except SystemExit as e:
+            rows.append(skipped("dense.py", str(e)))
+            return rows
+    for r in [r for r in rows if r.get("dump")]:
+        progress(f"dense {r['case']}: contour_bench (C++ harness)")
+        c = run_json([bench, "--file", r["dump"], "--iso", ",".join(str(v) for v in r["isovalues"]),
+                      "--threads", str(threads), "--reps", str(reps)])[0]
+        c.update(bench="dense", case=r["case"], tool="contour_bench", huge_pages=True)
+        rows.append(c)
+    return rows
 
 
 def thread_counts(threads_all, all_only=False):

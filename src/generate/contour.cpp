@@ -9,7 +9,6 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/core/huge_pages.hpp"
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
@@ -17,6 +16,7 @@
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/weld/vertex_weld.hpp"
@@ -173,11 +173,11 @@ PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& gri
   auto field = [&](const std::string& name, int components) {
     mesh.point_fields.push_back(Field{name, components, {}});
     auto& values = mesh.point_fields.back().values;
-    resize_with_huge_pages(values, static_cast<std::size_t>(components * points));
+    parallel::resize_fresh(values, static_cast<std::size_t>(components * points));
     return values.data();
   };
   if (write_xyz) {
-    resize_with_huge_pages(mesh.points, static_cast<std::size_t>(3 * points));
+    parallel::resize_fresh(mesh.points, static_cast<std::size_t>(3 * points));
     w.out.xyz = mesh.points.data();
   }
   if (opt.scalars) w.out.scalar = field(grid.name, 1);
@@ -257,7 +257,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
 
   SurfaceMesh mesh;
   auto t0 = Clock::now();
-  resize_with_huge_pages(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
+  parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
   for (Id iso = 0; iso < n_iso; ++iso) write_triangles(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data());
   st.generate += seconds_since(t0);
 

@@ -46,7 +46,7 @@ struct RowCuts {
   Id last_x_word = 0;                     // the word of sample nx - 1, which starts no x edge
   std::uint64_t last_x_mask = 0;          // ~bit of sample nx - 1 in that word
 
-  RowCuts(const InsideBits& bits, const GridShape& s, Id j, Id k, Id last_plane) {
+  [[gnu::always_inline]] RowCuts(const InsideBits& bits, const GridShape& s, Id j, Id k, Id last_plane) {
     in = bits.row(j, k, s.ny);
     next_y = j + 1 < s.ny ? bits.row(j + 1, k, s.ny) : nullptr;
     next_z = k < last_plane ? bits.row(j, k + 1, s.ny) : nullptr;
@@ -61,7 +61,7 @@ struct RowCuts {
   };
 
   // Word q (zero past the samples).
-  Words word(Id q) const {
+  [[gnu::always_inline]] Words word(Id q) const {
     Words w;
     if (q >= data_words) return w;
     const std::uint64_t a = in[q];

@@ -10,7 +10,6 @@
 // starts: executables call this first thing in main() and are re-executed
 // once with the tunable added (KEYMESH_HUGE_PAGES=0 turns it off).
 #include <cstddef>
-#include <vector>
 
 namespace keymesh {
 
@@ -26,16 +25,5 @@ void reexec_with_huge_pages(int argc, char** argv);
 // what a host process that was not started with the tunable (Python) needs:
 // the kernel's THP mode here is `madvise`.
 void advise_huge_pages(void* data, std::size_t bytes);
-
-// Sizes `v` to n elements with huge pages asked for before the first touch
-// (reserve, advise, then resize).
-template <class T>
-void resize_with_huge_pages(std::vector<T>& v, std::size_t n) {
-  if (n > v.capacity()) {
-    v.reserve(n);
-    advise_huge_pages(v.data(), n * sizeof(T));
-  }
-  v.resize(n);
-}
 
 }  // namespace keymesh
