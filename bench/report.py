@@ -641,6 +641,38 @@ class Report:
                 "per label; the smoothing stage alone below. Medians after a warm-up.", "",
                 table(["case", "thr", "seconds", "points", "triangles", "VTK / keymesh", "load"], body), ""]
 
+    def dense_table(self):
+        rows = [r for r in self.rows if r.get("bench") == "dense" and "median" in r]
+        if not rows:
+            return []
+        body = []
+        for case in dict.fromkeys(r["case"] for r in rows):
+            for huge in (True, False):
+                km = next((r for r in rows if r["case"] == case and r["tool"] == "keymesh" and r["huge_pages"] == huge), None)
+                fe = next((r for r in rows if r["case"] == case and r["tool"] == "vtkFlyingEdges3D"
+                           and r["huge_pages"] == huge), None)
+                if not km:
+                    continue
+                cpp = next((r for r in rows if r["case"] == case and r["tool"] == "contour_bench"), None) if huge else None
+                body.append([km["label"] + (f", {len(km['isovalues'])} isovalues" if len(km["isovalues"]) > 1 else ""),
+                             "on" if huge else "off", f"{km['cells']:,}", f"{km['median'] * 1e3:.1f}",
+                             f"{fe['median'] * 1e3:.1f}" if fe else "", f"{fe['median'] / km['median']:.2f}×" if fe else "",
+                             f"{cpp['median'] * 1e3:.1f}" if cpp else "",
+                             f"{km['sum_single'] / km['median']:.2f}" if km.get("sum_single") else "",
+                             f"{km['input_mib']:.0f} + {km['output_mib']:.0f}" if "output_mib" in km else "",
+                             f"{cpp['peak_rss_mib']:.0f}" if cpp else "", km.get("loadavg", "")])
+        return ["## Real and dense volumes (issue 17)", "",
+                "`bench/dense.py`: `keymesh.contour` (Python module, fresh output arrays, normals off) and "
+                "vtkFlyingEdges3D (normals, gradients and scalars off) in one process on the same array, "
+                f"{rows[0]['threads']} threads, medians after a warm-up; with huge pages "
+                "(`glibc.malloc.hugetlb=1` for the whole process) and without (a Python process's default "
+                "malloc; keymesh still asks `madvise` for its output arrays). C++ harness: `bench/contour_bench` "
+                "on the same volume (huge pages). Several isovalues: the sum of the single-isovalue medians over "
+                "the one-call median (≥ 1: one call costs no more). Memory: input + output MiB of the call, and the "
+                "C++ harness's peak RSS (the whole process: volume read, contour, output).", "",
+                table(["volume", "huge pages", "triangles", "keymesh ms", "FE3D ms", "FE3D / keymesh", "C++ harness ms",
+                       "Σ single / one call", "input + output MiB", "harness peak MiB", "load"], body), ""]
+
     def write(self, path, plotdir):
         plots = self.plots(plotdir)
         parts = (self.header() + self.headlines() + self.table1() + self.table2() +
@@ -652,7 +684,7 @@ class Report:
                                "`bench/ops_bench --op tet24`: face centres keyed by the face (KEY-REDUCE) or welded "
                                "by coordinates (VERTEX-WELD); run up to 128³ (49 M tets). Data-independent: the "
                                "MRI row times the same grid shape.", PAPER_T4) +
-                 self.table5_6() + self.labels_table() + self.losses() + self.skipped() + self.figures(plots))
+                 self.table5_6() + self.dense_table() + self.labels_table() + self.losses() + self.skipped() + self.figures(plots))
         with open(path, "w") as f:
             f.write("\n".join(parts).rstrip() + "\n")
         return path
