@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/io/input_file.hpp"
 #include "keymesh/io/volume_formats.hpp"
 
 namespace keymesh::io {
@@ -71,7 +72,8 @@ class DicomPlanes : public generate::PlaneSource {
     std::error_code ec;
     for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
       const std::string name = entry.path().filename().string();
-      if (name.empty() || name[0] == '.' || name == "DICOMDIR" || !entry.is_regular_file(ec)) continue;
+      if (name.empty() || name[0] == '.' || name == "DICOMDIR" || entry.is_directory(ec)) continue;
+      input_size(entry.path().string());  // as every input: a FIFO or a device is refused by name
       files.push_back(entry.path().string());
     }
     if (ec) throw InputError(folder + ": cannot list the folder: " + ec.message());

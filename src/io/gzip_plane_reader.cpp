@@ -1,14 +1,15 @@
 #include "keymesh/io/gzip_plane_reader.hpp"
 
-#include <fcntl.h>
 #include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <utility>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/io/input_file.hpp"
 
 namespace keymesh::io {
 
@@ -31,7 +32,10 @@ GzipPlaneReader::~GzipPlaneReader() {
 void GzipPlaneReader::open_at_first_plane() {
   if (gz_) gzclose(static_cast<gzFile>(gz_));
   gz_ = nullptr;
-  const int fd = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+  // Opened as every input is (regular files only); zlib gets its own
+  // descriptor, positioned at the gzip data.
+  InputFile in(path_);
+  const int fd = ::dup(fileno(in.stream()));
   if (fd < 0) throw InputError(path_ + ": cannot open: " + std::strerror(errno));
   if (::lseek(fd, static_cast<off_t>(file_offset_), SEEK_SET) < 0) {
     ::close(fd);

@@ -174,6 +174,12 @@ def dicom_mixed_series_refused():
         f.truncate(os.path.getsize(os.path.join(cut, "s6")) - 100)
     refused(cut, ["s6"])
 
+    fifo = os.path.join(D, "fifo")  # a FIFO among the slices would block a reader: refused as every input
+    shutil.copytree(base, fifo)
+    os.mkfifo(os.path.join(fifo, "pipe"))
+    p = run("convert", fifo, "-o", os.path.join(D, "fifo.nrrd"), expect=1)
+    assert p.stderr.strip() == f"keymesh: {os.path.join(fifo, 'pipe')}: not a regular file (a FIFO)", p.stderr
+
     empty = os.path.join(D, "empty")
     os.makedirs(empty)
     refused(empty, ["no file"])

@@ -3,9 +3,10 @@
 // as scanners and PACS export them), read with GDCM (Debian libgdcm-dev),
 // which also decodes compressed transfer syntaxes (JPEG, JPEG 2000, RLE).
 //
-// Every regular file of the folder (not its sub-folders; hidden files and
-// DICOMDIR skipped) must be a slice of the same series: same
-// SeriesInstanceUID, Rows x Columns, ImageOrientationPatient, PixelSpacing
+// Every file of the folder (not its sub-folders; hidden files and DICOMDIR
+// skipped; a FIFO or device refused by name, as every input) must be a
+// slice of the same series: same SeriesInstanceUID, Rows x Columns,
+// ImageOrientationPatient, PixelSpacing
 // and pixel format (one sample of 8, 16 or signed 32 bits), else the folder
 // is refused naming the two files that differ. Slices are ordered by their
 // ImagePositionPatient projected on the slice normal (row cosine x column
