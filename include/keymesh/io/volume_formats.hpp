@@ -26,8 +26,8 @@ struct VolumeLayout {
 };
 VolumeLayout nrrd_layout(const std::string& path);
 VolumeLayout nifti_layout(const std::string& path);
-// A .vti whose point array is appended raw and uncompressed (ParaView's
-// default for large images); otherwise `compressed` says why it cannot be
+// A .vti whose point array is appended raw and uncompressed (as keymesh
+// writes it; ParaView with compression off); otherwise `compressed` says why it cannot be
 // read by offset.
 VolumeLayout vti_layout(const std::string& path);
 
