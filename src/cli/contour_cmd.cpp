@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "command.hpp"
+#include "raw_input.hpp"
 #include "keymesh/analyze/topology.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/contour_tets.hpp"
@@ -32,11 +33,7 @@ struct ContourCli {
   bool gather = false;       // under mpirun: one file from rank 0
   bool balance = false;      // under mpirun: slabs by work
   // Raw input description.
-  std::vector<long long> dims;
-  std::string type = "float32";
-  std::vector<double> spacing, origin;
-  std::string endian = "little";
-  long long header_bytes = 0;
+  RawInputCli raw_input;
   CommonOptions common;
 };
 
@@ -67,25 +64,7 @@ Register reg{Command{
       cmd.add_flag("--coarsen", o->coarsen,
                    "merge the points nearest to one grid point (key = nearest input point on the edge), "
                    "averaging positions and fields; drop collapsed triangles");
-      auto* dims = cmd.add_option("--dims", o->dims, "raw input: points along x y z")->expected(3);
-      cmd.add_option("--type", o->type, "raw input: uint8 int8 uint16 int16 int32 float32 float64")
-          ->check(CLI::Validator(
-              [](std::string& text) -> std::string {
-                try {
-                  parse_scalar_type(text);
-                  return {};
-                } catch (const std::exception& e) {
-                  return e.what();
-                }
-              },
-              "TYPE"))
-          ->needs(dims);
-      cmd.add_option("--spacing", o->spacing, "raw input: voxel spacing x y z")->expected(3)->needs(dims);
-      cmd.add_option("--origin", o->origin, "raw input: origin x y z")->expected(3)->needs(dims);
-      cmd.add_option("--endian", o->endian, "raw input: little or big")
-          ->check(CLI::IsMember({"little", "big"}))->needs(dims);
-      cmd.add_option("--header-bytes", o->header_bytes, "raw input: bytes to skip")->needs(dims)
-          ->check(CLI::NonNegativeNumber);
+      o->raw_input.add_options(cmd);
       cmd.add_option("--memory-limit", o->memory_limit,
                      "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
                      "the output is byte-identical (averaged normals: within float rounding); raw (--dims), "
@@ -107,16 +86,8 @@ Register reg{Command{
         const int threads = apply_threads(o->common);
         StageTimer timer;
         Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
-        io::RawOptions raw;
-        const bool is_raw = !o->dims.empty();
-        if (is_raw) {
-          raw.dims = {o->dims[0], o->dims[1], o->dims[2]};
-          raw.type = parse_scalar_type(o->type);
-          if (!o->spacing.empty()) raw.spacing = {o->spacing[0], o->spacing[1], o->spacing[2]};
-          if (!o->origin.empty()) raw.origin = {o->origin[0], o->origin[1], o->origin[2]};
-          raw.big_endian = o->endian == "big";
-          raw.header_bytes = o->header_bytes;
-        }
+        const bool is_raw = o->raw_input.given();
+        const io::RawOptions raw = is_raw ? o->raw_input.options() : io::RawOptions{};
         generate::ContourOptions opt;
         opt.isovalues = o->isovalues;
         opt.weld = o->weld == "vertexweld"       ? generate::ContourWeld::VertexWeld

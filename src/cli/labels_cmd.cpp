@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "command.hpp"
+#include "raw_input.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/labels.hpp"
 #include "keymesh/io/mesh_io.hpp"
@@ -21,6 +22,7 @@ struct LabelsCli {
   bool per_label = false;
   int smooth = 16;
   double relaxation = 0.5;
+  RawInputCli raw_input;
   CommonOptions common;
 };
 
@@ -28,7 +30,9 @@ Register reg{Command{
     "labels", "surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys",
     [](CLI::App& cmd) -> std::function<int()> {
       auto o = std::make_shared<LabelsCli>();
-      cmd.add_option("input", o->input, "integer volume (uint8 int8 uint16 int16 int32): .vti .nrrd .nhdr .nii .nii.gz .den")
+      cmd.add_option("input", o->input,
+                     "integer volume (uint8 int8 uint16 int16 int32): .vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or "
+                     "Zarr folder, or raw with --dims")
           ->required();
       cmd.add_option("-o,--output", o->output,
                      "output mesh: .vtp keeps the cell fields boundary_labels (and label); .ply .obj .stl drop them")
@@ -50,6 +54,7 @@ Register reg{Command{
           ->check(CLI::NonNegativeNumber);
       cmd.add_option("--relaxation", o->relaxation, "smoothing relaxation factor in (0, 1] (default 0.5)")
           ->check(CLI::Range(1e-9, 1.0));
+      o->raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32");
       add_common_options(cmd, o->common);
       return [o]() {
         if (int refused = require_cpu_backend(o->common, "labels")) return refused;
@@ -65,7 +70,9 @@ Register reg{Command{
         opt.smooth_iterations = o->smooth;
         opt.relaxation = o->relaxation;
         progress.say("reading " + o->input);
-        const ImageGrid grid = timer.run("read", [&] { return io::read_volume(o->input); });
+        const io::RawOptions raw = o->raw_input.given() ? o->raw_input.options() : io::RawOptions{};
+        const ImageGrid grid =
+            timer.run("read", [&] { return io::read_volume(o->input, o->raw_input.given() ? &raw : nullptr); });
         progress.enable_if(grid.num_points() > (1ll << 25));
         generate::LabelStats stats;
         SurfaceMesh mesh;

@@ -273,6 +273,14 @@ def every_integer_type():
         out = os.path.join(D, f"t-{dt.__name__}.vtp")
         run("labels", path, "-o", out, "--smooth", 0, "-q")
         assert open(out, "rb").read() == open(base, "rb").read(), dt
+    # The same samples as headerless raw data (big-endian, after a 16-byte header).
+    raw = os.path.join(D, "t.raw")
+    with open(raw, "wb") as f:
+        f.write(b"x" * 16 + VOL.astype(">i2").tobytes(order="F"))
+    out = os.path.join(D, "t-raw.vtp")
+    run("labels", raw, "-o", out, "--smooth", 0, "-q", "--dims", *VOL.shape, "--type", "int16", "--spacing", *SPACING,
+        "--endian", "big", "--header-bytes", 16)
+    assert open(out, "rb").read() == open(base, "rb").read()
 
 
 def bad_input_refused():
@@ -298,6 +306,6 @@ check("surface nets network: face labels = voxels across the edge, counts per pa
 check("smoothing: stays in its cell, bounded area/volume change, 1 and 2 threads identical",
       smoothing_bounded_and_thread_independent)
 check("--labels selects, --background", selection_and_background)
-check("uint8/int8/uint16/int32 give the int16 bytes", every_integer_type)
+check("uint8/int8/uint16/int32 and big-endian raw give the int16 bytes", every_integer_type)
 check("float volume, too many labels, missing label, bad options refused", bad_input_refused)
 finish()
