@@ -3,7 +3,7 @@
 //   contour_bench --size 512 --threads 2 --reps 5
 //                 [--weld keyreduce|keyreduce-sort|vertexweld]
 //                 [--normals none|gradient|average] [--iso V] [--grid voxel|tet5]
-//                 [--file VOLUME] [--iso V1,V2,...]
+//                 [--file VOLUME] [--iso V1,V2,...] [--coarsen on]
 // --file contours a volume file (any format keymesh::io::read_volume reads:
 // .vti .nrrd .nii(.gz) .den) instead of generating the sphere; --iso is then
 // required and "size" reports the largest dimension.
@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   int threads = 0, reps = 5;
   std::string weld = "keyreduce", normals = "none", grid_kind = "voxel", file;
   double iso = -1;
+  bool coarsen = false;
   std::vector<double> isos;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
     }
     else if (a == "--grid") grid_kind = argv[i + 1];
     else if (a == "--file") file = argv[i + 1];
+    else if (a == "--coarsen") coarsen = std::string(argv[i + 1]) == "on";
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -86,6 +88,7 @@ int main(int argc, char** argv) {
                 : normals == "gradient" ? generate::ContourNormals::Gradient
                                         : generate::ContourNormals::None;
   opt.scalars = false;
+  opt.coarsen = coarsen;
   std::vector<double> times;
   generate::ContourStats stats;
   Id points = 0, cells = 0;
@@ -103,9 +106,9 @@ int main(int argc, char** argv) {
   std::printf(
       "{\"bench\":\"contour\",\"grid\":\"%s\",\"build\":%.6f,\"size\":%lld,\"iso\":%.6f,\"weld\":\"%s\",\"normals\":\"%s\",\"threads\":%d,"
       "\"points\":%lld,\"cells\":%lld,\"median\":%.6f,\"min\":%.6f,\"max\":%.6f,\"first\":%.6f,\"reps\":%d,"
-      "\"classify\":%.6f,\"generate\":%.6f,\"weld_s\":%.6f,\"fields\":%.6f,\"peak_rss_mib\":%.1f}\n",
+      "\"classify\":%.6f,\"generate\":%.6f,\"weld_s\":%.6f,\"fields\":%.6f,\"coarsen_s\":%.6f,\"peak_rss_mib\":%.1f}\n",
       grid_kind.c_str(), build, size, iso, weld.c_str(), normals.c_str(), used, (long long)points, (long long)cells, times[times.size() / 2],
-      times.front(), times.back(), first, reps, stats.classify, stats.generate, stats.weld, stats.fields,
+      times.front(), times.back(), first, reps, stats.classify, stats.generate, stats.weld, stats.fields, stats.coarsen,
       static_cast<double>(usage.ru_maxrss) / 1024.0);
   return 0;
 }
