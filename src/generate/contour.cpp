@@ -19,7 +19,7 @@
 #include "keymesh/parallel/fresh_memory.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
-#include "keymesh/weld/vertex_weld.hpp"
+#include "keymesh/keyreduce/weld.hpp"
 #include "contour_rows.hpp"
 #include "voxel_bits.hpp"
 
@@ -308,26 +308,19 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
     blocks.push_back(corners);
     st.soup_points = corners;
     auto t0 = Clock::now();
-    if (opt.weld == ContourWeld::KeyReduceSort) {
-      groups = keyreduce::partition_sort(soup.data(), corners, parallel::bits_needed<K>(key_range - 1),
-                                         keyreduce::Order::Skip);
-      mesh.connectivity = std::move(groups.index_map);  // the index map is the triangle list
-    } else {
-      // VERTEX-WELD: the soup a plain marching cubes writes, a position per
-      // corner, welded by coordinates.
-      std::vector<float> soup_xyz(3 * corners);
-      parallel::for_each(corners, [&](Id c) { interp.position(interp.locate(soup[c]), &soup_xyz[3 * c]); });
-      weld::WeldResult welded = weld::vertex_weld(soup_xyz.data(), corners);
-      mesh.points = std::move(welded.points);
-      mesh.connectivity = std::move(welded.index_map);
-      groups.unique_keys.resize(welded.first.size());
-      parallel::for_each(groups.num_groups(), [&](Id p) { groups.unique_keys[p] = soup[welded.first[p]]; });
-      if (average) {
-        // Average over the coordinate-welded groups with KEY-REDUCE's reduction.
-        groups.index_map = mesh.connectivity;
-        keyreduce::build_order(groups);
-      }
-    }
+    // VERTEX-WELD welds the soup a plain marching cubes writes, a position
+    // per corner, by coordinates; its groups are averaged with KEY-REDUCE's
+    // ordered reduction (they have no slab blocks).
+    const bool by_position = opt.weld == ContourWeld::VertexWeld;
+    keyreduce::WeldSpec<K> spec;
+    spec.plan = by_position ? keyreduce::WeldPlan::ByPosition : keyreduce::WeldPlan::Sort;
+    spec.key_bits = parallel::bits_needed<K>(key_range - 1);
+    spec.order = by_position && average ? keyreduce::Order::Build : keyreduce::Order::Skip;
+    groups = keyreduce::weld(
+        soup.data(), corners, spec, [&](Id c, float* xyz) { interp.position(interp.locate(soup[c]), xyz); },
+        {by_position ? &mesh.points : nullptr, nullptr});
+    // The index map is the triangle list.
+    mesh.connectivity = spec.order == keyreduce::Order::Build ? groups.index_map : std::move(groups.index_map);
     st.weld += seconds_since(t0);
   }
   bits.words = {};

@@ -13,6 +13,7 @@
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/keyreduce/weld.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -266,23 +267,17 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
   keyreduce::Groups<std::uint64_t> groups;
   const bool average = opt.normals == ContourNormals::Average;
   auto t0 = Clock::now();
-  if (opt.weld == ContourWeld::VertexWeld) {
-    std::vector<float> soup_xyz(static_cast<std::size_t>(3 * corners));
-    parallel::for_each(corners, [&](Id c) { position(locate(soup[c]), &soup_xyz[3 * c]); });
-    weld::WeldResult welded = weld::vertex_weld(soup_xyz.data(), corners);
-    mesh.points = std::move(welded.points);
-    mesh.connectivity = std::move(welded.index_map);
-    groups.unique_keys.resize(welded.first.size());
-    parallel::for_each(groups.num_groups(), [&](Id p) { groups.unique_keys[p] = soup[welded.first[p]]; });
-    if (average) {
-      groups.index_map = mesh.connectivity;
-      keyreduce::build_order(groups);
-    }
-  } else {
+  {
     // Both KEY-REDUCE plan names use the sort plan here: N^2 edge keys are
     // too many to address directly.
-    groups = keyreduce::partition_sort(soup.data(), corners, 2 * ek.bits + iso_bits,
-                                       average ? keyreduce::Order::Build : keyreduce::Order::Skip);
+    const bool by_position = opt.weld == ContourWeld::VertexWeld;
+    keyreduce::WeldSpec<std::uint64_t> spec;
+    spec.plan = by_position ? keyreduce::WeldPlan::ByPosition : keyreduce::WeldPlan::Sort;
+    spec.key_bits = 2 * ek.bits + iso_bits;
+    spec.order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
+    groups = keyreduce::weld(
+        soup.data(), corners, spec, [&](Id c, float* xyz) { position(locate(soup[c]), xyz); },
+        {by_position ? &mesh.points : nullptr, nullptr});
     mesh.connectivity = groups.index_map;
   }
   soup = {};

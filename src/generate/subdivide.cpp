@@ -14,7 +14,7 @@
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
-#include "keymesh/weld/vertex_weld.hpp"
+#include "keymesh/keyreduce/weld.hpp"
 
 namespace keymesh::generate {
 
@@ -48,20 +48,14 @@ struct EdgeGroups {
 
 template <class Position>
 EdgeGroups group_edges(const std::vector<std::uint64_t>& keys, int key_bits, SubdivideWeld weld, Position&& position) {
+  keyreduce::WeldSpec<std::uint64_t> spec;
+  spec.plan = weld == SubdivideWeld::KeyReduce ? keyreduce::WeldPlan::Sort : keyreduce::WeldPlan::ByPosition;
+  spec.key_bits = key_bits;
+  auto g = keyreduce::weld(keys.data(), static_cast<Id>(keys.size()), spec,
+                           [&](Id i, float* xyz) { position(keys[i], xyz); });
   EdgeGroups out;
-  const Id n = static_cast<Id>(keys.size());
-  if (weld == SubdivideWeld::KeyReduce) {
-    auto g = keyreduce::partition_sort(keys.data(), n, key_bits, keyreduce::Order::Skip);
-    out.edge_key = std::move(g.unique_keys);
-    out.index_map = std::move(g.index_map);
-    return out;
-  }
-  std::vector<float> xyz(static_cast<std::size_t>(3 * n));
-  parallel::for_each(n, [&](Id i) { position(keys[i], &xyz[3 * i]); });
-  weld::WeldResult w = weld::vertex_weld(xyz.data(), n);
-  out.index_map = std::move(w.index_map);
-  out.edge_key.resize(w.first.size());
-  parallel::for_each(static_cast<Id>(w.first.size()), [&](Id p) { out.edge_key[p] = keys[w.first[p]]; });
+  out.edge_key = std::move(g.unique_keys);
+  out.index_map = std::move(g.index_map);
   return out;
 }
 

@@ -11,7 +11,7 @@
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
-#include "keymesh/weld/vertex_weld.hpp"
+#include "keymesh/keyreduce/weld.hpp"
 
 namespace keymesh::generate {
 
@@ -32,21 +32,16 @@ struct FaceGroups {
 template <class K, class Position>
 FaceGroups group_faces(const std::vector<K>& keys, bool dense, K key_range, int key_bits, bool vertex_weld,
                        Position&& position) {
+  keyreduce::WeldSpec<K> spec;
+  spec.plan = vertex_weld ? keyreduce::WeldPlan::ByPosition
+              : dense     ? keyreduce::WeldPlan::Dense
+                          : keyreduce::WeldPlan::Sort;
+  spec.key_range = key_range;
+  spec.key_bits = key_bits;
   FaceGroups out;
-  const Id n = static_cast<Id>(keys.size());
-  if (vertex_weld) {
-    std::vector<float> xyz(static_cast<std::size_t>(3 * n));
-    parallel::for_each(n, [&](Id i) { position(i, &xyz[3 * i]); });
-    weld::WeldResult w = weld::vertex_weld(xyz.data(), n);
-    out.index_map = std::move(w.index_map);
-    out.first = std::move(w.first);
-    return out;
-  }
-  auto g = dense ? keyreduce::partition_dense(keys.data(), n, key_range, keyreduce::Order::Skip)
-                 : keyreduce::partition_sort(keys.data(), n, key_bits, keyreduce::Order::Skip);
-  // The first pair of each group: the smallest pair index with that group.
-  out.first.assign(static_cast<std::size_t>(g.num_groups()), std::numeric_limits<std::uint32_t>::max());
-  for (Id i = n - 1; i >= 0; --i) out.first[g.index_map[i]] = static_cast<std::uint32_t>(i);
+  // The first pair of each group: a face centre is computed from the cell
+  // that names it first, whichever plan grouped it.
+  auto g = keyreduce::weld(keys.data(), static_cast<Id>(keys.size()), spec, position, {nullptr, &out.first});
   out.index_map = std::move(g.index_map);
   return out;
 }

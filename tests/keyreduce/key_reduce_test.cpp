@@ -8,6 +8,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
+#include "keymesh/keyreduce/weld.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/parallel/threads.hpp"
 
@@ -192,4 +193,49 @@ TEST(ExclusiveScan, MatchesSerialAndReturnsTotal) {
     }
   }
   parallel::set_thread_count(0);
+}
+
+// The weld layer: the dense and sort plans give the reference grouping; the
+// by-position plan (VERTEX-WELD) groups pairs whose positions are equal,
+// which here are a function of the key alone, so it finds the same groups up
+// to renumbering; every plan's `first` is the smallest pair of its group.
+TEST(Weld, ThreePlansGroupAlike) {
+  std::mt19937 rng(5);
+  std::vector<std::uint32_t> keys(20000);
+  for (auto& k : keys) k = std::uniform_int_distribution<std::uint32_t>(0, 2999)(rng);
+  auto position = [&](Id i, float* xyz) {
+    const std::uint32_t k = keys[static_cast<std::size_t>(i)];
+    xyz[0] = static_cast<float>(k % 17);
+    xyz[1] = static_cast<float>(k / 17);
+    xyz[2] = 0.5f;
+  };
+  for (auto plan : {keyreduce::WeldPlan::Dense, keyreduce::WeldPlan::Sort, keyreduce::WeldPlan::ByPosition}) {
+    keyreduce::WeldSpec<std::uint32_t> spec;
+    spec.plan = plan;
+    spec.key_range = 3000;
+    spec.key_bits = 12;
+    spec.order = Order::Build;
+    std::vector<float> points;
+    std::vector<std::uint32_t> first;
+    const auto g = keyreduce::weld(keys.data(), static_cast<Id>(keys.size()), spec, position, {&points, &first});
+    if (plan != keyreduce::WeldPlan::ByPosition) {
+      expect_matches_reference(keys, g);
+      EXPECT_TRUE(points.empty());
+    } else {
+      ASSERT_EQ(static_cast<Id>(points.size()), 3 * g.num_groups());
+      // Same partition: pairs share a group exactly when they share a key.
+      std::map<std::uint32_t, std::uint32_t> group_of_key;
+      for (std::size_t i = 0; i < keys.size(); ++i) {
+        const auto [it, fresh] = group_of_key.emplace(keys[i], g.index_map[i]);
+        ASSERT_EQ(it->second, g.index_map[i]);
+        ASSERT_EQ(g.unique_keys[g.index_map[i]], keys[i]);
+      }
+      EXPECT_EQ(static_cast<Id>(group_of_key.size()), g.num_groups());
+    }
+    ASSERT_EQ(static_cast<Id>(first.size()), g.num_groups());
+    std::vector<std::uint32_t> smallest(first.size(), UINT32_MAX);
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      smallest[g.index_map[i]] = std::min(smallest[g.index_map[i]], static_cast<std::uint32_t>(i));
+    EXPECT_EQ(first, smallest);
+  }
 }
