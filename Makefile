@@ -74,13 +74,18 @@ SANITIZER_ENV = KEYMESH_HUGE_PAGES=0 ASAN_OPTIONS=detect_leaks=1:strict_string_c
 
 # The short sanitized run of `make test`: the keymesh command alone under
 # ASan+UBSan (-O1) on the hostile-input and contour CLI tests and every
-# fuzz corpus and regression file (tests/sanitized_cli.py).
+# fuzz corpus and regression file (tests/sanitized_cli.py), then every
+# libFuzzer target (ASan+UBSan too) for FUZZ_QUICK_SECONDS each (0 skips).
+FUZZ_QUICK_SECONDS ?= 10
 sanitize-quick: deps
 	@echo "make test: short sanitized run (ASan+UBSan keymesh in build-asan-quick)"
 	@cmake -S . -B build-asan-quick $(SANITIZE_CMAKE) -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_SANITIZE=address,undefined \
 	  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" >/dev/null
 	@cmake --build build-asan-quick -j $(JOBS) --target keymesh
 	@$(SANITIZER_ENV) $(PYTHON) tests/sanitized_cli.py build-asan-quick/keymesh
+ifneq ($(FUZZ_QUICK_SECONDS),0)
+	@$(MAKE) --no-print-directory fuzz FUZZ_SECONDS=$(FUZZ_QUICK_SECONDS)
+endif
 
 sanitize: deps
 	@cmake -S . -B build-asan $(SANITIZE_CMAKE) -DKEYMESH_SANITIZE=address,undefined $(CMAKE_FLAGS) >/dev/null

@@ -2,10 +2,13 @@
 
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "keymesh/core/work_estimate.hpp"
@@ -162,6 +165,26 @@ std::string error_line(const CLI::App* cmd, const std::string& message) {
     if (message.find(path) != std::string::npos) return message;
   // The input it concerns; a command with none (generate) names its output.
   return paths.empty() ? message : paths.front().second + ": " + message;
+}
+
+int refuse_unwritable_outputs(const CLI::App& cmd) {
+  for (const char* name : {"--output", "--report"})
+    if (const CLI::Option* opt = cmd.get_option_no_throw(name))
+      for (const std::string& path : opt->results()) {
+        if (is_device(path)) continue;
+        const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+        const std::string dir = parent.empty() ? std::string(".") : parent.string();
+        const char* why = nullptr;
+        struct stat st {};
+        if (path.empty() || path.back() == '/') why = "not a file name";
+        else if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) why = "is a directory";
+        else if (::access(dir.c_str(), W_OK | X_OK) != 0) why = std::strerror(errno);
+        if (why) {
+          std::fprintf(stderr, "keymesh: %s: cannot write: %s\n", path.c_str(), why);
+          return 1;
+        }
+      }
+  return 0;
 }
 
 int refuse_shared_paths(const CLI::App& cmd) {

@@ -112,6 +112,12 @@ bool is_mesh_path(const std::string& path);
 // "--report"), so a new subcommand that uses these names is covered.
 int refuse_shared_paths(const CLI::App& cmd);
 
+// Refuses (exit 1, one line "<path>: cannot write: <errno text>") a command
+// whose -o/--report lies in a directory that does not exist or cannot be
+// written, before any work: a report that cannot be written would otherwise
+// fail only after the whole run (and after its summary line).
+int refuse_unwritable_outputs(const CLI::App& cmd);
+
 // The error line for a failure of `cmd`: the message as it is when it names
 // one of the command's paths, otherwise prefixed with the input path
 // ("quality: cell 0 is not a triangle" -> "<file>: quality: cell 0 ..."), so

@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
           return 2;
         }
         if (int rc = keymesh::cli::refuse_shared_paths(*sub)) return rc;
+        if (int rc = keymesh::cli::refuse_unwritable_outputs(*sub)) return rc;
         // Every file the command writes appears only if it succeeds.
         keymesh::io::OutputTransaction outputs;
         const int rc = run();

@@ -489,7 +489,8 @@ def failed_runs_leave_every_file_untouched():
     ]
     for args, ext in cases:
         keep = write("keep" + ext, "OLD")
-        rc, lines = km2(*args, "-o", keep, "--report", bad_report, "-q")
+        # Without -q too: one line, refused before any work (no "N points -> keep" first).
+        rc, lines = km2(*args, "-o", keep, "--report", bad_report)
         assert rc == 1 and len(lines) == 1 and bad_report in lines[0], (args, rc, lines)
         with open(keep) as f:
             assert f.read() == "OLD", f"{args}: the old {keep} was replaced"
