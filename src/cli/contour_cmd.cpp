@@ -231,6 +231,17 @@ Register reg{Command{
                                  {"weld", stats.weld},
                                  {"fields", stats.fields}};
           r["peak_rss_mib"] = peak_rss_mib();
+          // What the run had to hold at least: the samples read and the mesh
+          // written (MiB), beside its peak.
+          double out_bytes = 4.0 * static_cast<double>(mesh.points.size() + mesh.connectivity.size()) +
+                             8.0 * static_cast<double>(mesh.offsets.size());
+          for (const Field& f : mesh.point_fields) out_bytes += 4.0 * static_cast<double>(f.values.size());
+          r["output_mib"] = out_bytes / (1 << 20);
+          if (r.contains("dims") && r.contains("scalar_type") && o->memory_limit.empty()) {
+            double samples = 1;
+            for (const auto& d : r["dims"]) samples *= d.get<double>();
+            r["input_mib"] = samples * static_cast<double>(scalar_size(parse_scalar_type(r["scalar_type"]))) / (1 << 20);
+          }
           if (opt.backend == generate::Backend::Cuda)
             r["device_peak_mib"] = static_cast<double>(stats.device_peak_bytes) / (1 << 20);
           write_report(o->common.report_path, r);
