@@ -52,6 +52,9 @@ GridShape shape_of(const ImageGrid& g) {
 // the thread count.
 constexpr Id kSlabsPerBlock = 4;
 
+// The most scratch (inside bits) a thread keeps between contours, in bytes.
+constexpr std::size_t kKeepScratch = std::size_t{256} << 20;
+
 // One isovalue's triangle soup as edge keys, appended to `keys` with
 // `key_offset` added (the isovalue's index times 3N). Appends to `blocks`
 // the first pair of every kSlabsPerBlock voxel slabs: a point is shared only
@@ -233,8 +236,20 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   const Id kb = opt.ghost_below, ke = s.nz - 1 - opt.ghost_above;
   st.key_bits = 3 * s.n * n_iso <= Id{std::numeric_limits<std::uint32_t>::max()} ? 32 : 64;
 
-  std::vector<InsideBits> bits(static_cast<std::size_t>(n_iso));
-  std::vector<RowCounts> rows(static_cast<std::size_t>(n_iso));
+  // Scratch kept by the calling thread across calls (a session contouring
+  // one volume after another, e.g. from Python, reuses mapped memory instead
+  // of faulting in fresh pages), released when it grows past kKeepScratch.
+  thread_local std::vector<InsideBits> bits;
+  thread_local std::vector<RowCounts> rows;
+  bits.resize(static_cast<std::size_t>(n_iso));
+  rows.resize(static_cast<std::size_t>(n_iso));
+  struct Release {
+    ~Release() {
+      std::size_t bytes = 0;
+      for (const auto& b : bits) bytes += b.words.capacity() * sizeof(std::uint64_t);
+      if (bytes > kKeepScratch) bits = {}, rows = {};
+    }
+  } release;
   std::vector<Id> blocks;  // slab blocks of the triangles, for averaging
   Id points = 0, triangles = 0;
   for (Id iso = 0; iso < n_iso; ++iso) {
@@ -269,7 +284,6 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
       write(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
     });
   st.fields += seconds_since(t0);
-  bits.clear();
   finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n), st);
   return mesh;
 }
