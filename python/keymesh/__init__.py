@@ -175,10 +175,11 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             gradient and Hessian: (|g|^2 tr H - g^T H g) / (2 |g|^3), 1/r on
             a sphere of a distance field (values growing outward).
         threads: worker threads, 0 = all cores. Output is identical for any count.
-        progress: progress(stage, fraction), called at the start and the end
-            (the library's contour does not report its stages yet); Ctrl-C
-            during the call raises KeyboardInterrupt when the contour
-            returns (its stages are not interruptible yet).
+        progress: progress(stage, fraction), called at the start, between
+            the contour's stages ("classify" per isovalue, "triangles",
+            "points", then "normals" or "coarsen") and at the end; Ctrl-C
+            during the call raises KeyboardInterrupt at the next stage
+            boundary, and a callback that raises abandons the call.
 
     Returns:
         Mesh with points (n, 3) float32, cells (m, 3) uint32 and point_data

@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/progress.hpp"
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
@@ -209,6 +210,7 @@ void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduc
                     ContourStats& st) {
   const bool average = opt.normals == ContourNormals::Average;
   if (average && !opt.coarsen) {
+    progress::report("normals", 0.9);
     auto t0 = Clock::now();
     Field f{"Normals", 3, {}};
     average_normals(vertex_weld_groups, vertex_weld_groups ? nullptr : &blocks, mesh, f.values);
@@ -216,6 +218,7 @@ void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduc
     st.fields += seconds_since(t0);
   }
   if (opt.coarsen) {
+    progress::report("coarsen", 0.9);
     auto t0 = Clock::now();
     st.triangles_before_coarsening = mesh.num_cells();
     mesh = coarsen(mesh, coarse, coarse_range);
@@ -253,6 +256,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   std::vector<Id> blocks;  // slab blocks of the triangles, for averaging
   Id points = 0, triangles = 0;
   for (Id iso = 0; iso < n_iso; ++iso) {
+    progress::report("classify", 0.4 * static_cast<double>(iso) / static_cast<double>(n_iso));
     auto t0 = Clock::now();
     classify(samples, s, InsideTest<T>(opt.isovalues[iso]), bits[iso]);
     st.classify += seconds_since(t0);
@@ -271,11 +275,13 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
                      " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
 
   SurfaceMesh mesh;
+  progress::report("triangles", 0.4);
   auto t0 = Clock::now();
   parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
   for (Id iso = 0; iso < n_iso; ++iso) write_triangles(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data());
   st.generate += seconds_since(t0);
 
+  progress::report("points", 0.7);
   t0 = Clock::now();
   std::vector<std::uint64_t> coarse;
   const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse, true);
@@ -312,6 +318,7 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
     // The triangle soup: one key per triangle corner.
     std::vector<K> soup;
     for (Id iso_index = 0; iso_index < n_iso; ++iso_index) {
+      progress::report("soup", 0.3 * static_cast<double>(iso_index) / static_cast<double>(n_iso));
       auto t0 = Clock::now();
       classify(samples, s, InsideTest<T>(opt.isovalues[iso_index]), bits);
       st.classify += seconds_since(t0);
@@ -321,6 +328,7 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
     const Id corners = static_cast<Id>(soup.size());
     blocks.push_back(corners);
     st.soup_points = corners;
+    progress::report("weld", 0.3);
     auto t0 = Clock::now();
     // VERTEX-WELD welds the soup a plain marching cubes writes, a position
     // per corner, by coordinates; its groups are averaged with KEY-REDUCE's
@@ -339,6 +347,7 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
   }
   bits.words = {};
 
+  progress::report("points", 0.7);
   auto t0 = Clock::now();
   const Id points = groups.num_groups();
   const K* point_key = groups.unique_keys.data();

@@ -256,7 +256,7 @@ def test_tetrahedralize_a_hexahedral_grid():
 def test_contour_reports_start_and_end(ball):
     seen = []
     mesh = keymesh.contour(ball, 8.3, progress=lambda s, f: seen.append((s, f)))
-    assert seen == [("contour", 0.0), ("contour", 1.0)] and mesh.n_cells > 0
+    assert seen[0] == ("contour", 0.0) and seen[-1] == ("contour", 1.0) and mesh.n_cells > 0
 
 
 def test_tetrahedralize_and_dual_report_stages(surface):
@@ -279,3 +279,27 @@ def test_ctrl_c_stops_marching_cubes_between_blocks():
     with pytest.raises(KeyboardInterrupt):
         keymesh.marching_cubes(sphere_field((64, 70, 66), (30.2, 33.1, 31.7)), 20.5, progress=press_ctrl_c)
     assert calls.count("marching cubes: classify") == 2 and "marching cubes: generate" not in calls
+
+
+def test_contour_reports_its_stages_and_can_be_abandoned():
+    """keymesh.contour reports classify, triangles and points in order (the
+    library's stage boundaries), and a callback that raises at the triangle
+    stage abandons the call; the next call is unaffected."""
+    field = sphere_field((48, 50, 52), (23.1, 24.2, 25.3))
+    seen = []
+    mesh = keymesh.contour(field, [10.5, 15.5], normals="average", progress=lambda s, f: seen.append((s, f)))
+    stages = [s for s, _ in seen]
+    for stage in ("classify", "triangles", "points", "normals"):
+        assert stage in stages, stages
+    assert stages.index("classify") < stages.index("triangles") < stages.index("points") < stages.index("normals")
+    fractions = [f for _, f in seen]
+    assert fractions == sorted(fractions)
+
+    def stop(stage, fraction):
+        if stage == "triangles":
+            raise RuntimeError("abandoned at " + stage)
+
+    with pytest.raises(RuntimeError, match="abandoned at triangles"):
+        keymesh.contour(field, [10.5, 15.5], normals="average", progress=stop)
+    again = keymesh.contour(field, [10.5, 15.5], normals="average")
+    assert np.array_equal(again.points, mesh.points) and np.array_equal(again.cells, mesh.cells)
