@@ -1,7 +1,8 @@
 """The short sanitized run of `make test` (issue 11): the `keymesh` command
 built with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan-quick)
-runs the hostile-input and contour CLI tests, then reads every file of the
-fuzz seed corpus and of tests/fuzz/regressions with `keymesh info`: each must
+runs the hostile-input, contour and formats (DICOM, Zarr, glTF) CLI tests,
+then reads every file of the fuzz seed corpus and of tests/fuzz/regressions
+with `keymesh info`: each must
 end with exit 0 or 1 and no sanitizer report. `make sanitize` is the whole
 suite under ASan/UBSan and TSan.
 
@@ -21,7 +22,7 @@ for var in ("ASAN_OPTIONS", "UBSAN_OPTIONS"):
 env.setdefault("KEYMESH_HUGE_PAGES", "0")
 
 failed = []
-for script in ("cli/test_hardening.py", "cli/test_contour_cli.py"):
+for script in ("cli/test_hardening.py", "cli/test_contour_cli.py", "cli/test_formats_cli.py"):
     p = subprocess.run([sys.executable, os.path.join(HERE, script), KEYMESH], env=env, stdin=subprocess.DEVNULL,
                        capture_output=True, text=True, timeout=900)
     last = (p.stdout.strip().splitlines() or ["(no output)"])[-1]
