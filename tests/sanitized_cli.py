@@ -2,9 +2,8 @@
 built with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan-quick)
 runs the hostile-input, contour and formats (DICOM, Zarr, glTF) CLI tests,
 then reads every file of the fuzz seed corpus and of tests/fuzz/regressions
-with `keymesh info`: each must
-end with exit 0 or 1 and no sanitizer report. `make sanitize` is the whole
-suite under ASan/UBSan and TSan.
+with `keymesh info`: each must end with exit 0 or 1 and no sanitizer report.
+`make sanitize` is the whole suite under ASan/UBSan and TSan.
 
 Usage: sanitized_cli.py BUILD-ASAN-QUICK/keymesh (with ASAN_OPTIONS set)."""
 import os
