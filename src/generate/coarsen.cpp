@@ -5,17 +5,12 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/scan.hpp"
 
 namespace keymesh::generate {
-
-namespace {
-struct Vec3f {
-  float x, y, z;
-};
-}  // namespace
 
 // Collapses fold surfaces over themselves: two triangles on the same three
 // points facing opposite ways (a zero-volume fold) cancel, and repeated
@@ -143,24 +138,16 @@ void average_normals(SurfaceMesh& mesh) {
   const float* P = mesh.points.data();
   const PointIndex* C = mesh.connectivity.data();
   std::vector<Vec3f> face(static_cast<std::size_t>(mesh.num_cells()));
-  parallel::for_each(mesh.num_cells(), [&](Id t) {
-    const float* a = P + 3 * Id{C[3 * t]};
-    const float* b = P + 3 * Id{C[3 * t + 1]};
-    const float* c = P + 3 * Id{C[3 * t + 2]};
-    const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const float v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    face[t] = Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  });
-  // The reduce half by hand: a point no triangle uses (an empty group) gets a zero normal.
+  parallel::for_each(mesh.num_cells(), [&](Id t) { face[t] = triangle_normal(P, C, t); });
+  // Summed from zero (not from the first value, as keyreduce::reduce does):
+  // a point no triangle uses gets a zero normal, and the bytes of earlier
+  // outputs are kept (0 + -0 is +0).
   Field n{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * mesh.num_points()))};
+  auto* out = reinterpret_cast<Vec3f*>(n.values.data());
   parallel::for_each(mesh.num_points(), [&](Id p) {
     Vec3f s{0, 0, 0};
-    for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) {
-      const Vec3f f = face[g.order[j] / 3];
-      s = Vec3f{s.x + f.x, s.y + f.y, s.z + f.z};
-    }
-    const float len = std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
-    if (len > 0) n.values[3 * p] = s.x / len, n.values[3 * p + 1] = s.y / len, n.values[3 * p + 2] = s.z / len;
+    for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) s = add(s, face[g.order[j] / 3]);
+    out[p] = unit(s);
   });
   for (Field& f : mesh.point_fields)
     if (f.name == "Normals") {

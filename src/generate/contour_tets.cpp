@@ -12,6 +12,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/keyreduce/weld.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
@@ -180,10 +181,6 @@ void tet_soup(const I* conn, Id tets, Id points, const float* P, const float* sc
   st.generate += seconds_since(t0);
 }
 
-struct Vec3f {
-  float x, y, z;
-};
-
 }  // namespace
 
 SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats) {
@@ -317,22 +314,10 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     const PointIndex* C = mesh.connectivity.data();
     const float* Q = mesh.points.data();
     std::vector<Vec3f> face(static_cast<std::size_t>(mesh.num_cells()));
-    parallel::for_each(mesh.num_cells(), [&](Id t) {
-      const float* a = Q + 3 * Id{C[3 * t]};
-      const float* b = Q + 3 * Id{C[3 * t + 1]};
-      const float* c = Q + 3 * Id{C[3 * t + 2]};
-      const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      const float v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      face[t] = Vec3f{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-    });
+    parallel::for_each(mesh.num_cells(), [&](Id t) { face[t] = triangle_normal(Q, C, t); });
     Field n{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * points))};
     keyreduce::reduce(
-        groups, [&](Id pair) { return face[pair / 3]; },
-        [](Vec3f a, Vec3f b) { return Vec3f{a.x + b.x, a.y + b.y, a.z + b.z}; },
-        [](Vec3f s, Id) {
-          const float len = std::sqrt(s.x * s.x + s.y * s.y + s.z * s.z);
-          return len > 0 ? Vec3f{s.x / len, s.y / len, s.z / len} : Vec3f{0, 0, 0};
-        },
+        groups, [&](Id pair) { return face[pair / 3]; }, add, [](Vec3f s, Id) { return unit(s); },
         reinterpret_cast<Vec3f*>(n.values.data()));
     mesh.point_fields.push_back(std::move(n));
   }
