@@ -77,6 +77,9 @@ SANITIZER_ENV = KEYMESH_HUGE_PAGES=0 ASAN_OPTIONS=detect_leaks=1:strict_string_c
 # fuzz corpus and regression file (tests/sanitized_cli.py), then every
 # libFuzzer target (ASan+UBSan too) for FUZZ_QUICK_SECONDS each (0 skips).
 FUZZ_QUICK_SECONDS ?= 10
+# ... and at most FUZZ_QUICK_RUNS inputs from seed 1, so that a green run is
+# the same run on any machine as fast (a gate must not fail by chance).
+FUZZ_QUICK_RUNS ?= 4000
 sanitize-quick: deps
 	@echo "make test: short sanitized run (ASan+UBSan keymesh in build-asan-quick)"
 	@cmake -S . -B build-asan-quick $(SANITIZE_CMAKE) -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_SANITIZE=address,undefined \
@@ -84,7 +87,7 @@ sanitize-quick: deps
 	@cmake --build build-asan-quick -j $(JOBS) --target keymesh
 	@$(SANITIZER_ENV) $(PYTHON) tests/sanitized_cli.py build-asan-quick/keymesh
 ifneq ($(FUZZ_QUICK_SECONDS),0)
-	@$(MAKE) --no-print-directory fuzz FUZZ_SECONDS=$(FUZZ_QUICK_SECONDS)
+	@$(MAKE) --no-print-directory fuzz FUZZ_SECONDS=$(FUZZ_QUICK_SECONDS) FUZZ_FLAGS="-seed=1 -runs=$(FUZZ_QUICK_RUNS)"
 endif
 
 sanitize: deps

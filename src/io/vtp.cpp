@@ -197,6 +197,9 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vecto
   if (mesh.offsets.size() == 1) mesh.offsets.clear();
   compact_offsets(mesh);
   if (global_ids && !every_piece_has_ids) global_ids->clear();
+  // What every caller relies on (non-finite coordinates included): the
+  // parser's own result is checked, not only read_mesh's.
+  validate_mesh(mesh, path);
   return mesh;
 }
 
