@@ -30,7 +30,20 @@ SurfaceMesh read_obj(const std::string& path) {
   return parse_obj(data, path);
 }
 
+namespace {
+SurfaceMesh parse_obj_unchecked(std::string_view data, const std::string& path);
+}  // namespace
+
+// The parser's result is checked here (non-finite coordinates included), not
+// only by read_mesh: every caller of a parser relies on it.
 SurfaceMesh parse_obj(std::string_view data, const std::string& path) {
+  SurfaceMesh mesh = parse_obj_unchecked(data, path);
+  validate_mesh(mesh, path);
+  return mesh;
+}
+
+namespace {
+SurfaceMesh parse_obj_unchecked(std::string_view data, const std::string& path) {
   SurfaceMesh mesh;
   std::vector<float> normals;                 // vn lines, 3 per normal
   std::vector<std::int64_t> corner_normal;    // per connectivity entry, -1 when absent
@@ -115,6 +128,7 @@ SurfaceMesh parse_obj(std::string_view data, const std::string& path) {
   }
   return mesh;
 }
+}  // namespace
 
 void write_obj(const SurfaceMesh& mesh, const std::string& path) {
   validate_mesh(mesh, path);

@@ -138,7 +138,20 @@ SurfaceMesh read_ply(const std::string& path) {
   return parse_ply(data, path);
 }
 
+namespace {
+SurfaceMesh parse_ply_unchecked(std::string_view data, const std::string& path);
+}  // namespace
+
+// The parser's result is checked here (non-finite coordinates included), not
+// only by read_mesh: every caller of a parser relies on it.
 SurfaceMesh parse_ply(std::string_view data, const std::string& path) {
+  SurfaceMesh mesh = parse_ply_unchecked(data, path);
+  validate_mesh(mesh, path);
+  return mesh;
+}
+
+namespace {
+SurfaceMesh parse_ply_unchecked(std::string_view data, const std::string& path) {
   // ---- header ---------------------------------------------------------------
   std::size_t pos = 0;
   auto next_line = [&](std::string_view& line) {
@@ -341,6 +354,7 @@ SurfaceMesh parse_ply(std::string_view data, const std::string& path) {
   if (mesh.offsets.size() == 1) mesh.offsets.clear();  // a face element with no faces
   return mesh;
 }
+}  // namespace
 
 namespace {
 

@@ -107,7 +107,20 @@ SurfaceMesh read_stl(const std::string& path) {
   return parse_stl(data, path);
 }
 
+namespace {
+SurfaceMesh parse_stl_unchecked(std::string_view data, const std::string& path);
+}  // namespace
+
+// The parser's result is checked here (non-finite coordinates included), not
+// only by read_mesh: every caller of a parser relies on it.
 SurfaceMesh parse_stl(std::string_view data, const std::string& path) {
+  SurfaceMesh mesh = parse_stl_unchecked(data, path);
+  validate_mesh(mesh, path);
+  return mesh;
+}
+
+namespace {
+SurfaceMesh parse_stl_unchecked(std::string_view data, const std::string& path) {
   // Many binary writers start the 80-byte header with "solid" too, so the
   // exact binary size decides first.
   if (data.size() >= 84) {
@@ -122,6 +135,7 @@ SurfaceMesh parse_stl(std::string_view data, const std::string& path) {
   if (!starts_with_solid(data)) throw InputError(path + ": not an STL file (too short for binary, no 'solid')");
   return parse_ascii(data, path);
 }
+}  // namespace
 
 void write_stl(const SurfaceMesh& mesh, const std::string& path) {
   validate_mesh(mesh, path);
