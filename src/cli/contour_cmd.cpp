@@ -99,6 +99,7 @@ Register reg{Command{
         opt.scalars = !o->no_scalars;
         opt.array = o->array;
         opt.coarsen = o->coarsen;
+        opt.max_output_bytes = memory_budget(o->common);
         opt.curvature = o->curvature;
         opt.backend = o->common.backend == "cuda" ? generate::Backend::Cuda : generate::Backend::Cpu;
         auto warn_outside = [&](std::array<double, 2> range) {

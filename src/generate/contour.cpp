@@ -10,6 +10,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/progress.hpp"
+#include "keymesh/core/work_estimate.hpp"
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
@@ -270,6 +271,14 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   }
   blocks.push_back(3 * triangles);
   st.soup_points = 3 * triangles;
+  if (opt.max_output_bytes) {
+    // Floats per point: position, scalar, normals, curvature; 3 ids per triangle.
+    const std::uint64_t per_point = 4 * (3 + (opt.scalars ? 1 : 0) + (opt.normals != ContourNormals::None ? 3 : 0) +
+                                         (opt.curvature ? 1 : 0));
+    const auto p = static_cast<std::uint64_t>(points), t = static_cast<std::uint64_t>(triangles);
+    check_work({p, t, saturating_add(saturating_mul(p, per_point), saturating_mul(t, 12))}, opt.max_output_bytes,
+               "contour");
+  }
   if (3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("contour: " + std::to_string(triangles) +
                      " triangles exceed the supported 1431655765 (2^32 - 1 corners)");

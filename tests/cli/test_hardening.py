@@ -16,6 +16,7 @@
 import base64
 import gzip
 import math
+import json
 import os
 import resource
 import signal
@@ -693,6 +694,26 @@ def ply_properties_never_repeat():
     assert [r[props.index("field_x")] for r in rows] == [7.0, 8.0, 9.0], rows
 
 
+def contour_output_estimated():
+    """contour counts its rows first and refuses, by name and before allocating
+    any output, a mesh larger than --max-memory; the estimate is the output's
+    bytes (3 floats + 1 scalar per point, 3 ids per triangle)."""
+    vol = os.path.join(D, "s40.vti")
+    run("generate", "sphere", "--size", 40, "-o", vol, "-q")
+    out = os.path.join(D, "est.ply")
+    report = os.path.join(D, "est.json")
+    run("contour", vol, "-o", out, "--iso", 17.5, "-q", "--report", report)
+    with open(report) as f:
+        r = json.load(f)
+    need = 16 * r["points"] + 12 * r["cells"]
+    os.remove(out)
+    line = refused(["contour", vol, "-o", out, "--iso", 17.5, "-q", "--max-memory", need - 1], vol, 1, "contour:")
+    assert str(r["points"]) in line and str(r["cells"]) in line, line
+    assert not os.path.exists(out)
+    run("contour", vol, "-o", out, "--iso", 17.5, "-q", "--max-memory", need + 1)
+    assert os.path.exists(out)
+
+
 check("issue 19: XML nested 300,000 deep refused; --threads past the maximum: exit 2; generate too big: refused", deep_xml_and_thread_counts)
 check("issue 19: FIFO, directory, /dev/zero as any input or .pvtp piece: refused by name", non_regular_inputs_refused)
 check("issue 19: a failed run (bad --report) leaves every old file untouched, no new file", failed_runs_leave_every_file_untouched)
@@ -702,4 +723,5 @@ check("issue 19: subdivide --levels 8, --max-memory: work refused before allocat
 check("issue 19: --memory-limit -5, --type float16: exit 2 from the validators", options_validated_with_exit_2)
 check("issue 19: operation errors name the input file", every_error_names_the_input)
 check("issue 19: the PLY writer never repeats a property", ply_properties_never_repeat)
+check("issue 19: contour's output estimated from its row counts, refused past --max-memory", contour_output_estimated)
 finish()

@@ -71,6 +71,11 @@ struct ContourOptions {
   // no generated cell. A slab with ghosts gives the bits of the whole grid.
   Id ghost_below = 0;
   Id ghost_above = 0;
+  // Voxel grids: the most bytes the output (points, fields, triangles) may
+  // take (0: no bound). Checked once the rows are counted, before any output
+  // is allocated: a contour past it is refused by name (LimitError) instead
+  // of running into the OOM killer.
+  std::uint64_t max_output_bytes = 0;
   // Unstructured grids only: the point field to contour (empty: the first
   // one-component point field). Every point field is carried, interpolated.
   std::string array;
