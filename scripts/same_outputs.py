@@ -13,12 +13,14 @@ files that differ; 0 when every file is identical.
 import argparse
 import filecmp
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
 
 BRAIN = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"
 HEAD = "/usr/share/mricron/templates/ch2.nii.gz"
+AAL = "/usr/share/mricron/templates/aal.nii.gz"
 
 # (name, arguments after the command name; {in:NAME} is an input, {out} the output path)
 CASES = [
@@ -47,11 +49,34 @@ CASES = [
     ("dual", "dual {in:sphere-ply} -o {out}.vtp"),
     ("convert-vtk", "convert {in:tets} -o {out}.vtk"),
     ("convert-vtp", "convert {in:sphere-vtp-avg} -o {out}.ply"),
+    ("convert-glb", "convert {in:sphere-vtp-avg} -o {out}.glb"),
+    ("convert-vti", "convert {in:s96.nrrd} -o {out}.vti"),
+    ("pipeline", "pipeline {in:s96.vti} -o {out}.vtp --iso 46.3 --coarsen --subdivide 1 --dual"),
+    ("labels-nets", "labels " + AAL + " -o {out}.vtp"),
+    ("labels-nets-raw", "labels " + AAL + " -o {out}.ply --smooth 0"),
+    ("labels-mc", "labels " + AAL + " -o {out}.vtp --method discrete-mc --labels 3,17,40"),
+    ("labels-per-label", "labels " + AAL + " -o {out}.vtp --per-label --labels 5,6,7"),
+    ("mpi-contour", "mpirun:2 contour {in:s96.vti} -o {out}.vtp --iso 46.3 --normals gradient"),
+    ("mpi-contour-3", "mpirun:3 contour " + HEAD + " -o {out}.ply --iso 90.5 --balance"),
+    ("contour-glb", "contour " + HEAD + " -o {out}.glb --iso 90.5 --normals average"),
 ]
 
 
+MPIRUN = shutil.which("mpirun")
+
+
 def run(keymesh, args, check=True):
-    return subprocess.run([keymesh] + args, check=check, capture_output=True, text=True)
+    """Runs keymesh; arguments that start with `mpirun:P` run it as P MPI ranks."""
+    cmd = [keymesh]
+    env = None
+    if args and args[0].startswith("mpirun:"):
+        ranks = args.pop(0).split(":")[1]
+        cmd = [MPIRUN, "--oversubscribe", "-np", ranks, keymesh]
+        if os.geteuid() == 0:
+            cmd.insert(1, "--allow-run-as-root")
+        env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_MCA_btl_vader_single_copy_mechanism="none")
+    return subprocess.run(cmd + args, check=check, capture_output=True, text=True, env=env,
+                          stdin=subprocess.DEVNULL)
 
 
 def main():
@@ -60,6 +85,9 @@ def main():
     ap.add_argument("--after", required=True)
     ap.add_argument("--keep", help="write outputs here instead of a temporary folder")
     a = ap.parse_args()
+    if not MPIRUN:
+        print("note: no mpirun, the mpirun: cases are left out")
+        CASES[:] = [c for c in CASES if not c[1].startswith("mpirun:")]
     tmp = a.keep or tempfile.mkdtemp(prefix="keymesh-same-")
     os.makedirs(tmp, exist_ok=True)
     inputs = os.path.join(tmp, "inputs")
