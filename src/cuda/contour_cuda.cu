@@ -36,7 +36,7 @@ namespace {
 
 using generate::EdgeInterpolator;
 using generate::GridShape;
-using generate::Vec3f;
+using ::keymesh::Vec3f;
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -154,7 +154,7 @@ __global__ void points_kernel(EdgeInterpolator<T> interp, const K* keys, float* 
 
 __global__ void face_kernel(const float* xyz, const std::uint32_t* conn, Vec3f* face, Id triangles) {
   const Id t = static_cast<Id>(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (t < triangles) face[t] = generate::triangle_normal(xyz, conn, t);
+  if (t < triangles) face[t] = ::keymesh::triangle_normal(xyz, conn, t);
 }
 
 // Stage 5: each point sums its triangles' normals over the pairs of even
@@ -174,9 +174,9 @@ __global__ void average_kernel(const std::uint32_t* perm, const std::uint32_t* g
         if (blocks[mid] <= pair) lo = mid;
         else hi = mid;
       }
-      if ((lo & 1) == parity) acc = generate::add(acc, face[pair / 3]);
+      if ((lo & 1) == parity) acc = ::keymesh::add(acc, face[pair / 3]);
     }
-  const Vec3f u = generate::unit(acc);
+  const Vec3f u = ::keymesh::unit(acc);
   normal[3 * g] = u.x, normal[3 * g + 1] = u.y, normal[3 * g + 2] = u.z;
 }
 

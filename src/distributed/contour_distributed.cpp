@@ -13,7 +13,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour.hpp"
-#include "keymesh/generate/contour_kernels.hpp"
+#include "keymesh/mesh/normals.hpp"
 
 namespace keymesh::distributed {
 
@@ -196,16 +196,8 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   // Averaged normals, KEY-REDUCE's merge over this rank's triangles first:
   // each point's sum of its face normals in triangle order.
   const bool average = options.normals == generate::ContourNormals::Average;
-  std::vector<float> normal_sums;
-  if (average) {
-    const SurfaceMesh& m = piece.mesh;
-    normal_sums.assign(3 * static_cast<std::size_t>(m.num_points()), 0.0f);
-    auto* sum = reinterpret_cast<generate::Vec3f*>(normal_sums.data());
-    for (Id t = 0; t < m.num_cells(); ++t) {
-      const generate::Vec3f f = generate::triangle_normal(m.points.data(), m.connectivity.data(), t);
-      for (int c = 0; c < 3; ++c) sum[m.connectivity[3 * t + c]] = generate::add(sum[m.connectivity[3 * t + c]], f);
-    }
-  }
+  std::vector<Vec3f> normal_sums;
+  if (average) normal_sums = point_normal_sums(piece.mesh);
   st.contour = seconds_since(t0);
 
   // The exchange starts when the slowest rank is done: that wait is the
@@ -227,11 +219,11 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   };
   // The shared planes' partial sums merge at their owners (the rest of the
   // merge); then the transform, normalising, on every copy alike.
-  piece.numbering = number_keys(piece.keys, segments, first_key, average ? &normal_sums : nullptr, 3);
+  const ValueMerge merge = value_merge(normal_sums, add);
+  piece.numbering = number_keys(piece.keys, segments, first_key, average ? &merge : nullptr);
   if (average) {
-    auto* sum = reinterpret_cast<generate::Vec3f*>(normal_sums.data());
-    for (Id p = 0; p < piece.mesh.num_points(); ++p) sum[p] = generate::unit(sum[p]);
-    piece.mesh.point_fields.push_back(Field{"Normals", 3, std::move(normal_sums)});
+    normalize(normal_sums.data(), piece.mesh.num_points());
+    piece.mesh.point_fields.push_back(normals_field(normal_sums));
   }
   const GlobalNumbering& g = piece.numbering;
   if (g.total > static_cast<long long>(std::numeric_limits<PointIndex>::max()))

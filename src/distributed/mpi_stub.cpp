@@ -26,7 +26,7 @@ void abort_all(int code) { std::exit(code); }
 bool all_ok(bool ok) { return ok; }
 
 GlobalNumbering number_keys(std::span<const std::uint64_t>, int, const std::function<std::uint64_t(int, int)>&,
-                            std::vector<float>*, int) {
+                            const ValueMerge*) {
   not_built();
 }
 void require_distributable(const ImageGrid&, const generate::ContourOptions&, int) { not_built(); }

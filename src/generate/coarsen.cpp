@@ -128,33 +128,4 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
   return out;
 }
 
-void average_normals(SurfaceMesh& mesh) {
-  if (!mesh.all_triangles()) throw InputError("normals: the mesh has polygons; only triangles are averaged");
-  keyreduce::Groups<std::uint32_t> g;
-  // Groups by point id: the connectivity is the index map; unique keys are the points.
-  g.index_map = mesh.connectivity;
-  g.unique_keys.resize(static_cast<std::size_t>(mesh.num_points()));
-  keyreduce::build_order(g);
-  const float* P = mesh.points.data();
-  const PointIndex* C = mesh.connectivity.data();
-  std::vector<Vec3f> face(static_cast<std::size_t>(mesh.num_cells()));
-  parallel::for_each(mesh.num_cells(), [&](Id t) { face[t] = triangle_normal(P, C, t); });
-  // Summed from zero (not from the first value, as keyreduce::reduce does):
-  // a point no triangle uses gets a zero normal, and the bytes of earlier
-  // outputs are kept (0 + -0 is +0).
-  Field n{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * mesh.num_points()))};
-  auto* out = reinterpret_cast<Vec3f*>(n.values.data());
-  parallel::for_each(mesh.num_points(), [&](Id p) {
-    Vec3f s{0, 0, 0};
-    for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) s = add(s, face[g.order[j] / 3]);
-    out[p] = unit(s);
-  });
-  for (Field& f : mesh.point_fields)
-    if (f.name == "Normals") {
-      f = std::move(n);
-      return;
-    }
-  mesh.point_fields.push_back(std::move(n));
-}
-
 }  // namespace keymesh::generate

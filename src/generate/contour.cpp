@@ -107,31 +107,28 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, Id k_begin, Id k_en
   return triangles;
 }
 
-// Sum of the area-weighted normals of the triangles around each point,
-// merged by KEY-REDUCE over the groups, then normalised (the transform).
-// With `blocks` (slab blocks of the soup, see generate_soup) the sums are
-// scattered block by block (keyreduce::reduce_blocked), with no pair order;
-// otherwise (VERTEX-WELD's groups) reduced over the groups' pair order.
+// Point normals (mesh/normals.hpp): the area-weighted face normals summed
+// from zero by KEY-REDUCE, then normalised. With `blocks` (slab blocks of
+// the soup, see generate_soup) the sums are scattered block by block
+// (keyreduce::reduce_blocked), with no pair order; otherwise (VERTEX-WELD's
+// groups) summed over the groups' pair order. Both merge a point's corners
+// in increasing corner order, from zero.
 template <class K>
 void average_normals(const keyreduce::Groups<K>* groups, const std::vector<Id>* blocks, const SurfaceMesh& mesh,
                      std::vector<float>& normals) {
   const float* P = mesh.points.data();
   const PointIndex* C = mesh.connectivity.data();
-  auto face_normal = [P, C](Id t) { return triangle_normal(P, C, t); };
   const Id points = mesh.num_points();
   normals.resize(3 * points);
   auto* out = reinterpret_cast<Vec3f*>(normals.data());
   if (blocks) {
     // The three corners of a triangle share its face normal (arity 3).
-    keyreduce::reduce_blocked(C, blocks->data(), static_cast<Id>(blocks->size()) - 1, 3, face_normal, add,
-                              Vec3f{0, 0, 0}, out, points);
-    parallel::for_each(points, [&](Id p) { out[p] = unit(out[p]); });
-    return;
+    keyreduce::reduce_blocked(C, blocks->data(), static_cast<Id>(blocks->size()) - 1, 3,
+                              [P, C](Id t) { return triangle_normal(P, C, t); }, add, Vec3f{0, 0, 0}, out, points);
+  } else {
+    sum_face_normals(*groups, face_normals(mesh).data(), out);
   }
-  std::vector<Vec3f> face(mesh.num_cells());
-  parallel::for_each(mesh.num_cells(), [&](Id t) { face[t] = face_normal(t); });
-  keyreduce::reduce(
-      *groups, [&](Id pair) { return face[pair / 3]; }, add, [&](Vec3f sum, Id) { return unit(sum); }, out);
+  normalize(out, points);
 }
 
 // Where each point's values go: the mesh's arrays (null when not asked

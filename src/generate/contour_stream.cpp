@@ -9,6 +9,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/mesh/normals.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 
@@ -70,7 +71,7 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   // (a different summation order), not bit for bit.
   const bool average = options.normals == ContourNormals::Average;
   if (average) opt.normals = ContourNormals::None;
-  std::vector<float> normal_sums;
+  std::vector<Vec3f> normal_sums;  // per slab point
   for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
     const Id count = std::min(planes, nz - k0);
     const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
@@ -99,12 +100,8 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
     for (std::size_t i = 0; i < fields.size(); ++i)
       fields[i].values.insert(fields[i].values.end(), m.point_fields[i].values.begin(), m.point_fields[i].values.end());
     if (average) {
-      normal_sums.resize(normal_sums.size() + 3 * static_cast<std::size_t>(m.num_points()), 0.0f);
-      auto* sum = reinterpret_cast<Vec3f*>(normal_sums.data() + 3 * base);
-      for (Id t = 0; t < m.num_cells(); ++t) {
-        const Vec3f f = triangle_normal(m.points.data(), m.connectivity.data(), t);
-        for (int c = 0; c < 3; ++c) sum[m.connectivity[3 * t + c]] = add(sum[m.connectivity[3 * t + c]], f);
-      }
+      const std::vector<Vec3f> sums = point_normal_sums(m);
+      normal_sums.insert(normal_sums.end(), sums.begin(), sums.end());
     }
     for (Id t = 0; t < m.num_cells(); ++t) {
       auto& dst = corners[static_cast<std::size_t>(slab_keys[m.connectivity[3 * t]] / per_iso)];
@@ -130,9 +127,8 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
     const Id first = g.order[g.offsets[p]];
     if (average) {
       // The merge across slabs, in slab order, then the transform.
-      const auto* part = reinterpret_cast<const Vec3f*>(normal_sums.data());
       Vec3f merged{0, 0, 0};
-      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) merged = add(merged, part[g.order[j]]);
+      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) merged = add(merged, normal_sums[g.order[j]]);
       reinterpret_cast<Vec3f*>(normals.values.data())[p] = unit(merged);
     }
     for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];

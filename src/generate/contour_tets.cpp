@@ -311,14 +311,11 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     mesh.point_fields.push_back(std::move(g));
   }
   if (average && !opt.coarsen) {
-    const PointIndex* C = mesh.connectivity.data();
-    const float* Q = mesh.points.data();
-    std::vector<Vec3f> face(static_cast<std::size_t>(mesh.num_cells()));
-    parallel::for_each(mesh.num_cells(), [&](Id t) { face[t] = triangle_normal(Q, C, t); });
+    // The weld's groups are the corners grouped by point (mesh/normals.hpp).
     Field n{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * points))};
-    keyreduce::reduce(
-        groups, [&](Id pair) { return face[pair / 3]; }, add, [](Vec3f s, Id) { return unit(s); },
-        reinterpret_cast<Vec3f*>(n.values.data()));
+    auto* out = reinterpret_cast<Vec3f*>(n.values.data());
+    sum_face_normals(groups, face_normals(mesh).data(), out);
+    normalize(out, points);
     mesh.point_fields.push_back(std::move(n));
   }
   st.fields += seconds_since(t0);

@@ -35,18 +35,38 @@ struct GlobalNumbering {
   std::vector<long long> first_ids;
 };
 
+// The values merged with the keys: `bytes` bytes per local key at `values`
+// (this rank's partial results), combined by `merge(acc, part)`: the merge
+// operator of keyreduce::reduce (associative and commutative), type-erased
+// so that the exchange moves bytes. Build one with value_merge().
+struct ValueMerge {
+  void* values = nullptr;
+  std::size_t bytes = 0;
+  std::function<void(void* acc, const void* part)> merge;
+};
+
 // Collective over MPI_COMM_WORLD. Throws InputError when a rank asks for a
 // key its owner does not hold (the ranks read different inputs).
 // Costs O(segments * P * log n) searches plus a pass over the keys not
 // owned; the owned ones are numbered in one sweep.
 //
-// With `sums` (`components` floats per key, this rank's partial sums) the
-// fields merge the same way: every copy's partial sum travels with its key
-// to the owner, which adds them to its own in sender rank order (a fixed
-// order), and every copy receives the total; the caller applies the
-// transform (e.g. normalising). Deterministic for a given P.
+// With `values` the fields merge the same way: every copy's partial value
+// travels with its key to the owner, which merges them into its own in
+// sender rank order (a fixed order), and every copy receives the result;
+// the caller applies the transform (e.g. normalising). Deterministic for a
+// given P.
 GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
                             const std::function<std::uint64_t(int segment, int rank)>& first_key,
-                            std::vector<float>* sums = nullptr, int components = 0);
+                            const ValueMerge* values = nullptr);
+
+// A ValueMerge over one value of type V per key, e.g.
+// value_merge(normal_sums, add) for Vec3f sums.
+template <class V, class Merge>
+ValueMerge value_merge(std::vector<V>& values, Merge merge) {
+  return ValueMerge{values.data(), sizeof(V), [merge](void* acc, const void* part) {
+                      V& a = *static_cast<V*>(acc);
+                      a = merge(a, *static_cast<const V*>(part));
+                    }};
+}
 
 }  // namespace keymesh::distributed

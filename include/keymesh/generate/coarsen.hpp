@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "keymesh/mesh/normals.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
 
 namespace keymesh::generate {
@@ -28,9 +29,8 @@ Id remove_folds(SurfaceMesh& mesh);
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
                     CoarsenStats* stats = nullptr);
 
-// Area-weighted average of the incident face normals at every point, merged
-// by KEY-REDUCE over the triangles' corners in a fixed order; sets or replaces
-// the "Normals" point field.
-void average_normals(SurfaceMesh& mesh);
+// Point normals live in the mesh layer (mesh/normals.hpp); coarsening
+// renormalises averaged ones and callers re-average after it.
+using ::keymesh::average_normals;
 
 }  // namespace keymesh::generate
