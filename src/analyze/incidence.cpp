@@ -1,3 +1,4 @@
+#include "keymesh/mesh/keys.hpp"
 #include "keymesh/analyze/incidence.hpp"
 
 #include <algorithm>
@@ -51,16 +52,16 @@ std::vector<std::int64_t> cell_neighbours(const SurfaceMesh& m) {
   check_ids(m);
   const auto cell = cells_of_corners(m);
   const Id n = static_cast<Id>(m.connectivity.size());
-  const int bits = std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(std::max<Id>(m.num_points(), 2) - 1)));
+  const EdgeKeys ek = EdgeKeys::for_points(m.num_points(), "incidence");
   std::vector<std::uint64_t> keys(static_cast<std::size_t>(n));
   parallel::for_each(m.num_cells(), [&](Id c) {
     const std::uint64_t b = m.cell_begin(c), e = m.cell_end(c);
     for (std::uint64_t k = b; k < e; ++k) {
       const std::uint64_t p = m.connectivity[k], q = m.connectivity[k + 1 < e ? k + 1 : b];
-      keys[k] = (std::min(p, q) << bits) | std::max(p, q);
+      keys[k] = ek(p, q);
     }
   });
-  const auto g = keyreduce::partition_sort(keys.data(), n, 2 * bits, keyreduce::Order::Build);
+  const auto g = keyreduce::partition_sort(keys.data(), n, ek.key_bits(), keyreduce::Order::Build);
   std::vector<std::int64_t> across(static_cast<std::size_t>(n), -1);
   parallel::for_each(g.num_groups(), [&](Id k) {
     const Id b = g.offsets[k], e = g.offsets[k + 1];

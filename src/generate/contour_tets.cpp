@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include "keymesh/core/error.hpp"
@@ -14,6 +15,8 @@
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/mesh/cell_tables.hpp"
+#include "keymesh/mesh/keys.hpp"
 #include "keymesh/keyreduce/weld.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
 #include "keymesh/parallel/for_each.hpp"
@@ -28,7 +31,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+using cells::kTetEdges;
 
 int edge_of(int a, int b) {
   for (int e = 0; e < 6; ++e)
@@ -92,20 +95,6 @@ const TetTable& tet_table() {
 // Tets per chunk of the counting pass: fixed, so the work split never
 // changes the output (which is in tet order anyway).
 constexpr Id kTetsPerChunk = Id{1} << 14;
-
-struct EdgeKeys {
-  int bits;  // bits of a point id
-  std::uint64_t key(std::uint64_t a, std::uint64_t b, std::uint64_t iso_index) const {
-    if (a > b) std::swap(a, b);
-    return (iso_index << (2 * bits)) | (a << bits) | b;
-  }
-  void decode(std::uint64_t key, std::uint64_t& a, std::uint64_t& b, std::uint64_t& iso_index) const {
-    const std::uint64_t mask = (std::uint64_t{1} << bits) - 1;
-    b = key & mask;
-    a = (key >> bits) & mask;
-    iso_index = key >> (2 * bits);
-  }
-};
 
 // Appends one isovalue's soup (an edge key per triangle corner) to `keys`.
 template <class I>
@@ -174,7 +163,7 @@ void tet_soup(const I* conn, Id tets, Id points, const float* P, const float* sc
       for (int tri = 0; tri < table.triangles[m]; ++tri)
         for (int corner = 0; corner < 3; ++corner) {
           const int e = table.edges[m][3 * tri + (flip && corner ? 3 - corner : corner)];
-          *o++ = ek.key(v[kTetEdges[e][0]], v[kTetEdges[e][1]], iso_index);
+          *o++ = ek.with_level(ek(v[kTetEdges[e][0]], v[kTetEdges[e][1]]), iso_index);
         }
     }
   }, 4);
@@ -213,9 +202,9 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
   st = ContourStats{};
   const Id points_in = tets.num_points();
   const Id tet_count = tets.num_cells();
-  const EdgeKeys ek{std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(points_in) - 1))};
+  const EdgeKeys ek = EdgeKeys::for_points(points_in, "contour");
   const int iso_bits = parallel::bits_needed<std::uint64_t>(opt.isovalues.size() - 1);
-  if (2 * ek.bits + iso_bits > 64)
+  if (ek.key_bits() + iso_bits > 64)
     throw LimitError("contour: edge keys of " + std::to_string(points_in) + " points and " +
                      std::to_string(opt.isovalues.size()) + " isovalues need more than 64 bits");
   st.key_bits = 64;
@@ -245,9 +234,8 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
   };
   auto locate = [&](std::uint64_t key) {
     EdgePoint e{};
-    std::uint64_t iso_index;
-    ek.decode(key, e.a, e.b, iso_index);
-    const double iso = opt.isovalues[iso_index];
+    std::tie(e.a, e.b) = ek.decode(key);
+    const double iso = opt.isovalues[ek.level(key)];
     const double t = (iso - double(S[e.a])) / (double(S[e.b]) - double(S[e.a]));
     // A NaN end sample (outside by definition) has no crossing: midway.
     e.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
@@ -270,7 +258,7 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     const bool by_position = opt.weld == ContourWeld::VertexWeld;
     keyreduce::WeldSpec<std::uint64_t> spec;
     spec.plan = by_position ? keyreduce::WeldPlan::ByPosition : keyreduce::WeldPlan::Sort;
-    spec.key_bits = 2 * ek.bits + iso_bits;
+    spec.key_bits = ek.key_bits() + iso_bits;
     spec.order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
     groups = keyreduce::weld(
         soup.data(), corners, spec, [&](Id c, float* xyz) { position(locate(soup[c]), xyz); },
@@ -303,9 +291,7 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     if (&f == field)
       parallel::for_each(points, [&](Id p) {
         if (!std::isfinite(g.values[p])) {
-          std::uint64_t a, b, iso_index;
-          ek.decode(point_key[p], a, b, iso_index);
-          g.values[p] = static_cast<float>(opt.isovalues[iso_index]);
+          g.values[p] = static_cast<float>(opt.isovalues[ek.level(point_key[p])]);
         }
       });
     mesh.point_fields.push_back(std::move(g));
@@ -325,9 +311,7 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     std::vector<std::uint64_t> coarse(static_cast<std::size_t>(points));
     parallel::for_each(points, [&](Id p) {
       const EdgePoint e = locate(point_key[p]);
-      std::uint64_t a, b, iso_index;
-      ek.decode(point_key[p], a, b, iso_index);
-      coarse[p] = iso_index * static_cast<std::uint64_t>(points_in) + (e.t >= 0.5 ? e.b : e.a);
+      coarse[p] = ek.level(point_key[p]) * static_cast<std::uint64_t>(points_in) + (e.t >= 0.5 ? e.b : e.a);
     });
     st.triangles_before_coarsening = mesh.num_cells();
     mesh = coarsen(mesh, coarse, static_cast<std::uint64_t>(points_in) * opt.isovalues.size());

@@ -12,6 +12,8 @@
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/mesh/cell_tables.hpp"
+#include "keymesh/mesh/keys.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/keyreduce/weld.hpp"
@@ -19,23 +21,6 @@
 namespace keymesh::generate {
 
 namespace {
-
-// The key of edge (a, b): (min << bits) | max.
-struct EdgeKey {
-  int bits;
-  std::uint64_t operator()(std::uint64_t a, std::uint64_t b) const {
-    return a < b ? (a << bits) | b : (b << bits) | a;
-  }
-  std::pair<std::uint64_t, std::uint64_t> decode(std::uint64_t k) const {
-    return {k >> bits, k & ((std::uint64_t{1} << bits) - 1)};
-  }
-};
-
-EdgeKey edge_key_for(Id points) {
-  const int bits = std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(std::max<Id>(points, 2) - 1)));
-  if (2 * bits > 64) throw LimitError("subdivide: edge keys of " + std::to_string(points) + " points need over 64 bits");
-  return EdgeKey{bits};
-}
 
 // The parent edges of the pairs, grouped: for every pair, its new point's
 // index among the new points (the index map), and for every new point the
@@ -80,7 +65,7 @@ V3 unit(V3 a) {
 
 SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, SubdivideWeld weld) {
   const Id V = m.num_points(), F = m.num_cells();
-  const EdgeKey ek = edge_key_for(V);
+  const EdgeKeys ek = EdgeKeys::for_points(V, "subdivide");
   const Field* normals = m.find_point_field("Normals");
   if (normals && normals->components != 3) normals = nullptr;
   if (scheme == SubdivideScheme::Bezier && !normals)
@@ -114,7 +99,7 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
     }
     xyz[0] = float(p.x), xyz[1] = float(p.y), xyz[2] = float(p.z);
   };
-  const EdgeGroups g = group_edges(keys, 2 * ek.bits, weld, [&](std::uint64_t k, float* xyz) { edge_point(k, xyz, nullptr); });
+  const EdgeGroups g = group_edges(keys, ek.key_bits(), weld, [&](std::uint64_t k, float* xyz) { edge_point(k, xyz, nullptr); });
   keys = {};
   const Id E = static_cast<Id>(g.edge_key.size());
   check_points(V + E, "the surface");
@@ -162,17 +147,17 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
 
 UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld weld) {
   const Id V = m.num_points(), T = m.num_cells();
-  const EdgeKey ek = edge_key_for(V);
-  constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  const EdgeKeys ek = EdgeKeys::for_points(V, "subdivide");
+  using cells::kTetEdges;
   std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * T));
   parallel::for_each(T, [&](Id t) {
-    for (int e = 0; e < 6; ++e) keys[6 * t + e] = ek(m.connectivity[4 * t + kEdges[e][0]], m.connectivity[4 * t + kEdges[e][1]]);
+    for (int e = 0; e < 6; ++e) keys[6 * t + e] = ek(m.connectivity[4 * t + kTetEdges[e][0]], m.connectivity[4 * t + kTetEdges[e][1]]);
   });
   auto midpoint = [&](std::uint64_t key, float* xyz) {
     const auto [a, b] = ek.decode(key);
     for (int c = 0; c < 3; ++c) xyz[c] = 0.5f * (m.points[3 * a + c] + m.points[3 * b + c]);
   };
-  const EdgeGroups g = group_edges(keys, 2 * ek.bits, weld, midpoint);
+  const EdgeGroups g = group_edges(keys, ek.key_bits(), weld, midpoint);
   keys = {};
   const Id E = static_cast<Id>(g.edge_key.size());
   check_points(V + E, "the grid");

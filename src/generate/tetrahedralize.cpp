@@ -1,3 +1,4 @@
+#include "keymesh/mesh/cell_tables.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 
 #include <algorithm>
@@ -54,12 +55,9 @@ Id checked_mul(Id a, Id b, const char* what) {
   return a * b;
 }
 
-// VTK_HEXAHEDRON lists the bottom face counter-clockwise, then the top face:
-// its corner h is our bit corner kHexToBits[h] (VTK_VOXEL is in bit order).
-constexpr int kHexToBits[8] = {0, 1, 3, 2, 4, 5, 7, 6};
-
-// The six faces of a hexahedron in bit corners: -x, +x, -y, +y, -z, +z.
-constexpr int kFaces[6][4] = {{0, 2, 4, 6}, {1, 3, 5, 7}, {0, 1, 4, 5}, {2, 3, 6, 7}, {0, 1, 2, 3}, {4, 5, 6, 7}};
+// Hexahedron corners in bit order and its faces (mesh/cell_tables.hpp).
+using cells::kHexToBits;
+constexpr const auto& kFaces = cells::kHexFaceCycle;
 
 // The diagonal of face f that the split of `parity` cuts: the two face
 // corners whose bit count has that parity.

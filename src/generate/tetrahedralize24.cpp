@@ -9,6 +9,8 @@
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/mesh/cell_tables.hpp"
+#include "keymesh/mesh/keys.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/keyreduce/weld.hpp"
@@ -17,10 +19,9 @@ namespace keymesh::generate {
 
 namespace {
 
-// Corners in bit order (corner c at (c & 1, (c >> 1) & 1, (c >> 2) & 1)).
-// The six faces -x, +x, -y, +y, -z, +z as corner cycles around the face.
-constexpr int kFaceCycle[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
-constexpr int kHexToBits[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+// Corners in bit order, faces as corner cycles (mesh/cell_tables.hpp).
+using cells::kHexToBits;
+constexpr const auto& kFaceCycle = cells::kHexFaceCycle;
 
 // The face centres of the soup: for every (cell, face) pair its group (the
 // face-centre index) and for every group the first pair naming it.
@@ -173,15 +174,13 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
     throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " cells exceed the supported size");
   // A quad face is named by its smallest corner and the corner diagonally
   // opposite it: in a conforming mesh no two faces share a diagonal.
-  const int bits = std::max(1, parallel::bits_needed<std::uint64_t>(static_cast<std::uint64_t>(std::max<Id>(N, 2) - 1)));
-  if (2 * bits > 64) throw LimitError("tetrahedralize --scheme 24: face keys need more than 64 bits");
+  const EdgeKeys ek = EdgeKeys::for_points(N, "tetrahedralize --scheme 24");
   std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
   parallel::for_each(cells, [&](Id c) {
     for (int f = 0; f < 6; ++f) {
-      int m = 0;
-      for (int k = 1; k < 4; ++k)
-        if (corner[c][kFaceCycle[f][k]] < corner[c][kFaceCycle[f][m]]) m = k;
-      keys[6 * c + f] = (corner[c][kFaceCycle[f][m]] << bits) | corner[c][kFaceCycle[f][(m + 2) % 4]];
+      std::uint64_t cycle[4];
+      for (int k = 0; k < 4; ++k) cycle[k] = corner[c][kFaceCycle[f][k]];
+      keys[6 * c + f] = ek.quad(cycle);
     }
   });
   const float* P = hexes.points.data();
@@ -192,7 +191,7 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
       xyz[x] = static_cast<float>(s / 4);
     }
   };
-  const FaceGroups g = group_faces<std::uint64_t>(keys, false, 0, 2 * bits, vertex_weld, face_centre);
+  const FaceGroups g = group_faces<std::uint64_t>(keys, false, 0, ek.key_bits(), vertex_weld, face_centre);
   keys = {};
   const Id F = static_cast<Id>(g.first.size());
   const Id total = N + F + cells;

@@ -1,0 +1,20 @@
+#pragma once
+// Corner, edge and face tables of the linear cells, in one place.
+//
+// Hexahedra are handled in bit order: corner c sits at
+// (c & 1, (c >> 1) & 1, (c >> 2) & 1) of the unit cube (VTK_VOXEL's order).
+namespace keymesh::cells {
+
+// VTK_HEXAHEDRON lists the bottom face counter-clockwise, then the top face:
+// its corner h is bit corner kHexToBits[h].
+inline constexpr int kHexToBits[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+
+// The six faces of a hexahedron, -x, +x, -y, +y, -z, +z, each as the cycle
+// of its bit corners around the face.
+inline constexpr int kHexFaceCycle[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                            {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+
+// The six edges of a tetrahedron (corners 0..3).
+inline constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+}  // namespace keymesh::cells
