@@ -1,3 +1,4 @@
+#include "keymesh/mesh/fields.hpp"
 #include "keymesh/generate/subdivide.hpp"
 
 #include <algorithm>
@@ -107,11 +108,7 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
   SurfaceMesh out;
   out.points.resize(static_cast<std::size_t>(3 * (V + E)));
   std::copy(m.points.begin(), m.points.end(), out.points.begin());
-  for (const Field& f : m.point_fields) {
-    Field h{f.name, f.components, std::vector<float>(static_cast<std::size_t>((V + E) * f.components))};
-    std::copy(f.values.begin(), f.values.end(), h.values.begin());
-    out.point_fields.push_back(std::move(h));
-  }
+  out.point_fields = extend_point_fields(m.point_fields, V + E);
   parallel::for_each(E, [&](Id e) {
     const std::uint64_t key = g.edge_key[e];
     const auto [a, b] = ek.decode(key);
@@ -120,8 +117,7 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
       float* dst = &out.point_fields[i].values[(V + e) * f.components];
       const bool is_normals = &f == normals;
       if (is_normals && scheme == SubdivideScheme::Bezier) continue;  // set with the position
-      for (int c = 0; c < f.components; ++c)
-        dst[c] = 0.5f * (f.values[a * f.components + c] + f.values[b * f.components + c]);
+      midpoint_tuple(f, out.point_fields[i], V + e, a, b);
       if (is_normals) {
         const V3 n = unit(load(dst));
         dst[0] = float(n.x), dst[1] = float(n.y), dst[2] = float(n.z);
@@ -142,6 +138,7 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
     const PointIndex tri[12] = {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca};
     std::copy(tri, tri + 12, &out.connectivity[12 * t]);
   });
+  out.cell_fields = repeat_cell_fields(m.cell_fields, F, 4);
   return out;
 }
 
@@ -166,20 +163,11 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
   out.uniform_type = CellType::Tetra;
   out.points.resize(static_cast<std::size_t>(3 * (V + E)));
   std::copy(m.points.begin(), m.points.end(), out.points.begin());
-  for (const Field& f : m.point_fields) {
-    Field h{f.name, f.components, std::vector<float>(static_cast<std::size_t>((V + E) * f.components))};
-    std::copy(f.values.begin(), f.values.end(), h.values.begin());
-    out.point_fields.push_back(std::move(h));
-  }
+  out.point_fields = extend_point_fields(m.point_fields, V + E);
   parallel::for_each(E, [&](Id e) {
     const auto [a, b] = ek.decode(g.edge_key[e]);
     midpoint(g.edge_key[e], &out.points[3 * (V + e)]);
-    for (std::size_t i = 0; i < m.point_fields.size(); ++i) {
-      const Field& f = m.point_fields[i];
-      for (int c = 0; c < f.components; ++c)
-        out.point_fields[i].values[(V + e) * f.components + c] =
-            0.5f * (f.values[a * f.components + c] + f.values[b * f.components + c]);
-    }
+    for (std::size_t i = 0; i < m.point_fields.size(); ++i) midpoint_tuple(m.point_fields[i], out.point_fields[i], V + e, a, b);
   });
   out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(V + E), static_cast<std::size_t>(32 * T));
   const float* P = out.points.data();
@@ -211,16 +199,7 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
       for (int k = 0; k < 4; ++k) out.connectivity.set(static_cast<std::size_t>(32 * t + 4 * c + k), w[k]);
     }
   });
-  for (const Field& f : m.cell_fields) {
-    Field h{f.name, f.components, std::vector<float>(f.values.size() * 8)};
-    const auto k = static_cast<std::size_t>(f.components);
-    parallel::for_each(T, [&](Id t) {
-      for (int c = 0; c < 8; ++c)
-        std::copy_n(f.values.begin() + static_cast<std::ptrdiff_t>(t * k), k,
-                    h.values.begin() + static_cast<std::ptrdiff_t>((8 * t + c) * k));
-    });
-    out.cell_fields.push_back(std::move(h));
-  }
+  out.cell_fields = repeat_cell_fields(m.cell_fields, T, 8);
   return out;
 }
 

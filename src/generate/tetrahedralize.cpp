@@ -1,3 +1,4 @@
+#include "keymesh/mesh/fields.hpp"
 #include "keymesh/mesh/cell_tables.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 
@@ -239,16 +240,7 @@ UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes) {
       for (int k = 0; k < 4; ++k) out.connectivity.set(static_cast<std::size_t>(20 * c + 4 * t + k), v[k]);
     }
   });
-  for (const Field& f : hexes.cell_fields) {
-    Field g{f.name, f.components, std::vector<float>(f.values.size() * 5)};
-    const auto k = static_cast<std::size_t>(f.components);
-    parallel::for_each(cells, [&](Id c) {
-      for (int t = 0; t < 5; ++t)
-        std::copy_n(f.values.begin() + static_cast<std::ptrdiff_t>(c * k), k,
-                    g.values.begin() + static_cast<std::ptrdiff_t>((5 * c + t) * k));
-    });
-    out.cell_fields.push_back(std::move(g));
-  }
+  out.cell_fields = repeat_cell_fields(hexes.cell_fields, cells, 5);
   return out;
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "keymesh/mesh/fields.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
@@ -61,17 +62,6 @@ void emit_cell(const std::uint64_t corner[8], const std::uint64_t face[6], std::
     }
 }
 
-void average_fields(const std::vector<Field>& in, std::vector<Field>& out, Id point, const std::uint64_t* ids, int n) {
-  for (std::size_t i = 0; i < in.size(); ++i) {
-    const int k = in[i].components;
-    for (int c = 0; c < k; ++c) {
-      double s = 0;
-      for (int j = 0; j < n; ++j) s += in[i].values[ids[j] * k + c];
-      out[i].values[point * k + c] = static_cast<float>(s / n);
-    }
-  }
-}
-
 }  // namespace
 
 UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
@@ -121,15 +111,13 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
   const Id total = N + F + cells;
   out.points.resize(static_cast<std::size_t>(3 * total));
   std::copy(corners.points.begin(), corners.points.end(), out.points.begin());
-  for (const Field& f : corners.point_fields) out.point_fields.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(total * f.components))});
-  for (std::size_t i = 0; i < corners.point_fields.size(); ++i)
-    std::copy(corners.point_fields[i].values.begin(), corners.point_fields[i].values.end(), out.point_fields[i].values.begin());
+  out.point_fields = extend_point_fields(corners.point_fields, total);
   parallel::for_each(F, [&](Id face) {
     const Id pair = g.first[face];
     face_centre(pair, &out.points[3 * (N + face)]);
     std::uint64_t ids[4];
     for (int c = 0; c < 4; ++c) ids[c] = cell_corner(pair / 6, kFaceCycle[pair % 6][c]);
-    average_fields(corners.point_fields, out.point_fields, N + face, ids, 4);
+    average_point_fields(corners.point_fields, out.point_fields, N + face, ids, 4);
   });
   parallel::for_each(cells, [&](Id v) {
     std::uint64_t ids[8];
@@ -139,7 +127,7 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
       for (std::uint64_t id : ids) s += P[3 * id + x];
       out.points[3 * (N + F + v) + x] = static_cast<float>(s / 8);
     }
-    average_fields(corners.point_fields, out.point_fields, N + F + v, ids, 8);
+    average_point_fields(corners.point_fields, out.point_fields, N + F + v, ids, 8);
   });
   progress::report("tetrahedralize 24: tets", 0.7);
   out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
@@ -201,16 +189,13 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
   out.uniform_type = CellType::Tetra;
   out.points.resize(static_cast<std::size_t>(3 * total));
   std::copy(hexes.points.begin(), hexes.points.end(), out.points.begin());
-  for (const Field& f : hexes.point_fields) {
-    out.point_fields.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(total * f.components))});
-    std::copy(f.values.begin(), f.values.end(), out.point_fields.back().values.begin());
-  }
+  out.point_fields = extend_point_fields(hexes.point_fields, total);
   parallel::for_each(F, [&](Id face) {
     const Id pair = g.first[face];
     face_centre(pair, &out.points[3 * (N + face)]);
     std::uint64_t ids[4];
     for (int c = 0; c < 4; ++c) ids[c] = corner[pair / 6][kFaceCycle[pair % 6][c]];
-    average_fields(hexes.point_fields, out.point_fields, N + face, ids, 4);
+    average_point_fields(hexes.point_fields, out.point_fields, N + face, ids, 4);
   });
   parallel::for_each(cells, [&](Id v) {
     for (int x = 0; x < 3; ++x) {
@@ -218,7 +203,7 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
       for (std::uint64_t id : corner[v]) s += P[3 * id + x];
       out.points[3 * (N + F + v) + x] = static_cast<float>(s / 8);
     }
-    average_fields(hexes.point_fields, out.point_fields, N + F + v, corner[v].data(), 8);
+    average_point_fields(hexes.point_fields, out.point_fields, N + F + v, corner[v].data(), 8);
   });
   out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
   const float* Q = out.points.data();
@@ -229,16 +214,7 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
       for (int x = 0; x < 4; ++x) out.connectivity.set(static_cast<std::size_t>(96 * v + 4 * k + x), t[x]);
     });
   });
-  for (const Field& f : hexes.cell_fields) {
-    Field h{f.name, f.components, std::vector<float>(f.values.size() * 24)};
-    const auto k = static_cast<std::size_t>(f.components);
-    parallel::for_each(cells, [&](Id c) {
-      for (int t = 0; t < 24; ++t)
-        std::copy_n(f.values.begin() + static_cast<std::ptrdiff_t>(c * k), k,
-                    h.values.begin() + static_cast<std::ptrdiff_t>((24 * c + t) * k));
-    });
-    out.cell_fields.push_back(std::move(h));
-  }
+  out.cell_fields = repeat_cell_fields(hexes.cell_fields, cells, 24);
   return out;
 }
 

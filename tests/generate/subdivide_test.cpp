@@ -134,6 +134,25 @@ TEST(SubdivideTriangles, VertexWeldAndThreadCountsAgree) {
   EXPECT_EQ(tris(a), tris(w));
 }
 
+TEST(SubdivideTriangles, ChildrenKeepTheirParentsCellFields) {
+  // A cell field (e.g. labels' boundary_labels) follows the split: the
+  // four children of triangle t are 4t..4t+3 and carry t's tuple.
+  SurfaceMesh m = sphere_surface(16, 5.3);
+  Field f{"pair", 2, {}};
+  for (Id t = 0; t < m.num_cells(); ++t) f.values.insert(f.values.end(), {float(t), float(-t)});
+  m.cell_fields.push_back(f);
+  SubdivideOptions o;
+  o.levels = 2;
+  const SurfaceMesh s = generate::subdivide(m, o);
+  ASSERT_EQ(s.cell_fields.size(), 1u);
+  ASSERT_EQ(s.cell_fields[0].values.size(), 2 * static_cast<std::size_t>(s.num_cells()));
+  ASSERT_EQ(s.num_cells(), 16 * m.num_cells());
+  for (Id c = 0; c < s.num_cells(); ++c) {
+    EXPECT_EQ(s.cell_fields[0].values[2 * c], float(c / 16)) << c;
+    EXPECT_EQ(s.cell_fields[0].values[2 * c + 1], -float(c / 16)) << c;
+  }
+}
+
 TEST(SubdivideTriangles, RefusesWhatItCannotDo) {
   SurfaceMesh quad;
   quad.points = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};

@@ -1,0 +1,33 @@
+#pragma once
+// Field helpers every generator shares: new points get their tuples from the
+// input points that made them (the reduce half of KEY-REDUCE for fields),
+// new cells repeat their parent cell's tuple. One arithmetic per helper, so a
+// field's bytes do not depend on which generator wrote it.
+#include <cstdint>
+#include <vector>
+
+#include "keymesh/core/types.hpp"
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh {
+
+// The output point fields of a generator that keeps the input points as
+// its first ones: each input field's tuples, then room (zeros) for the new
+// points up to `total` points.
+std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total);
+
+// out[i]'s tuple at `point` = the mean, summed in double, of in[i]'s tuples
+// at ids[0 .. n) (a face or cell centre).
+void average_point_fields(const std::vector<Field>& in, std::vector<Field>& out, Id point, const std::uint64_t* ids,
+                          int n);
+
+// f_out's tuple at `point` = 0.5f * (tuple a + tuple b) in float (an edge's
+// midpoint, as subdivision places it).
+void midpoint_tuple(const Field& f, Field& f_out, Id point, std::uint64_t a, std::uint64_t b);
+
+// Every cell's tuple repeated for its `children` cells, which follow one
+// another in the output (cell c's children are c * children + 0 ..
+// children - 1).
+std::vector<Field> repeat_cell_fields(const std::vector<Field>& in, Id cells, int children);
+
+}  // namespace keymesh

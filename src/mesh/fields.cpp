@@ -1,0 +1,52 @@
+#include "keymesh/mesh/fields.hpp"
+
+#include <algorithm>
+
+#include "keymesh/parallel/for_each.hpp"
+
+namespace keymesh {
+
+std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total) {
+  std::vector<Field> out;
+  out.reserve(in.size());
+  for (const Field& f : in) {
+    out.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(total * f.components))});
+    std::copy(f.values.begin(), f.values.end(), out.back().values.begin());
+  }
+  return out;
+}
+
+void average_point_fields(const std::vector<Field>& in, std::vector<Field>& out, Id point, const std::uint64_t* ids,
+                          int n) {
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const int k = in[i].components;
+    for (int c = 0; c < k; ++c) {
+      double s = 0;
+      for (int j = 0; j < n; ++j) s += in[i].values[ids[j] * k + c];
+      out[i].values[point * k + c] = static_cast<float>(s / n);
+    }
+  }
+}
+
+void midpoint_tuple(const Field& f, Field& f_out, Id point, std::uint64_t a, std::uint64_t b) {
+  const int k = f.components;
+  for (int c = 0; c < k; ++c) f_out.values[point * k + c] = 0.5f * (f.values[a * k + c] + f.values[b * k + c]);
+}
+
+std::vector<Field> repeat_cell_fields(const std::vector<Field>& in, Id cells, int children) {
+  std::vector<Field> out;
+  out.reserve(in.size());
+  for (const Field& f : in) {
+    Field h{f.name, f.components, std::vector<float>(f.values.size() * static_cast<std::size_t>(children))};
+    const auto k = static_cast<std::size_t>(f.components);
+    parallel::for_each(cells, [&](Id c) {
+      for (int t = 0; t < children; ++t)
+        std::copy_n(f.values.begin() + static_cast<std::ptrdiff_t>(c * k), k,
+                    h.values.begin() + static_cast<std::ptrdiff_t>((children * c + t) * k));
+    });
+    out.push_back(std::move(h));
+  }
+  return out;
+}
+
+}  // namespace keymesh
