@@ -170,9 +170,8 @@ void tet_soup(const I* conn, Id tets, Id points, const float* P, const float* sc
   st.generate += seconds_since(t0);
 }
 
-}  // namespace
-
-SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats) {
+// Checks what marching tetrahedra cannot do and returns the field to contour.
+const Field& contour_field(const UnstructuredGrid& tets, const ContourOptions& opt) {
   if (opt.isovalues.empty()) throw InputError("contour: no isovalue given");
   for (double iso : opt.isovalues)
     if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
@@ -197,125 +196,152 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
   if (field->components != 1)
     throw InputError("contour: point field '" + field->name + "' has " + std::to_string(field->components) +
                      " components (need 1)");
-  ContourStats local;
-  ContourStats& st = stats ? *stats : local;
-  st = ContourStats{};
-  const Id points_in = tets.num_points();
-  const Id tet_count = tets.num_cells();
-  const EdgeKeys ek = EdgeKeys::for_points(points_in, "contour");
-  const int iso_bits = parallel::bits_needed<std::uint64_t>(opt.isovalues.size() - 1);
-  if (ek.key_bits() + iso_bits > 64)
-    throw LimitError("contour: edge keys of " + std::to_string(points_in) + " points and " +
-                     std::to_string(opt.isovalues.size()) + " isovalues need more than 64 bits");
-  st.key_bits = 64;
-  const float* P = tets.points.data();
-  const float* S = field->values.data();
+  return *field;
+}
 
-  std::vector<std::uint64_t> soup;
-  {
-    // Left uninitialised (every entry is written before it is read), so
-    // the pages are first touched by the parallel passes, not by a serial memset.
-    std::unique_ptr<std::uint8_t[]> inside(new std::uint8_t[static_cast<std::size_t>(points_in)]);
-    std::unique_ptr<std::uint8_t[]> cases(new std::uint8_t[static_cast<std::size_t>(tet_count)]);
-    tets.connectivity.visit([&](auto conn) {
-      for (std::size_t k = 0; k < opt.isovalues.size(); ++k)
-        tet_soup(conn.data(), tet_count, points_in, P, S, opt.isovalues[k], k, ek, inside.get(), cases.get(),
-                 soup, st);
-    });
-  }
-  const Id corners = static_cast<Id>(soup.size());
-  st.soup_points = corners;
+// Where the point of an edge key lies: its end points a < b and the
+// parameter t from a to b.
+struct EdgePoint {
+  std::uint64_t a, b;
+  double t;
+};
 
-  // Where the point of edge key `key` lies: its end points a < b and the
-  // parameter t from a to b.
-  struct EdgePoint {
-    std::uint64_t a, b;
-    double t;
-  };
-  auto locate = [&](std::uint64_t key) {
+struct TetEdgePoints {
+  EdgeKeys ek;
+  const std::vector<double>& isovalues;
+  const float* P;  // grid points
+  const float* S;  // the contoured samples
+
+  EdgePoint locate(std::uint64_t key) const {
     EdgePoint e{};
     std::tie(e.a, e.b) = ek.decode(key);
-    const double iso = opt.isovalues[ek.level(key)];
+    const double iso = isovalues[ek.level(key)];
     const double t = (iso - double(S[e.a])) / (double(S[e.b]) - double(S[e.a]));
     // A NaN end sample (outside by definition) has no crossing: midway.
     e.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
     return e;
-  };
-  auto position = [&](const EdgePoint& e, float* xyz) {
+  }
+  void position(std::uint64_t key, float* xyz) const {
+    const EdgePoint e = locate(key);
     for (int a = 0; a < 3; ++a) {
       const double pa = P[3 * e.a + a], pb = P[3 * e.b + a];
       xyz[a] = static_cast<float>(pa + e.t * (pb - pa));
     }
-  };
-
-  SurfaceMesh mesh;
-  keyreduce::Groups<std::uint64_t> groups;
-  const bool average = opt.normals == ContourNormals::Average;
-  auto t0 = Clock::now();
-  {
-    // Both KEY-REDUCE plan names use the sort plan here: N^2 edge keys are
-    // too many to address directly.
-    const bool by_position = opt.weld == ContourWeld::VertexWeld;
-    keyreduce::WeldSpec<std::uint64_t> spec;
-    spec.plan = by_position ? keyreduce::WeldPlan::ByPosition : keyreduce::WeldPlan::Sort;
-    spec.key_bits = ek.key_bits() + iso_bits;
-    spec.order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
-    groups = keyreduce::weld(
-        soup.data(), corners, spec, [&](Id c, float* xyz) { position(locate(soup[c]), xyz); },
-        {by_position ? &mesh.points : nullptr, nullptr});
-    mesh.connectivity = groups.index_map;
   }
-  soup = {};
-  st.weld += seconds_since(t0);
+};
 
-  t0 = Clock::now();
+// The map step over every isovalue: an edge key per triangle corner.
+std::vector<std::uint64_t> tet_soups(const UnstructuredGrid& tets, const ContourOptions& opt, const TetEdgePoints& ep,
+                                     ContourStats& st) {
+  std::vector<std::uint64_t> soup;
+  // Left uninitialised (every entry is written before it is read), so
+  // the pages are first touched by the parallel passes, not by a serial memset.
+  std::unique_ptr<std::uint8_t[]> inside(new std::uint8_t[static_cast<std::size_t>(tets.num_points())]);
+  std::unique_ptr<std::uint8_t[]> cases(new std::uint8_t[static_cast<std::size_t>(tets.num_cells())]);
+  tets.connectivity.visit([&](auto conn) {
+    for (std::size_t k = 0; k < opt.isovalues.size(); ++k)
+      tet_soup(conn.data(), tets.num_cells(), tets.num_points(), ep.P, ep.S, opt.isovalues[k], k, ep.ek, inside.get(),
+               cases.get(), soup, st);
+  });
+  return soup;
+}
+
+// Every point field of the grid at the welded points, interpolated along
+// the points' edges (the contoured field only with opt.scalars).
+void interpolate_fields(const UnstructuredGrid& tets, const Field& field, const ContourOptions& opt,
+                        const TetEdgePoints& ep, const keyreduce::Groups<std::uint64_t>& groups, SurfaceMesh& mesh) {
   const Id points = groups.num_groups();
   const std::uint64_t* point_key = groups.unique_keys.data();
-  if (mesh.points.empty()) {
-    mesh.points.resize(static_cast<std::size_t>(3 * points));
-    parallel::for_each(points, [&](Id p) { position(locate(point_key[p]), &mesh.points[3 * p]); });
-  }
   for (const Field& f : tets.point_fields) {
-    if (&f == field && !opt.scalars) continue;
+    if (&f == &field && !opt.scalars) continue;
     const int k = f.components;
     Field g{f.name, k, std::vector<float>(static_cast<std::size_t>(points) * static_cast<std::size_t>(k))};
     parallel::for_each(points, [&](Id p) {
-      const EdgePoint e = locate(point_key[p]);
+      const EdgePoint e = ep.locate(point_key[p]);
       for (int c = 0; c < k; ++c) {
         const double va = f.values[e.a * k + c], vb = f.values[e.b * k + c];
         const double v = va + e.t * (vb - va);
         // The contoured field at a NaN end takes the isovalue; others keep a finite end.
-        g.values[p * k + c] = static_cast<float>(std::isfinite(v) ? v : (std::isfinite(va) ? va : vb));
+        const float value = static_cast<float>(std::isfinite(v) ? v : (std::isfinite(va) ? va : vb));
+        g.values[p * k + c] =
+            &f == &field && !std::isfinite(value) ? static_cast<float>(opt.isovalues[ep.ek.level(point_key[p])]) : value;
       }
     });
-    if (&f == field)
-      parallel::for_each(points, [&](Id p) {
-        if (!std::isfinite(g.values[p])) {
-          g.values[p] = static_cast<float>(opt.isovalues[ek.level(point_key[p])]);
-        }
-      });
     mesh.point_fields.push_back(std::move(g));
   }
+}
+
+// Coarsening: every point's coarse key is its edge's end point nearest to
+// the crossing, per isovalue.
+SurfaceMesh coarsen_contour(SurfaceMesh mesh, const TetEdgePoints& ep, const std::vector<std::uint64_t>& point_key,
+                            Id points_in, std::size_t isovalues, bool average, ContourStats& st) {
+  const Id points = mesh.num_points();
+  std::vector<std::uint64_t> coarse(static_cast<std::size_t>(points));
+  parallel::for_each(points, [&](Id p) {
+    const EdgePoint e = ep.locate(point_key[p]);
+    coarse[p] = ep.ek.level(point_key[p]) * static_cast<std::uint64_t>(points_in) + (e.t >= 0.5 ? e.b : e.a);
+  });
+  st.triangles_before_coarsening = mesh.num_cells();
+  mesh = coarsen(mesh, coarse, static_cast<std::uint64_t>(points_in) * isovalues);
+  if (average) average_normals(mesh);
+  return mesh;
+}
+
+}  // namespace
+
+SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats) {
+  const Field& field = contour_field(tets, opt);
+  ContourStats local;
+  ContourStats& st = stats ? *stats : local;
+  st = ContourStats{};
+  const Id points_in = tets.num_points();
+  const TetEdgePoints ep{EdgeKeys::for_points(points_in, "contour"), opt.isovalues, tets.points.data(),
+                         field.values.data()};
+  const int iso_bits = parallel::bits_needed<std::uint64_t>(opt.isovalues.size() - 1);
+  if (ep.ek.key_bits() + iso_bits > 64)
+    throw LimitError("contour: edge keys of " + std::to_string(points_in) + " points and " +
+                     std::to_string(opt.isovalues.size()) + " isovalues need more than 64 bits");
+  st.key_bits = 64;
+  std::vector<std::uint64_t> soup = tet_soups(tets, opt, ep, st);
+  const Id corners = static_cast<Id>(soup.size());
+  st.soup_points = corners;
+
+  // Weld: both KEY-REDUCE plan names use the sort plan here (N^2 edge keys
+  // are too many to address directly); VERTEX-WELD by position.
+  SurfaceMesh mesh;
+  const bool average = opt.normals == ContourNormals::Average;
+  auto t0 = Clock::now();
+  const bool by_position = opt.weld == ContourWeld::VertexWeld;
+  keyreduce::WeldSpec<std::uint64_t> spec;
+  spec.plan = by_position ? keyreduce::WeldPlan::ByPosition : keyreduce::WeldPlan::Sort;
+  spec.key_bits = ep.ek.key_bits() + iso_bits;
+  spec.order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
+  const keyreduce::Groups<std::uint64_t> groups =
+      keyreduce::weld(soup.data(), corners, spec, [&](Id c, float* xyz) { ep.position(soup[c], xyz); },
+                      {by_position ? &mesh.points : nullptr, nullptr});
+  mesh.connectivity = groups.index_map;
+  soup = {};
+  st.weld += seconds_since(t0);
+
+  // Reduce: positions, fields, normals.
+  t0 = Clock::now();
+  const Id points = groups.num_groups();
+  if (mesh.points.empty()) {
+    mesh.points.resize(static_cast<std::size_t>(3 * points));
+    parallel::for_each(points, [&](Id p) { ep.position(groups.unique_keys[p], &mesh.points[3 * p]); });
+  }
+  interpolate_fields(tets, field, opt, ep, groups, mesh);
   if (average && !opt.coarsen) {
     // The weld's groups are the corners grouped by point (mesh/normals.hpp).
-    Field n{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * points))};
-    auto* out = reinterpret_cast<Vec3f*>(n.values.data());
-    sum_face_normals(groups, face_normals(mesh).data(), out);
-    normalize(out, points);
-    mesh.point_fields.push_back(std::move(n));
+    std::vector<Vec3f> normals(static_cast<std::size_t>(points));
+    sum_face_normals(groups, face_normals(mesh).data(), normals.data());
+    normalize(normals.data(), points);
+    mesh.point_fields.push_back(normals_field(normals));
   }
   st.fields += seconds_since(t0);
   if (opt.coarsen) {
     t0 = Clock::now();
-    // The coarse key: the edge's end point nearest to the crossing, per isovalue.
-    std::vector<std::uint64_t> coarse(static_cast<std::size_t>(points));
-    parallel::for_each(points, [&](Id p) {
-      const EdgePoint e = locate(point_key[p]);
-      coarse[p] = ek.level(point_key[p]) * static_cast<std::uint64_t>(points_in) + (e.t >= 0.5 ? e.b : e.a);
-    });
-    st.triangles_before_coarsening = mesh.num_cells();
-    mesh = coarsen(mesh, coarse, static_cast<std::uint64_t>(points_in) * opt.isovalues.size());
-    if (average) generate::average_normals(mesh);
+    mesh = coarsen_contour(std::move(mesh), ep, groups.unique_keys, points_in, opt.isovalues.size(), average, st);
     st.coarsen += seconds_since(t0);
   }
   return mesh;
