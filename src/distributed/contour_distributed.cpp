@@ -104,54 +104,124 @@ std::vector<Id> balanced_bounds(const std::vector<long long>& triangles, Id nxy,
 
 }  // namespace
 
-ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options, bool balance) {
+namespace {
+
+// Planes of the volume held by this rank: [lo, hi] (inclusive) in `grid`.
+struct HeldSlab {
+  ImageGrid grid;
+  Id lo = 0, hi = -1;
+};
+
+// A slab of `count` planes shaped like the volume.
+ImageGrid new_slab(const ImageGrid& head, Id count) {
+  ImageGrid g;
+  g.spacing = head.spacing;
+  g.origin = head.origin;
+  g.name = head.name;
+  g.allocate({head.dims[0], head.dims[1], count}, head.type);
+  return g;
+}
+
+// With balance: read the equal slab, count its layers' triangles, share the
+// counts, and move the boundaries so that every rank gets the same work.
+// Returns the slab read (its planes are kept for the final read).
+HeldSlab balance(generate::PlaneSource& source, const generate::ContourOptions& options, std::vector<Id>& bounds,
+                 int r, RankStats& st) {
+  const ImageGrid& head = source.header();
+  const int P = static_cast<int>(bounds.size()) - 1;
+  auto t0 = Clock::now();
+  HeldSlab held;
+  held.lo = bounds[r];
+  held.hi = bounds[r + 1];
+  held.grid = new_slab(head, held.hi - held.lo + 1);
+  source.read_planes(held.lo, held.hi - held.lo + 1, held.grid.bytes.data());
+  st.read = seconds_since(t0);
+  t0 = Clock::now();
+  const std::vector<Id> mine = generate::triangles_per_layer(held.grid, options);
+  std::vector<long long> counts(mine.begin(), mine.end()), all(static_cast<std::size_t>(head.dims[2] - 1));
+  std::vector<int> sizes(static_cast<std::size_t>(P)), displs(static_cast<std::size_t>(P));
+  for (int q = 0; q < P; ++q) {
+    sizes[q] = checked_int(bounds[q + 1] - bounds[q], "voxel layers");
+    displs[q] = checked_int(bounds[q], "voxel layers");
+  }
+  MPI_Allgatherv(counts.data(), sizes[r], MPI_LONG_LONG, all.data(), sizes.data(), displs.data(), MPI_LONG_LONG,
+                 MPI_COMM_WORLD);
+  bounds = balanced_bounds(all, head.dims[0] * head.dims[1], P);
+  st.balance = seconds_since(t0);
+  return held;
+}
+
+// Planes [first, last] of the final slab: those already held are copied
+// (or kept as they are when the boundaries did not move), the others read.
+ImageGrid read_slab(generate::PlaneSource& source, HeldSlab held, Id first, Id last) {
+  if (first == held.lo && last == held.hi) return std::move(held.grid);
+  const ImageGrid& head = source.header();
+  ImageGrid slab = new_slab(head, last - first + 1);
+  const std::size_t plane = static_cast<std::size_t>(head.dims[0] * head.dims[1]) * scalar_size(head.type);
+  const Id keep_lo = std::max(first, held.lo), keep_hi = std::min(last, held.hi);
+  if (keep_lo > keep_hi) {
+    source.read_planes(first, last - first + 1, slab.bytes.data());
+    return slab;
+  }
+  std::copy_n(held.grid.bytes.data() + plane * static_cast<std::size_t>(keep_lo - held.lo),
+              plane * static_cast<std::size_t>(keep_hi - keep_lo + 1),
+              slab.bytes.data() + plane * static_cast<std::size_t>(keep_lo - first));
+  if (first < keep_lo) source.read_planes(first, keep_lo - first, slab.bytes.data());
+  if (keep_hi < last)
+    source.read_planes(keep_hi + 1, last - keep_hi, slab.bytes.data() + plane * static_cast<std::size_t>(keep_hi + 1 - first));
+  return slab;
+}
+
+// The distributed KEY-REDUCE of the piece's keys. Keys are isovalue-major
+// (isovalue * 3 * points + 3 * point + axis); rank q owns the points of
+// planes [lo_q, lo_{q+1}), the last rank also the top plane. Averaged
+// normals: the shared planes' partial sums merge at their owners (the rest
+// of the merge); then the transform, normalising, on every copy alike.
+void number_piece(ContourPiece& piece, const generate::ContourOptions& options, const std::vector<Id>& bounds,
+                  Id nxy, Id nz, std::vector<Vec3f>* normal_sums) {
+  const int P = static_cast<int>(bounds.size()) - 1;
+  const int segments = static_cast<int>(options.isovalues.size());
+  const std::uint64_t per_iso = 3ull * static_cast<std::uint64_t>(nxy * nz);
+  const auto first_key = [&](int iso, int q) -> std::uint64_t {
+    const std::uint64_t base = static_cast<std::uint64_t>(iso) * per_iso;
+    if (q == P) return base + per_iso;
+    return base + std::uint64_t{3} * static_cast<std::uint64_t>(nxy) * static_cast<std::uint64_t>(bounds[q]);
+  };
+  std::vector<Vec3f> none;
+  const ValueMerge merge = value_merge(normal_sums ? *normal_sums : none, add);
+  piece.numbering = number_keys(piece.keys, segments, first_key, normal_sums ? &merge : nullptr);
+  if (normal_sums) {
+    normalize(normal_sums->data(), piece.mesh.num_points());
+    piece.mesh.point_fields.push_back(normals_field(*normal_sums));
+  }
+  const GlobalNumbering& g = piece.numbering;
+  if (g.total > static_cast<long long>(std::numeric_limits<PointIndex>::max()))
+    throw LimitError("distributed contour: " + std::to_string(g.total) + " points exceed 32-bit point ids");
+  RankStats& st = piece.stats;
+  st.points = static_cast<double>(piece.mesh.num_points());
+  for (std::uint8_t o : g.owned) st.points_owned += o;
+  st.triangles = static_cast<double>(piece.mesh.num_cells());
+  st.keys_requested = static_cast<double>(g.keys_requested);
+  st.bytes_sent = static_cast<double>(g.bytes_sent);
+}
+
+}  // namespace
+
+ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options, bool balance_work) {
   int P = 1, r = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &P);
   MPI_Comm_rank(MPI_COMM_WORLD, &r);
   const ImageGrid& head = source.header();
   require_distributable(head, options, P);
-  const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2], nxy = nx * ny;
+  const Id nz = head.dims[2], nxy = head.dims[0] * head.dims[1];
   ContourPiece piece;
   RankStats& st = piece.stats;
   // Rank q's voxel layers [bounds[q], bounds[q + 1]) need planes bounds[q] .. bounds[q + 1].
   std::vector<Id> bounds(static_cast<std::size_t>(P) + 1);
   for (int q = 0; q <= P; ++q) bounds[q] = (nz - 1) * q / P;
-  // Planes [first, first + count) of the volume, read by this rank.
-  auto new_slab = [&](Id count) {
-    ImageGrid g;
-    g.spacing = head.spacing;
-    g.origin = head.origin;
-    g.name = head.name;
-    g.allocate({nx, ny, count}, head.type);
-    return g;
-  };
-  ImageGrid slab;
-  // With balance: read the equal slab, count its layers' triangles, share
-  // the counts, and move the boundaries so that every rank gets the same
-  // work; the planes already read are kept, only the rest is read.
-  Id held_lo = 0, held_hi = -1;  // planes in `slab` before the final read
+  HeldSlab held;
+  if (balance_work && P > 1) held = balance(source, options, bounds, r, st);
   auto t0 = Clock::now();
-  if (balance && P > 1) {
-    const Id lo0 = bounds[r], hi0 = bounds[r + 1];
-    slab = new_slab(hi0 - lo0 + 1);
-    source.read_planes(lo0, hi0 - lo0 + 1, slab.bytes.data());
-    st.read = seconds_since(t0);
-    t0 = Clock::now();
-    const std::vector<Id> mine = generate::triangles_per_layer(slab, options);
-    std::vector<long long> counts(mine.begin(), mine.end()), all(static_cast<std::size_t>(nz - 1));
-    std::vector<int> sizes(static_cast<std::size_t>(P)), displs(static_cast<std::size_t>(P));
-    for (int q = 0; q < P; ++q) {
-      sizes[q] = checked_int(bounds[q + 1] - bounds[q], "voxel layers");
-      displs[q] = checked_int(bounds[q], "voxel layers");
-    }
-    MPI_Allgatherv(counts.data(), sizes[r], MPI_LONG_LONG, all.data(), sizes.data(), displs.data(), MPI_LONG_LONG,
-                   MPI_COMM_WORLD);
-    bounds = balanced_bounds(all, nxy, P);
-    held_lo = lo0;
-    held_hi = hi0;
-    st.balance = seconds_since(t0);
-    t0 = Clock::now();
-  }
   const Id lo = bounds[r], hi = bounds[r + 1];
   st.first_plane = static_cast<double>(lo);
   st.planes = static_cast<double>(hi - lo + 1);
@@ -159,28 +229,7 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   // slab's border: a ghost plane on either side (where the grid has one).
   const bool ghosts = options.normals == generate::ContourNormals::Gradient || options.curvature;
   const Id below = ghosts && lo > 0 ? 1 : 0, above = ghosts && hi < nz - 1 ? 1 : 0;
-  {
-    // Planes [first, last] of the final slab: those already held are copied
-    // (or kept as they are when the boundaries did not move), the others read.
-    const Id first = lo - below, last = hi + above;
-    if (first != held_lo || last != held_hi) {
-      ImageGrid held = std::move(slab);
-      slab = new_slab(last - first + 1);
-      const std::size_t plane = static_cast<std::size_t>(nxy) * scalar_size(head.type);
-      const Id keep_lo = std::max(first, held_lo), keep_hi = std::min(last, held_hi);
-      if (keep_lo <= keep_hi) {
-        std::copy_n(held.bytes.data() + plane * static_cast<std::size_t>(keep_lo - held_lo),
-                    plane * static_cast<std::size_t>(keep_hi - keep_lo + 1),
-                    slab.bytes.data() + plane * static_cast<std::size_t>(keep_lo - first));
-        if (first < keep_lo) source.read_planes(first, keep_lo - first, slab.bytes.data());
-        if (keep_hi < last)
-          source.read_planes(keep_hi + 1, last - keep_hi,
-                             slab.bytes.data() + plane * static_cast<std::size_t>(keep_hi + 1 - first));
-      } else {
-        source.read_planes(first, last - first + 1, slab.bytes.data());
-      }
-    }
-  }
+  ImageGrid slab = read_slab(source, std::move(held), lo - below, hi + above);
   st.read += seconds_since(t0);
 
   t0 = Clock::now();
@@ -189,13 +238,11 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   opt.total_planes = nz;
   opt.ghost_below = below;
   opt.ghost_above = above;
-  if (options.normals == generate::ContourNormals::Average)
-    opt.normals = generate::ContourNormals::None;  // averaged below, across ranks
+  const bool average = options.normals == generate::ContourNormals::Average;
+  if (average) opt.normals = generate::ContourNormals::None;  // averaged below, across ranks
   piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys);
   slab.bytes = {};
-  // Averaged normals, KEY-REDUCE's merge over this rank's triangles first:
-  // each point's sum of its face normals in triangle order.
-  const bool average = options.normals == generate::ContourNormals::Average;
+  // Averaged normals, KEY-REDUCE's merge over this rank's triangles first.
   std::vector<Vec3f> normal_sums;
   if (average) normal_sums = point_normal_sums(piece.mesh);
   st.contour = seconds_since(t0);
@@ -205,34 +252,8 @@ ContourPiece contour_piece(generate::PlaneSource& source, const generate::Contou
   t0 = Clock::now();
   MPI_Barrier(MPI_COMM_WORLD);
   st.wait = seconds_since(t0);
-
-  // Keys are isovalue-major (isovalue * 3 * points + 3 * point + axis); a
-  // point belongs to the rank whose voxel layers start at its plane.
   t0 = Clock::now();
-  const int segments = static_cast<int>(options.isovalues.size());
-  const std::uint64_t per_iso = 3ull * static_cast<std::uint64_t>(nxy * nz);
-  // Rank q owns the points of planes [lo_q, lo_{q+1}); the last rank also the top plane.
-  const auto first_key = [=](int iso, int q) -> std::uint64_t {
-    const std::uint64_t base = static_cast<std::uint64_t>(iso) * per_iso;
-    if (q == P) return base + per_iso;
-    return base + std::uint64_t{3} * static_cast<std::uint64_t>(nxy) * static_cast<std::uint64_t>(bounds[q]);
-  };
-  // The shared planes' partial sums merge at their owners (the rest of the
-  // merge); then the transform, normalising, on every copy alike.
-  const ValueMerge merge = value_merge(normal_sums, add);
-  piece.numbering = number_keys(piece.keys, segments, first_key, average ? &merge : nullptr);
-  if (average) {
-    normalize(normal_sums.data(), piece.mesh.num_points());
-    piece.mesh.point_fields.push_back(normals_field(normal_sums));
-  }
-  const GlobalNumbering& g = piece.numbering;
-  if (g.total > static_cast<long long>(std::numeric_limits<PointIndex>::max()))
-    throw LimitError("distributed contour: " + std::to_string(g.total) + " points exceed 32-bit point ids");
-  st.points = static_cast<double>(piece.mesh.num_points());
-  for (std::uint8_t o : g.owned) st.points_owned += o;
-  st.triangles = static_cast<double>(piece.mesh.num_cells());
-  st.keys_requested = static_cast<double>(g.keys_requested);
-  st.bytes_sent = static_cast<double>(g.bytes_sent);
+  number_piece(piece, options, bounds, nxy, nz, average ? &normal_sums : nullptr);
   st.exchange = seconds_since(t0);
   return piece;
 }
