@@ -18,24 +18,23 @@ namespace keymesh::generate {
 namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-}  // namespace
 
-SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
-                             ContourStats* stats, StreamStats* stream_stats) {
+// What the streamed contour cannot do (yet), refused by name.
+void check_streamable(const ImageGrid& head, const ContourOptions& options) {
   if (options.coarsen) throw InputError("contour --memory-limit: coarsening is not streamed yet");
   if (options.backend != Backend::Cpu) throw InputError("contour --memory-limit: streaming runs on the CPU backend");
   if (options.weld == ContourWeld::VertexWeld)
     throw InputError("contour --memory-limit: VERTEX-WELD has no keys to merge slabs by; use --weld keyreduce");
-  const ImageGrid& head = source.header();
-  const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];
   for (int a = 0; a < 3; ++a)
     if (head.dims[a] < 2)
       throw InputError("contour: grid has " + std::to_string(head.dims[a]) + " point(s) along axis " + "xyz"[a] +
                        " (need at least 2)");
+}
+
+// Planes per slab (ghosts excluded) that `memory_limit` bytes hold.
+Id planes_per_slab(const ImageGrid& head, std::size_t memory_limit, bool ghosts) {
+  const Id nx = head.dims[0], ny = head.dims[1];
   const std::size_t plane_bytes = static_cast<std::size_t>(nx * ny) * scalar_size(head.type);
-  // Gradient normals and curvature take central differences across a
-  // slab's border: each slab reads a ghost plane on either side.
-  const bool ghosts = options.normals == ContourNormals::Gradient || options.curvature;
   const Id ghost_planes = ghosts ? 2 : 0;
   const Id fit = static_cast<Id>(memory_limit / plane_bytes);
   if (fit < 2 + ghost_planes)
@@ -43,53 +42,27 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
                      std::string(ghosts ? "four " : "two ") + std::to_string(nx) + " x " + std::to_string(ny) +
                      " planes (" + std::to_string((2 + ghost_planes) * plane_bytes) + " bytes needed" +
                      (ghosts ? ", two of them ghost planes for the derivatives" : "") + ")");
-  const Id planes = std::min(fit - ghost_planes, nz);
-  const Id n_iso = static_cast<Id>(options.isovalues.size());
-  const std::uint64_t per_iso = 3ull * static_cast<std::uint64_t>(nx * ny * nz);
+  return std::min(fit - ghost_planes, head.dims[2]);
+}
 
-  StreamStats ss;
-  ss.planes_per_slab = planes;
-  ss.slab_bytes = static_cast<std::size_t>(std::min(planes + ghost_planes, nz)) * plane_bytes;
-  ContourStats total;
-  // Every slab's points (global keys, positions, scalars), one after the
-  // other, and its triangles as indices into that list, per isovalue so that
-  // the isovalues' triangles end up one after the other, as in one contour.
+// Every slab's points (global keys, positions, fields), one after the
+// other, and its triangles as indices into that list, per isovalue so that
+// the isovalues' triangles end up one after the other, as in one contour.
+// Averaged normals: each slab's points carry the sum of their triangles'
+// normals (KEY-REDUCE's merge within the slab); the merge across slabs adds
+// a shared point's sums, and the transform normalises once. Equal to the
+// in-memory normals within float rounding (associated differently), not
+// bit for bit.
+struct SlabPoints {
+  std::uint64_t per_iso;
+  bool average;
   std::vector<std::uint64_t> keys;
   std::vector<float> points;
-  std::vector<Field> fields;  // every point field of the slabs (scalars, normals, curvature), concatenated
-  std::vector<std::vector<std::uint32_t>> corners(static_cast<std::size_t>(n_iso));
-  ImageGrid slab;
-  slab.spacing = head.spacing;
-  slab.origin = head.origin;
-  slab.name = head.name;
-  ContourOptions opt = options;
-  opt.total_planes = nz;
-  // Averaged normals: each slab's points carry the sum of their triangles'
-  // normals (KEY-REDUCE's merge within the slab, in triangle order); the
-  // merge across slabs adds a shared point's sums, and the transform
-  // normalises once. Equal to the in-memory normals within float rounding
-  // (a different summation order), not bit for bit.
-  const bool average = options.normals == ContourNormals::Average;
-  if (average) opt.normals = ContourNormals::None;
-  std::vector<Vec3f> normal_sums;  // per slab point
-  for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
-    const Id count = std::min(planes, nz - k0);
-    const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
-    auto t0 = Clock::now();
-    slab.allocate({nx, ny, below + count + above}, head.type);
-    source.read_planes(k0 - below, below + count + above, slab.bytes.data());
-    ss.read += seconds_since(t0);
-    t0 = Clock::now();
-    opt.first_plane = k0 - below;
-    opt.ghost_below = below;
-    opt.ghost_above = above;
-    std::vector<std::uint64_t> slab_keys;
-    ContourStats st;
-    const SurfaceMesh m = contour(slab, opt, &st, &slab_keys);
-    total.classify += st.classify, total.generate += st.generate, total.weld += st.weld, total.fields += st.fields;
-    total.soup_points += st.soup_points;
-    total.key_bits = st.key_bits;
-    ss.contour += seconds_since(t0);
+  std::vector<Field> fields;  // every point field of the slabs, concatenated
+  std::vector<std::vector<std::uint32_t>> corners;  // per isovalue
+  std::vector<Vec3f> normal_sums;
+
+  void append(const SurfaceMesh& m, const std::vector<std::uint64_t>& slab_keys) {
     const std::uint64_t base = keys.size();
     if (base + slab_keys.size() > std::numeric_limits<std::uint32_t>::max())
       throw LimitError("contour --memory-limit: more than 2^32 - 1 points before merging");
@@ -107,46 +80,103 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
       auto& dst = corners[static_cast<std::size_t>(slab_keys[m.connectivity[3 * t]] / per_iso)];
       for (int c = 0; c < 3; ++c) dst.push_back(static_cast<std::uint32_t>(base + m.connectivity[3 * t + c]));
     }
+  }
+
+  // KEY-REDUCE over the slabs' points: a shared plane's points appear
+  // twice, with equal bits; the first of each group stands for it, and the
+  // index map takes every slab point to its merged point.
+  SurfaceMesh merge() const {
+    const Id n = static_cast<Id>(keys.size());
+    const auto g = keyreduce::partition_sort(keys.data(), n,
+                                             parallel::bits_needed<std::uint64_t>(per_iso * corners.size() - 1),
+                                             keyreduce::Order::Build);
+    SurfaceMesh mesh;
+    const Id unique = g.num_groups();
+    mesh.points.resize(static_cast<std::size_t>(3 * unique));
+    for (const Field& f : fields)
+      mesh.point_fields.push_back(Field{f.name, f.components, std::vector<float>(static_cast<std::size_t>(unique * f.components))});
+    std::vector<Vec3f> normals(average ? static_cast<std::size_t>(unique) : 0);
+    parallel::for_each(unique, [&](Id p) {
+      const Id first = g.order[g.offsets[p]];
+      if (average) {
+        // The merge across slabs, in slab order, then the transform.
+        Vec3f merged{0, 0, 0};
+        for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) merged = add(merged, normal_sums[g.order[j]]);
+        normals[p] = unit(merged);
+      }
+      for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
+      for (std::size_t i = 0; i < fields.size(); ++i) {
+        const int c = fields[i].components;
+        std::copy_n(fields[i].values.begin() + c * first, c, mesh.point_fields[i].values.begin() + c * p);
+      }
+    });
+    if (average) mesh.point_fields.push_back(normals_field(normals));
+    std::size_t total_corners = 0;
+    for (const auto& c : corners) total_corners += c.size();
+    mesh.connectivity.resize(total_corners);
+    std::size_t at = 0;
+    for (const auto& c : corners) {
+      parallel::for_each(static_cast<Id>(c.size()), [&](Id i) { mesh.connectivity[at + i] = g.index_map[c[i]]; });
+      at += c.size();
+    }
+    return mesh;
+  }
+};
+
+void add_stats(ContourStats& total, const ContourStats& st) {
+  total.classify += st.classify, total.generate += st.generate, total.weld += st.weld, total.fields += st.fields;
+  total.soup_points += st.soup_points;
+  total.key_bits = st.key_bits;
+}
+
+}  // namespace
+
+SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats* stats, StreamStats* stream_stats) {
+  const ImageGrid& head = source.header();
+  check_streamable(head, options);
+  const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];
+  // Gradient normals and curvature take central differences across a
+  // slab's border: each slab reads a ghost plane on either side.
+  const bool ghosts = options.normals == ContourNormals::Gradient || options.curvature;
+  const Id planes = planes_per_slab(head, memory_limit, ghosts);
+  StreamStats ss;
+  ss.planes_per_slab = planes;
+  ss.slab_bytes = static_cast<std::size_t>(std::min(planes + (ghosts ? 2 : 0), nz)) *
+                  static_cast<std::size_t>(nx * ny) * scalar_size(head.type);
+  const bool average = options.normals == ContourNormals::Average;
+  SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, {}, {}, {}, {}, {}};
+  all.corners.resize(options.isovalues.size());
+  ContourStats total;
+  ImageGrid slab;
+  slab.spacing = head.spacing;
+  slab.origin = head.origin;
+  slab.name = head.name;
+  ContourOptions opt = options;
+  opt.total_planes = nz;
+  if (average) opt.normals = ContourNormals::None;  // summed per slab, merged across slabs
+  for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
+    const Id count = std::min(planes, nz - k0);
+    const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
+    auto t0 = Clock::now();
+    slab.allocate({nx, ny, below + count + above}, head.type);
+    source.read_planes(k0 - below, below + count + above, slab.bytes.data());
+    ss.read += seconds_since(t0);
+    t0 = Clock::now();
+    opt.first_plane = k0 - below;
+    opt.ghost_below = below;
+    opt.ghost_above = above;
+    std::vector<std::uint64_t> slab_keys;
+    ContourStats st;
+    const SurfaceMesh m = contour(slab, opt, &st, &slab_keys);
+    add_stats(total, st);
+    ss.contour += seconds_since(t0);
+    all.append(m, slab_keys);
     ++ss.slabs;
   }
   slab.bytes = {};
-
-  // KEY-REDUCE over the slabs' points: a shared plane's points appear twice,
-  // with equal bits; the first of each group stands for it.
-  auto t0 = Clock::now();
-  const Id n = static_cast<Id>(keys.size());
-  const auto g = keyreduce::partition_sort(keys.data(), n, parallel::bits_needed<std::uint64_t>(per_iso * n_iso - 1),
-                                           keyreduce::Order::Build);
-  SurfaceMesh mesh;
-  const Id unique = g.num_groups();
-  mesh.points.resize(static_cast<std::size_t>(3 * unique));
-  for (const Field& f : fields)
-    mesh.point_fields.push_back(Field{f.name, f.components, std::vector<float>(static_cast<std::size_t>(unique * f.components))});
-  Field normals{"Normals", 3, std::vector<float>(average ? static_cast<std::size_t>(3 * unique) : 0)};
-  parallel::for_each(unique, [&](Id p) {
-    const Id first = g.order[g.offsets[p]];
-    if (average) {
-      // The merge across slabs, in slab order, then the transform.
-      Vec3f merged{0, 0, 0};
-      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) merged = add(merged, normal_sums[g.order[j]]);
-      reinterpret_cast<Vec3f*>(normals.values.data())[p] = unit(merged);
-    }
-    for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
-    for (std::size_t i = 0; i < fields.size(); ++i) {
-      const int c = fields[i].components;
-      std::copy_n(fields[i].values.begin() + c * first, c, mesh.point_fields[i].values.begin() + c * p);
-    }
-  });
-  if (average) mesh.point_fields.push_back(std::move(normals));
-  std::size_t total_corners = 0;
-  for (const auto& c : corners) total_corners += c.size();
-  mesh.connectivity.resize(total_corners);
-  // KEY-REDUCE's index map takes every slab point to its merged point.
-  std::size_t at = 0;
-  for (const auto& c : corners) {
-    parallel::for_each(static_cast<Id>(c.size()), [&](Id i) { mesh.connectivity[at + i] = g.index_map[c[i]]; });
-    at += c.size();
-  }
+  const auto t0 = Clock::now();
+  SurfaceMesh mesh = all.merge();
   ss.merge = seconds_since(t0);
   if (stats) *stats = total;
   if (stream_stats) *stream_stats = ss;
