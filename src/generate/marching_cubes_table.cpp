@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <functional>
 #include <vector>
 
 namespace keymesh::generate {
@@ -15,58 +14,63 @@ struct Vec3 {
 
 int coord(int corner, int axis) { return (corner >> axis) & 1; }
 
-MarchingCubesTable build_table() {
+// Builds the table from the cube's geometry (no table data is typed in).
+struct TableBuilder {
   MarchingCubesTable t{};
-  // The 12 edges: corner pairs that differ in exactly one coordinate.
-  int e = 0;
-  for (int a = 0; a < 8; ++a)
-    for (int axis = 0; axis < 3; ++axis) {
-      if (coord(a, axis) != 0) continue;
-      const int b = a | (1 << axis);
-      t.edges[e++] = CubeEdge{static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(b),
-                              static_cast<std::uint8_t>(axis), static_cast<std::uint8_t>(coord(a, 0)),
-                              static_cast<std::uint8_t>(coord(a, 1)), static_cast<std::uint8_t>(coord(a, 2))};
-    }
-  auto edge_of = [&](int a, int b) {
+  std::vector<std::array<int, 4>> faces;  // corners in cyclic order around each face
+
+  TableBuilder() {
+    // The 12 edges: corner pairs that differ in exactly one coordinate.
+    int e = 0;
+    for (int a = 0; a < 8; ++a)
+      for (int axis = 0; axis < 3; ++axis) {
+        if (coord(a, axis) != 0) continue;
+        const int b = a | (1 << axis);
+        t.edges[e++] = CubeEdge{static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(b),
+                                static_cast<std::uint8_t>(axis), static_cast<std::uint8_t>(coord(a, 0)),
+                                static_cast<std::uint8_t>(coord(a, 1)), static_cast<std::uint8_t>(coord(a, 2))};
+      }
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        std::array<int, 4> f{};
+        const int cyc[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        for (int k = 0; k < 4; ++k) f[k] = (side << axis) | (cyc[k][0] << u) | (cyc[k][1] << v);
+        faces.push_back(f);
+      }
+  }
+
+  int edge_of(int a, int b) const {
     for (int i = 0; i < 12; ++i)
       if ((t.edges[i].corner0 == a && t.edges[i].corner1 == b) || (t.edges[i].corner0 == b && t.edges[i].corner1 == a))
         return i;
     return -1;
-  };
-  // The 6 faces, corners listed in cyclic order around the face.
-  std::vector<std::array<int, 4>> faces;
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      std::array<int, 4> f{};
-      const int cyc[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-      for (int k = 0; k < 4; ++k) f[k] = (side << axis) | (cyc[k][0] << u) | (cyc[k][1] << v);
-      faces.push_back(f);
-    }
-  auto midpoint = [&](int edge) {
+  }
+
+  Vec3 midpoint(int edge) const {
     const auto& ce = t.edges[edge];
     Vec3 p{double(coord(ce.corner0, 0)), double(coord(ce.corner0, 1)), double(coord(ce.corner0, 2))};
     (ce.axis == 0 ? p.x : ce.axis == 1 ? p.y : p.z) += 0.5;
     return p;
-  };
+  }
 
   // Two cube edges on a common face. A diagonal between them inside a
   // polygon would lie on that face, where the neighbouring cube may draw the
   // same diagonal: the edge would then carry four triangles (non-manifold).
-  auto share_face = [&](int e1, int e2) {
+  bool share_face(int e1, int e2) const {
     for (int axis = 0; axis < 3; ++axis) {
       if (t.edges[e1].axis == axis || t.edges[e2].axis == axis) continue;
       const int c1 = coord(t.edges[e1].corner0, axis), c2 = coord(t.edges[e2].corner0, axis);
       if (c1 == c2) return true;
     }
     return false;
-  };
+  }
+
   // Triangulates a polygon (cut edges in order) without such diagonals:
   // the triangle on edge (p0, p1) takes the first apex whose two sides are
   // polygon edges or allowed diagonals, and the two remaining pieces are
   // triangulated the same way (a fan when every diagonal is allowed).
-  std::function<bool(const std::vector<int>&, std::vector<std::array<int, 3>>&)> triangulate =
-      [&](const std::vector<int>& poly, std::vector<std::array<int, 3>>& out) -> bool {
+  bool triangulate(const std::vector<int>& poly, std::vector<std::array<int, 3>>& out) const {
     const std::size_t m = poly.size();
     if (m < 3) return true;
     if (m == 3) {
@@ -87,11 +91,12 @@ MarchingCubesTable build_table() {
       }
     }
     return false;
-  };
+  }
 
-  for (int cube_case = 0; cube_case < 256; ++cube_case) {
+  // The contour segments on the cube's faces: each cut edge gets one
+  // neighbour per face it lies on.
+  std::array<std::vector<int>, 12> segments(int cube_case) const {
     auto inside = [&](int c) { return (cube_case >> c) & 1; };
-    // Each cut edge gets one neighbour per face it lies on.
     std::array<std::vector<int>, 12> adj;
     for (const auto& f : faces) {
       std::array<int, 4> fe{};
@@ -99,19 +104,41 @@ MarchingCubesTable build_table() {
       std::vector<int> cut;
       for (int k = 0; k < 4; ++k)
         if (inside(f[k]) != inside(f[(k + 1) % 4])) cut.push_back(k);
-      std::vector<std::array<int, 2>> segments;
+      std::vector<std::array<int, 2>> segs;
       if (cut.size() == 2) {
-        segments.push_back({fe[cut[0]], fe[cut[1]]});
+        segs.push_back({fe[cut[0]], fe[cut[1]]});
       } else if (cut.size() == 4) {
         // Ambiguous face: cut off every inside corner on its own.
         for (int k = 0; k < 4; ++k)
-          if (inside(f[k])) segments.push_back({fe[(k + 3) % 4], fe[k]});
+          if (inside(f[k])) segs.push_back({fe[(k + 3) % 4], fe[k]});
       }
-      for (const auto& s : segments) {
+      for (const auto& s : segs) {
         adj[s[0]].push_back(s[1]);
         adj[s[1]].push_back(s[0]);
       }
     }
+    return adj;
+  }
+
+  // Orients a loop: its Newell normal must point from inside corners to
+  // outside ones.
+  void orient(std::vector<int>& loop, int cube_case) const {
+    Vec3 n{0, 0, 0}, d{0, 0, 0};
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const Vec3 p = midpoint(loop[i]), q = midpoint(loop[(i + 1) % loop.size()]);
+      n.x += (p.y - q.y) * (p.z + q.z);
+      n.y += (p.z - q.z) * (p.x + q.x);
+      n.z += (p.x - q.x) * (p.y + q.y);
+      const auto& ce = t.edges[loop[i]];
+      const double sgn = (cube_case >> ce.corner0) & 1 ? 1.0 : -1.0;  // corner0 -> corner1 goes inside -> outside
+      (ce.axis == 0 ? d.x : ce.axis == 1 ? d.y : d.z) += sgn;
+    }
+    if (n.x * d.x + n.y * d.y + n.z * d.z < 0) std::reverse(loop.begin(), loop.end());
+  }
+
+  // Every case: the segments' loops, oriented and triangulated.
+  void add_case(int cube_case) {
+    const std::array<std::vector<int>, 12> adj = segments(cube_case);
     std::array<bool, 12> seen{};
     int tri = 0;
     for (int start = 0; start < 12; ++start) {
@@ -125,18 +152,7 @@ MarchingCubesTable build_table() {
         prev = cur;
         cur = next;
       } while (cur != start);
-      // Orient: the Newell normal must point from inside corners to outside ones.
-      Vec3 n{0, 0, 0}, d{0, 0, 0};
-      for (std::size_t i = 0; i < loop.size(); ++i) {
-        const Vec3 p = midpoint(loop[i]), q = midpoint(loop[(i + 1) % loop.size()]);
-        n.x += (p.y - q.y) * (p.z + q.z);
-        n.y += (p.z - q.z) * (p.x + q.x);
-        n.z += (p.x - q.x) * (p.y + q.y);
-        const auto& ce = t.edges[loop[i]];
-        const double sgn = inside(ce.corner0) ? 1.0 : -1.0;  // corner0 -> corner1 goes inside -> outside
-        (ce.axis == 0 ? d.x : ce.axis == 1 ? d.y : d.z) += sgn;
-      }
-      if (n.x * d.x + n.y * d.y + n.z * d.z < 0) std::reverse(loop.begin(), loop.end());
+      orient(loop, cube_case);
       std::vector<std::array<int, 3>> tris;
       if (!triangulate(loop, tris)) {
         // Not met by any of the 256 cases (the noise-volume test would see
@@ -151,7 +167,12 @@ MarchingCubesTable build_table() {
     }
     t.triangle_count[cube_case] = static_cast<std::uint8_t>(tri);
   }
-  return t;
+};
+
+MarchingCubesTable build_table() {
+  TableBuilder b;
+  for (int cube_case = 0; cube_case < 256; ++cube_case) b.add_case(cube_case);
+  return b.t;
 }
 
 }  // namespace
