@@ -1,5 +1,6 @@
 #include "keymesh/generate/dual.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -63,46 +64,56 @@ void fans_of(const SurfaceMesh& m, const analyze::PointCells& pc, Id p, std::vec
   }
 }
 
-}  // namespace
+// Pass 1 of the dual: per point, the polygons and corners it contributes,
+// whether it needs its own dual point (an open fan), and the fan counts;
+// then their prefix sums (poly_count, corner_count and self become first
+// indices).
+struct FanCounts {
+  std::vector<Id> poly_count, corner_count, self, fans, open_fans, skipped;
+  Id polys = 0, corners = 0, extra = 0;
+};
 
-SurfaceMesh dual(const SurfaceMesh& m, DualStats* stats) {
-  const analyze::PointCells pc = analyze::point_cells(m);
-  const Id V = m.num_points(), F = m.num_cells();
-  progress::report("dual: fans", 0.0);
-  // Pass 1: per point, the polygons and points it contributes, and whether
-  // it needs its own dual point (an open fan).
-  std::vector<Id> poly_count(static_cast<std::size_t>(V + 1), 0), corner_count(static_cast<std::size_t>(V + 1), 0),
-      self(static_cast<std::size_t>(V + 1), 0), fans(static_cast<std::size_t>(V + 1), 0),
-      open_fans(static_cast<std::size_t>(V + 1), 0), skipped(static_cast<std::size_t>(V + 1), 0);
-  const int chunks = parallel::chunk_count(V, 1024);
+// A fan becomes a polygon when it has three corners at least, counting the
+// point itself for an open fan (which also needs two cells).
+bool fan_is_polygon(const std::vector<std::uint32_t>& f, bool open) {
+  const Id size = static_cast<Id>(f.size()) + (open ? 1 : 0);
+  return size >= 3 && !(open && f.size() < 2);
+}
+
+FanCounts count_fans(const SurfaceMesh& m, const analyze::PointCells& pc, int chunks) {
+  const Id V = m.num_points();
+  FanCounts fc;
+  for (auto* v : {&fc.poly_count, &fc.corner_count, &fc.self, &fc.fans, &fc.open_fans, &fc.skipped})
+    v->assign(static_cast<std::size_t>(V + 1), 0);
   parallel::for_each_chunk(V, chunks, [&](Id lo, Id hi, int) {
     std::vector<std::uint32_t> fan;
     std::vector<std::uint8_t> used;
     for (Id p = lo; p < hi; ++p)
       fans_of(m, pc, p, fan, used, [&](const std::vector<std::uint32_t>& f, bool open) {
-        ++fans[p];
-        open_fans[p] += open;
-        const Id size = static_cast<Id>(f.size()) + (open ? 1 : 0);
-        if (size < 3 || (open && f.size() < 2)) {
-          ++skipped[p];
+        ++fc.fans[p];
+        fc.open_fans[p] += open;
+        if (!fan_is_polygon(f, open)) {
+          ++fc.skipped[p];
           return;
         }
-        ++poly_count[p];
-        corner_count[p] += size;
-        if (open) self[p] = 1;
+        ++fc.poly_count[p];
+        fc.corner_count[p] += static_cast<Id>(f.size()) + (open ? 1 : 0);
+        if (open) fc.self[p] = 1;
       });
   });
-  const Id polys = parallel::exclusive_scan(poly_count.data(), poly_count.data(), V + 1);
-  const Id corners = parallel::exclusive_scan(corner_count.data(), corner_count.data(), V + 1);
-  const Id extra = parallel::exclusive_scan(self.data(), self.data(), V + 1);
-  if (F + extra > Id{UINT32_MAX} || corners > Id{UINT32_MAX})
-    throw LimitError("dual: " + std::to_string(F + extra) + " points or " + std::to_string(corners) +
-                     " corners exceed 2^32 - 1");
+  fc.polys = parallel::exclusive_scan(fc.poly_count.data(), fc.poly_count.data(), V + 1);
+  fc.corners = parallel::exclusive_scan(fc.corner_count.data(), fc.corner_count.data(), V + 1);
+  fc.extra = parallel::exclusive_scan(fc.self.data(), fc.self.data(), V + 1);
+  return fc;
+}
 
-  SurfaceMesh out;
-  out.points.resize(static_cast<std::size_t>(3 * (F + extra)));
+// The dual's points: every cell's centroid (fields averaged alike, normals
+// renormalised), then a copy of every point with an open fan.
+void dual_points(const SurfaceMesh& m, const FanCounts& fc, SurfaceMesh& out) {
+  const Id V = m.num_points(), F = m.num_cells();
+  out.points.resize(static_cast<std::size_t>(3 * (F + fc.extra)));
   for (const Field& f : m.point_fields)
-    out.point_fields.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>((F + extra) * f.components))});
+    out.point_fields.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>((F + fc.extra) * f.components))});
   parallel::for_each(F, [&](Id c) {
     const std::uint64_t b = m.cell_begin(c), e = m.cell_end(c);
     const double w = 1.0 / double(e - b);
@@ -121,13 +132,13 @@ SurfaceMesh dual(const SurfaceMesh& m, DualStats* stats) {
     }
   });
   parallel::for_each(V, [&](Id p) {
-    if (self[p + 1] == self[p]) return;
-    const Id q = F + self[p];
+    if (fc.self[p + 1] == fc.self[p]) return;
+    const Id q = F + fc.self[p];
     for (int x = 0; x < 3; ++x) out.points[3 * q + x] = m.points[3 * p + x];
-    for (std::size_t i = 0; i < m.point_fields.size(); ++i)
-      for (int x = 0; x < m.point_fields[i].components; ++x)
-        out.point_fields[i].values[q * m.point_fields[i].components + x] =
-            m.point_fields[i].values[p * m.point_fields[i].components + x];
+    for (std::size_t i = 0; i < m.point_fields.size(); ++i) {
+      const int k = m.point_fields[i].components;
+      std::copy_n(m.point_fields[i].values.begin() + p * k, k, out.point_fields[i].values.begin() + q * k);
+    }
   });
   for (Field& f : out.point_fields)
     if (f.name == "Normals" && f.components == 3)
@@ -136,32 +147,52 @@ SurfaceMesh dual(const SurfaceMesh& m, DualStats* stats) {
         const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
       });
-  progress::report("dual: polygons", 0.5);
-  // Pass 2: the polygons, point by point (so in input point order).
-  out.connectivity.resize(static_cast<std::size_t>(corners));
-  out.offsets.resize(static_cast<std::size_t>(polys + 1));
-  out.offsets[polys] = static_cast<std::uint64_t>(corners);
+}
+
+// Pass 2: the polygons, point by point (so in input point order).
+void dual_polygons(const SurfaceMesh& m, const analyze::PointCells& pc, const FanCounts& fc, int chunks,
+                   SurfaceMesh& out) {
+  const Id V = m.num_points(), F = m.num_cells();
+  out.connectivity.resize(static_cast<std::size_t>(fc.corners));
+  out.offsets.resize(static_cast<std::size_t>(fc.polys + 1));
+  out.offsets[fc.polys] = static_cast<std::uint64_t>(fc.corners);
   parallel::for_each_chunk(V, chunks, [&](Id lo, Id hi, int) {
     std::vector<std::uint32_t> fan;
     std::vector<std::uint8_t> used;
     for (Id p = lo; p < hi; ++p) {
-      Id poly = poly_count[p], at = corner_count[p];
+      Id poly = fc.poly_count[p], at = fc.corner_count[p];
       fans_of(m, pc, p, fan, used, [&](const std::vector<std::uint32_t>& f, bool open) {
-        const Id size = static_cast<Id>(f.size()) + (open ? 1 : 0);
-        if (size < 3 || (open && f.size() < 2)) return;
+        if (!fan_is_polygon(f, open)) return;
         out.offsets[poly++] = static_cast<std::uint64_t>(at);
         for (std::uint32_t corner : f) out.connectivity[at++] = pc.cell_of_corner[corner];
-        if (open) out.connectivity[at++] = static_cast<PointIndex>(F + self[p]);
+        if (open) out.connectivity[at++] = static_cast<PointIndex>(F + fc.self[p]);
       });
     }
   });
+}
+
+}  // namespace
+
+SurfaceMesh dual(const SurfaceMesh& m, DualStats* stats) {
+  const analyze::PointCells pc = analyze::point_cells(m);
+  const Id V = m.num_points(), F = m.num_cells();
+  progress::report("dual: fans", 0.0);
+  const int chunks = parallel::chunk_count(V, 1024);
+  const FanCounts fc = count_fans(m, pc, chunks);
+  if (F + fc.extra > Id{UINT32_MAX} || fc.corners > Id{UINT32_MAX})
+    throw LimitError("dual: " + std::to_string(F + fc.extra) + " points or " + std::to_string(fc.corners) +
+                     " corners exceed 2^32 - 1");
+  SurfaceMesh out;
+  dual_points(m, fc, out);
+  progress::report("dual: polygons", 0.5);
+  dual_polygons(m, pc, fc, chunks, out);
   if (stats) {
     DualStats s;
-    s.polygons = polys;
+    s.polygons = fc.polys;
     for (Id p = 0; p < V; ++p) {
-      s.boundary_fans += open_fans[p];
-      s.nonmanifold_points += fans[p] > 1;
-      s.skipped_fans += skipped[p];
+      s.boundary_fans += fc.open_fans[p];
+      s.nonmanifold_points += fc.fans[p] > 1;
+      s.skipped_fans += fc.skipped[p];
     }
     *stats = s;
   }
