@@ -57,7 +57,6 @@ Id checked_mul(Id a, Id b, const char* what) {
 }
 
 // Hexahedron corners in bit order and its faces (mesh/cell_tables.hpp).
-using cells::kHexToBits;
 constexpr const auto& kFaces = cells::kHexFaceCycle;
 
 // The diagonal of face f that the split of `parity` cuts: the two face
@@ -144,21 +143,14 @@ UnstructuredGrid tetrahedralize5(const ImageGrid& grid) {
   return out;
 }
 
-UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes) {
-  hexes.validate("tetrahedralize input");
-  const Id cells = hexes.num_cells();
-  // Corner ids of every cell in bit order.
-  std::vector<std::array<std::uint64_t, 8>> corner(static_cast<std::size_t>(cells));
-  for (Id c = 0; c < cells; ++c) {
-    const std::uint8_t t = hexes.cell_type(c);
-    if (t != std::uint8_t(CellType::Hexahedron) && t != std::uint8_t(CellType::Voxel))
-      throw InputError("tetrahedralize --scheme 5: cell " + std::to_string(c) + " is a " + cell_type_name(t) +
-                       ", not a hexahedron");
-    const std::uint64_t b = hexes.cell_begin(c);
-    for (int h = 0; h < 8; ++h)
-      corner[c][t == std::uint8_t(CellType::Voxel) ? h : kHexToBits[h]] = hexes.connectivity[b + h];
-  }
-  // Face adjacency: faces sorted by their sorted corner ids; equal runs are shared faces.
+namespace {
+
+// Face adjacency: faces sorted by their sorted corner ids; equal runs are
+// shared faces. next[c] lists (neighbour, (face of c, face of neighbour)).
+using FaceNeighbours = std::vector<std::vector<std::pair<Id, std::pair<int, int>>>>;
+
+FaceNeighbours face_neighbours(const std::vector<std::array<std::uint64_t, 8>>& corner) {
+  const Id cells = static_cast<Id>(corner.size());
   struct FaceRef {
     std::array<std::uint64_t, 4> key;
     Id cell;
@@ -176,7 +168,7 @@ UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes) {
   std::sort(faces.begin(), faces.end(), [](const FaceRef& a, const FaceRef& b) {
     return a.key != b.key ? a.key < b.key : (a.cell != b.cell ? a.cell < b.cell : a.face < b.face);
   });
-  std::vector<std::vector<std::pair<Id, std::pair<int, int>>>> next(static_cast<std::size_t>(cells));
+  FaceNeighbours next(static_cast<std::size_t>(cells));
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t e = i + 1;
     while (e < faces.size() && faces[e].key == faces[i].key) ++e;
@@ -190,14 +182,19 @@ UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes) {
     }
     i = e;
   }
+  return next;
+}
+
+// Breadth-first 2-colouring: a neighbour takes the split whose diagonal on
+// the shared face is the one this cell already cuts.
+std::vector<int> split_parities(const std::vector<std::array<std::uint64_t, 8>>& corner, const FaceNeighbours& next) {
+  const Id cells = static_cast<Id>(corner.size());
   auto diagonal_ids = [&](Id c, int f, int parity) {
     const auto d = face_diagonal(f, parity);
     std::array<std::uint64_t, 2> ids{corner[c][d[0]], corner[c][d[1]]};
     std::sort(ids.begin(), ids.end());
     return ids;
   };
-  // Breadth-first 2-colouring: a neighbour takes the split whose diagonal on
-  // the shared face is the one this cell already cuts.
   std::vector<int> parity(static_cast<std::size_t>(cells), -1);
   std::vector<Id> queue;
   for (Id seed = 0; seed < cells; ++seed) {
@@ -222,7 +219,16 @@ UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes) {
       }
     }
   }
+  return parity;
+}
 
+}  // namespace
+
+UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes) {
+  hexes.validate("tetrahedralize input");
+  const Id cells = hexes.num_cells();
+  const auto corner = cells::hex_corners(hexes, "tetrahedralize --scheme 5");
+  const std::vector<int> parity = split_parities(corner, face_neighbours(corner));
   UnstructuredGrid out;
   out.points = hexes.points;
   out.point_fields = hexes.point_fields;

@@ -21,7 +21,6 @@ namespace keymesh::generate {
 namespace {
 
 // Corners in bit order, faces as corner cycles (mesh/cell_tables.hpp).
-using cells::kHexToBits;
 constexpr const auto& kFaceCycle = cells::kHexFaceCycle;
 
 // The face centres of the soup: for every (cell, face) pair its group (the
@@ -149,15 +148,7 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
 UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_weld) {
   hexes.validate("tetrahedralize input");
   const Id cells = hexes.num_cells(), N = hexes.num_points();
-  std::vector<std::array<std::uint64_t, 8>> corner(static_cast<std::size_t>(cells));
-  for (Id c = 0; c < cells; ++c) {
-    const std::uint8_t t = hexes.cell_type(c);
-    if (t != std::uint8_t(CellType::Hexahedron) && t != std::uint8_t(CellType::Voxel))
-      throw InputError("tetrahedralize --scheme 24: cell " + std::to_string(c) + " is a " + cell_type_name(t) +
-                       ", not a hexahedron");
-    const std::uint64_t b = hexes.cell_begin(c);
-    for (int h = 0; h < 8; ++h) corner[c][t == std::uint8_t(CellType::Voxel) ? h : kHexToBits[h]] = hexes.connectivity[b + h];
-  }
+  const auto corner = cells::hex_corners(hexes, "tetrahedralize --scheme 24");
   if (6 * cells > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " cells exceed the supported size");
   // A quad face is named by its smallest corner and the corner diagonally

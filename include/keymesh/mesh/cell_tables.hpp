@@ -3,6 +3,13 @@
 //
 // Hexahedra are handled in bit order: corner c sits at
 // (c & 1, (c >> 1) & 1, (c >> 2) & 1) of the unit cube (VTK_VOXEL's order).
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "keymesh/mesh/unstructured_grid.hpp"
+
 namespace keymesh::cells {
 
 // VTK_HEXAHEDRON lists the bottom face counter-clockwise, then the top face:
@@ -16,5 +23,10 @@ inline constexpr int kHexFaceCycle[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5
 
 // The six edges of a tetrahedron (corners 0..3).
 inline constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+// The corner ids of every cell of a grid of hexahedra (VTK_HEXAHEDRON or
+// VTK_VOXEL), in bit order; InputError naming `who` and the cell for any
+// other cell type.
+std::vector<std::array<std::uint64_t, 8>> hex_corners(const UnstructuredGrid& hexes, const std::string& who);
 
 }  // namespace keymesh::cells
