@@ -140,10 +140,9 @@ struct ChunkCounts {
   Id edges = 0, boundary = 0, nonmanifold_edges = 0, nonmanifold_vertices = 0, unused = 0;
 };
 
-}  // namespace
-
-TopologyReport check_topology(const SurfaceMesh& mesh) {
-  TopologyReport r;
+// Offsets, sizes and point ids a report can trust; the first out-of-range
+// id whatever the thread count.
+void check_layout(const SurfaceMesh& mesh) {
   if (mesh.points.size() % 3 != 0)
     throw InputError("check_topology: " + std::to_string(mesh.points.size()) + " point coordinates, not a multiple of 3");
   const Id n = mesh.num_points();
@@ -160,64 +159,123 @@ TopologyReport check_topology(const SurfaceMesh& mesh) {
         throw InputError("check_topology: cell offsets decrease at cell " + std::to_string(c));
   }
   const Id m = mesh.num_cells();
-  r.points = n;
-  r.cells = m;
   if (n > Id{std::numeric_limits<std::uint32_t>::max()} || corners > Id{std::numeric_limits<std::uint32_t>::max()} ||
       m > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("check_topology: more than 2^32 - 1 points, cells or cell corners");
+  const int chunks = parallel::chunk_count(corners, 1 << 16);
+  std::vector<Id> first_bad(std::max(chunks, 1), corners);
+  parallel::for_each_chunk(corners, chunks, [&](Id b, Id e, int c) {
+    for (Id i = b; i < e; ++i)
+      if (Id{conn[i]} >= n) {
+        first_bad[c] = i;
+        break;
+      }
+  });
+  const Id bad = *std::min_element(first_bad.begin(), first_bad.end());
+  if (bad < corners)
+    throw InputError("check_topology: cell point id " + std::to_string(conn[bad]) + " out of range (" +
+                     std::to_string(n) + " points)");
+}
 
-  // Out-of-range ids: report the first one, whatever the thread count.
-  {
-    const int chunks = parallel::chunk_count(corners, 1 << 16);
-    std::vector<Id> first_bad(std::max(chunks, 1), corners);
-    parallel::for_each_chunk(corners, chunks, [&](Id b, Id e, int c) {
-      for (Id i = b; i < e; ++i)
-        if (Id{conn[i]} >= n) {
-          first_bad[c] = i;
-          break;
-        }
-    });
-    const Id bad = *std::min_element(first_bad.begin(), first_bad.end());
-    if (bad < corners)
-      throw InputError("check_topology: cell point id " + std::to_string(conn[bad]) + " out of range (" +
-                       std::to_string(n) + " points)");
+// Corners grouped by point (CSR: point v's corners are order[start[v] ..
+// start[v + 1])). Filled with atomic cursors, so the order inside a point's
+// list depends on scheduling; the fan pass sorts each list by corner index
+// first, which makes everything after it deterministic.
+void corners_by_point(const SurfaceMesh& mesh, std::vector<Id>& start, std::vector<std::uint32_t>& order) {
+  const Id n = mesh.num_points();
+  const auto& conn = mesh.connectivity;
+  const Id corners = static_cast<Id>(conn.size());
+  start.assign(static_cast<std::size_t>(n) + 1, 0);
+  order.resize(static_cast<std::size_t>(corners));
+  std::vector<std::uint32_t> cursor(static_cast<std::size_t>(n), 0);
+  parallel::for_each(corners, [&](Id i) {
+    std::atomic_ref<std::uint32_t>(cursor[conn[i]]).fetch_add(1, std::memory_order_relaxed);
+  });
+  for (Id v = 0; v < n; ++v) start[v + 1] = start[v] + cursor[v];
+  parallel::for_each(n, [&](Id v) { cursor[v] = 0; });
+  parallel::for_each(corners, [&](Id i) {
+    const PointIndex v = conn[i];
+    const std::uint32_t slot = std::atomic_ref<std::uint32_t>(cursor[v]).fetch_add(1, std::memory_order_relaxed);
+    order[start[v] + slot] = static_cast<std::uint32_t>(i);
+  });
+}
+
+// The fan of point v (its d corners at list): every edge from v is counted
+// at its smaller end point, with how many cells use it; the corners are
+// united through shared edges and repeated cells, and more than one class
+// makes v non-manifold. `ent` and `par` are scratch for 2d and d entries.
+struct FanPass {
+  const SurfaceMesh& mesh;
+  const std::vector<std::uint32_t>& corner_cell;  // empty for triangles
+  std::vector<std::uint8_t>& degenerate;
+
+  // The cell of a corner and the corners before and after it in the cell.
+  void neighbours(Id corner, Id& c, Id& prev, Id& next) const {
+    if (corner_cell.empty()) {
+      c = corner / 3;
+      const Id b = 3 * c;
+      const Id at = corner - b;
+      prev = b + (at == 0 ? 2 : at - 1);
+      next = b + (at == 2 ? 0 : at + 1);
+    } else {
+      c = corner_cell[corner];
+      const Id b = static_cast<Id>(mesh.offsets[c]);
+      const Id e = static_cast<Id>(mesh.offsets[c + 1]);
+      prev = corner == b ? e - 1 : corner - 1;
+      next = corner + 1 == e ? b : corner + 1;
+    }
   }
 
-  // Cell of every corner (implicit for triangles).
-  std::vector<std::uint32_t> corner_cell;
-  std::vector<std::uint8_t> degenerate(static_cast<std::size_t>(m), 0);
-  if (!mesh.offsets.empty()) {
-    corner_cell.resize(static_cast<std::size_t>(corners));
-    parallel::for_each(m, [&](Id c) {
-      const std::uint64_t b = mesh.offsets[c], e = mesh.offsets[c + 1];
-      for (std::uint64_t k = b; k < e; ++k) corner_cell[k] = static_cast<std::uint32_t>(c);
-      if (e - b < 3) degenerate[c] = 1;  // fewer than three points spans no area
-    }, 1024);
+  void operator()(Id v, std::uint32_t* list, Id d, FanEntry* ent, std::uint32_t* par, ChunkCounts& cc) const {
+    const auto& conn = mesh.connectivity;
+    small_sort(list, list + d, [](std::uint32_t a, std::uint32_t b) { return a < b; });
+    Id ne = 0;
+    Id prev_cell = -1;
+    for (Id j = 0; j < d; ++j) {
+      Id c, prev, next;
+      neighbours(list[j], c, prev, next);
+      const auto lj = static_cast<std::uint32_t>(j);
+      par[j] = lj;
+      const auto cell_bits = static_cast<std::uint64_t>(c);
+      ent[ne++] = {(std::uint64_t{conn[prev]} << 32) | cell_bits, lj};
+      ent[ne++] = {(std::uint64_t{conn[next]} << 32) | cell_bits, lj};
+      // Two corners of one cell at the same point: the cell repeats an id.
+      if (c == prev_cell) {
+        std::atomic_ref<std::uint8_t>(degenerate[c]).store(1, std::memory_order_relaxed);
+        local_unite(par, lj, lj - 1);
+      }
+      prev_cell = c;
+    }
+    small_sort(ent, ent + ne, [](const FanEntry& a, const FanEntry& b) { return a.key < b.key; });
+    for (Id g = 0; g < ne;) {
+      const std::uint64_t w = ent[g].key >> 32;
+      Id h = g + 1;
+      Id distinct = 1;
+      for (; h < ne && (ent[h].key >> 32) == w; ++h) {
+        if (ent[h].key != ent[h - 1].key) ++distinct;
+        local_unite(par, ent[g].local, ent[h].local);
+      }
+      // An edge from v to itself only marks a degenerate cell (already flagged).
+      if (w > static_cast<std::uint64_t>(v)) {
+        ++cc.edges;
+        if (distinct == 1) ++cc.boundary;
+        if (distinct >= 3) ++cc.nonmanifold_edges;
+      }
+      g = h;
+    }
+    Id fans = 0;
+    for (Id j = 0; j < d; ++j)
+      if (local_find(par, static_cast<std::uint32_t>(j)) == j) ++fans;
+    if (fans > 1) ++cc.nonmanifold_vertices;
   }
-  const bool triangles = mesh.offsets.empty();
+};
 
-  // Corners grouped by point (CSR). Filled with atomic cursors, so the order
-  // inside a point's list depends on scheduling; the fan pass sorts each list
-  // by corner index first, which makes everything after it deterministic.
-  std::vector<Id> start(static_cast<std::size_t>(n) + 1, 0);
-  std::vector<std::uint32_t> order(static_cast<std::size_t>(corners));
-  {
-    std::vector<std::uint32_t> cursor(static_cast<std::size_t>(n), 0);
-    parallel::for_each(corners, [&](Id i) {
-      std::atomic_ref<std::uint32_t>(cursor[conn[i]]).fetch_add(1, std::memory_order_relaxed);
-    });
-    for (Id v = 0; v < n; ++v) start[v + 1] = start[v] + cursor[v];
-    parallel::for_each(n, [&](Id v) { cursor[v] = 0; });
-    parallel::for_each(corners, [&](Id i) {
-      const PointIndex v = conn[i];
-      const std::uint32_t slot = std::atomic_ref<std::uint32_t>(cursor[v]).fetch_add(1, std::memory_order_relaxed);
-      order[start[v] + slot] = static_cast<std::uint32_t>(i);
-    });
-  }
+// Every point's fan, in fixed chunks; the counts summed into r.
+void count_fans(const SurfaceMesh& mesh, const FanPass& fan, const std::vector<Id>& start,
+                std::vector<std::uint32_t>& order, TopologyReport& r) {
+  const Id n = mesh.num_points();
   Id max_degree = 0;
   for (Id v = 0; v < n; ++v) max_degree = std::max(max_degree, start[v + 1] - start[v]);
-
-  // Per point: its fan. Every edge is counted at its smaller end point.
   const int chunks = parallel::chunk_count(n, 1 << 12);
   std::vector<ChunkCounts> counts(std::max(chunks, 1));
   // Per-chunk scratch, padded apart by a few cache lines: threads writing
@@ -228,71 +286,16 @@ TopologyReport check_topology(const SurfaceMesh& mesh) {
   std::vector<std::uint32_t> parents(static_cast<std::size_t>(std::max(chunks, 1) * parent_stride));
   parallel::for_each_chunk(n, chunks, [&](Id vb, Id ve, int chunk) {
     ChunkCounts cc;  // local: counts[] entries share cache lines
-    FanEntry* ent = entries.data() + chunk * entry_stride;
-    std::uint32_t* par = parents.data() + chunk * parent_stride;
     for (Id v = vb; v < ve; ++v) {
       const Id s = start[v], d = start[v + 1] - s;
       if (d == 0) {
         ++cc.unused;
         continue;
       }
-      std::uint32_t* list = order.data() + s;
-      small_sort(list, list + d, [](std::uint32_t a, std::uint32_t b) { return a < b; });
-      Id ne = 0;
-      Id prev_cell = -1;
-      for (Id j = 0; j < d; ++j) {
-        const Id corner = list[j];
-        Id c, prev, next;
-        if (triangles) {
-          c = corner / 3;
-          const Id b = 3 * c;
-          const Id at = corner - b;
-          prev = b + (at == 0 ? 2 : at - 1);
-          next = b + (at == 2 ? 0 : at + 1);
-        } else {
-          c = corner_cell[corner];
-          const Id b = static_cast<Id>(mesh.offsets[c]);
-          const Id e = static_cast<Id>(mesh.offsets[c + 1]);
-          prev = corner == b ? e - 1 : corner - 1;
-          next = corner + 1 == e ? b : corner + 1;
-        }
-        const auto lj = static_cast<std::uint32_t>(j);
-        par[j] = lj;
-        const auto cell_bits = static_cast<std::uint64_t>(c);
-        ent[ne++] = {(std::uint64_t{conn[prev]} << 32) | cell_bits, lj};
-        ent[ne++] = {(std::uint64_t{conn[next]} << 32) | cell_bits, lj};
-        // Two corners of one cell at the same point: the cell repeats an id.
-        if (c == prev_cell) {
-          std::atomic_ref<std::uint8_t>(degenerate[c]).store(1, std::memory_order_relaxed);
-          local_unite(par, lj, lj - 1);
-        }
-        prev_cell = c;
-      }
-      small_sort(ent, ent + ne, [](const FanEntry& a, const FanEntry& b) { return a.key < b.key; });
-      for (Id g = 0; g < ne;) {
-        const std::uint64_t w = ent[g].key >> 32;
-        Id h = g + 1;
-        Id distinct = 1;
-        for (; h < ne && (ent[h].key >> 32) == w; ++h) {
-          if (ent[h].key != ent[h - 1].key) ++distinct;
-          local_unite(par, ent[g].local, ent[h].local);
-        }
-        // An edge from v to itself only marks a degenerate cell (already flagged).
-        if (w > static_cast<std::uint64_t>(v)) {
-          ++cc.edges;
-          if (distinct == 1) ++cc.boundary;
-          if (distinct >= 3) ++cc.nonmanifold_edges;
-        }
-        g = h;
-      }
-      Id fans = 0;
-      for (Id j = 0; j < d; ++j)
-        if (local_find(par, static_cast<std::uint32_t>(j)) == j) ++fans;
-      if (fans > 1) ++cc.nonmanifold_vertices;
+      fan(v, order.data() + s, d, entries.data() + chunk * entry_stride, parents.data() + chunk * parent_stride, cc);
     }
     counts[chunk] = cc;
   });
-  order = {};
   for (const ChunkCounts& cc : counts) {
     r.edges += cc.edges;
     r.boundary_edges += cc.boundary;
@@ -300,26 +303,56 @@ TopologyReport check_topology(const SurfaceMesh& mesh) {
     r.nonmanifold_vertices += cc.nonmanifold_vertices;
     r.unused_points += cc.unused;
   }
-  for (std::uint8_t f : degenerate) r.degenerate_cells += f;
+}
 
-  // Components: cells joined through shared points.
-  {
-    ConcurrentUnionFind uf(n);
+// Components: cells joined through shared points (points no cell uses are
+// not components).
+Id count_components(const SurfaceMesh& mesh, const std::vector<Id>& start) {
+  const Id n = mesh.num_points();
+  const auto& conn = mesh.connectivity;
+  ConcurrentUnionFind uf(n);
+  parallel::for_each(mesh.num_cells(), [&](Id c) {
+    const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
+    for (std::uint64_t k = b + 1; k < e; ++k) uf.unite(conn[b], conn[k]);
+  }, 1 << 14);
+  const int rc = parallel::chunk_count(n, 1 << 14);
+  std::vector<Id> roots(std::max(rc, 1), 0);
+  parallel::for_each_chunk(n, rc, [&](Id b, Id e, int c) {
+    for (Id v = b; v < e; ++v)
+      if (start[v + 1] > start[v] && uf.find(static_cast<std::uint32_t>(v)) == v) ++roots[c];
+  });
+  Id total = 0;
+  for (Id x : roots) total += x;
+  return total;
+}
+
+}  // namespace
+
+TopologyReport check_topology(const SurfaceMesh& mesh) {
+  check_layout(mesh);
+  TopologyReport r;
+  const Id n = mesh.num_points(), m = mesh.num_cells();
+  r.points = n;
+  r.cells = m;
+  // Cell of every corner (implicit for triangles).
+  std::vector<std::uint32_t> corner_cell;
+  std::vector<std::uint8_t> degenerate(static_cast<std::size_t>(m), 0);
+  if (!mesh.offsets.empty()) {
+    corner_cell.resize(mesh.connectivity.size());
     parallel::for_each(m, [&](Id c) {
-      const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
-      for (std::uint64_t k = b + 1; k < e; ++k) uf.unite(conn[b], conn[k]);
-    }, 1 << 14);
-    const int rc = parallel::chunk_count(n, 1 << 14);
-    std::vector<Id> roots(std::max(rc, 1), 0);
-    parallel::for_each_chunk(n, rc, [&](Id b, Id e, int c) {
-      for (Id v = b; v < e; ++v)
-        if (start[v + 1] > start[v] && uf.find(static_cast<std::uint32_t>(v)) == v) ++roots[c];
-    });
-    for (Id x : roots) r.components += x;
+      const std::uint64_t b = mesh.offsets[c], e = mesh.offsets[c + 1];
+      for (std::uint64_t k = b; k < e; ++k) corner_cell[k] = static_cast<std::uint32_t>(c);
+      if (e - b < 3) degenerate[c] = 1;  // fewer than three points spans no area
+    }, 1024);
   }
-
+  std::vector<Id> start;
+  std::vector<std::uint32_t> order;
+  corners_by_point(mesh, start, order);
+  count_fans(mesh, FanPass{mesh, corner_cell, degenerate}, start, order, r);
+  order = {};
+  for (std::uint8_t f : degenerate) r.degenerate_cells += f;
+  r.components = count_components(mesh, start);
   r.duplicate_points = count_duplicate_points(mesh.points.data(), n);
-
   const Id used = n - r.unused_points;
   r.euler_characteristic = used - r.edges + m;
   r.closed_manifold = m > 0 && r.boundary_edges == 0 && r.nonmanifold_edges == 0 && r.nonmanifold_vertices == 0 &&
