@@ -40,6 +40,9 @@ CASES = [
     ("head-nrrd-stream", "contour {in:head.nrrd} -o {out}.ply --iso 90.5 --memory-limit 4M"),
     ("tets", "tetrahedralize {in:s24.vti} -o {out}.vtu"),
     ("tets24", "tetrahedralize {in:s24.vti} -o {out}.vtu --scheme 24"),
+    ("hexes5", "tetrahedralize {in:hexes.vtk} -o {out}.vtu"),
+    ("hexes24", "tetrahedralize {in:hexes.vtk} -o {out}.vtu --scheme 24"),
+    ("hexes24-vweld", "tetrahedralize {in:hexes.vtk} -o {out}.vtu --scheme 24 --weld vertexweld"),
     ("tets24-vweld", "tetrahedralize {in:s24.vti} -o {out}.vtu --scheme 24 --weld vertexweld"),
     ("tet-contour", "contour {in:tets} -o {out}.vtp --iso 9.3 --normals average"),
     ("tet-contour-vweld", "contour {in:tets} -o {out}.vtp --iso 9.3 --normals average --weld vertexweld"),
@@ -63,6 +66,31 @@ CASES = [
 
 
 MPIRUN = shutil.which("mpirun")
+
+
+def write_hex_grid(path, n=(5, 4, 3)):
+    """A legacy .vtk grid of VTK_HEXAHEDRON cells with a jittered point field
+    and a cell field, written here (no keymesh involved), so that the
+    unstructured-hexahedra paths of tetrahedralize are compared too."""
+    nx, ny, nz = n
+    pts = [(i + 0.1 * ((i * 7 + j * 3 + k) % 5), j + 0.05 * ((i + 2 * j + 5 * k) % 3), k * 1.5)
+           for k in range(nz) for j in range(ny) for i in range(nx)]
+    pid = lambda i, j, k: (k * ny + j) * nx + i
+    cells = []
+    for k in range(nz - 1):
+        for j in range(ny - 1):
+            for i in range(nx - 1):
+                cells.append([pid(i, j, k), pid(i + 1, j, k), pid(i + 1, j + 1, k), pid(i, j + 1, k),
+                              pid(i, j, k + 1), pid(i + 1, j, k + 1), pid(i + 1, j + 1, k + 1), pid(i, j + 1, k + 1)])
+    with open(path, "w") as f:
+        f.write("# vtk DataFile Version 3.0\nhexes\nASCII\nDATASET UNSTRUCTURED_GRID\n")
+        f.write(f"POINTS {len(pts)} float\n" + "".join(f"{x} {y} {z}\n" for x, y, z in pts))
+        f.write(f"CELLS {len(cells)} {9 * len(cells)}\n" + "".join("8 " + " ".join(map(str, c)) + "\n" for c in cells))
+        f.write(f"CELL_TYPES {len(cells)}\n" + "12\n" * len(cells))
+        f.write(f"POINT_DATA {len(pts)}\nSCALARS density float 1\nLOOKUP_TABLE default\n")
+        f.write("".join(f"{(x - 2) ** 2 + y * y + z}\n" for x, y, z in pts))
+        f.write(f"CELL_DATA {len(cells)}\nSCALARS cell_id float 1\nLOOKUP_TABLE default\n")
+        f.write("".join(f"{c}\n" for c in range(len(cells))))
 
 
 def run(keymesh, args, check=True):
@@ -95,6 +123,7 @@ def main():
     run(a.before, ["generate", "sphere", "--size", "96", "-o", os.path.join(inputs, "s96.vti"), "-q"])
     run(a.before, ["convert", os.path.join(inputs, "s96.vti"), "-o", os.path.join(inputs, "s96.nrrd"), "-q"])
     run(a.before, ["convert", HEAD, "-o", os.path.join(inputs, "head.nrrd"), "-q"])
+    write_hex_grid(os.path.join(inputs, "hexes.vtk"))
     run(a.before, ["generate", "sphere", "--size", "24", "-o", os.path.join(inputs, "s24.vti"), "-q"])
     produced = {}  # (case, build) -> output file, for cases whose output is a later case's input
     differ = []

@@ -61,15 +61,77 @@ void emit_cell(const std::uint64_t corner[8], const std::uint64_t face[6], std::
     }
 }
 
+// The face- and cell-centre rule: the mean of points ids[0 .. n), summed in
+// double.
+void centre(const float* P, const std::uint64_t* ids, int n, float* xyz) {
+  for (int x = 0; x < 3; ++x) {
+    double s = 0;
+    for (int j = 0; j < n; ++j) s += P[3 * ids[j] + x];
+    xyz[x] = static_cast<float>(s / n);
+  }
+}
+
+// The corner ids of face pair % 6 of cell pair / 6, in cycle order.
+template <class CornerOf>
+void face_ids(const CornerOf& corner_of, Id pair, std::uint64_t ids[4]) {
+  for (int c = 0; c < 4; ++c) ids[c] = corner_of(pair / 6, kFaceCycle[pair % 6][c]);
+}
+
+// The reduce and emit half both inputs share, once the faces are welded:
+// the input points, then a face centre per group (from the group's first
+// pair) and a centre per cell, fields averaged alike; 24 tets per cell.
+// corner_of(cell, bit corner) gives a corner's point id.
+template <class CornerOf>
+UnstructuredGrid assemble24(const std::vector<float>& points, const std::vector<Field>& fields, Id cells,
+                            const CornerOf& corner_of, const FaceGroups& g) {
+  const Id N = static_cast<Id>(points.size() / 3), F = static_cast<Id>(g.first.size()), total = N + F + cells;
+  if (total > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("tetrahedralize --scheme 24: " + std::to_string(total) + " points exceed 2^32 - 1");
+  const float* P = points.data();
+  UnstructuredGrid out;
+  out.uniform_type = CellType::Tetra;
+  out.points.resize(static_cast<std::size_t>(3 * total));
+  std::copy(points.begin(), points.end(), out.points.begin());
+  out.point_fields = extend_point_fields(fields, total);
+  parallel::for_each(F, [&](Id face) {
+    std::uint64_t ids[4];
+    face_ids(corner_of, g.first[face], ids);
+    centre(P, ids, 4, &out.points[3 * (N + face)]);
+    average_point_fields(fields, out.point_fields, N + face, ids, 4);
+  });
+  parallel::for_each(cells, [&](Id v) {
+    std::uint64_t ids[8];
+    for (int c = 0; c < 8; ++c) ids[c] = corner_of(v, c);
+    centre(P, ids, 8, &out.points[3 * (N + F + v)]);
+    average_point_fields(fields, out.point_fields, N + F + v, ids, 8);
+  });
+  progress::report("tetrahedralize 24: tets", 0.7);
+  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
+  const float* Q = out.points.data();
+  out.connectivity.visit_mut([&](auto conn) {
+    using I = typename decltype(conn)::value_type;
+    parallel::for_each(cells, [&](Id v) {
+      std::uint64_t c8[8], f6[6];
+      for (int c = 0; c < 8; ++c) c8[c] = corner_of(v, c);
+      for (int f = 0; f < 6; ++f) f6[f] = static_cast<std::uint64_t>(N + g.index_map[6 * v + f]);
+      emit_cell(c8, f6, static_cast<std::uint64_t>(N + F + v), Q, [&](int k, const std::uint64_t* t) {
+        for (int x = 0; x < 4; ++x) conn[96 * v + 4 * k + x] = static_cast<I>(t[x]);
+      });
+    });
+  });
+  return out;
+}
+
 }  // namespace
 
+// Voxels: the corners are the grid points (with the samples as a field),
+// the cells implicit, face f of voxel v keyed by 3 * (its lower corner) +
+// its normal axis (dense plan).
 UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2)
       throw InputError("tetrahedralize: grid has " + std::to_string(grid.dims[a]) + " point(s) along axis " + "xyz"[a] +
                        " (need at least 2)");
-  // The corners (points, scalars), then the voxels as hexahedra in bit
-  // order, their faces keyed by implicit face ids.
   const UnstructuredGrid corners = grid_points(grid);
   const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2], nxy = nx * ny, N = nxy * nz;
   const Id cells = (nx - 1) * (ny - 1) * (nz - 1);
@@ -79,7 +141,6 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
     const Id i = v % (nx - 1), j = (v / (nx - 1)) % (ny - 1), k = v / ((nx - 1) * (ny - 1));
     return static_cast<std::uint64_t>((i + (c & 1)) + nx * (j + ((c >> 1) & 1)) + nxy * (k + ((c >> 2) & 1)));
   };
-  // Face f of voxel v: 3 * (its lower corner) + its normal axis.
   progress::report("tetrahedralize 24: face keys", 0.1);
   std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
   parallel::for_each(cells, [&](Id v) {
@@ -90,121 +151,45 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
       keys[6 * v + f] = 3 * (p0 + (f & 1) * step[axis]) + std::uint64_t(axis);
     }
   });
-  const float* P = corners.points.data();
   auto face_centre = [&](Id pair, float* xyz) {
-    const Id v = pair / 6;
-    const int f = static_cast<int>(pair % 6);
-    for (int x = 0; x < 3; ++x) {
-      double s = 0;
-      for (int c : kFaceCycle[f]) s += P[3 * cell_corner(v, c) + x];
-      xyz[x] = static_cast<float>(s / 4);
-    }
+    std::uint64_t ids[4];
+    face_ids(cell_corner, pair, ids);
+    centre(corners.points.data(), ids, 4, xyz);
   };
   progress::report("tetrahedralize 24: weld face centres", 0.25);
   const FaceGroups g = group_faces<std::uint64_t>(keys, true, std::uint64_t(3 * N), 0, vertex_weld, face_centre);
-  progress::report("tetrahedralize 24: points", 0.5);
   keys = {};
-  const Id F = static_cast<Id>(g.first.size());
-  UnstructuredGrid out;
-  out.uniform_type = CellType::Tetra;
-  const Id total = N + F + cells;
-  out.points.resize(static_cast<std::size_t>(3 * total));
-  std::copy(corners.points.begin(), corners.points.end(), out.points.begin());
-  out.point_fields = extend_point_fields(corners.point_fields, total);
-  parallel::for_each(F, [&](Id face) {
-    const Id pair = g.first[face];
-    face_centre(pair, &out.points[3 * (N + face)]);
-    std::uint64_t ids[4];
-    for (int c = 0; c < 4; ++c) ids[c] = cell_corner(pair / 6, kFaceCycle[pair % 6][c]);
-    average_point_fields(corners.point_fields, out.point_fields, N + face, ids, 4);
-  });
-  parallel::for_each(cells, [&](Id v) {
-    std::uint64_t ids[8];
-    for (int c = 0; c < 8; ++c) ids[c] = cell_corner(v, c);
-    for (int x = 0; x < 3; ++x) {
-      double s = 0;
-      for (std::uint64_t id : ids) s += P[3 * id + x];
-      out.points[3 * (N + F + v) + x] = static_cast<float>(s / 8);
-    }
-    average_point_fields(corners.point_fields, out.point_fields, N + F + v, ids, 8);
-  });
-  progress::report("tetrahedralize 24: tets", 0.7);
-  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
-  const float* Q = out.points.data();
-  out.connectivity.visit_mut([&](auto conn) {
-    using I = typename decltype(conn)::value_type;
-    parallel::for_each(cells, [&](Id v) {
-      std::uint64_t c8[8], f6[6];
-      for (int c = 0; c < 8; ++c) c8[c] = cell_corner(v, c);
-      for (int f = 0; f < 6; ++f) f6[f] = static_cast<std::uint64_t>(N + g.index_map[6 * v + f]);
-      emit_cell(c8, f6, static_cast<std::uint64_t>(N + F + v), Q, [&](int k, const std::uint64_t* t) {
-        for (int x = 0; x < 4; ++x) conn[96 * v + 4 * k + x] = static_cast<I>(t[x]);
-      });
-    });
-  });
-  return out;
+  progress::report("tetrahedralize 24: points", 0.5);
+  return assemble24(corners.points, corners.point_fields, cells, cell_corner, g);
 }
 
+// Hexahedra: a quad face is named by its smallest corner and the corner
+// diagonally opposite it (sort plan): in a conforming mesh no two faces
+// share a diagonal.
 UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_weld) {
   hexes.validate("tetrahedralize input");
   const Id cells = hexes.num_cells(), N = hexes.num_points();
   const auto corner = cells::hex_corners(hexes, "tetrahedralize --scheme 24");
   if (6 * cells > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " cells exceed the supported size");
-  // A quad face is named by its smallest corner and the corner diagonally
-  // opposite it: in a conforming mesh no two faces share a diagonal.
+  auto cell_corner = [&](Id v, int c) { return corner[v][c]; };
   const EdgeKeys ek = EdgeKeys::for_points(N, "tetrahedralize --scheme 24");
   std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
   parallel::for_each(cells, [&](Id c) {
     for (int f = 0; f < 6; ++f) {
       std::uint64_t cycle[4];
-      for (int k = 0; k < 4; ++k) cycle[k] = corner[c][kFaceCycle[f][k]];
+      face_ids(cell_corner, 6 * c + f, cycle);
       keys[6 * c + f] = ek.quad(cycle);
     }
   });
-  const float* P = hexes.points.data();
   auto face_centre = [&](Id pair, float* xyz) {
-    for (int x = 0; x < 3; ++x) {
-      double s = 0;
-      for (int c : kFaceCycle[pair % 6]) s += P[3 * corner[pair / 6][c] + x];
-      xyz[x] = static_cast<float>(s / 4);
-    }
+    std::uint64_t ids[4];
+    face_ids(cell_corner, pair, ids);
+    centre(hexes.points.data(), ids, 4, xyz);
   };
   const FaceGroups g = group_faces<std::uint64_t>(keys, false, 0, ek.key_bits(), vertex_weld, face_centre);
   keys = {};
-  const Id F = static_cast<Id>(g.first.size());
-  const Id total = N + F + cells;
-  if (total > Id{std::numeric_limits<std::uint32_t>::max()})
-    throw LimitError("tetrahedralize --scheme 24: " + std::to_string(total) + " points exceed 2^32 - 1");
-  UnstructuredGrid out;
-  out.uniform_type = CellType::Tetra;
-  out.points.resize(static_cast<std::size_t>(3 * total));
-  std::copy(hexes.points.begin(), hexes.points.end(), out.points.begin());
-  out.point_fields = extend_point_fields(hexes.point_fields, total);
-  parallel::for_each(F, [&](Id face) {
-    const Id pair = g.first[face];
-    face_centre(pair, &out.points[3 * (N + face)]);
-    std::uint64_t ids[4];
-    for (int c = 0; c < 4; ++c) ids[c] = corner[pair / 6][kFaceCycle[pair % 6][c]];
-    average_point_fields(hexes.point_fields, out.point_fields, N + face, ids, 4);
-  });
-  parallel::for_each(cells, [&](Id v) {
-    for (int x = 0; x < 3; ++x) {
-      double s = 0;
-      for (std::uint64_t id : corner[v]) s += P[3 * id + x];
-      out.points[3 * (N + F + v) + x] = static_cast<float>(s / 8);
-    }
-    average_point_fields(hexes.point_fields, out.point_fields, N + F + v, corner[v].data(), 8);
-  });
-  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total), static_cast<std::size_t>(96 * cells));
-  const float* Q = out.points.data();
-  parallel::for_each(cells, [&](Id v) {
-    std::uint64_t f6[6];
-    for (int f = 0; f < 6; ++f) f6[f] = static_cast<std::uint64_t>(N + g.index_map[6 * v + f]);
-    emit_cell(corner[v].data(), f6, static_cast<std::uint64_t>(N + F + v), Q, [&](int k, const std::uint64_t* t) {
-      for (int x = 0; x < 4; ++x) out.connectivity.set(static_cast<std::size_t>(96 * v + 4 * k + x), t[x]);
-    });
-  });
+  UnstructuredGrid out = assemble24(hexes.points, hexes.point_fields, cells, cell_corner, g);
   out.cell_fields = repeat_cell_fields(hexes.cell_fields, cells, 24);
   return out;
 }
