@@ -8,6 +8,7 @@
 #include "raw_input.hpp"
 #include "keymesh/analyze/topology.hpp"
 #include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour_stream.hpp"
 #include "keymesh/generate/contour_tets.hpp"
 #include "contour_distributed.hpp"
 #include "keymesh/distributed/mpi.hpp"

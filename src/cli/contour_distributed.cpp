@@ -44,7 +44,7 @@ int run_distributed_contour(const DistributedContourJob& job) {
   }
   StageTimer timer;
   // Checks every rank makes alike: refused with one message, no MPI_Abort.
-  std::unique_ptr<generate::PlaneSource> source;
+  std::unique_ptr<PlaneSource> source;
   try {
     source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
     distributed::require_distributable(source->header(), job.options, ranks);

@@ -125,7 +125,7 @@ ImageGrid new_slab(const ImageGrid& head, Id count) {
 // With balance: read the equal slab, count its layers' triangles, share the
 // counts, and move the boundaries so that every rank gets the same work.
 // Returns the slab read (its planes are kept for the final read).
-HeldSlab balance(generate::PlaneSource& source, const generate::ContourOptions& options, std::vector<Id>& bounds,
+HeldSlab balance(PlaneSource& source, const generate::ContourOptions& options, std::vector<Id>& bounds,
                  int r, RankStats& st) {
   const ImageGrid& head = source.header();
   const int P = static_cast<int>(bounds.size()) - 1;
@@ -153,7 +153,7 @@ HeldSlab balance(generate::PlaneSource& source, const generate::ContourOptions& 
 
 // Planes [first, last] of the final slab: those already held are copied
 // (or kept as they are when the boundaries did not move), the others read.
-ImageGrid read_slab(generate::PlaneSource& source, HeldSlab held, Id first, Id last) {
+ImageGrid read_slab(PlaneSource& source, HeldSlab held, Id first, Id last) {
   if (first == held.lo && last == held.hi) return std::move(held.grid);
   const ImageGrid& head = source.header();
   ImageGrid slab = new_slab(head, last - first + 1);
@@ -207,7 +207,7 @@ void number_piece(ContourPiece& piece, const generate::ContourOptions& options, 
 
 }  // namespace
 
-ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options, bool balance_work) {
+ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance_work) {
   int P = 1, r = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &P);
   MPI_Comm_rank(MPI_COMM_WORLD, &r);

@@ -30,7 +30,7 @@ GlobalNumbering number_keys(std::span<const std::uint64_t>, int, const std::func
   not_built();
 }
 void require_distributable(const ImageGrid&, const generate::ContourOptions&, int) { not_built(); }
-ContourPiece contour_piece(generate::PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }
+ContourPiece contour_piece(PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }
 SurfaceMesh gather(ContourPiece&) { not_built(); }
 std::vector<RankStats> gather_stats(const RankStats&) { not_built(); }
 

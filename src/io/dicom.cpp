@@ -61,7 +61,7 @@ struct Slice {
 
 std::string name_of(const std::string& file) { return std::filesystem::path(file).filename().string(); }
 
-class DicomPlanes : public generate::PlaneSource {
+class DicomPlanes : public PlaneSource {
  public:
   explicit DicomPlanes(const std::string& folder) : folder_(folder) {
     // GDCM prints its own warnings on stderr; keymesh reports what matters.
@@ -273,7 +273,7 @@ class DicomPlanes : public generate::PlaneSource {
 
 }  // namespace
 
-std::unique_ptr<generate::PlaneSource> open_dicom_series(const std::string& folder) {
+std::unique_ptr<PlaneSource> open_dicom_series(const std::string& folder) {
   return std::make_unique<DicomPlanes>(folder);
 }
 

@@ -17,7 +17,7 @@ namespace keymesh::io {
 
 namespace {
 
-class RawPlanes : public generate::PlaneSource {
+class RawPlanes : public PlaneSource {
  public:
   RawPlanes(std::string path, const RawOptions& o, double slope = 1, double inter = 0)
       : path_(std::move(path)), options_(o), slope_(slope), inter_(inter) {
@@ -91,11 +91,11 @@ class RawPlanes : public generate::PlaneSource {
 
 }  // namespace
 
-std::unique_ptr<generate::PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options) {
+std::unique_ptr<PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options) {
   return std::make_unique<RawPlanes>(path, options);
 }
 
-std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw) {
+std::unique_ptr<PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw) {
   if (raw) return open_raw_planes(path, *raw);
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return is_zarr_folder(path) ? open_zarr(path) : open_dicom_series(path);
@@ -131,7 +131,7 @@ std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& pat
 
 namespace keymesh::io {
 
-ImageGrid read_all_planes(generate::PlaneSource& source) {
+ImageGrid read_all_planes(PlaneSource& source) {
   const ImageGrid& head = source.header();
   ImageGrid grid;
   grid.spacing = head.spacing;

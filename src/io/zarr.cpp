@@ -71,7 +71,7 @@ void apply_transforms(const json& list, std::vector<double>& scale, std::vector<
   }
 }
 
-class ZarrPlanes : public generate::PlaneSource {
+class ZarrPlanes : public PlaneSource {
  public:
   explicit ZarrPlanes(const std::string& folder) : folder_(folder) {
     // A metadata value of the wrong JSON type (a string where a number is
@@ -340,7 +340,7 @@ bool is_zarr_folder(const std::string& folder) {
          (name.size() > 5 && name.compare(name.size() - 5, 5, ".zarr") == 0);
 }
 
-std::unique_ptr<generate::PlaneSource> open_zarr(const std::string& folder) {
+std::unique_ptr<PlaneSource> open_zarr(const std::string& folder) {
   return std::make_unique<ZarrPlanes>(folder);
 }
 

@@ -14,7 +14,7 @@ using generate::ContourOptions;
 namespace {
 
 // Planes served from a grid held in memory (the test's stand-in for a file).
-class GridPlanes : public generate::PlaneSource {
+class GridPlanes : public PlaneSource {
  public:
   explicit GridPlanes(const ImageGrid& g) : g_(g) {
     head_.dims = g.dims, head_.type = g.type, head_.spacing = g.spacing, head_.origin = g.origin, head_.name = g.name;

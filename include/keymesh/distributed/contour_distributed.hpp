@@ -48,7 +48,7 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 // same work (triangles per layer counted on the equal split first, then
 // shared); without, every rank gets the same number of voxel layers. The
 // output is the same either way.
-ContourPiece contour_piece(generate::PlaneSource& source, const generate::ContourOptions& options, bool balance);
+ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance);
 
 // Collective: rank 0 returns the whole mesh (points in global id order,
 // triangles isovalue by isovalue in rank order: the single-process file),

@@ -19,18 +19,9 @@
 #include <memory>
 
 #include "keymesh/generate/contour.hpp"
+#include "keymesh/mesh/plane_source.hpp"
 
 namespace keymesh::generate {
-
-// Planes of a volume read on demand (x fastest, native byte order).
-class PlaneSource {
- public:
-  virtual ~PlaneSource() = default;
-  // dims, type, spacing, origin and name of the volume; no samples.
-  virtual const ImageGrid& header() const = 0;
-  // Reads planes [first, first + count) into out (count * nx * ny samples).
-  virtual void read_planes(Id first, Id count, std::byte* out) = 0;
-};
 
 struct StreamStats {
   Id slabs = 0;

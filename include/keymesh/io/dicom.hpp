@@ -22,13 +22,13 @@
 #include <memory>
 #include <string>
 
-#include "keymesh/generate/contour_stream.hpp"
+#include "keymesh/mesh/plane_source.hpp"
 #include "keymesh/mesh/image_grid.hpp"
 
 namespace keymesh::io {
 
 // The series' header is read from every file (not their pixels); planes
 // are then read one file each, so --memory-limit streams a series.
-std::unique_ptr<generate::PlaneSource> open_dicom_series(const std::string& folder);
+std::unique_ptr<PlaneSource> open_dicom_series(const std::string& folder);
 
 }  // namespace keymesh::io

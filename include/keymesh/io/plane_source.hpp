@@ -6,14 +6,14 @@
 #include <memory>
 #include <string>
 
-#include "keymesh/generate/contour_stream.hpp"
+#include "keymesh/mesh/plane_source.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::io {
 
 // Throws InputError naming the file when it is shorter than the header
 // bytes plus the samples the dims declare.
-std::unique_ptr<generate::PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options);
+std::unique_ptr<PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options);
 
 // Raw (when `raw` is given), or a .nrrd/.nhdr or .nii whose samples are
 // stored uncompressed: the header parsed with the reader's checks, then
@@ -22,10 +22,10 @@ std::unique_ptr<generate::PlaneSource> open_raw_planes(const std::string& path, 
 // InputError naming the file and what to do.
 // A folder is a Zarr array or OME-Zarr image (io/zarr.hpp) when it holds
 // Zarr metadata, else a DICOM series (io/dicom.hpp).
-std::unique_ptr<generate::PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw);
+std::unique_ptr<PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw);
 
 // Every plane of the source into one grid: how read_volume reads the formats
 // whose reader is a plane source (DICOM series, Zarr).
-ImageGrid read_all_planes(generate::PlaneSource& source);
+ImageGrid read_all_planes(PlaneSource& source);
 
 }  // namespace keymesh::io

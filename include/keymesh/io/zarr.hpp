@@ -18,7 +18,7 @@
 #include <memory>
 #include <string>
 
-#include "keymesh/generate/contour_stream.hpp"
+#include "keymesh/mesh/plane_source.hpp"
 
 namespace keymesh::io {
 
@@ -28,6 +28,6 @@ bool is_zarr_folder(const std::string& folder);
 // Parses the metadata; planes are then read a chunk row at a time (every
 // chunk overlapping the planes is decoded once per call), so
 // --memory-limit streams an array whose chunks span few z-planes.
-std::unique_ptr<generate::PlaneSource> open_zarr(const std::string& folder);
+std::unique_ptr<PlaneSource> open_zarr(const std::string& folder);
 
 }  // namespace keymesh::io
