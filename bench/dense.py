@@ -23,13 +23,14 @@ import argparse
 import gzip
 import json
 import os
-import resource
 import statistics
 import struct
 import sys
 import time
 
 import numpy as np
+
+import peer_common
 
 MRICRON = "/usr/share/mricron/templates"
 
@@ -118,10 +119,6 @@ def timed(fn, reps):
     return times, out
 
 
-def peak_mib():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--threads", type=int, default=2)
@@ -149,7 +146,7 @@ def main():
             r = {"bench": "dense", "case": name, "label": label, "tool": tool, "threads": a.threads,
                  "huge_pages": huge, "isovalues": isos, "points": int(points), "cells": int(cells),
                  "median": statistics.median(times), "min": min(times), "max": max(times), "reps": len(times),
-                 "peak_rss_mib": peak_mib(), "input_mib": v.nbytes / 2**20}
+                 "peak_rss_mib": peer_common.peak_rss_mib(), "input_mib": v.nbytes / 2**20}
             r.update(extra or {})
             rows.append(r)
             print(json.dumps(r), flush=True)
@@ -183,13 +180,7 @@ def main():
             img.GetPointData().SetScalars(arr)
 
             def fe():
-                f = vtk.vtkFlyingEdges3D()
-                f.SetInputData(img)
-                for i, iso in enumerate(isos):
-                    f.SetValue(i, iso)
-                f.ComputeNormalsOff()
-                f.ComputeScalarsOff()
-                f.ComputeGradientsOff()
+                f = peer_common.contour_filter(vtk.vtkFlyingEdges3D, img, isos)
                 f.Update()
                 return f.GetOutput()
 

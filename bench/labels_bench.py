@@ -22,6 +22,8 @@ import statistics
 import sys
 import time
 
+import peer_common
+
 AAL = "/usr/share/mricron/templates/aal.nii.gz"
 
 
@@ -79,13 +81,8 @@ def main():
         row(name, median_time(lambda: km(**kw), a.repeat), points=mesh.n_points, triangles=mesh.n_cells)
 
     def vtk_fe():
-        fe = vtk.vtkDiscreteFlyingEdges3D()
-        fe.SetInputData(image)
-        for i, lab in enumerate(labels):
-            fe.SetValue(i, lab)
-        fe.ComputeNormalsOff()
-        fe.ComputeGradientsOff()
-        fe.ComputeScalarsOn()  # the label of each surface (as keymesh's label field)
+        # scalars: the label of each surface (as keymesh's label field)
+        fe = peer_common.contour_filter(vtk.vtkDiscreteFlyingEdges3D, image, labels, scalars=True)
         fe.Update()
         return fe.GetOutput()
 

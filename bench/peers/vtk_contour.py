@@ -5,12 +5,8 @@ Run with Debian's /usr/bin/python3 (python3-vtk9). Only Update() is timed;
 the volume is built once. VTK's SMP backend (TBB in Debian) uses --threads.
 """
 import argparse
-import json
-import resource
 import os
-import statistics
 import sys
-import time
 
 import numpy as np
 import vtk
@@ -18,17 +14,14 @@ from vtk.util import numpy_support as ns
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import datasets  # noqa: E402
+import peer_common  # noqa: E402
 
 
 def clean(img, a):
     """vtkCleanPolyData on the soup of the contour: every triangle with its
     own three points (what marching cubes writes before welding); only the
     weld is timed."""
-    fe = vtk.vtkFlyingEdges3D()
-    fe.SetInputData(img)
-    fe.SetValue(0, a.iso)
-    fe.ComputeNormalsOff()
-    fe.ComputeScalarsOff()
+    fe = peer_common.contour_filter(vtk.vtkFlyingEdges3D, img, [a.iso])
     fe.Update()
     mesh = fe.GetOutput()
     pts = ns.vtk_to_numpy(mesh.GetPoints().GetData())
@@ -42,22 +35,17 @@ def clean(img, a):
                   ns.numpy_to_vtk(np.arange(len(conn), dtype=np.int64), deep=True))
     soup.SetPolys(cells)
     del fe, mesh
-    times = []
-    for _ in range(a.reps):
+
+    def make():
         f = vtk.vtkCleanPolyData()
         f.SetInputData(soup)
         f.SetTolerance(0.0)
         f.PointMergingOn()
-        t0 = time.perf_counter()
-        f.Update()
-        times.append(time.perf_counter() - t0)
-        points, ncells = f.GetOutput().GetNumberOfPoints(), f.GetOutput().GetNumberOfCells()
-        del f
-    print(json.dumps({"bench": "contour", "tool": "vtkCleanPolyData", "size": a.size, "iso": a.iso, "threads": 1,
-                      "soup_points": len(conn), "points": points, "cells": ncells,
-                      "median": statistics.median(times), "min": min(times), "max": max(times), "first": times[0],
-                      "reps": a.reps, "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}),
-          flush=True)
+        return f
+
+    times, counts = peer_common.time_updates(make, a.reps, peer_common.points_and_cells)
+    peer_common.print_row({"bench": "contour", "tool": "vtkCleanPolyData", "size": a.size, "iso": a.iso,
+                           "threads": 1, "soup_points": len(conn), **counts}, times)
 
 
 def main():
@@ -73,10 +61,7 @@ def main():
     a = ap.parse_args()
     vtk.vtkSMPTools.Initialize(a.threads)
     if a.file:
-        reader = vtk.vtkXMLImageDataReader()
-        reader.SetFileName(a.file)
-        reader.Update()
-        img = reader.GetOutput()
+        img = peer_common.read(vtk.vtkXMLImageDataReader, a.file)
     else:
         d = datasets.sphere(a.size)
         img = vtk.vtkImageData()
@@ -89,26 +74,10 @@ def main():
         if name == "vtkCleanPolyData":
             clean(img, a)
             continue
-        times = []
-        points = cells = 0
-        for _ in range(a.reps):
-            f = getattr(vtk, name)()
-            f.SetInputData(img)
-            f.SetValue(0, a.iso)
-            f.ComputeNormalsOff()
-            f.ComputeScalarsOff()
-            if hasattr(f, "ComputeGradientsOff"):
-                f.ComputeGradientsOff()
-            t0 = time.perf_counter()
-            f.Update()
-            times.append(time.perf_counter() - t0)
-            points, cells = f.GetOutput().GetNumberOfPoints(), f.GetOutput().GetNumberOfCells()
-            del f
-        print(json.dumps({"bench": "contour", "tool": name, "size": a.size, "iso": a.iso,
-                          "threads": a.threads if name == "vtkFlyingEdges3D" else 1,
-                          "points": points, "cells": cells, "median": statistics.median(times),
-                          "min": min(times), "max": max(times), "first": times[0], "reps": a.reps,
-                          "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}), flush=True)
+        times, counts = peer_common.time_updates(lambda: peer_common.contour_filter(getattr(vtk, name), img, [a.iso]),
+                                                 a.reps, peer_common.points_and_cells)
+        peer_common.print_row({"bench": "contour", "tool": name, "size": a.size, "iso": a.iso,
+                               "threads": a.threads if name == "vtkFlyingEdges3D" else 1, **counts}, times)
 
 
 if __name__ == "__main__":

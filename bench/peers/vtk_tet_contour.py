@@ -5,12 +5,13 @@ own vtkDataSetTriangleFilter from the volume (optional). Prints JSON lines.
 Run with Debian's /usr/bin/python3 (python3-vtk9). Only Update() is timed.
 """
 import argparse
-import json
-import resource
-import statistics
-import time
+import os
+import sys
 
 import vtk
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import peer_common  # noqa: E402
 
 
 def main():
@@ -22,31 +23,18 @@ def main():
     ap.add_argument("--reps", type=int, default=5)
     a = ap.parse_args()
     vtk.vtkSMPTools.Initialize(a.threads)
-    r = vtk.vtkXMLUnstructuredGridReader()
-    r.SetFileName(a.vtu)
-    r.Update()
-    ug = r.GetOutput()
+    ug = peer_common.read(vtk.vtkXMLUnstructuredGridReader, a.vtu)
     ug.GetPointData().SetActiveScalars(ug.GetPointData().GetArrayName(0))
-    times = []
-    points = cells = 0
-    for _ in range(a.reps):
-        f = vtk.vtkContour3DLinearGrid()
-        f.SetInputData(ug)
-        f.SetValue(0, a.iso)
+
+    def make():
+        f = peer_common.contour_filter(vtk.vtkContour3DLinearGrid, ug, [a.iso])
         f.MergePointsOn()
         f.InterpolateAttributesOff()
-        f.ComputeNormalsOff()
-        t0 = time.perf_counter()
-        f.Update()
-        times.append(time.perf_counter() - t0)
-        points, cells = f.GetOutput().GetNumberOfPoints(), f.GetOutput().GetNumberOfCells()
-        del f
-    print(json.dumps({"bench": "contour", "grid": "tet5", "tool": "vtkContour3DLinearGrid", "size": a.size,
-                      "iso": a.iso, "threads": a.threads, "points": points, "cells": cells,
-                      "median": statistics.median(times), "min": min(times), "max": max(times), "first": times[0],
-                      "reps": a.reps, "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}),
-          flush=True)
+        return f
 
+    times, counts = peer_common.time_updates(make, a.reps, peer_common.points_and_cells)
+    peer_common.print_row({"bench": "contour", "grid": "tet5", "tool": "vtkContour3DLinearGrid", "size": a.size,
+                           "iso": a.iso, "threads": a.threads, **counts}, times)
 
 if __name__ == "__main__":
     main()
