@@ -7,6 +7,7 @@
 #include "command.hpp"
 #include "raw_input.hpp"
 #include "keymesh/analyze/topology.hpp"
+#include "keymesh/backend/contour.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/contour_stream.hpp"
 #include "keymesh/generate/contour_tets.hpp"
@@ -192,7 +193,7 @@ Register reg{Command{
           warn_outside(scalar_range(grid));
           progress.say("contouring " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
                        std::to_string(grid.dims[2]) + " " + scalar_type_name(grid.type));
-          mesh = timer.run("contour", [&] { return generate::contour(grid, opt, &stats); });
+          mesh = timer.run("contour", [&] { return backend::contour(grid, opt, &stats); });
           r["dims"] = grid.dims;
           r["scalar_type"] = scalar_type_name(grid.type);
           r["grid"] = "voxels";

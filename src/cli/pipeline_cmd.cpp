@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "command.hpp"
+#include "keymesh/backend/contour.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/contour_tets.hpp"
 #include "keymesh/generate/dual.hpp"
@@ -71,7 +72,7 @@ Register reg{Command{
           mesh = timer.run("contour", [&] { return generate::contour(g, opt); });
         } else {
           const ImageGrid g = timer.run("read", [&] { return io::read_volume(o->input); });
-          mesh = timer.run("contour", [&] { return generate::contour(g, opt); });
+          mesh = timer.run("contour", [&] { return backend::contour(g, opt); });
         }
         nlohmann::json r;
         r["contour_cells"] = mesh.num_cells();

@@ -11,7 +11,6 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/core/work_estimate.hpp"
-#include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
@@ -375,8 +374,7 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
 
 }  // namespace
 
-SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
-                    std::vector<std::uint64_t>* point_keys) {
+void check_contour_input(const ImageGrid& grid, const ContourOptions& options) {
   if (options.isovalues.empty()) throw InputError("contour: no isovalue given");
   for (double iso : options.isovalues)
     if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
@@ -387,11 +385,14 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   if (static_cast<Id>(grid.byte_count()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
     throw InputError("contour: grid holds " + std::to_string(grid.byte_count()) + " bytes, dims need " +
                      std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
-  if (options.backend == Backend::Cuda) {
-    if (point_keys || options.total_planes)
-      throw InputError("--backend cuda: streamed (slab) contouring is not available on the GPU yet");
-    return cuda::contour(grid, options, stats);
-  }
+}
+
+SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
+                    std::vector<std::uint64_t>* point_keys) {
+  check_contour_input(grid, options);
+  // The GPU is reached through keymesh/backend/contour.hpp (the layer above generate and cuda).
+  if (options.backend != Backend::Cpu)
+    throw InputError("--backend cuda: generate::contour runs on the CPU (backend::contour chooses the GPU)");
   if (options.ghost_below < 0 || options.ghost_below > 1 || options.ghost_above < 0 || options.ghost_above > 1 ||
       ((options.ghost_below || options.ghost_above) && !options.total_planes) ||
       grid.dims[2] - options.ghost_below - options.ghost_above < 2)

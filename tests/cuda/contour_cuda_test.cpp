@@ -8,6 +8,7 @@
 #include <random>
 #include <string>
 
+#include "keymesh/backend/contour.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/contour.hpp"
@@ -34,7 +35,7 @@ void expect_identical(const ImageGrid& g, ContourOptions o) {
   o.backend = Backend::Cpu;
   const SurfaceMesh cpu = generate::contour(g, o);
   o.backend = Backend::Cuda;
-  const SurfaceMesh gpu = generate::contour(g, o);
+  const SurfaceMesh gpu = backend::contour(g, o);
   EXPECT_TRUE(same_bits(cpu.points, gpu.points));
   EXPECT_EQ(cpu.connectivity, gpu.connectivity);
   ASSERT_EQ(cpu.point_fields.size(), gpu.point_fields.size());
@@ -65,7 +66,7 @@ TEST(CudaContour, ReportsPeakDeviceMemory) {
   o.isovalues = {40.5};
   o.backend = generate::Backend::Cuda;
   generate::ContourStats st;
-  const SurfaceMesh m = generate::contour(g, o, &st);
+  const SurfaceMesh m = backend::contour(g, o, &st);
   EXPECT_GE(st.device_peak_bytes, g.bytes.size());
   EXPECT_LT(st.device_peak_bytes, g.bytes.size() + 200 * static_cast<std::uint64_t>(m.num_cells()) * 12 + (64u << 20));
 }
@@ -94,7 +95,7 @@ TEST(CudaContour, RefusesWhatItDoesNotDoByName) {
   o.isovalues = {10.5};
   o.backend = Backend::Cuda;
   o.coarsen = true;
-  EXPECT_THROW(generate::contour(generate::spherical_distance(24), o), InputError);
+  EXPECT_THROW(backend::contour(generate::spherical_distance(24), o), InputError);
 }
 
 TEST(CudaContour, WithoutADeviceTheBackendSaysWhy) {
@@ -105,11 +106,52 @@ TEST(CudaContour, WithoutADeviceTheBackendSaysWhy) {
   o.isovalues = {10.5};
   o.backend = Backend::Cuda;
   try {
-    generate::contour(generate::spherical_distance(16), o);
+    backend::contour(generate::spherical_distance(16), o);
     FAIL() << "--backend cuda without a device must be refused";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--backend cuda"), std::string::npos) << e.what();
   }
+}
+
+// The backend layer refuses bad input exactly as the CPU contour does, before
+// the GPU (or its absence) is considered: the CPU's own message is the reference.
+TEST(BackendContour, BadInputIsRefusedAsOnTheCpu) {
+  auto message_of = [](const ImageGrid& g, ContourOptions o, Backend where) {
+    o.backend = where;
+    try {
+      if (where == Backend::Cpu) generate::contour(g, o);
+      else backend::contour(g, o);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  ImageGrid flat;
+  flat.allocate({8, 8, 1}, ScalarType::Float32);  // one plane: no voxel
+  ContourOptions o;
+  o.isovalues = {0.5};
+  EXPECT_NE(message_of(flat, o, Backend::Cpu), "");
+  EXPECT_EQ(message_of(flat, o, Backend::Cpu), message_of(flat, o, Backend::Cuda));
+  o.isovalues = {};
+  const ImageGrid sphere = generate::spherical_distance(8);
+  EXPECT_NE(message_of(sphere, o, Backend::Cpu), "");
+  EXPECT_EQ(message_of(sphere, o, Backend::Cpu), message_of(sphere, o, Backend::Cuda));
+}
+
+// generate is CPU-only: asked for the GPU directly, it refuses by name (the
+// choice belongs to backend::contour), and backend::contour on the CPU is
+// generate::contour.
+TEST(BackendContour, GenerateRunsOnTheCpuAndTheBackendLayerChooses) {
+  const ImageGrid g = generate::spherical_distance(20);
+  ContourOptions o;
+  o.isovalues = {6.5};
+  const SurfaceMesh direct = generate::contour(g, o);
+  const SurfaceMesh chosen = backend::contour(g, o);
+  EXPECT_GT(direct.num_cells(), 0);
+  EXPECT_TRUE(same_bits(direct.points, chosen.points));
+  EXPECT_EQ(direct.connectivity, chosen.connectivity);
+  o.backend = Backend::Cuda;
+  EXPECT_THROW(generate::contour(g, o), InputError);
 }
 
 }  // namespace

@@ -39,6 +39,7 @@ enum class ContourNormals { None, Gradient, Average };
 enum class ContourWeld { KeyReduce, KeyReduceSort, VertexWeld };
 // Where the contour runs: CPU threads, or an NVIDIA GPU (keymesh/cuda/backend.hpp:
 // byte-identical output; what the GPU does not support yet is refused by name).
+// The choice is made by keymesh/backend/contour.hpp, above generate.
 enum class Backend { Cpu, Cuda };
 
 struct ContourOptions {
@@ -96,6 +97,13 @@ struct ContourStats {
   std::uint64_t device_peak_bytes = 0;
 };
 
+// Throws InputError for an empty isovalue list, a non-finite isovalue, a
+// grid with fewer than 2 points along an axis or fewer bytes than its dims
+// need: the input checks of contour() on voxels, whichever backend runs it.
+void check_contour_input(const ImageGrid& grid, const ContourOptions& options);
+
+// Runs on the CPU: options.backend must be Backend::Cpu (keymesh/backend/contour.hpp
+// chooses between the CPU and the GPU).
 // Throws InputError for an empty isovalue list, a non-finite isovalue or a
 // grid with fewer than 2 points along an axis; LimitError when the output
 // would exceed 2^32 - 1 points or triangle corners.

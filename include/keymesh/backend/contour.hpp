@@ -1,0 +1,21 @@
+#pragma once
+// Marching cubes on the backend the options name: CPU threads
+// (generate::contour) or an NVIDIA GPU (cuda::contour, byte-identical output).
+//
+// Why a layer of its own: generate is CPU-only and the CUDA backend is built
+// on generate's options and per-element kernels (cuda sits above generate),
+// so the choice between them is made above both. The CLI calls this; the
+// generators and the distributed and streamed contours call generate directly
+// (they refuse --backend cuda by name).
+#include "keymesh/generate/contour.hpp"
+
+namespace keymesh::backend {
+
+// options.backend == Backend::Cpu: generate::contour(grid, options, stats).
+// Backend::Cuda: the same input checks as generate::contour (same
+// InputError), then cuda::contour; a slab (options.total_planes) is refused
+// by name, as is a build or a machine without a usable GPU.
+SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& options,
+                    generate::ContourStats* stats = nullptr);
+
+}  // namespace keymesh::backend

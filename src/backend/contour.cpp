@@ -1,0 +1,17 @@
+#include "keymesh/backend/contour.hpp"
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/cuda/backend.hpp"
+
+namespace keymesh::backend {
+
+SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& options, generate::ContourStats* stats) {
+  if (options.backend != generate::Backend::Cuda) return generate::contour(grid, options, stats);
+  // The input is refused as the CPU refuses it, before the GPU is asked for.
+  generate::check_contour_input(grid, options);
+  if (options.total_planes)
+    throw InputError("--backend cuda: streamed (slab) contouring is not available on the GPU yet");
+  return cuda::contour(grid, options, stats);
+}
+
+}  // namespace keymesh::backend
