@@ -160,6 +160,10 @@ class Report:
         return self.q(ds, n, bench="contour", tool="keymesh", grid=grid, weld=weld, normals=normals,
                       threads=threads or self.T)
 
+    def paper_columns(self, t, *quotes):
+        """The paper's figures for a case ("VW/KR/avg" ms), on its all-threads line only."""
+        return ["/".join(map(str, q)) if q and t == self.T else "" for q in quotes]
+
     # ---------------------------------------------------------------- sections
     def header(self):
         m, run = self.machine, self.run
@@ -253,9 +257,7 @@ class Report:
                 kr, av = self.km(ds, n, threads=t), self.km(ds, n, normals="average", threads=t)
                 body.append([label if t == ts[0] else "", t, ms(vw), ms(srt), ms(kr), ms(av), ratio(kr, vw),
                              f"{100 * (av['median'] / kr['median'] - 1):+.0f}%" if kr and av else "—",
-                             mib(kr),
-                             "/".join(map(str, po)) if po and t == T else "",
-                             "/".join(map(str, pc)) if pc and t == T else ""])
+                             mib(kr), *self.paper_columns(t, po, pc)])
         out += [table(["dataset", "thr", "VERTEX-WELD", "KEY-REDUCE sort", "KEY-REDUCE dense", "KEY-REDUCE avg",
                        "VW / KR", "avg overhead", "KR peak MiB", "paper OpenMP ms", "paper CUDA ms"], body), ""]
         # peers
@@ -312,8 +314,7 @@ class Report:
                 vw, k = self.km(ds, n, "vertexweld", threads=t, grid="tet5"), self.km(ds, n, threads=t, grid="tet5")
                 body.append([label if t == ts[0] else "", t, ms(vw), ms(k), ratio(k, vw), mib(k),
                              ms(vt) if t == self.T else "", ratio(k, vt) if t == self.T else "",
-                             "/".join(map(str, po)) if po and t == self.T else "",
-                             "/".join(map(str, pc)) if pc and t == self.T else ""])
+                             *self.paper_columns(t, po, pc)])
         if body:
             out += ["### Unstructured: marching tetrahedra on the 5-tet grid", "",
                     "keymesh keys a point by its edge's two point ids (KEY-REDUCE sort plan); the tet grid is "
@@ -340,8 +341,7 @@ class Report:
                        mib(kr)]
                 if peer:
                     row += [ms(p) if t == self.T else "", ratio(kr, p) if t == self.T else ""]
-                row += ["/".join(map(str, po)) if po and t == self.T else "",
-                        "/".join(map(str, pc)) if pc and t == self.T else ""]
+                row += self.paper_columns(t, po, pc)
                 body.append(row)
         head = ["dataset", "thr", "output cells", "VERTEX-WELD", "KEY-REDUCE", "VW / KR", "KR peak MiB"]
         if peer:

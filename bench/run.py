@@ -74,6 +74,30 @@ def skipped(tool, reason, **kw):
     return dict(bench="skipped", tool=tool, reason=reason, **kw)
 
 
+def peer(script, args, tool, **kw):
+    """The rows of a peer script of bench/ run with Debian's python3 (VTK
+    comes from python3-vtk9), or one row saying why `tool` was skipped."""
+    try:
+        return run_json([SYSTEM_PYTHON, os.path.join(HERE, script), *args])
+    except SystemExit as e:
+        return [skipped(tool, str(e), **kw)]
+
+
+def keymesh_row(cmd):
+    """The row of one run of a keymesh harness (contour_bench, ops_bench)."""
+    r = run_json(cmd)[0]
+    r["tool"] = "keymesh"
+    return r
+
+
+def volume_vti(keymesh, work, n, d=None):
+    """The volume's .vti: a dataset's of datasets.py, else the n^3 sphere, generated once into work."""
+    vti = d["vti"] if d else os.path.join(work, f"sphere{n}.vti")
+    if not os.path.exists(vti):
+        subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
+    return vti
+
+
 def machine():
     cpu = "unknown"
     try:
@@ -91,9 +115,7 @@ def machine():
 
 def cli_cold(keymesh, size, iso, threads, reps, workdir):
     """`keymesh contour` as a user runs it: a fresh process per run; seconds.contour from --report."""
-    vti = os.path.join(workdir, f"sphere{size}.vti")
-    if not os.path.exists(vti):
-        subprocess.run([keymesh, "generate", "sphere", "--size", str(size), "-o", vti, "--quiet"], check=True)
+    vti = volume_vti(keymesh, workdir, size)
     times, rss = [], 0
     for _ in range(reps):
         rep = os.path.join(workdir, "r.json")
@@ -196,12 +218,10 @@ def main():
             # QUICK: the datasets at all threads only, 256^3 without tets and the other operations
             part += contour_rows(bench, n, iso, threads_all, reps, d["nrrd"], name, all_only=a.quick)
             progress(f"{name} VTK")
-            try:
-                part += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_contour.py"), "--size", str(n),
-                                  "--file", d["vti"], "--iso", str(iso), "--threads", str(threads_all),
-                                  "--reps", str(peer_reps if n > 256 else reps), "--filters", VTK_CONTOUR_PEERS])
-            except SystemExit as e:
-                part.append(skipped("vtkFlyingEdges3D", str(e), size=n))
+            part += peer("peers/vtk_contour.py", ["--size", str(n), "--file", d["vti"], "--iso", str(iso),
+                                                  "--threads", str(threads_all), "--reps",
+                                                  str(peer_reps if n > 256 else reps), "--filters", VTK_CONTOUR_PEERS],
+                         "vtkFlyingEdges3D", size=n)
             part += peer_rows(thrust, n, iso, d["nrrd"], threads_all, reps, peer_reps)
             if n <= 128 or (n <= 256 and not a.quick):
                 part += tet_rows(bench, keymesh, n, iso, threads_all, reps, work, d, all_only=a.quick)
@@ -291,9 +311,7 @@ def contour_rows(bench, n, iso, threads_all, reps, file, label, all_only=False):
             progress(f"{label} keymesh {weld} normals={normals} threads={threads}")
             cmd = [bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps), "--weld", weld,
                    "--normals", normals, "--iso", str(iso)]
-            r = run_json(cmd + (["--file", file] if file else []))[0]
-            r["tool"] = "keymesh"
-            rows.append(r)
+            rows.append(keymesh_row(cmd + (["--file", file] if file else [])))
     return rows
 
 
@@ -354,14 +372,11 @@ def tet_rows(bench, keymesh, n, iso, threads_all, reps, work, d=None, all_only=F
     for threads in thread_counts(threads_all, all_only):
         for weld in ("vertexweld", "keyreduce"):
             progress(f"{label} tets keymesh {weld} threads={threads}")
-            r = run_json([bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps), "--grid", "tet5",
-                          "--weld", weld, "--iso", str(iso)] + (["--file", d["nrrd"]] if d else []))[0]
-            r["tool"] = "keymesh"
-            rows.append(r)
-    vti = d["vti"] if d else os.path.join(work, f"sphere{n}.vti")
+            rows.append(keymesh_row([bench, "--size", str(n), "--threads", str(threads), "--reps", str(reps),
+                                     "--grid", "tet5", "--weld", weld, "--iso", str(iso)] +
+                                    (["--file", d["nrrd"]] if d else [])))
+    vti = volume_vti(keymesh, work, n, d)
     vtu = os.path.join(work, f"tets{n}.vtu")
-    if not os.path.exists(vti):
-        subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
     rep = os.path.join(work, "tet.json")
     progress(f"{label} keymesh tetrahedralize (CLI)")
     subprocess.run([keymesh, "tetrahedralize", vti, "-o", vtu, "-q", "--report", rep], check=True,
@@ -371,11 +386,9 @@ def tet_rows(bench, keymesh, n, iso, threads_all, reps, work, d=None, all_only=F
                  "threads": tr["threads"], "median": tr["seconds"]["tetrahedralize"], "cells": tr["cells"],
                  "peak_rss_mib": tr["peak_rss_mib"]})
     progress(f"{label} tets VTK")
-    try:
-        rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_tet_contour.py"), "--vtu", vtu,
-                          "--size", str(n), "--iso", str(iso), "--threads", str(threads_all), "--reps", str(reps)])
-    except SystemExit as e:
-        rows.append(skipped("vtkContour3DLinearGrid", str(e), size=n, grid="tet5"))
+    rows += peer("peers/vtk_tet_contour.py", ["--vtu", vtu, "--size", str(n), "--iso", str(iso), "--threads",
+                                              str(threads_all), "--reps", str(reps)],
+                 "vtkContour3DLinearGrid", size=n, grid="tet5")
     os.remove(vtu)
     return rows
 
@@ -393,41 +406,28 @@ def ops_rows(ops, keymesh, n, iso, threads_all, reps, work, d=None, quick=False)
     for threads in thread_counts(threads_all, all_only):
         for weld in ("vertexweld", "keyreduce"):
             progress(f"{label} subdivide {weld} threads={threads}")
-            r = run_json([ops, "--op", "subdivide", "--size", str(n), "--threads", str(threads), "--reps", str(reps),
-                          "--weld", weld] + src)[0]
-            r["tool"] = "keymesh"
-            rows.append(r)
+            rows.append(keymesh_row([ops, "--op", "subdivide", "--size", str(n), "--threads", str(threads),
+                                     "--reps", str(reps), "--weld", weld] + src))
             if n <= 128 and (not quick or (d is None and threads == threads_all)):
                 progress(f"{label} tet24 {weld} threads={threads}")
-                r = run_json([ops, "--op", "tet24", "--size", str(n), "--threads", str(threads), "--reps",
-                              str(1 if quick else min(reps, 3)), "--weld", weld] + src)[0]
-                r["tool"] = "keymesh"
-                rows.append(r)
+                rows.append(keymesh_row([ops, "--op", "tet24", "--size", str(n), "--threads", str(threads), "--reps",
+                                         str(1 if quick else min(reps, 3)), "--weld", weld] + src))
     for threads in thread_counts(threads_all, all_only):
         for op in ("contour", "coarsen", "dual"):
             progress(f"{label} {op} threads={threads}")
-            r = run_json([ops, "--op", op, "--size", str(n), "--threads", str(threads), "--reps", str(reps)] + src)[0]
-            r["tool"] = "keymesh"
-            rows.append(r)
-    vti = d["vti"] if d else os.path.join(work, f"sphere{n}.vti")
+            rows.append(keymesh_row([ops, "--op", op, "--size", str(n), "--threads", str(threads), "--reps",
+                                     str(reps)] + src))
+    vti = volume_vti(keymesh, work, n, d)
     vtp = os.path.join(work, f"contour{n}.vtp")
-    if not os.path.exists(vti):
-        subprocess.run([keymesh, "generate", "sphere", "--size", str(n), "-o", vti, "-q"], check=True)
     if quick and d is not None:
         return rows  # QUICK: the VTK surface peers on the sphere only
     subprocess.run([keymesh, "contour", vti, "-o", vtp, "--iso", str(iso), "--normals", "average", "-q"], check=True)
     progress(f"{label} subdivide VTK")
-    try:
-        rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_subdivide.py"), "--mesh", vtp,
-                          "--size", str(n), "--reps", str(reps)])
-    except SystemExit as e:
-        rows.append(skipped("vtkLinearSubdivisionFilter", str(e), size=n))
+    rows += peer("peers/vtk_subdivide.py", ["--mesh", vtp, "--size", str(n), "--reps", str(reps)],
+                 "vtkLinearSubdivisionFilter", size=n)
     progress(f"{label} decimation VTK")
-    try:
-        rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "peers", "vtk_decimate.py"), "--mesh", vtp,
-                          "--size", str(n), "--reps", str(reps)])
-    except SystemExit as e:
-        rows.append(skipped("vtkBinnedDecimation", str(e), size=n))
+    rows += peer("peers/vtk_decimate.py", ["--mesh", vtp, "--size", str(n), "--reps", str(reps)],
+                 "vtkBinnedDecimation", size=n)
     os.remove(vtp)
     return rows
 
@@ -449,12 +449,17 @@ def summarize(rows, sizes, threads):
 
     out("\nMarching cubes + weld, Spherical Distance field at iso N/2 - 1 + 0.001 (the paper's Table 1 surfaces)")
 
-    def line(label, **kw):
+    def medians(label, sizes_, **kw):
+        """One line of a table: the case's median (min-max) at each size, blank where it did not run."""
         cells = []
-        for n in sizes:
+        for n in sizes_:
             r = find(rows, size=n, **kw)
-            cells.append(f"{r['median'] * 1e3:8.1f} ({r['min'] * 1e3:.0f}-{r['max'] * 1e3:.0f})" if r else " " * 18)
+            cells.append(f"{r['median'] * 1e3:8.1f} ({r.get('min', r['median']) * 1e3:.0f}-"
+                         f"{r.get('max', r['median']) * 1e3:.0f})" if r else "")
         out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+
+    def line(label, **kw):
+        medians(label, sizes, **kw)
 
     out("\nWarm: medians of repetitions in one process (ms; min-max)")
     out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in sizes))
@@ -510,12 +515,7 @@ def summarize(rows, sizes, threads):
         out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in tet_sizes))
 
         def tline(label, **kw):
-            cells = []
-            for n in tet_sizes:
-                r = find(rows, size=n, grid="tet5", **kw)
-                cells.append(f"{r['median'] * 1e3:8.1f} ({r.get('min', r['median']) * 1e3:.0f}-"
-                             f"{r.get('max', r['median']) * 1e3:.0f})" if r else "")
-            out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+            medians(label, tet_sizes, grid="tet5", **kw)
         for t in sorted({1, threads}):
             tline(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", weld="vertexweld", threads=t)
             tline(f"keymesh KEY-REDUCE sort plan, {t} thr", tool="keymesh", weld="keyreduce", threads=t)
@@ -544,11 +544,7 @@ def summarize(rows, sizes, threads):
         out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in op_sizes))
 
         def oline(label, **kw):
-            cells = []
-            for n in op_sizes:
-                r = find(rows, size=n, bench=bench_name, **kw)
-                cells.append(f"{r['median'] * 1e3:8.1f} ({r['min'] * 1e3:.0f}-{r['max'] * 1e3:.0f})" if r else "")
-            out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+            medians(label, op_sizes, bench=bench_name, **kw)
         for t in sorted({1, threads}):
             oline(f"keymesh VERTEX-WELD, {t} thr", tool="keymesh", weld="vertexweld", threads=t)
             oline(f"keymesh KEY-REDUCE, {t} thr", tool="keymesh", weld="keyreduce", threads=t)
@@ -570,11 +566,7 @@ def summarize(rows, sizes, threads):
         out(f"{'case':44s} " + " ".join(f"{n:>16d}^3" for n in op_sizes))
 
         def cline(label, bench_name, **kw):
-            cells = []
-            for n in op_sizes:
-                r = find(rows, size=n, bench=bench_name, **kw)
-                cells.append(f"{r['median'] * 1e3:8.1f} ({r['min'] * 1e3:.0f}-{r['max'] * 1e3:.0f})" if r else "")
-            out(f"{label:44s} " + " ".join(f"{c:>19s}" for c in cells))
+            medians(label, op_sizes, bench=bench_name, **kw)
         for t in sorted({1, threads}):
             cline(f"keymesh contour (ops_bench), {t} thr", "contour", tool="keymesh", threads=t, grid=None)
             cline(f"keymesh contour + coarsening, {t} thr", "coarsen", tool="keymesh", threads=t)
