@@ -9,15 +9,12 @@
 // keymesh's own VERTEX-WELD welds. Only the weld is timed, as in Bell's
 // example: copy the soup, sort the positions lexicographically, unique, then
 // lower_bound every corner to get the connectivity.
-#include <sys/resource.h>
-
 #include <thrust/binary_search.h>
 #include <thrust/device_vector.h>
 #include <thrust/sort.h>
 #include <thrust/tuple.h>
 #include <thrust/unique.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -29,6 +26,7 @@
 #include "keymesh/core/huge_pages.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "../bench_common.hpp"
 #include "../bench_input.hpp"
 
 using namespace keymesh;
@@ -53,34 +51,17 @@ struct Equal {
 
 int main(int argc, char** argv) {
   reexec_with_huge_pages(argc, argv);
-  long long size = 256;
-  int threads = 0, reps = 5;
-  double iso = -1;
-  std::string file;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--size") size = std::atoll(argv[i + 1]);
-    else if (a == "--threads") threads = std::atoi(argv[i + 1]);
-    else if (a == "--reps") reps = std::atoi(argv[i + 1]);
-    else if (a == "--iso") iso = std::atof(argv[i + 1]);
-    else if (a == "--file") file = argv[i + 1];
-    else {
-      std::fprintf(stderr, "unknown option %s\n", a.c_str());
-      return 2;
-    }
-  }
-  if (!file.empty() && iso < 0) {
-    std::fprintf(stderr, "--file needs --iso\n");
-    return 2;
-  }
-  const int used = parallel::set_thread_count(threads);
+  bench::CommonOptions o;
+  const int status = bench::parse_options(argc, argv, o, [](const std::string&, const char*) { return false; });
+  if (status != 0) return status;
+  const int used = parallel::set_thread_count(o.threads);
   omp_set_num_threads(used);
   std::vector<float> soup;
   {
-    const ImageGrid grid = bench::input_volume(file, size);
-    if (iso < 0) iso = static_cast<double>(size / 2) - 1 + 0.001;
+    const ImageGrid grid = bench::input_volume(o.file, o.size);
+    if (o.iso < 0) o.iso = bench::sphere_iso(o.size);
     generate::ContourOptions opt;
-    opt.isovalues = {iso};
+    opt.isovalues = {o.iso};
     opt.scalars = false;
     const SurfaceMesh m = generate::contour(grid, opt);
     soup.resize(m.connectivity.size() * 3);
@@ -91,7 +72,7 @@ int main(int argc, char** argv) {
   const Pos* soup_pos = reinterpret_cast<const Pos*>(soup.data());
   std::vector<double> times;
   std::size_t points = 0;
-  for (int r = 0; r < reps; ++r) {
+  for (int r = 0; r < o.reps; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
     thrust::device_vector<Pos> vertices(soup_pos, soup_pos + corners);
     thrust::device_vector<Pos> input(vertices);
@@ -102,16 +83,11 @@ int main(int argc, char** argv) {
     times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     points = vertices.size();
   }
-  const double first = times.front();
-  std::sort(times.begin(), times.end());
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
   std::printf(
       "{\"bench\":\"contour\",\"tool\":\"thrust-vertexweld\",\"backend\":\"thrust-omp-%d.%d.%d\",\"grid\":\"voxel\","
-      "\"size\":%lld,\"iso\":%.6f,\"threads\":%d,\"soup_points\":%zu,\"points\":%zu,\"cells\":%zu,\"median\":%.6f,"
-      "\"min\":%.6f,\"max\":%.6f,\"first\":%.6f,\"reps\":%d,\"peak_rss_mib\":%.1f}\n",
-      THRUST_MAJOR_VERSION, THRUST_MINOR_VERSION, THRUST_SUBMINOR_VERSION, size, iso, used, corners, points,
-      corners / 3, times[times.size() / 2], times.front(), times.back(), first, reps,
-      static_cast<double>(usage.ru_maxrss) / 1024.0);
+      "\"size\":%lld,\"iso\":%.6f,\"threads\":%d,\"soup_points\":%zu,\"points\":%zu,\"cells\":%zu,%s,"
+      "\"peak_rss_mib\":%.1f}\n",
+      THRUST_MAJOR_VERSION, THRUST_MINOR_VERSION, THRUST_SUBMINOR_VERSION, o.size, o.iso, used, corners, points,
+      corners / 3, bench::timing_json(times).c_str(), bench::peak_rss_mib());
   return 0;
 }
