@@ -235,14 +235,11 @@ def test_tetrahedralize_a_hexahedral_grid():
     nx, ny, nz = 4, 3, 3
     i, j, k = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
     pts = np.stack([i * 1.5, j * 1.0, k * 0.5], axis=-1).reshape(-1, 3).astype(np.float32)
-    pid = lambda a, b, c: (a * ny + b) * nz + c
-    hexes = []
-    for a in range(nx - 1):
-        for b in range(ny - 1):
-            for c in range(nz - 1):
-                hexes.append([pid(a, b, c), pid(a + 1, b, c), pid(a + 1, b + 1, c), pid(a, b + 1, c),
-                              pid(a, b, c + 1), pid(a + 1, b, c + 1), pid(a + 1, b + 1, c + 1), pid(a, b + 1, c + 1)])
-    hexes = np.array(hexes, np.int64)
+    # Each cell's 8 point ids in VTK's hexahedron order (bottom quad, then
+    # top), cells in the points' order (the last index fastest).
+    a, b, c = (x.ravel() for x in np.meshgrid(np.arange(nx - 1), np.arange(ny - 1), np.arange(nz - 1), indexing="ij"))
+    corners = ((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1))
+    hexes = np.stack([((a + da) * ny + b + db) * nz + c + dc for da, db, dc in corners], axis=1).astype(np.int64)
     label = np.arange(len(hexes), dtype=np.float32)
     grid = keymesh.Grid(pts, hexes, cell_type=12, cell_data={"label": label})
     for scheme in (5, 24):
