@@ -160,6 +160,15 @@ class Report:
         return self.q(ds, n, bench="contour", tool="keymesh", grid=grid, weld=weld, normals=normals,
                       threads=threads or self.T)
 
+    def case_lines(self, **kw):
+        """A table's lines: each case at each thread count measured (kw: the
+        rows that count), as (dataset, size, label on the case's first line
+        only, threads)."""
+        for ds, n, label in self.cases:
+            ts = self.threads_of(ds, n, **kw)
+            for t in ts:
+                yield ds, n, label if t == ts[0] else "", t
+
     def paper_columns(self, t, *quotes):
         """The paper's figures for a case ("VW/KR/avg" ms), on its all-threads line only."""
         return ["/".join(map(str, q)) if q and t == self.T else "" for q in quotes]
@@ -248,16 +257,14 @@ class Report:
                "their OpenMP (8 threads) and CUDA (Tesla C2070) times for VERTEX-WELD / KEY-REDUCE / "
                "averaging.", ""]
         body = []
-        for ds, n, label in self.cases:
+        for ds, n, shown, t in self.case_lines(bench="contour", tool="keymesh", grid="voxel"):
             pk = (kind(ds), n)
             po, pc = PAPER_T2[("openmp", "voxel")].get(pk), PAPER_T2[("cuda", "voxel")].get(pk)
-            ts = self.threads_of(ds, n, bench="contour", tool="keymesh", grid="voxel")
-            for t in ts:
-                vw, srt = self.km(ds, n, "vertexweld", threads=t), self.km(ds, n, "keyreduce-sort", threads=t)
-                kr, av = self.km(ds, n, threads=t), self.km(ds, n, normals="average", threads=t)
-                body.append([label if t == ts[0] else "", t, ms(vw), ms(srt), ms(kr), ms(av), ratio(kr, vw),
-                             f"{100 * (av['median'] / kr['median'] - 1):+.0f}%" if kr and av else "—",
-                             mib(kr), *self.paper_columns(t, po, pc)])
+            vw, srt = self.km(ds, n, "vertexweld", threads=t), self.km(ds, n, "keyreduce-sort", threads=t)
+            kr, av = self.km(ds, n, threads=t), self.km(ds, n, normals="average", threads=t)
+            body.append([shown, t, ms(vw), ms(srt), ms(kr), ms(av), ratio(kr, vw),
+                         f"{100 * (av['median'] / kr['median'] - 1):+.0f}%" if kr and av else "—",
+                         mib(kr), *self.paper_columns(t, po, pc)])
         out += [table(["dataset", "thr", "VERTEX-WELD", "KEY-REDUCE sort", "KEY-REDUCE dense", "KEY-REDUCE avg",
                        "VW / KR", "avg overhead", "KR peak MiB", "paper OpenMP ms", "paper CUDA ms"], body), ""]
         # peers
@@ -302,19 +309,16 @@ class Report:
                       body), ""]
         # tets
         body = []
-        for ds, n, label in self.cases:
-            kr = self.km(ds, n, grid="tet5")
-            if not kr:
+        for ds, n, shown, t in self.case_lines(bench="contour", tool="keymesh", grid="tet5"):
+            if not self.km(ds, n, grid="tet5"):
                 continue
             pk = (kind(ds), n)
             po, pc = PAPER_T2[("openmp", "tet5")].get(pk), PAPER_T2[("cuda", "tet5")].get(pk)
             vt = self.q(ds, n, bench="contour", grid="tet5", tool="vtkContour3DLinearGrid")
-            ts = self.threads_of(ds, n, bench="contour", tool="keymesh", grid="tet5")
-            for t in ts:
-                vw, k = self.km(ds, n, "vertexweld", threads=t, grid="tet5"), self.km(ds, n, threads=t, grid="tet5")
-                body.append([label if t == ts[0] else "", t, ms(vw), ms(k), ratio(k, vw), mib(k),
-                             ms(vt) if t == self.T else "", ratio(k, vt) if t == self.T else "",
-                             *self.paper_columns(t, po, pc)])
+            vw, k = self.km(ds, n, "vertexweld", threads=t, grid="tet5"), self.km(ds, n, threads=t, grid="tet5")
+            body.append([shown, t, ms(vw), ms(k), ratio(k, vw), mib(k),
+                         ms(vt) if t == self.T else "", ratio(k, vt) if t == self.T else "",
+                         *self.paper_columns(t, po, pc)])
         if body:
             out += ["### Unstructured: marching tetrahedra on the 5-tet grid", "",
                     "keymesh keys a point by its edge's two point ids (KEY-REDUCE sort plan); the tet grid is "
@@ -327,22 +331,17 @@ class Report:
 
     def op_table(self, bench, title, intro, paper, peer=None):
         body = []
-        for ds, n, label in self.cases:
-            if not self.q(ds, n, bench=bench, tool="keymesh"):
-                continue
+        for ds, n, shown, t in self.case_lines(bench=bench, tool="keymesh"):
             pk = (kind(ds), n)
             po, pc = paper["openmp"].get(pk), paper["cuda"].get(pk)
             p = self.q(ds, n, bench=bench, tool=peer) if peer else None
-            ts = self.threads_of(ds, n, bench=bench, tool="keymesh")
-            for t in ts:
-                vw = self.q(ds, n, bench=bench, tool="keymesh", weld="vertexweld", threads=t)
-                kr = self.q(ds, n, bench=bench, tool="keymesh", weld="keyreduce", threads=t)
-                row = [label if t == ts[0] else "", t, f"{kr['cells']:,}" if kr else "—", ms(vw), ms(kr), ratio(kr, vw),
-                       mib(kr)]
-                if peer:
-                    row += [ms(p) if t == self.T else "", ratio(kr, p) if t == self.T else ""]
-                row += self.paper_columns(t, po, pc)
-                body.append(row)
+            vw = self.q(ds, n, bench=bench, tool="keymesh", weld="vertexweld", threads=t)
+            kr = self.q(ds, n, bench=bench, tool="keymesh", weld="keyreduce", threads=t)
+            row = [shown, t, f"{kr['cells']:,}" if kr else "—", ms(vw), ms(kr), ratio(kr, vw), mib(kr)]
+            if peer:
+                row += [ms(p) if t == self.T else "", ratio(kr, p) if t == self.T else ""]
+            row += self.paper_columns(t, po, pc)
+            body.append(row)
         head = ["dataset", "thr", "output cells", "VERTEX-WELD", "KEY-REDUCE", "VW / KR", "KR peak MiB"]
         if peer:
             head += [f"{peer} (1 thr)", "peer / keymesh"]
@@ -356,20 +355,17 @@ class Report:
                "contour, scalars carried, no normals). Peers decimate the finished contour with one bin per "
                "voxel (their time excludes the contour). *Paper*: OpenMP / CUDA, structured.", ""]
         body = []
-        for ds, n, label in self.cases:
-            pk = (kind(ds), n)
-            p5 = PAPER_T5.get(pk)
+        for ds, n, shown, t in self.case_lines(bench="coarsen", tool="keymesh"):
+            p5 = PAPER_T5.get((kind(ds), n))
             bd = self.q(ds, n, bench="coarsen", tool="vtkBinnedDecimation")
             qc = self.q(ds, n, bench="coarsen", tool="vtkQuadricClustering")
-            ts = self.threads_of(ds, n, bench="coarsen", tool="keymesh")
-            for t in ts:
-                c0 = self.q(ds, n, bench="contour", tool="keymesh", threads=t, grid=None)
-                c1 = self.q(ds, n, bench="coarsen", tool="keymesh", threads=t)
-                body.append([label if t == ts[0] else "", t, ms(c0), ms(c1),
-                             f"{100 * (c1['median'] / c0['median'] - 1):+.0f}%" if c0 else "—",
-                             f"{c0['cells']:,} → {c1['cells']:,}" if c0 else "—", mib(c1),
-                             ms(bd) if t == self.T else "", ms(qc) if t == self.T else "",
-                             f"{p5[1]}/{p5[0]}" if p5 and t == self.T else ""])
+            c0 = self.q(ds, n, bench="contour", tool="keymesh", threads=t, grid=None)
+            c1 = self.q(ds, n, bench="coarsen", tool="keymesh", threads=t)
+            body.append([shown, t, ms(c0), ms(c1),
+                         f"{100 * (c1['median'] / c0['median'] - 1):+.0f}%" if c0 else "—",
+                         f"{c0['cells']:,} → {c1['cells']:,}" if c0 else "—", mib(c1),
+                         ms(bd) if t == self.T else "", ms(qc) if t == self.T else "",
+                         *self.paper_columns(t, p5 and p5[::-1])])
         out += [table(["dataset", "thr", "contour", "contour + coarsening", "coarsening cost", "triangles",
                        "peak MiB", "vtkBinnedDecimation", "vtkQuadricClustering", "paper OpenMP/CUDA ms"], body),
                 "", "Not run: coarsening of the marching-tetrahedra contour (the paper's unstructured rows).", ""]
@@ -377,13 +373,11 @@ class Report:
                 "`bench/ops_bench --op dual`: the dual of the contour with averaged normals (a polygon per point "
                 "through its triangles' centroids, keyed by the point). *Paper*: OpenMP / CUDA, structured.", ""]
         body = []
-        for ds, n, label in self.cases:
+        for ds, n, shown, t in self.case_lines(bench="dual", tool="keymesh"):
             p6 = PAPER_T6.get((kind(ds), n))
-            ts = self.threads_of(ds, n, bench="dual", tool="keymesh")
-            for t in ts:
-                d = self.q(ds, n, bench="dual", tool="keymesh", threads=t)
-                body.append([label if t == ts[0] else "", t, f"{d['input_cells']:,}", f"{d['cells']:,}", ms(d), mib(d),
-                             f"{p6[1]}/{p6[0]}" if p6 and t == self.T else ""])
+            d = self.q(ds, n, bench="dual", tool="keymesh", threads=t)
+            body.append([shown, t, f"{d['input_cells']:,}", f"{d['cells']:,}", ms(d), mib(d),
+                         *self.paper_columns(t, p6 and p6[::-1])])
         out += [table(["dataset", "thr", "input triangles", "dual polygons", "dual", "peak MiB",
                        "paper OpenMP/CUDA ms"], body),
                 "", "Not run: the dual of the marching-tetrahedra contour (the paper's unstructured rows).", ""]
