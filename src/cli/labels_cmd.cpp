@@ -7,7 +7,9 @@
 #include "raw_input.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/labels.hpp"
+#include "keymesh/generate/labels_stream.hpp"
 #include "keymesh/io/mesh_io.hpp"
+#include "keymesh/io/plane_source.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::cli {
@@ -22,9 +24,22 @@ struct LabelsCli {
   bool per_label = false;
   int smooth = 16;
   double relaxation = 0.5;
+  std::string memory_limit;  // stream the volume in slabs
   RawInputCli raw_input;
   CommonOptions common;
 };
+
+generate::LabelOptions label_options(const LabelsCli& o) {
+  generate::LabelOptions opt;
+  opt.method = o.method == "discrete-mc" ? generate::LabelMethod::DiscreteMarchingCubes
+                                         : generate::LabelMethod::SurfaceNets;
+  opt.labels.assign(o.labels.begin(), o.labels.end());
+  opt.background = o.background;
+  opt.per_label = o.per_label;
+  opt.smooth_iterations = o.smooth;
+  opt.relaxation = o.relaxation;
+  return opt;
+}
 
 Register reg{Command{
     "labels", "surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys",
@@ -55,31 +70,52 @@ Register reg{Command{
       cmd.add_option("--relaxation", o->relaxation, "smoothing relaxation factor in (0, 1] (default 0.5)")
           ->check(CLI::Range(1e-9, 1.0));
       o->raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32");
+      cmd.add_option("--memory-limit", o->memory_limit,
+                     "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
+                     "label indices (e.g. 256M); the surfaces are merged by key, then smoothed and written whole "
+                     "(not streamed: the output mesh); byte-identical to one in-memory run; raw (--dims), "
+                     ".nrrd/.nhdr or .nii with uncompressed samples, DICOM, Zarr")
+          ->check(size_validator());
       add_common_options(cmd, o->common);
       return [o]() {
         if (int refused = require_cpu_backend(o->common, "labels")) return refused;
         const int threads = apply_threads(o->common);
         StageTimer timer;
         Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
-        generate::LabelOptions opt;
-        opt.method = o->method == "discrete-mc" ? generate::LabelMethod::DiscreteMarchingCubes
-                                                : generate::LabelMethod::SurfaceNets;
-        opt.labels.assign(o->labels.begin(), o->labels.end());
-        opt.background = o->background;
-        opt.per_label = o->per_label;
-        opt.smooth_iterations = o->smooth;
-        opt.relaxation = o->relaxation;
-        progress.say("reading " + o->input);
+        const generate::LabelOptions opt = label_options(*o);
         const io::RawOptions raw = o->raw_input.given() ? o->raw_input.options() : io::RawOptions{};
-        const ImageGrid grid =
-            timer.run("read", [&] { return io::read_volume(o->input, o->raw_input.given() ? &raw : nullptr); });
-        progress.enable_if(grid.num_points() > (1ll << 25));
         generate::LabelStats stats;
         SurfaceMesh mesh;
+        nlohmann::json r;
         try {
-          mesh = timer.run("labels", [&] { return generate::contour_labels(grid, opt, &stats); });
+          if (!o->memory_limit.empty()) {
+            std::size_t limit = 0;
+            parse_size(o->memory_limit, limit);  // checked by its validator
+            auto source = io::open_volume_planes(o->input, o->raw_input.given() ? &raw : nullptr);
+            generate::LabelStreamStats ss;
+            mesh = timer.run("labels", [&] {
+              return generate::contour_labels_streamed(*source, opt, limit, &stats, &ss);
+            });
+            timer.add("read", ss.read);
+            r["dims"] = source->header().dims;
+            r["scalar_type"] = scalar_type_name(source->header().type);
+            r["memory_limit"] = limit;
+            r["stream"] = {{"slabs", ss.slabs}, {"rows_per_slab", ss.rows_per_slab}, {"slab_bytes", ss.slab_bytes},
+                           {"read", ss.read}, {"merge", ss.merge}};
+          } else {
+            progress.say("reading " + o->input);
+            const ImageGrid grid =
+                timer.run("read", [&] { return io::read_volume(o->input, o->raw_input.given() ? &raw : nullptr); });
+            progress.enable_if(grid.num_points() > (1ll << 25));
+            mesh = timer.run("labels", [&] { return generate::contour_labels(grid, opt, &stats); });
+            r["dims"] = grid.dims;
+            r["scalar_type"] = scalar_type_name(grid.type);
+          }
         } catch (const InputError& e) {
-          throw InputError(o->input + ": " + e.what());  // name the file the label map came from
+          // The generator's refusals name the file the label map came from
+          // (the readers' already do).
+          if (std::string(e.what()).rfind("labels", 0) == 0) throw InputError(o->input + ": " + e.what());
+          throw;
         }
         std::string ext = std::filesystem::path(o->output).extension().string();
         if (ext != ".vtp" && !o->common.quiet)
@@ -92,7 +128,6 @@ Register reg{Command{
                        static_cast<long long>(stats.surfaces), static_cast<long long>(mesh.num_points()),
                        static_cast<long long>(mesh.num_cells()), o->output.c_str());
         if (!o->common.report_path.empty()) {
-          nlohmann::json r;
           r["input"] = o->input;
           r["output"] = o->output;
           r["method"] = o->method;
@@ -100,8 +135,6 @@ Register reg{Command{
           r["background"] = o->background;
           r["smooth"] = o->smooth;
           r["relaxation"] = o->relaxation;
-          r["dims"] = grid.dims;
-          r["scalar_type"] = scalar_type_name(grid.type);
           r["distinct_labels"] = stats.distinct_labels;
           r["labels_extracted"] = stats.surfaces;
           r["points"] = mesh.num_points();

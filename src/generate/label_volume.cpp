@@ -1,6 +1,7 @@
 #include "label_volume.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -54,17 +55,126 @@ Id index_of(const std::vector<std::int64_t>& values, std::int64_t v) {
   return static_cast<Id>(std::lower_bound(values.begin(), values.end(), v) - values.begin());
 }
 
+// The value -> stored index table of a small type (over its whole range).
 template <class T>
-LabelVolume scan_typed(const ImageGrid& grid, const T* samples, const LabelOptions& opt) {
+std::vector<LabelIndex> small_table(const LabelVolume& vol) {
+  constexpr Id lowest = static_cast<Id>(std::numeric_limits<T>::lowest());
+  std::vector<LabelIndex> table(std::size_t{1} << (8 * sizeof(T)), vol.background);
+  for (std::size_t at = 0; at < vol.values.size(); ++at) {
+    const std::int64_t v = vol.values[at];
+    if (v >= lowest && v <= static_cast<Id>(std::numeric_limits<T>::max()))
+      table[static_cast<std::size_t>(v - lowest)] = vol.stored[at];
+  }
+  return table;
+}
+
+// Maps the planes' samples into the window, counting voxels and boxes per
+// label index per chunk of z-planes, merged in chunk order (sums and
+// min/max: any order gives the same result).
+template <class T>
+void map_typed(LabelVolume& vol, const T* samples, const std::array<Id, 3>& dims, Id first, LabelCounts* counts) {
+  const Id nx = dims[0], ny = dims[1], nz = dims[2];
+  constexpr bool small = sizeof(T) <= 2;
+  constexpr Id lowest = static_cast<Id>(std::numeric_limits<T>::lowest());
+  std::vector<LabelIndex> table;
+  if constexpr (small) table = small_table<T>(vol);
+  // int32: a binary search once per run of equal samples.
+  auto map_of = [&](std::int64_t v) { return vol.stored[static_cast<std::size_t>(index_of(vol.values, v))]; };
+  const Id nl = static_cast<Id>(vol.values.size());
+  const int chunks = parallel::chunk_count(nz, 8);
+  std::vector<LabelCounts> part(static_cast<std::size_t>(chunks));
+  parallel::for_each_chunk(nz, chunks, [&](Id kb, Id ke, int c) {
+    LabelCounts& cnt = part[static_cast<std::size_t>(c)];
+    cnt.reset(nl);
+    for (Id k = kb; k < ke; ++k)
+      for (Id j = 0; j < ny; ++j) {
+        const T* in = samples + j * nx + k * nx * ny;
+        LabelIndex* out = vol.index.data() + (vol.at(1, j + 1, first + k + 1) - vol.first_plane * vol.nxy);
+        LabelIndex last = vol.background;
+        for (Id i = 0; i < nx; ++i) {
+          LabelIndex l;
+          if constexpr (small) {
+            l = table[static_cast<std::size_t>(static_cast<Id>(in[i]) - lowest)];
+          } else {
+            l = (i > 0 && in[i] == in[i - 1]) ? last : map_of(in[i]);
+          }
+          last = l;
+          out[i] = l;
+          if (l == vol.background) continue;
+          ++cnt.voxels[l];
+          auto& b = cnt.box[l];
+          const Id p[3] = {i + 1, j + 1, first + k + 1};
+          for (int a = 0; a < 3; ++a) {
+            b[a] = std::min(b[a], p[a]);
+            b[3 + a] = std::max(b[3 + a], p[a]);
+          }
+        }
+      }
+  });
+  if (!counts) return;
+  if (counts->voxels.empty()) counts->reset(nl);
+  for (const LabelCounts& c : part) counts->merge(c);
+}
+
+}  // namespace
+
+void LabelCounts::reset(Id labels) {
+  const Id big = std::numeric_limits<Id>::max();
+  voxels.assign(static_cast<std::size_t>(labels), 0);
+  box.assign(static_cast<std::size_t>(labels), {big, big, big, -1, -1, -1});
+}
+
+void LabelCounts::merge(const LabelCounts& other) {
+  for (std::size_t l = 0; l < voxels.size(); ++l) {
+    voxels[l] += other.voxels[l];
+    for (int a = 0; a < 3; ++a) {
+      box[l][a] = std::min(box[l][a], other.box[l][a]);
+      box[l][3 + a] = std::max(box[l][3 + a], other.box[l][3 + a]);
+    }
+  }
+}
+
+void check_label_grid(const ImageGrid& header, const LabelOptions& options) {
+  for (int a = 0; a < 3; ++a)
+    if (header.dims[a] < 1)
+      throw InputError("labels: grid has " + std::to_string(header.dims[a]) + " points along axis " + "xyz"[a]);
+  if (header.type == ScalarType::Float32 || header.type == ScalarType::Float64)
+    throw InputError(std::string("labels: a ") + scalar_type_name(header.type) +
+                     " volume is not a label map (integer samples: uint8, int8, uint16, int16, int32)");
+  if (options.background > kMaxLabelMagnitude || options.background < -kMaxLabelMagnitude)
+    throw InputError("labels: background " + std::to_string(options.background) +
+                     " is past the supported magnitude 2^24");
+}
+
+std::vector<std::int64_t> distinct_labels(const ImageGrid& samples) {
+  return visit_scalars(samples, [&](const auto* s) -> std::vector<std::int64_t> {
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(s)>>;
+    if constexpr (std::is_floating_point_v<T>) {
+      throw InputError("labels: float volume");
+    } else {
+      return distinct_values(s, samples.num_points());
+    }
+  });
+}
+
+void merge_distinct(std::vector<std::int64_t>& into, const std::vector<std::int64_t>& more) {
+  std::vector<std::int64_t> out;
+  out.reserve(into.size() + more.size());
+  std::set_union(into.begin(), into.end(), more.begin(), more.end(), std::back_inserter(out));
+  into.swap(out);
+  // Past the limit already: stop growing (an int32 noise volume).
+  if (static_cast<Id>(into.size()) > kMaxDistinctLabels + 1) into.resize(static_cast<std::size_t>(kMaxDistinctLabels + 1));
+}
+
+LabelVolume label_table(const ImageGrid& header, std::vector<std::int64_t> values, const LabelOptions& opt) {
   LabelVolume vol;
-  const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  const Id nx = header.dims[0], ny = header.dims[1], nz = header.dims[2];
   vol.dims = {nx + 2, ny + 2, nz + 2};
   vol.nxy = vol.dims[0] * vol.dims[1];
   vol.n = vol.nxy * vol.dims[2];
-  vol.origin = grid.origin;
-  vol.spacing = grid.spacing;
-
-  vol.values = distinct_values(samples, grid.num_points());
+  vol.origin = header.origin;
+  vol.spacing = header.spacing;
+  vol.values = std::move(values);
   vol.distinct_in_grid = static_cast<Id>(vol.values.size());
   for (std::int64_t v : {vol.values.front(), vol.values.back()})
     if (v > kMaxLabelMagnitude || v < -kMaxLabelMagnitude)
@@ -74,7 +184,9 @@ LabelVolume scan_typed(const ImageGrid& grid, const T* samples, const LabelOptio
   if (!std::binary_search(vol.values.begin(), vol.values.end(), opt.background))
     vol.values.insert(vol.values.begin() + index_of(vol.values, opt.background), opt.background);
   if (static_cast<Id>(vol.values.size()) > kMaxDistinctLabels)
-    throw InputError("labels: the volume holds " + std::to_string(vol.values.size()) +
+    throw InputError("labels: the volume holds " +
+                     std::string(static_cast<Id>(vol.values.size()) > kMaxDistinctLabels + 1 ? "more than " : "") +
+                     std::to_string(vol.values.size()) +
                      " distinct labels (background included), more than the supported " +
                      std::to_string(kMaxDistinctLabels));
   vol.background = static_cast<LabelIndex>(index_of(vol.values, opt.background));
@@ -90,103 +202,50 @@ LabelVolume scan_typed(const ImageGrid& grid, const T* samples, const LabelOptio
     keep[static_cast<std::size_t>(at)] = 1;
   }
   keep[vol.background] = 0;
-  for (std::size_t l = 0; l < keep.size(); ++l)
+  vol.stored.resize(vol.values.size());
+  for (std::size_t l = 0; l < keep.size(); ++l) {
+    vol.stored[l] = keep[l] ? static_cast<LabelIndex>(l) : vol.background;
     if (keep[l]) vol.selected.push_back(static_cast<LabelIndex>(l));
-
-  // Label value -> index, as the padded grid stores it (background when not
-  // selected). Small types use a table over their range; int32 a binary
-  // search once per run of equal samples.
-  auto map_of = [&](std::int64_t v) {
-    const Id at = index_of(vol.values, v);
-    return keep[static_cast<std::size_t>(at)] ? static_cast<LabelIndex>(at) : vol.background;
-  };
-  std::vector<LabelIndex> table;
-  constexpr bool small = sizeof(T) <= 2;
-  constexpr Id lowest = static_cast<Id>(std::numeric_limits<T>::lowest());
-  if constexpr (small) {
-    table.assign(std::size_t{1} << (8 * sizeof(T)), vol.background);
-    for (std::int64_t v : vol.values)
-      if (v >= lowest && v <= static_cast<Id>(std::numeric_limits<T>::max()))
-        table[static_cast<std::size_t>(v - lowest)] = map_of(v);
-  }
-
-  vol.index.assign(static_cast<std::size_t>(vol.n), vol.background);
-  const Id nl = static_cast<Id>(vol.values.size());
-  // Voxel counts and boxes per label index, per chunk of z-planes, merged
-  // in chunk order (sums and min/max: any order gives the same result).
-  const int chunks = parallel::chunk_count(nz, 8);
-  std::vector<std::vector<Id>> counts(static_cast<std::size_t>(chunks));
-  std::vector<std::vector<std::array<Id, 6>>> boxes(static_cast<std::size_t>(chunks));
-  parallel::for_each_chunk(nz, chunks, [&](Id kb, Id ke, int c) {
-    auto& cnt = counts[static_cast<std::size_t>(c)];
-    auto& box = boxes[static_cast<std::size_t>(c)];
-    cnt.assign(static_cast<std::size_t>(nl), 0);
-    const Id big = std::numeric_limits<Id>::max();
-    box.assign(static_cast<std::size_t>(nl), {big, big, big, -1, -1, -1});
-    for (Id k = kb; k < ke; ++k)
-      for (Id j = 0; j < ny; ++j) {
-        const T* in = samples + j * nx + k * nx * ny;
-        LabelIndex* out = vol.index.data() + vol.at(1, j + 1, k + 1);
-        LabelIndex last = vol.background;
-        for (Id i = 0; i < nx; ++i) {
-          LabelIndex l;
-          if constexpr (small) {
-            l = table[static_cast<std::size_t>(static_cast<Id>(in[i]) - lowest)];
-          } else {
-            l = (i > 0 && in[i] == in[i - 1]) ? last : map_of(in[i]);
-          }
-          last = l;
-          out[i] = l;
-          if (l == vol.background) continue;
-          ++cnt[l];
-          auto& b = box[l];
-          const Id p[3] = {i + 1, j + 1, k + 1};
-          for (int a = 0; a < 3; ++a) {
-            b[a] = std::min(b[a], p[a]);
-            b[3 + a] = std::max(b[3 + a], p[a]);
-          }
-        }
-      }
-  });
-  for (LabelIndex l : vol.selected) {
-    Id count = 0;
-    std::array<Id, 6> b = boxes[0][l];
-    for (int c = 0; c < chunks; ++c) {
-      count += counts[static_cast<std::size_t>(c)][l];
-      for (int a = 0; a < 3; ++a) {
-        b[a] = std::min(b[a], boxes[static_cast<std::size_t>(c)][l][a]);
-        b[3 + a] = std::max(b[3 + a], boxes[static_cast<std::size_t>(c)][l][3 + a]);
-      }
-    }
-    vol.voxels.push_back(count);
-    vol.box.push_back(b);
   }
   return vol;
 }
 
-}  // namespace
+void allocate_window(LabelVolume& vol, Id first_plane, Id planes) {
+  vol.first_plane = first_plane;
+  vol.index.assign(static_cast<std::size_t>(planes * vol.nxy), vol.background);
+}
 
-LabelVolume scan_labels(const ImageGrid& grid, const LabelOptions& options) {
-  for (int a = 0; a < 3; ++a)
-    if (grid.dims[a] < 1)
-      throw InputError("labels: grid has " + std::to_string(grid.dims[a]) + " points along axis " + "xyz"[a]);
-  if (static_cast<Id>(grid.byte_count()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
-    throw InputError("labels: grid holds " + std::to_string(grid.byte_count()) + " bytes, dims need " +
-                     std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
-  if (grid.type == ScalarType::Float32 || grid.type == ScalarType::Float64)
-    throw InputError(std::string("labels: a ") + scalar_type_name(grid.type) +
-                     " volume is not a label map (integer samples: uint8, int8, uint16, int16, int32)");
-  if (options.background > kMaxLabelMagnitude || options.background < -kMaxLabelMagnitude)
-    throw InputError("labels: background " + std::to_string(options.background) +
-                     " is past the supported magnitude 2^24");
-  return visit_scalars(grid, [&](const auto* samples) -> LabelVolume {
+void map_planes(LabelVolume& vol, const ImageGrid& planes, Id first, LabelCounts* counts) {
+  visit_scalars(planes, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
     if constexpr (std::is_floating_point_v<T>) {
       throw InputError("labels: float volume");
     } else {
-      return scan_typed<T>(grid, samples, options);
+      map_typed<T>(vol, samples, planes.dims, first, counts);
     }
   });
+}
+
+void set_boxes(LabelVolume& vol, const LabelCounts& counts) {
+  vol.voxels.clear();
+  vol.box.clear();
+  for (LabelIndex l : vol.selected) {
+    vol.voxels.push_back(counts.voxels[l]);
+    vol.box.push_back(counts.box[l]);
+  }
+}
+
+LabelVolume scan_labels(const ImageGrid& grid, const LabelOptions& options) {
+  check_label_grid(grid, options);
+  if (static_cast<Id>(grid.byte_count()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
+    throw InputError("labels: grid holds " + std::to_string(grid.byte_count()) + " bytes, dims need " +
+                     std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
+  LabelVolume vol = label_table(grid, distinct_labels(grid), options);
+  allocate_window(vol, 0, vol.dims[2]);
+  LabelCounts counts;
+  map_planes(vol, grid, 0, &counts);
+  set_boxes(vol, counts);
+  return vol;
 }
 
 void append_surfaces(std::vector<LabelSurface>& parts, LabelSurface& out) {
@@ -199,6 +258,7 @@ void append_surfaces(std::vector<LabelSurface>& parts, LabelSurface& out) {
     append(out.junction, part.junction);
     append(out.border_axes, part.border_axes);
     append(out.cell_centre, part.cell_centre);
+    append(out.keys, part.keys);
     for (const Field& f : part.mesh.cell_fields) {
       Field* to = nullptr;
       for (Field& g : out.mesh.cell_fields) to = g.name == f.name ? &g : to;

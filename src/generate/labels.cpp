@@ -22,11 +22,15 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 }  // namespace
 
-SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats) {
+void detail::check_label_options(const LabelOptions& options) {
   if (options.smooth_iterations < 0)
     throw InputError("labels: smoothing iterations " + std::to_string(options.smooth_iterations) + " is negative");
   if (!(options.relaxation > 0.0 && options.relaxation <= 1.0))
     throw InputError("labels: relaxation factor " + std::to_string(options.relaxation) + " is not in (0, 1]");
+}
+
+SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats) {
+  detail::check_label_options(options);
   LabelStats local;
   LabelStats& st = stats ? *stats : local;
   st = LabelStats{};
@@ -41,7 +45,12 @@ SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, L
   detail::LabelSurface surface = options.method == LabelMethod::SurfaceNets
                                      ? detail::surface_nets(vol, options.per_label, st)
                                      : detail::discrete_marching_cubes(vol, options.per_label, st);
-  t0 = Clock::now();
+  return detail::finish_label_mesh(surface, vol, options, st);
+}
+
+SurfaceMesh detail::finish_label_mesh(LabelSurface& surface, const LabelVolume& vol, const LabelOptions& options,
+                                      LabelStats& st) {
+  auto t0 = Clock::now();
   if (options.smooth_iterations > 0) progress::report("smooth", 0.6);
   detail::smooth_label_surface(surface, vol, options.method, options.smooth_iterations, options.relaxation);
   st.smooth = seconds_since(t0);

@@ -5,6 +5,7 @@
 // surfaces' keys are then made global edge keys of the padded grid, and one
 // more KEY-REDUCE (dense plan) over them shares the point of an edge
 // between the two labels at its ends.
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstring>
@@ -15,6 +16,7 @@
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {
@@ -29,19 +31,25 @@ struct LabelTriangles {
   std::vector<std::uint64_t> corner_keys;  // 3 per triangle
 };
 
-LabelTriangles contour_one_label(const LabelVolume& vol, std::size_t s) {
+// Only the cubes of rows [rows.first, rows.second) of the padded grid (a
+// slab of a streamed volume; a cube's row is its lower plane).
+LabelTriangles contour_one_label(const LabelVolume& vol, std::size_t s, std::pair<Id, Id> rows) {
   const LabelIndex label = vol.selected[s];
   std::array<Id, 3> lo{}, dims{};
   for (int a = 0; a < 3; ++a) {
     lo[a] = vol.box[s][a] - 1;
     dims[a] = vol.box[s][3 + a] - vol.box[s][a] + 3;
   }
+  const Id first_row = std::max(rows.first, lo[2]), end_row = std::min(rows.second, lo[2] + dims[2] - 1);
+  if (end_row <= first_row) return {};
+  dims[2] = end_row - first_row + 1;
+  lo[2] = first_row;
   ImageGrid indicator;
   indicator.allocate(dims, ScalarType::UInt8);
   auto* ind = reinterpret_cast<std::uint8_t*>(indicator.data());
   for (Id k = 0; k < dims[2]; ++k)
     for (Id j = 0; j < dims[1]; ++j) {
-      const LabelIndex* in = vol.index.data() + vol.at(lo[0], lo[1] + j, lo[2] + k);
+      const LabelIndex* in = vol.row(vol.at(lo[0], lo[1] + j, lo[2] + k));
       std::uint8_t* out = ind + (k * dims[1] + j) * dims[0];
       for (Id i = 0; i < dims[0]; ++i) out[i] = in[i] == label;
     }
@@ -72,8 +80,12 @@ LabelTriangles contour_one_label(const LabelVolume& vol, std::size_t s) {
 void weld_and_append(const LabelVolume& vol, const std::vector<std::uint64_t>& corner_keys,
                      const std::vector<LabelIndex>& triangle_label, LabelSurface& out) {
   const Id corners = static_cast<Id>(corner_keys.size());
-  auto groups = keyreduce::partition_dense(corner_keys.data(), corners, static_cast<std::uint64_t>(3 * vol.n),
-                                           keyreduce::Order::Skip);
+  // A window of a streamed volume sorts (its keys span the whole grid).
+  auto groups = vol.window ? keyreduce::partition_sort(corner_keys.data(), corners,
+                                                       parallel::bits_needed<std::uint64_t>(3 * vol.n),
+                                                       keyreduce::Order::Skip)
+                           : keyreduce::partition_dense(corner_keys.data(), corners,
+                                                        static_cast<std::uint64_t>(3 * vol.n), keyreduce::Order::Skip);
   const Id points = groups.num_groups();
   const std::uint32_t base = static_cast<std::uint32_t>(out.junction.size());
   const std::size_t c0 = out.mesh.connectivity.size();
@@ -88,8 +100,7 @@ void weld_and_append(const LabelVolume& vol, const std::vector<std::uint64_t>& c
     const Id p = static_cast<Id>(key / 3);
     const Id q = p + (key % 3 == 0 ? 1 : key % 3 == 1 ? vol.dims[0] : vol.nxy);
     const LabelIndex l = triangle_label[static_cast<std::size_t>(t)];
-    const LabelIndex m = vol.index[static_cast<std::size_t>(p)] == l ? vol.index[static_cast<std::size_t>(q)]
-                                                                     : vol.index[static_cast<std::size_t>(p)];
+    const LabelIndex m = vol.label(p) == l ? vol.label(q) : vol.label(p);
     out.pair[t0 + static_cast<std::size_t>(t)] = l < m ? (std::uint32_t{l} << 16 | m) : (std::uint32_t{m} << 16 | l);
   });
   // Points at edge midpoints; a junction when the cells around the edge
@@ -117,13 +128,14 @@ void weld_and_append(const LabelVolume& vol, const std::vector<std::uint64_t>& c
         for (int dv = -1; dv <= 1; ++dv) {
           const Id cu = ijk[u] + du, cv = ijk[v] + dv;
           if (cu < 0 || cv < 0 || cu >= vol.dims[u] || cv >= vol.dims[v]) continue;
-          const LabelIndex l = vol.index[static_cast<std::size_t>(p + end * stride[axis] + du * stride[u] + dv * stride[v])];
+          const LabelIndex l = vol.label(p + end * stride[axis] + du * stride[u] + dv * stride[v]);
           bool dup = false;
           for (int i = 0; i < n; ++i) dup = dup || seen[i] == l;
           if (!dup && n < 3) seen[n++] = l;
         }
     out.junction[at] = n >= 3;
   }, 1024);
+  if (vol.window) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
 }
 
 }  // namespace
@@ -133,7 +145,7 @@ LabelSurface discrete_marching_cubes(const LabelVolume& vol, bool per_label_surf
   std::vector<LabelTriangles> surfaces(n);
   auto t0 = Clock::now();
   parallel::for_each_dynamic(static_cast<Id>(n),
-                             [&](Id s) { surfaces[static_cast<std::size_t>(s)] = contour_one_label(vol, static_cast<std::size_t>(s)); }, 1);
+                             [&](Id s) { surfaces[static_cast<std::size_t>(s)] = contour_one_label(vol, static_cast<std::size_t>(s), {0, vol.dims[2]}); }, 1);
   st.generate += seconds_since(t0);
   t0 = Clock::now();
   LabelSurface out;
@@ -168,6 +180,22 @@ LabelSurface discrete_marching_cubes(const LabelVolume& vol, bool per_label_surf
   out.mesh.cell_fields.push_back(Field{"label", 1, std::move(label_field)});
   st.weld += seconds_since(t0);
   return out;
+}
+
+std::vector<LabelSurface> discrete_marching_cubes_rows(const LabelVolume& vol, std::pair<Id, Id> rows,
+                                                       LabelStats& st) {
+  const std::size_t n = vol.selected.size();
+  std::vector<LabelSurface> parts(n);
+  parallel::for_each_dynamic(static_cast<Id>(n), [&](Id s) {
+    const std::size_t at = static_cast<std::size_t>(s);
+    const LabelTriangles tri = contour_one_label(vol, at, rows);
+    const std::size_t triangles = tri.corner_keys.size() / 3;
+    weld_and_append(vol, tri.corner_keys, std::vector<LabelIndex>(triangles, vol.selected[at]), parts[at]);
+    parts[at].mesh.cell_fields.push_back(
+        Field{"label", 1, std::vector<float>(triangles, static_cast<float>(vol.values[vol.selected[at]]))});
+  }, 1);
+  for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());
+  return parts;
 }
 
 }  // namespace keymesh::generate::detail

@@ -14,6 +14,7 @@
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "label_volume.hpp"
 
@@ -98,14 +99,14 @@ struct CellCorners {
   }
   unsigned case_of(Id p, LabelIndex l) const {
     unsigned m = 0;
-    for (int c = 0; c < 8; ++c) m |= static_cast<unsigned>(v.index[static_cast<std::size_t>(p + offset[c])] == l) << c;
+    for (int c = 0; c < 8; ++c) m |= static_cast<unsigned>(v.label(p + offset[c]) == l) << c;
     return m;
   }
   int distinct(Id p) const {
     LabelIndex seen[8];
     int n = 0;
     for (int c = 0; c < 8; ++c) {
-      const LabelIndex l = v.index[static_cast<std::size_t>(p + offset[c])];
+      const LabelIndex l = v.label(p + offset[c]);
       bool dup = false;
       for (int i = 0; i < n; ++i) dup = dup || seen[i] == l;
       if (!dup) seen[n++] = l;
@@ -130,25 +131,28 @@ constexpr Id kFaceKeysPerCell = 6;
 // so that the quads of the face's four edges would all meet on one dual
 // edge. The face point of the arc (around the label's corner of this edge)
 // takes the side instead; the polygon is fanned from its first face point.
+//
+// Only the edges of rows k in [rows.first, rows.second) of the box (its
+// z-planes, box coordinates) are visited: a slab of a streamed volume.
 template <class K>
-void generate_quads(const LabelVolume& vol, const Box& box, int only, Soup<K>& soup) {
+void generate_quads(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange, Soup<K>& soup) {
   const auto& loops = cell_loops();
-  const Id rows = box.dims[1] * box.dims[2];
+  const Id rows = box.dims[1] * (krange.second - krange.first);
   const Id cstride[3] = {1, box.cx(), box.cxy()};
   const Id pstride[3] = {1, vol.dims[0], vol.nxy};
-  const LabelIndex* L = vol.index.data();
+  auto L = [&vol](Id p) { return vol.label(p); };
   const CellCorners corners(vol);
   const Id cells = box.cells();
   // Visits the edges of row r whose quads are written: f(i, axis, lo_end_label, hi_end_label).
   auto visit_row = [&](Id r, auto&& f) {
-    const Id j = r % box.dims[1], k = r / box.dims[1];
+    const Id j = r % box.dims[1], k = krange.first + r / box.dims[1];
     const Id row_first = vol.at(box.lo[0], box.lo[1] + j, box.lo[2] + k);
     const bool y_ok = j + 1 < box.dims[1], z_ok = k + 1 < box.dims[2];
     for (Id i = 0; i < box.dims[0]; ++i) {
       const Id p = row_first + i;
-      const LabelIndex a = L[p];
-      const LabelIndex ends[3] = {i + 1 < box.dims[0] ? L[p + 1] : a, y_ok ? L[p + pstride[1]] : a,
-                                  z_ok ? L[p + pstride[2]] : a};
+      const LabelIndex a = L(p);
+      const LabelIndex ends[3] = {i + 1 < box.dims[0] ? L(p + 1) : a, y_ok ? L(p + pstride[1]) : a,
+                                  z_ok ? L(p + pstride[2]) : a};
       for (int axis = 0; axis < 3; ++axis) {
         const LabelIndex b = ends[axis];
         if (a == b) continue;
@@ -200,7 +204,7 @@ void generate_quads(const LabelVolume& vol, const Box& box, int only, Soup<K>& s
       auto inside = [&](int oa, int ow) {
         Id q[3] = {f[0], f[1], f[2]};
         q[axis] += oa, q[w] += ow;
-        return L[vol.at(box.lo[0] + q[0], box.lo[1] + q[1], box.lo[2] + q[2])] == l;
+        return L(vol.at(box.lo[0] + q[0], box.lo[1] + q[1], box.lo[2] + q[2])) == l;
       };
       const bool c00 = inside(0, 0), c10 = inside(1, 0), c01 = inside(0, 1), c11 = inside(1, 1);
       if (!(c00 == c11 && c10 == c01 && c00 != c10)) continue;  // not ambiguous
@@ -305,7 +309,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
       const Id f[3] = {box.lo[0] + fc % box.cx(), box.lo[1] + (fc / box.cx()) % (box.dims[1] - 1),
                        box.lo[2] + fc / box.cxy()};
       const int s1 = d == 0 ? 1 : 0, s2 = d == 2 ? 1 : 2;  // spanning axes, s1 < s2
-      const bool c00 = vol.index[static_cast<std::size_t>(vol.at(f[0], f[1], f[2]))] == only;
+      const bool c00 = vol.label(vol.at(f[0], f[1], f[2])) == only;
       // The arc's corner: offsets along s1 and s2.
       const int o1 = static_cast<int>(arc), o2 = c00 ? o1 : 1 - o1;
       for (int a = 0; a < 3; ++a) {
@@ -357,12 +361,16 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
   }, 1024);
 }
 
-// Welds one soup (dense plan over the box's keys) and appends it to `out`.
+// Welds one soup (dense plan over the box's keys; a sort in a window of a
+// streamed volume, whose keys span far more than it holds: the same groups)
+// and appends it to `out`, with the points' keys in a window.
 template <class K>
 void weld_and_append(const LabelVolume& vol, const Box& box, int only, Soup<K>& soup, LabelSurface& out) {
   const K range = static_cast<K>(only < 0 ? box.cells() : (4 + kFaceKeysPerCell) * box.cells());
-  auto groups = keyreduce::partition_dense(soup.keys.data(), static_cast<Id>(soup.keys.size()), range,
-                                           keyreduce::Order::Skip);
+  const Id n = static_cast<Id>(soup.keys.size());
+  auto groups = vol.window ? keyreduce::partition_sort(soup.keys.data(), n, parallel::bits_needed<K>(range),
+                                                       keyreduce::Order::Skip)
+                           : keyreduce::partition_dense(soup.keys.data(), n, range, keyreduce::Order::Skip);
   const std::uint32_t base = static_cast<std::uint32_t>(out.junction.size());
   const std::size_t c0 = out.mesh.connectivity.size();
   out.mesh.connectivity.resize(c0 + groups.index_map.size());
@@ -370,6 +378,7 @@ void weld_and_append(const LabelVolume& vol, const Box& box, int only, Soup<K>& 
                      [&](Id i) { out.mesh.connectivity[c0 + static_cast<std::size_t>(i)] = base + groups.index_map[i]; });
   out.pair.insert(out.pair.end(), soup.pair.begin(), soup.pair.end());
   append_points(vol, box, only, groups.unique_keys, out);
+  if (vol.window) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
 }
 
 Box whole(const LabelVolume& vol) { return Box{{0, 0, 0}, vol.dims}; }
@@ -385,36 +394,43 @@ Box box_of(const LabelVolume& vol, std::size_t s) {
   return b;
 }
 
+// Edge rows [rows.first, rows.second) of the padded grid, in box coordinates
+// (empty when the box lies outside them).
+std::pair<Id, Id> rows_in(const Box& box, std::pair<Id, Id> rows) {
+  const Id b = std::max<Id>(rows.first - box.lo[2], 0), e = std::min<Id>(rows.second - box.lo[2], box.dims[2]);
+  return {b, std::max(b, e)};
+}
+
 template <class K>
-void network(const LabelVolume& vol, LabelSurface& out, LabelStats& st) {
+void network(const LabelVolume& vol, std::pair<Id, Id> rows, LabelSurface& out, LabelStats& st) {
   Soup<K> soup;
   const Box box = whole(vol);
   auto t0 = Clock::now();
-  generate_quads<K>(vol, box, -1, soup);
+  generate_quads<K>(vol, box, -1, rows, soup);
   st.generate += seconds_since(t0);
-  st.soup_corners = static_cast<Id>(soup.keys.size());
+  st.soup_corners += static_cast<Id>(soup.keys.size());
   t0 = Clock::now();
   weld_and_append(vol, box, -1, soup, out);
   st.weld += seconds_since(t0);
 }
 
 // One closed surface per selected label, each welded on its own box; the
-// labels run in parallel and are appended in label order.
-void per_label(const LabelVolume& vol, LabelSurface& out, LabelStats& st) {
+// labels run in parallel.
+std::vector<LabelSurface> per_label(const LabelVolume& vol, std::pair<Id, Id> rows, LabelStats& st) {
   const std::size_t n = vol.selected.size();
   std::vector<LabelSurface> parts(n);
   auto t0 = Clock::now();
   parallel::for_each_dynamic(static_cast<Id>(n), [&](Id s) {
     const Box box = box_of(vol, static_cast<std::size_t>(s));
     Soup<std::uint64_t> soup;
-    generate_quads(vol, box, vol.selected[static_cast<std::size_t>(s)], soup);
+    generate_quads(vol, box, vol.selected[static_cast<std::size_t>(s)], rows_in(box, rows), soup);
     weld_and_append(vol, box, vol.selected[static_cast<std::size_t>(s)], soup, parts[static_cast<std::size_t>(s)]);
     parts[static_cast<std::size_t>(s)].mesh.cell_fields.push_back(
         Field{"label", 1, std::vector<float>(soup.pair.size(), static_cast<float>(vol.values[vol.selected[s]]))});
   }, 1);
   st.generate += seconds_since(t0);
   for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());
-  append_surfaces(parts, out);
+  return parts;
 }
 
 }  // namespace
@@ -422,13 +438,24 @@ void per_label(const LabelVolume& vol, LabelSurface& out, LabelStats& st) {
 LabelSurface surface_nets(const LabelVolume& volume, bool per_label_surfaces, LabelStats& stats) {
   LabelSurface out;
   out.quads = !per_label_surfaces;  // per label, face points make some polygons longer than quads
+  const std::pair<Id, Id> rows{0, volume.dims[2]};
   if (per_label_surfaces) {
-    per_label(volume, out, stats);
+    auto parts = per_label(volume, rows, stats);
+    append_surfaces(parts, out);
   } else if (static_cast<std::uint64_t>(whole(volume).cells()) <= std::numeric_limits<std::uint32_t>::max()) {
-    network<std::uint32_t>(volume, out, stats);
+    network<std::uint32_t>(volume, rows, out, stats);
   } else {
-    network<std::uint64_t>(volume, out, stats);
+    network<std::uint64_t>(volume, rows, out, stats);
   }
+  return out;
+}
+
+std::vector<LabelSurface> surface_nets_rows(const LabelVolume& window, bool per_label_surfaces,
+                                            std::pair<Id, Id> rows, LabelStats& stats) {
+  if (per_label_surfaces) return per_label(window, rows, stats);
+  std::vector<LabelSurface> out(1);
+  out[0].quads = true;
+  network<std::uint64_t>(window, rows, out[0], stats);
   return out;
 }
 
