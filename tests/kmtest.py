@@ -7,6 +7,7 @@ argv[1], asserts, prints one line per check and a closing
 """
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -126,3 +127,24 @@ def nearest_distances(a, b):
         j = loc.FindClosestPoint(p)
         d[i] = np.linalg.norm(b[j] - p)
     return d
+
+
+def mpirun(P, *args, expect=0, program=None):
+    """Runs `mpirun -np P keymesh args` (or `program`); asserts the exit code."""
+    cmd = [shutil.which("mpirun"), "--oversubscribe", "-np", str(P)]
+    if os.geteuid() == 0:
+        cmd.insert(1, "--allow-run-as-root")
+    # One thread per rank: ranks are oversubscribed on small CI machines.
+    # No CMA single-copy: containers without ptrace rights refuse it.
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1",
+               OMPI_MCA_btl_vader_single_copy_mechanism="none")
+    if "ASAN_OPTIONS" in env:
+        # make sanitize: OpenMPI's own allocations (MCA components, op tables)
+        # are never freed; keymesh's leaks are checked by every other test.
+        env["ASAN_OPTIONS"] += ":detect_leaks=0"
+    p = subprocess.run(cmd + [program or KEYMESH, *map(str, args)], capture_output=True, text=True, stdin=subprocess.DEVNULL,
+                       timeout=300, env=env)
+    if expect is not None and p.returncode != expect:
+        raise AssertionError(f"mpirun -np {P} keymesh {' '.join(map(str, args))}: exit {p.returncode}, "
+                             f"expected {expect}\nstdout: {p.stdout}\nstderr: {p.stderr}")
+    return p

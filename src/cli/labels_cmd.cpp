@@ -4,8 +4,10 @@
 #include <memory>
 
 #include "command.hpp"
+#include "labels_job.hpp"
 #include "raw_input.hpp"
 #include "keymesh/core/error.hpp"
+#include "keymesh/distributed/mpi.hpp"
 #include "keymesh/generate/labels.hpp"
 #include "keymesh/generate/labels_stream.hpp"
 #include "keymesh/io/mesh_io.hpp"
@@ -29,8 +31,14 @@ struct LabelsCli {
   CommonOptions common;
 };
 
-generate::LabelOptions label_options(const LabelsCli& o) {
-  generate::LabelOptions opt;
+LabelsJob job_of(const LabelsCli& o) {
+  LabelsJob job;
+  job.input = o.input;
+  job.output = o.output;
+  job.method = o.method;
+  job.raw_given = o.raw_input.given();
+  if (job.raw_given) job.raw = o.raw_input.options();
+  generate::LabelOptions& opt = job.options;
   opt.method = o.method == "discrete-mc" ? generate::LabelMethod::DiscreteMarchingCubes
                                          : generate::LabelMethod::SurfaceNets;
   opt.labels.assign(o.labels.begin(), o.labels.end());
@@ -38,8 +46,89 @@ generate::LabelOptions label_options(const LabelsCli& o) {
   opt.per_label = o.per_label;
   opt.smooth_iterations = o.smooth;
   opt.relaxation = o.relaxation;
-  return opt;
+  if (!o.memory_limit.empty()) parse_size(o.memory_limit, job.memory_limit);  // checked by its validator
+  job.common = o.common;
+  return job;
 }
+
+// One process: the volume in memory, or streamed with --memory-limit.
+int run_labels(const LabelsJob& job) {
+  StageTimer timer;
+  Progress progress(job.common.quiet, file_size(job.input) > (64ll << 20));
+  const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
+  generate::LabelStats stats;
+  SurfaceMesh mesh;
+  nlohmann::json r;
+  if (job.memory_limit) {
+    auto source = io::open_volume_planes(job.input, raw);
+    generate::LabelStreamStats ss;
+    mesh = timer.run("labels", [&] {
+      return naming_input(job, [&] {
+        return generate::contour_labels_streamed(*source, job.options, job.memory_limit, &stats, &ss);
+      });
+    });
+    timer.add("read", ss.read);
+    r["dims"] = source->header().dims;
+    r["scalar_type"] = scalar_type_name(source->header().type);
+    r["memory_limit"] = job.memory_limit;
+    r["stream"] = {{"slabs", ss.slabs}, {"rows_per_slab", ss.rows_per_slab}, {"slab_bytes", ss.slab_bytes},
+                   {"read", ss.read}, {"merge", ss.merge}};
+  } else {
+    progress.say("reading " + job.input);
+    const ImageGrid grid = timer.run("read", [&] { return io::read_volume(job.input, raw); });
+    progress.enable_if(grid.num_points() > (1ll << 25));
+    mesh = timer.run("labels", [&] {
+      return naming_input(job, [&] { return generate::contour_labels(grid, job.options, &stats); });
+    });
+    r["dims"] = grid.dims;
+    r["scalar_type"] = scalar_type_name(grid.type);
+  }
+  progress.say("writing " + job.output);
+  write_labels_outputs(job, mesh, stats, std::move(r), timer);
+  return 0;
+}
+
+}  // namespace
+
+void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
+                          nlohmann::json r, StageTimer& timer) {
+  const std::string ext = std::filesystem::path(job.output).extension().string();
+  if (ext != ".vtp" && !job.common.quiet)
+    std::fprintf(stderr, "keymesh: warning: %s: %s files have no cell data; boundary_labels is not written "
+                         "(use .vtp)\n", job.output.c_str(), ext.c_str());
+  timer.run("write", [&] { io::write_mesh(mesh, job.output); });
+  if (!job.common.quiet)
+    std::fprintf(stderr, "keymesh: %lld labels, %lld points, %lld triangles -> %s\n",
+                 static_cast<long long>(stats.surfaces), static_cast<long long>(mesh.num_points()),
+                 static_cast<long long>(mesh.num_cells()), job.output.c_str());
+  if (job.common.report_path.empty()) return;
+  const generate::LabelOptions& opt = job.options;
+  r["input"] = job.input;
+  r["output"] = job.output;
+  r["method"] = job.method;
+  r["per_label"] = opt.per_label;
+  r["background"] = opt.background;
+  r["smooth"] = opt.smooth_iterations;
+  r["relaxation"] = opt.relaxation;
+  r["distinct_labels"] = stats.distinct_labels;
+  r["labels_extracted"] = stats.surfaces;
+  r["points"] = mesh.num_points();
+  r["cells"] = mesh.num_cells();
+  r["soup_points"] = stats.soup_corners;
+  r["threads"] = job.threads;
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const auto& p : timer.run("count", [&] { return generate::label_pair_counts(mesh); }))
+    pairs.push_back({{"labels", {p.first, p.second}}, {"points", p.points}, {"faces", p.faces}});
+  r["pairs"] = pairs;
+  auto seconds = timer.seconds();
+  seconds["labels_stages"] = {{"scan", stats.scan}, {"generate", stats.generate}, {"weld", stats.weld},
+                              {"smooth", stats.smooth}};
+  r["seconds"] = seconds;
+  r["peak_rss_mib"] = peak_rss_mib();
+  write_report(job.common.report_path, r);
+}
+
+namespace {
 
 Register reg{Command{
     "labels", "surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys",
@@ -74,85 +163,16 @@ Register reg{Command{
                      "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
                      "label indices (e.g. 256M); the surfaces are merged by key, then smoothed and written whole "
                      "(not streamed: the output mesh); byte-identical to one in-memory run; raw (--dims), "
-                     ".nrrd/.nhdr or .nii with uncompressed samples, DICOM, Zarr")
+                     ".nrrd/.nhdr, .nii (gzip too), DICOM, Zarr; under mpirun -np P each rank streams its own rows")
           ->check(size_validator());
       add_common_options(cmd, o->common);
       return [o]() {
         if (int refused = require_cpu_backend(o->common, "labels")) return refused;
-        const int threads = apply_threads(o->common);
-        StageTimer timer;
-        Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
-        const generate::LabelOptions opt = label_options(*o);
-        const io::RawOptions raw = o->raw_input.given() ? o->raw_input.options() : io::RawOptions{};
-        generate::LabelStats stats;
-        SurfaceMesh mesh;
-        nlohmann::json r;
-        try {
-          if (!o->memory_limit.empty()) {
-            std::size_t limit = 0;
-            parse_size(o->memory_limit, limit);  // checked by its validator
-            auto source = io::open_volume_planes(o->input, o->raw_input.given() ? &raw : nullptr);
-            generate::LabelStreamStats ss;
-            mesh = timer.run("labels", [&] {
-              return generate::contour_labels_streamed(*source, opt, limit, &stats, &ss);
-            });
-            timer.add("read", ss.read);
-            r["dims"] = source->header().dims;
-            r["scalar_type"] = scalar_type_name(source->header().type);
-            r["memory_limit"] = limit;
-            r["stream"] = {{"slabs", ss.slabs}, {"rows_per_slab", ss.rows_per_slab}, {"slab_bytes", ss.slab_bytes},
-                           {"read", ss.read}, {"merge", ss.merge}};
-          } else {
-            progress.say("reading " + o->input);
-            const ImageGrid grid =
-                timer.run("read", [&] { return io::read_volume(o->input, o->raw_input.given() ? &raw : nullptr); });
-            progress.enable_if(grid.num_points() > (1ll << 25));
-            mesh = timer.run("labels", [&] { return generate::contour_labels(grid, opt, &stats); });
-            r["dims"] = grid.dims;
-            r["scalar_type"] = scalar_type_name(grid.type);
-          }
-        } catch (const InputError& e) {
-          // The generator's refusals name the file the label map came from
-          // (the readers' already do).
-          if (std::string(e.what()).rfind("labels", 0) == 0) throw InputError(o->input + ": " + e.what());
-          throw;
-        }
-        std::string ext = std::filesystem::path(o->output).extension().string();
-        if (ext != ".vtp" && !o->common.quiet)
-          std::fprintf(stderr, "keymesh: warning: %s: %s files have no cell data; boundary_labels is not written "
-                               "(use .vtp)\n", o->output.c_str(), ext.c_str());
-        progress.say("writing " + o->output);
-        timer.run("write", [&] { io::write_mesh(mesh, o->output); });
-        if (!o->common.quiet)
-          std::fprintf(stderr, "keymesh: %lld labels, %lld points, %lld triangles -> %s\n",
-                       static_cast<long long>(stats.surfaces), static_cast<long long>(mesh.num_points()),
-                       static_cast<long long>(mesh.num_cells()), o->output.c_str());
-        if (!o->common.report_path.empty()) {
-          r["input"] = o->input;
-          r["output"] = o->output;
-          r["method"] = o->method;
-          r["per_label"] = o->per_label;
-          r["background"] = o->background;
-          r["smooth"] = o->smooth;
-          r["relaxation"] = o->relaxation;
-          r["distinct_labels"] = stats.distinct_labels;
-          r["labels_extracted"] = stats.surfaces;
-          r["points"] = mesh.num_points();
-          r["cells"] = mesh.num_cells();
-          r["soup_points"] = stats.soup_corners;
-          r["threads"] = threads;
-          nlohmann::json pairs = nlohmann::json::array();
-          for (const auto& p : timer.run("count", [&] { return generate::label_pair_counts(mesh); }))
-            pairs.push_back({{"labels", {p.first, p.second}}, {"points", p.points}, {"faces", p.faces}});
-          r["pairs"] = pairs;
-          auto seconds = timer.seconds();
-          seconds["labels_stages"] = {{"scan", stats.scan}, {"generate", stats.generate}, {"weld", stats.weld},
-                                      {"smooth", stats.smooth}};
-          r["seconds"] = seconds;
-          r["peak_rss_mib"] = peak_rss_mib();
-          write_report(o->common.report_path, r);
-        }
-        return 0;
+        LabelsJob job = job_of(*o);
+        job.threads = apply_threads(o->common);
+        // mpirun -np P keymesh labels VOLUME ...: each rank its rows.
+        if (distributed::size() > 1) return run_distributed_labels(job);
+        return run_labels(job);
       };
     }}};
 

@@ -51,12 +51,12 @@ int main(int argc, char** argv) {
     for (auto& [sub, run] : runners)
       if (sub->parsed()) {
         chosen_command = sub;
-        // Only the voxel contour is distributed; the other operations would
-        // each run whole on every rank and race on the output.
-        if (dist::size() > 1 && sub->get_name() != "contour") {
+        // Only the voxel contour and labels are distributed; the other
+        // operations would each run whole on every rank and race on the output.
+        if (dist::size() > 1 && sub->get_name() != "contour" && sub->get_name() != "labels") {
           if (dist::rank() == 0)
             std::fprintf(stderr, "keymesh %s: not distributed; under mpirun -np %d only `contour` of a volume "
-                                 "runs on several ranks (run %s as one process)\n",
+                                 "and `labels` run on several ranks (run %s as one process)\n",
                          sub->get_name().c_str(), dist::size(), sub->get_name().c_str());
           return 2;
         }

@@ -10,37 +10,15 @@ point at slab borders. Skipped (77) when mpirun is missing or keymesh was
 built without MPI."""
 import os
 import shutil
-import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import KEYMESH, check, finish, report, run, tempdir  # noqa: E402
+from kmtest import check, finish, mpirun, report, run, tempdir  # noqa: E402
 
 MPIRUN = shutil.which("mpirun")
 if not MPIRUN:
     print("skipped: no mpirun (install openmpi-bin and libopenmpi-dev)")
     sys.exit(77)
-
-
-def mpirun(P, *args, expect=0, program=None):
-    cmd = [MPIRUN, "--oversubscribe", "-np", str(P)]
-    if os.geteuid() == 0:
-        cmd.insert(1, "--allow-run-as-root")
-    # One thread per rank: ranks are oversubscribed on small CI machines.
-    # No CMA single-copy: containers without ptrace rights refuse it.
-    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1",
-               OMPI_MCA_btl_vader_single_copy_mechanism="none")
-    if "ASAN_OPTIONS" in env:
-        # make sanitize: OpenMPI's own allocations (MCA components, op tables)
-        # are never freed; keymesh's leaks are checked by every other test.
-        env["ASAN_OPTIONS"] += ":detect_leaks=0"
-    p = subprocess.run(cmd + [program or KEYMESH, *map(str, args)], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                       timeout=300, env=env)
-    if expect is not None and p.returncode != expect:
-        raise AssertionError(f"mpirun -np {P} keymesh {' '.join(map(str, args))}: exit {p.returncode}, "
-                             f"expected {expect}\nstdout: {p.stdout}\nstderr: {p.stderr}")
-    return p
-
 
 D = tempdir()
 N = 48

@@ -7,6 +7,9 @@
 // (KEYMESH_HAVE_MPI undefined) the same functions describe a world of one
 // rank, and a multi-rank launch is refused by name.
 
+#include <cstddef>
+#include <vector>
+
 namespace keymesh::distributed {
 
 // True when keymesh was built with MPI.
@@ -26,5 +29,11 @@ int size();
 // Collective: true when every rank passes true (how ranks agree that all
 // their pieces were written before rank 0 writes the index).
 bool all_ok(bool ok);
+// Collective: every rank's bytes, in rank order, on every rank (small
+// tables: LimitError past 2^31 - 1 bytes in all) or on rank 0 only (any
+// size, sent in pieces; the other ranks get an empty list). A world of one
+// rank returns {mine}.
+std::vector<std::vector<std::byte>> all_gather_bytes(const std::vector<std::byte>& mine);
+std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine);
 
 }  // namespace keymesh::distributed

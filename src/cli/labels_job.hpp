@@ -1,0 +1,46 @@
+#pragma once
+// `keymesh labels`: what a run needs once the options are parsed, shared by
+// the single-process command (labels_cmd.cpp) and the ranks of
+// `mpirun -np P keymesh labels` (labels_distributed.cpp).
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "command.hpp"
+#include "keymesh/generate/labels.hpp"
+#include "keymesh/io/volume_io.hpp"
+
+namespace keymesh::cli {
+
+struct LabelsJob {
+  std::string input, output;
+  std::string method;  // as given, for the report
+  io::RawOptions raw;
+  bool raw_given = false;
+  generate::LabelOptions options;
+  std::size_t memory_limit = 0;  // 0: the volume in memory (one process) or a rank's whole slab
+  CommonOptions common;
+  int threads = 1;
+};
+
+// Runs f(), naming the input file in the generator's refusals ("labels: ..."
+// becomes "IN: labels: ..."; the readers' errors name it already).
+template <class F>
+decltype(auto) naming_input(const LabelsJob& job, F&& f) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    if (std::string(e.what()).rfind("labels", 0) == 0) throw InputError(job.input + ": " + e.what());
+    throw;
+  }
+}
+
+// Writes the mesh, the summary line and the report (`r` holds what the run
+// adds: dims, scalar_type, stream, distributed).
+void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
+                          nlohmann::json r, StageTimer& timer);
+
+// Collective over the ranks: returns the exit code (every rank the same).
+int run_distributed_labels(const LabelsJob& job);
+
+}  // namespace keymesh::cli
