@@ -75,6 +75,24 @@ def read_polydata(path):
     return reader.GetOutput()
 
 
+def vtk_contour(filter_class, data, value, array=None, **switches):
+    """VTK's contour filter_class run on data at one value, normals off as in
+    keymesh's default output; switches set the filter's other flags
+    (ComputeScalars=False calls SetComputeScalars(False)); array names the
+    point array to contour when it is not the active scalars. The output."""
+    import vtk
+    f = filter_class()
+    f.SetInputData(data)
+    f.SetValue(0, value)
+    f.ComputeNormalsOff()
+    for name, on in switches.items():
+        getattr(f, "Set" + name)(on)
+    if array is not None:
+        f.SetInputArrayToProcess(0, 0, 0, vtk.vtkDataObject.FIELD_ASSOCIATION_POINTS, array)
+    f.Update()
+    return f.GetOutput()
+
+
 def points_of(poly):
     import numpy as np
     from vtk.util import numpy_support as ns

@@ -14,7 +14,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from kmtest import (check, finish, nearest_distances, points_of, read_polydata, require_vtk, run,  # noqa
-                    tempdir, triangles_of)
+                    tempdir, triangles_of, vtk_contour)
 
 require_vtk()
 import numpy as np  # noqa: E402
@@ -53,22 +53,14 @@ def load_nifti(path):
     return data, (nx, ny, nz), tuple(abs(p) for p in pixdim[1:4])
 
 
-def vtk_contour(data, dims, spacing, iso, cls):
+def contour_image(data, dims, spacing, iso, cls):
     img = vtk.vtkImageData()
     img.SetDimensions(*dims)
     img.SetSpacing(*spacing)
     arr = ns.numpy_to_vtk(np.ascontiguousarray(data), deep=True)
     arr.SetName("s")
     img.GetPointData().SetScalars(arr)
-    f = cls()
-    f.SetInputData(img)
-    f.SetValue(0, iso)
-    f.ComputeNormalsOff()
-    f.ComputeScalarsOff()
-    if hasattr(f, "ComputeGradientsOff"):
-        f.ComputeGradientsOff()
-    f.Update()
-    return f.GetOutput()
+    return vtk_contour(cls, img, iso, ComputeScalars=False, ComputeGradients=False)
 
 
 def compare(path, loader, iso):
@@ -77,7 +69,7 @@ def compare(path, loader, iso):
         out = os.path.join(D, os.path.basename(path) + f".{iso}.vtp")
         run("contour", path, "-o", out, "--iso", iso, "--quiet")
         km = read_polydata(out)
-        fe = vtk_contour(data, dims, spacing, iso, vtk.vtkFlyingEdges3D)
+        fe = contour_image(data, dims, spacing, iso, vtk.vtkFlyingEdges3D)
         assert (km.GetNumberOfPoints(), km.GetNumberOfCells()) == (fe.GetNumberOfPoints(), fe.GetNumberOfCells()), \
             ("vtkFlyingEdges3D", km.GetNumberOfPoints(), fe.GetNumberOfPoints(), km.GetNumberOfCells(), fe.GetNumberOfCells())
         # vtkMarchingCubes merges points through a spatial locator, so two
@@ -85,7 +77,7 @@ def compare(path, loader, iso):
         # float rounding of the isovalue) become one point, and a triangle
         # left with a repeated point is dropped; keys keep such points apart.
         # Its counts are therefore keymesh's after merging equal positions.
-        mc = vtk_contour(data, dims, spacing, iso, vtk.vtkMarchingCubes)
+        mc = contour_image(data, dims, spacing, iso, vtk.vtkMarchingCubes)
         _, position_id = np.unique(points_of(km), axis=0, return_inverse=True)
         position_id = position_id.reshape(-1)
         t = position_id[triangles_of(km)]

@@ -6,7 +6,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, points_of, read_polydata, require_vtk, run, tempdir, triangles_of  # noqa: E402
+from kmtest import (check, finish, points_of, read_polydata, require_vtk, run, tempdir, triangles_of,  # noqa: E402
+                    vtk_contour)
 
 require_vtk()
 import numpy as np  # noqa: E402
@@ -31,23 +32,13 @@ order = np.argsort(counts)
 CHOSEN = sorted({int(labels[i]) for i in (order[0], order[len(order) // 3], order[len(order) // 2], order[-1])})
 
 
-def vtk_surface(label):
-    fe = vtk.vtkDiscreteFlyingEdges3D()
-    fe.SetInputData(image)
-    fe.SetValue(0, label)
-    fe.ComputeNormalsOff()
-    fe.ComputeGradientsOff()
-    fe.ComputeScalarsOff()
-    fe.Update()
-    return fe.GetOutput()
-
-
 def same_as_vtk(label):
     def test():
         out = os.path.join(D, f"aal{label}.vtp")
         run("labels", AAL, "-o", out, "--method", "discrete-mc", "--labels", label, "--smooth", 0, "-q")
         ours = read_polydata(out)
-        theirs = vtk_surface(label)
+        theirs = vtk_contour(vtk.vtkDiscreteFlyingEdges3D, image, label, ComputeGradients=False,
+                             ComputeScalars=False)
         assert ours.GetNumberOfPoints() == theirs.GetNumberOfPoints(), (ours.GetNumberOfPoints(),
                                                                          theirs.GetNumberOfPoints())
         assert ours.GetNumberOfPolys() == theirs.GetNumberOfPolys(), (ours.GetNumberOfPolys(),

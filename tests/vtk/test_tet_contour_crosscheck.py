@@ -15,7 +15,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from kmtest import (check, finish, nearest_distances, points_of, read_polydata, report, require_vtk, run,  # noqa
-                    tempdir, triangles_of)
+                    tempdir, triangles_of, vtk_contour)
 
 require_vtk()
 import numpy as np  # noqa: E402
@@ -42,15 +42,7 @@ def tets_of(ug):
 
 def vtk_tet_contour(ug, iso, array):
     ug.GetPointData().SetActiveScalars(array)
-    f = vtk.vtkContour3DLinearGrid()
-    f.SetInputData(ug)
-    f.SetValue(0, iso)
-    f.MergePointsOn()
-    f.InterpolateAttributesOff()
-    f.ComputeNormalsOff()
-    f.SetInputArrayToProcess(0, 0, 0, vtk.vtkDataObject.FIELD_ASSOCIATION_POINTS, array)
-    f.Update()
-    return f.GetOutput()
+    return vtk_contour(vtk.vtkContour3DLinearGrid, ug, iso, array, MergePoints=True, InterpolateAttributes=False)
 
 
 def grid_checks(n):
