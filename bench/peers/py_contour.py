@@ -8,10 +8,7 @@ Run with Debian's /usr/bin/python3. Only the contour call is timed; building
 the volume (and OpenVDB's sparse grid from it) is not.
 """
 import argparse
-import json
 import os
-import resource
-import statistics
 import sys
 import time
 
@@ -19,6 +16,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import datasets  # noqa: E402
+import peer_common  # noqa: E402
 
 
 def main():
@@ -57,12 +55,9 @@ def main():
             points, cells = len(pts), len(tris) + 2 * len(quads)
             del pts, tris, quads
         name = "openvdb-volumeToMesh"
-    print(json.dumps({"bench": "contour", "tool": name, "version": str(version), "size": a.size, "iso": a.iso,
-                      "threads": threads, "points": points, "cells": cells, "cells_note":
-                      "triangles + 2 x quads" if a.tool == "openvdb" else "triangles",
-                      "median": statistics.median(times), "min": min(times), "max": max(times), "first": times[0],
-                      "reps": a.reps, "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}),
-          flush=True)
+    peer_common.print_row({"bench": "contour", "tool": name, "version": str(version), "size": a.size, "iso": a.iso,
+                           "threads": threads, "points": points, "cells": cells, "cells_note":
+                           "triangles + 2 x quads" if a.tool == "openvdb" else "triangles"}, times)
 
 
 if __name__ == "__main__":
