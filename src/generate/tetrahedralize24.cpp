@@ -61,16 +61,6 @@ void emit_cell(const std::uint64_t corner[8], const std::uint64_t face[6], std::
     }
 }
 
-// The face- and cell-centre rule: the mean of points ids[0 .. n), summed in
-// double.
-void centre(const float* P, const std::uint64_t* ids, int n, float* xyz) {
-  for (int x = 0; x < 3; ++x) {
-    double s = 0;
-    for (int j = 0; j < n; ++j) s += P[3 * ids[j] + x];
-    xyz[x] = static_cast<float>(s / n);
-  }
-}
-
 // The corner ids of face pair % 6 of cell pair / 6, in cycle order.
 template <class CornerOf>
 void face_ids(const CornerOf& corner_of, Id pair, std::uint64_t ids[4]) {
@@ -96,13 +86,13 @@ UnstructuredGrid assemble24(const std::vector<float>& points, const std::vector<
   parallel::for_each(F, [&](Id face) {
     std::uint64_t ids[4];
     face_ids(corner_of, g.first[face], ids);
-    centre(P, ids, 4, &out.points[3 * (N + face)]);
+    mean_position(P, ids, 4, &out.points[3 * (N + face)]);
     average_point_fields(fields, out.point_fields, N + face, ids, 4);
   });
   parallel::for_each(cells, [&](Id v) {
     std::uint64_t ids[8];
     for (int c = 0; c < 8; ++c) ids[c] = corner_of(v, c);
-    centre(P, ids, 8, &out.points[3 * (N + F + v)]);
+    mean_position(P, ids, 8, &out.points[3 * (N + F + v)]);
     average_point_fields(fields, out.point_fields, N + F + v, ids, 8);
   });
   progress::report("tetrahedralize 24: tets", 0.7);
@@ -154,7 +144,7 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
   auto face_centre = [&](Id pair, float* xyz) {
     std::uint64_t ids[4];
     face_ids(cell_corner, pair, ids);
-    centre(corners.points.data(), ids, 4, xyz);
+    mean_position(corners.points.data(), ids, 4, xyz);
   };
   progress::report("tetrahedralize 24: weld face centres", 0.25);
   const FaceGroups g = group_faces<std::uint64_t>(keys, true, std::uint64_t(3 * N), 0, vertex_weld, face_centre);
@@ -185,7 +175,7 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
   auto face_centre = [&](Id pair, float* xyz) {
     std::uint64_t ids[4];
     face_ids(cell_corner, pair, ids);
-    centre(hexes.points.data(), ids, 4, xyz);
+    mean_position(hexes.points.data(), ids, 4, xyz);
   };
   const FaceGroups g = group_faces<std::uint64_t>(keys, false, 0, ek.key_bits(), vertex_weld, face_centre);
   keys = {};

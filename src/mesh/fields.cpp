@@ -6,14 +6,26 @@
 
 namespace keymesh {
 
-std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total) {
+std::vector<Field> new_point_fields(const std::vector<Field>& like, Id points) {
   std::vector<Field> out;
-  out.reserve(in.size());
-  for (const Field& f : in) {
-    out.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(total * f.components))});
-    std::copy(f.values.begin(), f.values.end(), out.back().values.begin());
-  }
+  out.reserve(like.size());
+  for (const Field& f : like)
+    out.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(points * f.components))});
   return out;
+}
+
+std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total) {
+  std::vector<Field> out = new_point_fields(in, total);
+  for (std::size_t i = 0; i < in.size(); ++i) std::copy(in[i].values.begin(), in[i].values.end(), out[i].values.begin());
+  return out;
+}
+
+void mean_position(const float* P, const std::uint64_t* ids, int n, float* xyz) {
+  for (int x = 0; x < 3; ++x) {
+    double s = 0;
+    for (int j = 0; j < n; ++j) s += P[3 * ids[j] + x];
+    xyz[x] = static_cast<float>(s / n);
+  }
 }
 
 void average_point_fields(const std::vector<Field>& in, std::vector<Field>& out, Id point, const std::uint64_t* ids,

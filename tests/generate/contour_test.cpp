@@ -1,3 +1,4 @@
+#include "mesh_measures.hpp"
 #include "keymesh/generate/contour.hpp"
 
 #include <gtest/gtest.h>
@@ -50,29 +51,6 @@ std::map<std::pair<PointIndex, PointIndex>, int> edge_use(const SurfaceMesh& m) 
   return use;
 }
 
-std::vector<std::array<float, 3>> sorted_points(const SurfaceMesh& m) {
-  std::vector<std::array<float, 3>> p(m.num_points());
-  for (Id i = 0; i < m.num_points(); ++i) p[i] = {m.points[3 * i], m.points[3 * i + 1], m.points[3 * i + 2]};
-  std::sort(p.begin(), p.end());
-  return p;
-}
-
-// Triangles as sorted position triples, so meshes compare up to renumbering.
-std::vector<std::array<std::array<float, 3>, 3>> triangle_set(const SurfaceMesh& m) {
-  std::vector<std::array<std::array<float, 3>, 3>> tris(m.num_cells());
-  for (Id t = 0; t < m.num_cells(); ++t) {
-    for (int c = 0; c < 3; ++c) {
-      const Id p = m.connectivity[3 * t + c];
-      tris[t][c] = {m.points[3 * p], m.points[3 * p + 1], m.points[3 * p + 2]};
-    }
-    // rotate so the smallest corner comes first (keeps orientation)
-    auto it = std::min_element(tris[t].begin(), tris[t].end());
-    std::rotate(tris[t].begin(), it, tris[t].end());
-  }
-  std::sort(tris.begin(), tris.end());
-  return tris;
-}
-
 }  // namespace
 
 TEST(MarchingCubesTable, ComplementaryCasesAndCounts) {
@@ -113,7 +91,7 @@ TEST(Contour, ClosedSphereIsClosedManifoldWithEulerTwo) {
   const Id chi = m.num_points() - static_cast<Id>(use.size()) + m.num_cells();
   EXPECT_EQ(chi, 2);
   // No two points at the same position.
-  auto p = sorted_points(m);
+  auto p = test::sorted_points(m);
   EXPECT_EQ(std::adjacent_find(p.begin(), p.end()), p.end());
 }
 
@@ -138,13 +116,18 @@ TEST(Contour, TrianglesFaceOutwardOnSphere) {
   }
 }
 
-TEST(Contour, PointsLieOnTheSphereAndScalarsEqualIso) {
-  const Id n = 48;
-  const ImageGrid g = generate::spherical_distance(n);
+namespace {
+// The n^3 spherical distance field's contour at `iso` (centre n / 2).
+SurfaceMesh sphere_contour(Id n, double iso, ContourNormals normals) {
   ContourOptions opt;
-  opt.isovalues = {17.25};
-  opt.normals = ContourNormals::Gradient;
-  const SurfaceMesh m = generate::contour(g, opt);
+  opt.isovalues = {iso};
+  opt.normals = normals;
+  return generate::contour(generate::spherical_distance(n), opt);
+}
+}  // namespace
+
+TEST(Contour, PointsLieOnTheSphereAndScalarsEqualIso) {
+  const SurfaceMesh m = sphere_contour(48, 17.25, ContourNormals::Gradient);
   const Field* s = m.find_point_field("distance");
   const Field* nr = m.find_point_field("Normals");
   ASSERT_TRUE(s && nr);
@@ -162,12 +145,7 @@ TEST(Contour, PointsLieOnTheSphereAndScalarsEqualIso) {
 }
 
 TEST(Contour, AveragedNormalsAreUnitAndPointInward) {
-  const Id n = 40;
-  const ImageGrid g = generate::spherical_distance(n);
-  ContourOptions opt;
-  opt.isovalues = {15.3};
-  opt.normals = ContourNormals::Average;
-  const SurfaceMesh m = generate::contour(g, opt);
+  const SurfaceMesh m = sphere_contour(40, 15.3, ContourNormals::Average);
   const Field* nr = m.find_point_field("Normals");
   ASSERT_TRUE(nr);
   for (Id p = 0; p < m.num_points(); ++p) {
@@ -190,8 +168,8 @@ TEST(Contour, VertexWeldGivesTheSameMeshUpToRenumbering) {
     const SurfaceMesh ma = generate::contour(g, a), mb = generate::contour(g, b);
     ASSERT_EQ(ma.num_points(), mb.num_points());
     ASSERT_EQ(ma.num_cells(), mb.num_cells());
-    EXPECT_EQ(sorted_points(ma), sorted_points(mb));
-    EXPECT_EQ(triangle_set(ma), triangle_set(mb));
+    EXPECT_EQ(test::sorted_points(ma), test::sorted_points(mb));
+    EXPECT_EQ(test::triangle_set(ma), test::triangle_set(mb));
   }
 }
 

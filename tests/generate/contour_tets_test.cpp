@@ -43,30 +43,6 @@ bool consistently_wound(const SurfaceMesh& m) {
   return true;
 }
 
-// Triangles as position triples rotated to start at the smallest corner
-// (winding kept), sorted: compares meshes up to renumbering.
-std::vector<std::array<std::array<float, 3>, 3>> triangle_set(const SurfaceMesh& m) {
-  std::vector<std::array<std::array<float, 3>, 3>> out;
-  for (Id t = 0; t < m.num_cells(); ++t) {
-    std::array<std::array<float, 3>, 3> tri;
-    for (int c = 0; c < 3; ++c) {
-      const PointIndex p = m.connectivity[3 * t + c];
-      tri[c] = {m.points[3 * p], m.points[3 * p + 1], m.points[3 * p + 2]};
-    }
-    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
-    out.push_back(tri);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
-std::vector<std::array<float, 3>> sorted_points(const SurfaceMesh& m) {
-  std::vector<std::array<float, 3>> p(m.num_points());
-  for (Id i = 0; i < m.num_points(); ++i) p[i] = {m.points[3 * i], m.points[3 * i + 1], m.points[3 * i + 2]};
-  std::sort(p.begin(), p.end());
-  return p;
-}
-
 // Edges of the tet mesh whose ends straddle the isovalue: the expected point count.
 Id straddling_edges(const UnstructuredGrid& g, const std::vector<float>& s, double v) {
   std::vector<std::pair<std::uint64_t, std::uint64_t>> edges;
@@ -168,7 +144,7 @@ TEST(ContourTets, ShuffledIdsAndCornerOrdersWeldTheSame) {
   // The same points, up to the last bit where the smaller id changed ends.
   // (Triangles may differ: a quad cut in a tet is split along a diagonal
   // chosen by the tet's local corner order, as in VTK's tables.)
-  auto a = sorted_points(ref), b = sorted_points(m);
+  auto a = test::sorted_points(ref), b = test::sorted_points(m);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i)
     for (int x = 0; x < 3; ++x) ASSERT_NEAR(a[i][x], b[i][x], 1e-5) << "point " << i;
@@ -178,20 +154,13 @@ TEST(ContourTets, VertexWeldAndThreadsAgree) {
   const UnstructuredGrid g = sphere_tets(24);
   ContourOptions several = iso(5.5, ContourNormals::Average);
   several.isovalues.push_back(9.25);
-  parallel::set_thread_count(1);
-  const SurfaceMesh one = generate::contour(g, several);
-  parallel::set_thread_count(4);
-  const SurfaceMesh four = generate::contour(g, several);
+  const SurfaceMesh one = test::at_threads(1, [&] { return generate::contour(g, several); });
+  const SurfaceMesh four = test::at_threads(4, [&] { return generate::contour(g, several); });
   several.weld = ContourWeld::VertexWeld;
   const SurfaceMesh welded = generate::contour(g, several);
-  parallel::set_thread_count(0);
-  EXPECT_EQ(one.points, four.points);
-  EXPECT_EQ(one.connectivity, four.connectivity);
-  ASSERT_EQ(one.point_fields.size(), four.point_fields.size());
-  for (std::size_t i = 0; i < one.point_fields.size(); ++i)
-    EXPECT_EQ(one.point_fields[i].values, four.point_fields[i].values);
+  test::expect_identical(one, four);
   EXPECT_EQ(welded.num_points(), one.num_points());
-  EXPECT_EQ(triangle_set(welded), triangle_set(one));
+  EXPECT_EQ(test::triangle_set(welded), test::triangle_set(one));
   const auto topo = analyze::check_topology(one);
   EXPECT_EQ(topo.components, 2);
   EXPECT_TRUE(topo.closed_manifold);

@@ -1,3 +1,4 @@
+#include "mesh_measures.hpp"
 #include "keymesh/generate/subdivide.hpp"
 
 #include <gtest/gtest.h>
@@ -107,31 +108,14 @@ TEST(SubdivideTriangles, VertexWeldAndThreadCountsAgree) {
   const SurfaceMesh m = sphere_surface(20, 8.5);
   SubdivideOptions o;
   o.scheme = SubdivideScheme::Bezier;
-  parallel::set_thread_count(1);
-  const SurfaceMesh a = generate::subdivide(m, o);
-  parallel::set_thread_count(4);
-  const SurfaceMesh b = generate::subdivide(m, o);
+  const SurfaceMesh a = test::at_threads(1, [&] { return generate::subdivide(m, o); });
+  const SurfaceMesh b = test::at_threads(4, [&] { return generate::subdivide(m, o); });
   o.weld = SubdivideWeld::VertexWeld;
   const SurfaceMesh w = generate::subdivide(m, o);
-  parallel::set_thread_count(0);
-  EXPECT_EQ(a.points, b.points);
-  EXPECT_EQ(a.connectivity, b.connectivity);
+  test::expect_identical(a, b);
   EXPECT_EQ(w.num_points(), a.num_points());
   // Same triangles as position triples (the welded new points are numbered by position).
-  auto tris = [](const SurfaceMesh& s) {
-    std::multiset<std::array<float, 9>> out;
-    for (Id t = 0; t < s.num_cells(); ++t) {
-      std::array<std::array<float, 3>, 3> c;
-      for (int k = 0; k < 3; ++k)
-        for (int x = 0; x < 3; ++x) c[k][x] = s.points[3 * s.connectivity[3 * t + k] + x];
-      std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
-      std::array<float, 9> f;
-      for (int k = 0; k < 9; ++k) f[k] = c[k / 3][k % 3];
-      out.insert(f);
-    }
-    return out;
-  };
-  EXPECT_EQ(tris(a), tris(w));
+  EXPECT_EQ(test::triangle_set(a), test::triangle_set(w));
 }
 
 TEST(SubdivideTriangles, ChildrenKeepTheirParentsCellFields) {

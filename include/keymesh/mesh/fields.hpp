@@ -11,6 +11,9 @@
 
 namespace keymesh {
 
+// Zeroed point fields for `points` new points, named and shaped like `like`.
+std::vector<Field> new_point_fields(const std::vector<Field>& like, Id points);
+
 // The output point fields of a generator that keeps the input points as
 // its first ones: each input field's tuples, then room (zeros) for the new
 // points up to `total` points.
@@ -20,6 +23,10 @@ std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total);
 // at ids[0 .. n) (a face or cell centre).
 void average_point_fields(const std::vector<Field>& in, std::vector<Field>& out, Id point, const std::uint64_t* ids,
                           int n);
+
+// xyz = the mean, summed in double, of points ids[0 .. n) of P (a face or
+// cell centre).
+void mean_position(const float* P, const std::uint64_t* ids, int n, float* xyz);
 
 // f_out's tuple at `point` = 0.5f * (tuple a + tuple b) in float (an edge's
 // midpoint, as subdivision places it).

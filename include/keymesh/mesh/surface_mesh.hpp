@@ -16,6 +16,13 @@ struct Field {
   std::vector<float> values;
 };
 
+// The field named `name` in `fields`, or null.
+inline const Field* find_field(const std::vector<Field>& fields, const std::string& name) {
+  for (const auto& f : fields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
 struct SurfaceMesh {
   std::vector<float> points;                 // x,y,z per point
   std::vector<PointIndex> connectivity;      // point ids of every cell, cell after cell
@@ -36,16 +43,8 @@ struct SurfaceMesh {
   std::uint64_t cell_begin(Id c) const { return offsets.empty() ? 3 * std::uint64_t(c) : offsets[c]; }
   std::uint64_t cell_end(Id c) const { return offsets.empty() ? 3 * std::uint64_t(c) + 3 : offsets[c + 1]; }
 
-  const Field* find_point_field(const std::string& name) const {
-    for (const auto& f : point_fields)
-      if (f.name == name) return &f;
-    return nullptr;
-  }
-  const Field* find_cell_field(const std::string& name) const {
-    for (const auto& f : cell_fields)
-      if (f.name == name) return &f;
-    return nullptr;
-  }
+  const Field* find_point_field(const std::string& name) const { return find_field(point_fields, name); }
+  const Field* find_cell_field(const std::string& name) const { return find_field(cell_fields, name); }
 };
 
 }  // namespace keymesh

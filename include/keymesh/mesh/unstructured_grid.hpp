@@ -108,16 +108,8 @@ struct UnstructuredGrid {
   // True when every cell is of type t (stored uniformly or listed).
   bool all_cells_are(CellType t) const;
 
-  const Field* find_point_field(const std::string& name) const {
-    for (const auto& f : point_fields)
-      if (f.name == name) return &f;
-    return nullptr;
-  }
-  const Field* find_cell_field(const std::string& name) const {
-    for (const auto& f : cell_fields)
-      if (f.name == name) return &f;
-    return nullptr;
-  }
+  const Field* find_point_field(const std::string& name) const { return find_field(point_fields, name); }
+  const Field* find_cell_field(const std::string& name) const { return find_field(cell_fields, name); }
 
   // Checks the structural invariants (offsets monotone and in range, ids <
   // num_points, sizes of types/fields consistent, fixed-size cells have the
