@@ -67,4 +67,18 @@ inline void expect_identical(const SurfaceMesh& a, const SurfaceMesh& b) {
   for (std::size_t i = 0; i < a.point_fields.size(); ++i) EXPECT_EQ(a.point_fields[i].values, b.point_fields[i].values);
 }
 
+// run(by_position) at 1 and 4 threads gives the same bytes, and welding by
+// position (VERTEX-WELD) the same points and triangles up to renumbering.
+// Returns the 1-thread mesh.
+template <class Run>
+SurfaceMesh expect_threads_and_vertex_weld_agree(Run&& run) {
+  const SurfaceMesh one = at_threads(1, [&] { return run(false); });
+  const SurfaceMesh four = at_threads(4, [&] { return run(false); });
+  const SurfaceMesh welded = run(true);
+  expect_identical(one, four);
+  EXPECT_EQ(welded.num_points(), one.num_points());
+  EXPECT_EQ(triangle_set(welded), triangle_set(one));
+  return one;
+}
+
 }  // namespace keymesh::test
