@@ -27,6 +27,7 @@ struct LabelsCli {
   int smooth = 16;
   double relaxation = 0.5;
   std::string memory_limit;  // stream the volume in slabs
+  bool coarsen = false;
   RawInputCli raw_input;
   CommonOptions common;
 };
@@ -46,6 +47,7 @@ LabelsJob job_of(const LabelsCli& o) {
   opt.per_label = o.per_label;
   opt.smooth_iterations = o.smooth;
   opt.relaxation = o.relaxation;
+  opt.coarsen = o.coarsen;
   if (!o.memory_limit.empty()) parse_size(o.memory_limit, job.memory_limit);  // checked by its validator
   job.common = o.common;
   return job;
@@ -110,6 +112,11 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
   r["background"] = opt.background;
   r["smooth"] = opt.smooth_iterations;
   r["relaxation"] = opt.relaxation;
+  r["coarsen"] = opt.coarsen;
+  if (opt.coarsen) {
+    r["triangles_before"] = stats.triangles_before_coarsening;
+    r["triangles_after"] = mesh.num_cells();
+  }
   r["distinct_labels"] = stats.distinct_labels;
   r["labels_extracted"] = stats.surfaces;
   r["points"] = mesh.num_points();
@@ -122,7 +129,7 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
   r["pairs"] = pairs;
   auto seconds = timer.seconds();
   seconds["labels_stages"] = {{"scan", stats.scan}, {"generate", stats.generate}, {"weld", stats.weld},
-                              {"smooth", stats.smooth}};
+                              {"smooth", stats.smooth}, {"coarsen", stats.coarsen}};
   r["seconds"] = seconds;
   r["peak_rss_mib"] = peak_rss_mib();
   write_report(job.common.report_path, r);
@@ -158,6 +165,10 @@ Register reg{Command{
           ->check(CLI::NonNegativeNumber);
       cmd.add_option("--relaxation", o->relaxation, "smoothing relaxation factor in (0, 1] (default 0.5)")
           ->check(CLI::Range(1e-9, 1.0));
+      cmd.add_flag("--coarsen", o->coarsen,
+                   "after smoothing, merge the points of each 2x2x2 block of cells (surfacenets) or nearest grid "
+                   "point (discrete-mc), averaging positions; faces that collapse are dropped, label pairs kept; "
+                   "every label's surface stays closed, not always 2-manifold");
       o->raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32");
       cmd.add_option("--memory-limit", o->memory_limit,
                      "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "

@@ -60,6 +60,7 @@ void arrays(IO& io, Surface& s) {
   io.array(s.border_axes);
   io.array(s.cell_centre);
   io.array(s.keys);
+  io.array(s.coarse);
 }
 
 }  // namespace

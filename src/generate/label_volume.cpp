@@ -259,6 +259,7 @@ void append_surfaces(std::vector<LabelSurface>& parts, LabelSurface& out) {
     append(out.border_axes, part.border_axes);
     append(out.cell_centre, part.cell_centre);
     append(out.keys, part.keys);
+    append(out.coarse, part.coarse);
     for (const Field& f : part.mesh.cell_fields) {
       Field* to = nullptr;
       for (Field& g : out.mesh.cell_fields) to = g.name == f.name ? &g : to;

@@ -25,6 +25,22 @@ struct LabelVolume {
   std::vector<LabelIndex> index;
   Id first_plane = 0;
   bool window = false;  // generators then also keep each point's key (LabelSurface::keys)
+  // --coarsen: generators give every point its coarse key (LabelSurface::coarse).
+  bool coarse_keys = false;
+  bool per_label = false;
+
+  // The coarse key of a point (coarsening, label_coarsen.cpp): the 2x2x2
+  // block of padded cells holding cell (i, j, k) (surface nets), or a padded
+  // point's id (discrete MC: a midpoint's nearest grid point, the edge's
+  // lower end on a tie, which a midpoint always is). Per label, the label
+  // index goes above bit 44 so that labels' surfaces never merge.
+  std::uint64_t block_key(Id i, Id j, Id k) const {
+    const Id bx = dims[0] / 2 + 1, by = dims[1] / 2 + 1;
+    return static_cast<std::uint64_t>(i / 2 + (j / 2) * bx + (k / 2) * bx * by);
+  }
+  std::uint64_t part_key(std::uint64_t key, LabelIndex label) const {
+    return per_label ? (std::uint64_t{label} + 1) << 44 | key : key;
+  }
   std::vector<std::int64_t> values;      // label value of every index, increasing
   LabelIndex background = 0;             // index of the background value
   std::vector<LabelIndex> stored;        // per value index: what the grid stores (background when not selected)
@@ -95,6 +111,8 @@ struct LabelSurface {
   // space of its surface), kept by generators running on a window of a
   // streamed volume: the slabs' pieces of a surface are merged by key.
   std::vector<std::uint64_t> keys;
+  // Per point, its coarse key (LabelVolume::coarse_keys).
+  std::vector<std::uint64_t> coarse;
 };
 
 // Appends the parts (their own points each) to `out`, in order.
@@ -122,6 +140,12 @@ void check_label_options(const LabelOptions& options);
 // before the generator's own fields: the mesh contour_labels returns.
 SurfaceMesh finish_label_mesh(LabelSurface& surface, const LabelVolume& volume, const LabelOptions& options,
                               LabelStats& stats);
+
+// --coarsen (label_coarsen.cpp): merges the points by coarse key, averaging
+// their positions; drops faces that collapse and cancels faces of one label
+// pair on the same three points facing opposite ways. Keeps each face's pair
+// and cell fields.
+void coarsen_label_surface(LabelSurface& surface, LabelStats& stats);
 
 // Smooths the surface's points in place (label_smoothing.cpp): Jacobi
 // iterations over neighbour lists built by KEY-REDUCE.

@@ -36,7 +36,9 @@ SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, L
   st = LabelStats{};
   auto t0 = Clock::now();
   progress::report("scan labels", 0.0);
-  const detail::LabelVolume vol = detail::scan_labels(grid, options);
+  detail::LabelVolume vol = detail::scan_labels(grid, options);
+  vol.coarse_keys = options.coarsen;
+  vol.per_label = options.per_label;
   progress::report(options.method == LabelMethod::SurfaceNets ? "surface nets" : "discrete marching cubes", 0.1);
   st.scan = seconds_since(t0);
   st.distinct_labels = vol.distinct_in_grid;
@@ -54,6 +56,7 @@ SurfaceMesh detail::finish_label_mesh(LabelSurface& surface, const LabelVolume& 
   if (options.smooth_iterations > 0) progress::report("smooth", 0.6);
   detail::smooth_label_surface(surface, vol, options.method, options.smooth_iterations, options.relaxation);
   st.smooth = seconds_since(t0);
+  if (options.coarsen) detail::coarsen_label_surface(surface, st);
 
   SurfaceMesh mesh = std::move(surface.mesh);
   // boundary_labels first, then `label` when the generator wrote one.

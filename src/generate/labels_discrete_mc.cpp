@@ -110,6 +110,8 @@ void weld_and_append(const LabelVolume& vol, const std::vector<std::uint64_t>& c
   out.junction.resize(p0 + static_cast<std::size_t>(points));
   out.border_axes.resize(p0 + static_cast<std::size_t>(points));
   out.mesh.points.resize(3 * (p0 + static_cast<std::size_t>(points)));
+  if (vol.coarse_keys) out.coarse.resize(p0 + static_cast<std::size_t>(points));
+  const LabelIndex part_label = triangle_label.empty() ? LabelIndex{0} : triangle_label[0];  // per label: the one
   const Id stride[3] = {1, vol.dims[0], vol.nxy};
   parallel::for_each(points, [&](Id g) {
     const std::uint64_t key = groups.unique_keys[static_cast<std::size_t>(g)];
@@ -134,6 +136,7 @@ void weld_and_append(const LabelVolume& vol, const std::vector<std::uint64_t>& c
           if (!dup && n < 3) seen[n++] = l;
         }
     out.junction[at] = n >= 3;
+    if (vol.coarse_keys) out.coarse[at] = vol.part_key(static_cast<std::uint64_t>(p), part_label);
   }, 1024);
   if (vol.window) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
 }

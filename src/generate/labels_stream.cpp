@@ -45,6 +45,8 @@ detail::LabelSurface merge_by_key(const std::vector<const detail::LabelSurface*>
   out.junction.resize(static_cast<std::size_t>(unique));
   out.border_axes.resize(static_cast<std::size_t>(unique));
   out.cell_centre.resize(centres ? static_cast<std::size_t>(3 * unique) : 0);
+  const bool coarse = std::any_of(pieces.begin(), pieces.end(), [](auto* p) { return !p->coarse.empty(); });
+  out.coarse.resize(coarse ? static_cast<std::size_t>(unique) : 0);
   // Point j of the concatenation: its piece and index there.
   std::vector<std::uint32_t> piece_of(keys.size());
   for (std::size_t p = 0; p < pieces.size(); ++p)
@@ -60,6 +62,7 @@ detail::LabelSurface merge_by_key(const std::vector<const detail::LabelSurface*>
       for (int a = 0; a < 3; ++a) out.cell_centre[3 * u + a] = s.cell_centre[3 * at + a];
     out.junction[u] = s.junction[at];
     out.border_axes[u] = s.border_axes[at];
+    if (coarse) out.coarse[u] = s.coarse[at];
   }, 1024);
   for (std::size_t p = 0; p < pieces.size(); ++p) {
     const detail::LabelSurface& s = *pieces[p];
@@ -167,6 +170,8 @@ void LabelSlabs::set_labels(const std::vector<std::vector<std::int64_t>>& all) {
   for (const auto& v : all) detail::merge_distinct(values, v);
   m.vol = detail::label_table(m.source.header(), std::move(values), m.options);
   m.vol.window = true;
+  m.vol.coarse_keys = m.options.coarsen;
+  m.vol.per_label = m.options.per_label;
   m.st.distinct_labels = m.vol.distinct_in_grid;
   m.st.surfaces = static_cast<Id>(m.vol.selected.size());
 }

@@ -296,6 +296,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
   out.cell_centre.resize(static_cast<std::size_t>(3 * (base + n)));
   out.junction.resize(static_cast<std::size_t>(base + n));
   out.border_axes.resize(static_cast<std::size_t>(base + n));
+  if (vol.coarse_keys) out.coarse.resize(static_cast<std::size_t>(base + n));
   const Id cells = box.cells();
   parallel::for_each(n, [&](Id pt) {
     const Id key = static_cast<Id>(point_keys[static_cast<std::size_t>(pt)]);
@@ -322,6 +323,8 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
       }
       out.border_axes[at] = 0;
       out.junction[at] = corners.distinct(vol.at(f[0], f[1], f[2])) >= 3;  // the cell whose first corner is f
+      if (vol.coarse_keys)
+        out.coarse[at] = vol.part_key(vol.block_key(f[0], f[1], f[2]), static_cast<LabelIndex>(only));
       return;
     }
     const Id cell = only < 0 ? key : key / 4;
@@ -358,6 +361,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
     }
     out.border_axes[at] = border;
     out.junction[at] = corners.distinct(first) >= 3;
+    if (vol.coarse_keys) out.coarse[at] = vol.part_key(vol.block_key(g[0], g[1], g[2]), static_cast<LabelIndex>(only));
   }, 1024);
 }
 

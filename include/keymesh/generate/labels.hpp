@@ -56,6 +56,23 @@
 // Checked on white-noise label maps (tests/python/test_labels.py, 12 seeds):
 // every per-label surface of both methods closed, 2-manifold, Euler as above.
 //
+// Coarsening (coarsen): every point gets a coarser key, surface nets the
+// 2x2x2 block of cells holding its cell (face points: the face's cell),
+// discrete MC the nearest grid point (a midpoint's lower edge end); per
+// label, labels never share one. One KEY-REDUCE merges the points of a key,
+// averaging their (smoothed) positions in increasing index; faces left with
+// fewer than three distinct points are dropped, and faces of one label pair
+// on the same three points cancel by orientation (|net| copies of the
+// winning one are kept, first in face order). Each kept face keeps its
+// label pair (and label): the two labels across the grid edge it came from.
+// Guaranteed: every label's faces, oriented out of it (network: faces whose
+// pair holds it, flipped where it is the larger; per label and discrete MC:
+// faces of `label`), still form a closed 2-cycle (every directed edge used
+// as often as its reverse), since merging points and dropping collapsed or
+// cancelling faces keeps a cycle a cycle. Not guaranteed: 2-manifoldness
+// (an edge may gain four faces where a region is thinner than a block) and
+// the Euler characteristic.
+//
 // Guarantees: deterministic, bit-identical output at any thread count.
 // Refused (InputError, naming the volume): float samples, labels that are
 // not exactly representable as float32 (|v| > 2^24), more than
@@ -84,6 +101,9 @@ struct LabelOptions {
   // Smoothing of the welded mesh (generate/label_smoothing.hpp): 0 = off.
   int smooth_iterations = 16;
   double relaxation = 0.5;
+  // Coarsening after smoothing (see the header comment): points merged by a
+  // coarser key, faces that collapse dropped, label pairs kept.
+  bool coarsen = false;
 };
 
 struct LabelPairCount {
@@ -97,6 +117,8 @@ struct LabelStats {
   double generate = 0;  // map step: keys of the soup
   double weld = 0;      // KEY-REDUCE partition
   double smooth = 0;
+  double coarsen = 0;
+  Id triangles_before_coarsening = 0;
   Id distinct_labels = 0;   // in the volume, background counted
   Id surfaces = 0;          // labels extracted
   Id soup_corners = 0;      // triangle corners before welding
