@@ -27,24 +27,24 @@ std::string upper(std::string_view s) {
   return u;
 }
 
-bool legacy_type(std::string_view name, Scalar& s) {
+bool legacy_type(std::string_view name, ScalarType& s) {
   const std::string t = upper(name);
-  if (t == "FLOAT") s = Scalar::Float32;
-  else if (t == "DOUBLE") s = Scalar::Float64;
-  else if (t == "CHAR") s = Scalar::Int8;
-  else if (t == "UNSIGNED_CHAR") s = Scalar::UInt8;
-  else if (t == "SHORT") s = Scalar::Int16;
-  else if (t == "UNSIGNED_SHORT") s = Scalar::UInt16;
-  else if (t == "INT" || t == "VTKTYPEINT32") s = Scalar::Int32;
-  else if (t == "UNSIGNED_INT" || t == "VTKTYPEUINT32") s = Scalar::UInt32;
-  else if (t == "LONG" || t == "VTKTYPEINT64" || t == "VTKIDTYPE") s = Scalar::Int64;
-  else if (t == "UNSIGNED_LONG" || t == "VTKTYPEUINT64") s = Scalar::UInt64;
-  else if (t == "VTKTYPEINT8") s = Scalar::Int8;
-  else if (t == "VTKTYPEUINT8") s = Scalar::UInt8;
-  else if (t == "VTKTYPEINT16") s = Scalar::Int16;
-  else if (t == "VTKTYPEUINT16") s = Scalar::UInt16;
-  else if (t == "VTKTYPEFLOAT32") s = Scalar::Float32;
-  else if (t == "VTKTYPEFLOAT64") s = Scalar::Float64;
+  if (t == "FLOAT") s = ScalarType::Float32;
+  else if (t == "DOUBLE") s = ScalarType::Float64;
+  else if (t == "CHAR") s = ScalarType::Int8;
+  else if (t == "UNSIGNED_CHAR") s = ScalarType::UInt8;
+  else if (t == "SHORT") s = ScalarType::Int16;
+  else if (t == "UNSIGNED_SHORT") s = ScalarType::UInt16;
+  else if (t == "INT" || t == "VTKTYPEINT32") s = ScalarType::Int32;
+  else if (t == "UNSIGNED_INT" || t == "VTKTYPEUINT32") s = ScalarType::UInt32;
+  else if (t == "LONG" || t == "VTKTYPEINT64" || t == "VTKIDTYPE") s = ScalarType::Int64;
+  else if (t == "UNSIGNED_LONG" || t == "VTKTYPEUINT64") s = ScalarType::UInt64;
+  else if (t == "VTKTYPEINT8") s = ScalarType::Int8;
+  else if (t == "VTKTYPEUINT8") s = ScalarType::UInt8;
+  else if (t == "VTKTYPEINT16") s = ScalarType::Int16;
+  else if (t == "VTKTYPEUINT16") s = ScalarType::UInt16;
+  else if (t == "VTKTYPEFLOAT32") s = ScalarType::Float32;
+  else if (t == "VTKTYPEFLOAT64") s = ScalarType::Float64;
   else return false;
   return true;
 }
@@ -100,7 +100,7 @@ class Reader {
   // Refuses a count the rest of the file cannot hold, before anything of
   // that size is allocated: n binary values of type s, or n text numbers
   // (each at least one digit and a separator).
-  void check_count(std::int64_t n, Scalar s, const std::string& what) const {
+  void check_count(std::int64_t n, ScalarType s, const std::string& what) const {
     const std::uint64_t left = d_.size() - std::min(pos_, d_.size());
     const std::uint64_t room = binary_ ? left / scalar_size(s) : left / 2 + 1;
     if (n < 0 || static_cast<std::uint64_t>(n) > room)
@@ -109,7 +109,7 @@ class Reader {
   // n values of type s, each handed to put(i, text) in ASCII files or
   // put(i, pointer to the big-endian value) in BINARY ones.
   template <class Text, class Binary>
-  void values(std::int64_t n, Scalar s, const std::string& what, Text&& text, Binary&& bin) {
+  void values(std::int64_t n, ScalarType s, const std::string& what, Text&& text, Binary&& bin) {
     check_count(n, s, what);
     if (binary_) {
       rest_of_line();  // binary data starts after the keyword line
@@ -126,7 +126,7 @@ class Reader {
     }
   }
   // n numbers as floats.
-  std::vector<float> floats(std::int64_t n, Scalar s, const std::string& what) {
+  std::vector<float> floats(std::int64_t n, ScalarType s, const std::string& what) {
     check_count(n, s, what);
     std::vector<float> out(static_cast<std::size_t>(n));
     values(
@@ -141,7 +141,7 @@ class Reader {
   }
   // n integers, each handed to put(i, value).
   template <class Put>
-  void ints(std::int64_t n, Scalar s, const std::string& what, Put&& put) {
+  void ints(std::int64_t n, ScalarType s, const std::string& what, Put&& put) {
     std::int64_t v = 0;
     values(
         n, s, what,
@@ -193,7 +193,7 @@ void read_field_block(Reader& r, std::int64_t tuples, std::vector<Field>& fields
     }
     const std::int64_t comps = r.count("component count");
     const std::int64_t n = r.count("tuple count");
-    Scalar s;
+    ScalarType s;
     const std::string_view t = r.word();
     if (!legacy_type(t, s)) r.fail("unknown data type '" + std::string(t.substr(0, 40)) + "' of FIELD array " + name);
     if (comps < 1 || comps > 4096) r.fail("FIELD array " + name + " has " + std::to_string(comps) + " components");
@@ -217,10 +217,10 @@ std::string read_attributes(Reader& r, std::int64_t tuples, std::vector<Field>& 
         key == "TENSORS" || key == "TENSORS6" || key == "COLOR_SCALARS") {
       const std::string name = unescape_name(r.word());
       std::int64_t comps = key == "SCALARS" ? 1 : key == "TENSORS" ? 9 : key == "TENSORS6" ? 6 : 3;
-      Scalar s = Scalar::Float32;
+      ScalarType s = ScalarType::Float32;
       if (key == "COLOR_SCALARS") {
         comps = r.count("component count");
-        s = Scalar::UInt8;  // BINARY color scalars are unsigned chars; ASCII are floats in [0, 1]
+        s = ScalarType::UInt8;  // BINARY color scalars are unsigned chars; ASCII are floats in [0, 1]
       } else {
         const std::string_view t = r.word();
         if (!legacy_type(t, s)) r.fail("unknown data type '" + std::string(t.substr(0, 40)) + "' of " + name);
@@ -245,7 +245,7 @@ std::string read_attributes(Reader& r, std::int64_t tuples, std::vector<Field>& 
     if (key == "LOOKUP_TABLE") {  // a table of colours given in the data section
       r.word();
       const std::int64_t n = r.count("lookup table size");
-      r.floats(4 * n, Scalar::UInt8, "LOOKUP_TABLE");
+      r.floats(4 * n, ScalarType::UInt8, "LOOKUP_TABLE");
       continue;
     }
     if (key == "FIELD") {
@@ -328,7 +328,7 @@ UnstructuredGrid parse_legacy_vtk(std::string_view data, const std::string& path
     if (key == "POINTS") {
       if (npts >= 0) r.fail("a second POINTS section");
       npts = r.count("point count");
-      Scalar s;
+      ScalarType s;
       const std::string_view t = r.word();
       if (!legacy_type(t, s)) r.fail("unknown point type '" + std::string(t.substr(0, 40)) + "'");
       g.points = r.floats(3 * npts, s, "POINTS");
@@ -340,7 +340,7 @@ UnstructuredGrid parse_legacy_vtk(std::string_view data, const std::string& path
       // 5.x: "CELLS offsets_count connectivity_count" then OFFSETS and CONNECTIVITY arrays.
       const std::size_t save = r.pos(), save_line = r.line();
       if (upper(r.word()) == "OFFSETS") {
-        Scalar s;
+        ScalarType s;
         if (!legacy_type(r.word(), s)) r.fail("bad OFFSETS type");
         ncells = a > 0 ? a - 1 : 0;
         r.check_count(a, s, "OFFSETS");
@@ -363,14 +363,14 @@ UnstructuredGrid parse_legacy_vtk(std::string_view data, const std::string& path
         r.pos() = save, r.line() = save_line;
         ncells = a;
         if (b < a) r.fail("CELLS size " + std::to_string(b) + " is smaller than the cell count " + std::to_string(a));
-        r.check_count(b, Scalar::Int32, "CELLS");
+        r.check_count(b, ScalarType::Int32, "CELLS");
         const std::uint64_t nids = std::uint64_t(b - a);
         g.connectivity = IndexArray::for_ids(id_limit(), std::size_t(nids));
         g.offsets.assign(std::size_t(a) + 1, 0);
         std::uint64_t at = 0;       // ids stored so far
         std::int64_t cell = 0;      // cells started so far
         std::uint64_t left = 0;     // ids still due for the current cell
-        r.ints(b, Scalar::Int32, "CELLS", [&](std::int64_t i, std::int64_t v) {
+        r.ints(b, ScalarType::Int32, "CELLS", [&](std::int64_t i, std::int64_t v) {
           if (left > 0) {
             g.connectivity.set(std::size_t(at), read_id(v, std::int64_t(at), "CELLS"));
             ++at, --left;
@@ -389,9 +389,9 @@ UnstructuredGrid parse_legacy_vtk(std::string_view data, const std::string& path
       if (have_types) r.fail("a second CELL_TYPES section");
       have_types = true;
       const std::int64_t n = r.count("cell type count");
-      r.check_count(n, Scalar::Int32, "CELL_TYPES");
+      r.check_count(n, ScalarType::Int32, "CELL_TYPES");
       g.cell_types.resize(std::size_t(n));
-      r.ints(n, Scalar::Int32, "CELL_TYPES", [&](std::int64_t i, std::int64_t v) {
+      r.ints(n, ScalarType::Int32, "CELL_TYPES", [&](std::int64_t i, std::int64_t v) {
         if (v < 0 || v > 255) r.fail("CELL_TYPES: cell " + std::to_string(i) + " has type " + std::to_string(v));
         g.cell_types[std::size_t(i)] = static_cast<std::uint8_t>(v);
       });

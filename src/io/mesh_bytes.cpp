@@ -25,57 +25,39 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-std::size_t scalar_size(Scalar s) {
+double load_as_double(const void* p, ScalarType s, bool big) {
   switch (s) {
-    case Scalar::Int8:
-    case Scalar::UInt8: return 1;
-    case Scalar::Int16:
-    case Scalar::UInt16: return 2;
-    case Scalar::Int32:
-    case Scalar::UInt32:
-    case Scalar::Float32: return 4;
-    case Scalar::Int64:
-    case Scalar::UInt64:
-    case Scalar::Float64: return 8;
-  }
-  return 1;
-}
-
-bool scalar_is_float(Scalar s) { return s == Scalar::Float32 || s == Scalar::Float64; }
-
-double load_as_double(const void* p, Scalar s, bool big) {
-  switch (s) {
-    case Scalar::Int8: return load<std::int8_t>(p, big);
-    case Scalar::UInt8: return load<std::uint8_t>(p, big);
-    case Scalar::Int16: return load<std::int16_t>(p, big);
-    case Scalar::UInt16: return load<std::uint16_t>(p, big);
-    case Scalar::Int32: return load<std::int32_t>(p, big);
-    case Scalar::UInt32: return load<std::uint32_t>(p, big);
-    case Scalar::Int64: return static_cast<double>(load<std::int64_t>(p, big));
-    case Scalar::UInt64: return static_cast<double>(load<std::uint64_t>(p, big));
-    case Scalar::Float32: return load<float>(p, big);
-    case Scalar::Float64: return load<double>(p, big);
+    case ScalarType::Int8: return load<std::int8_t>(p, big);
+    case ScalarType::UInt8: return load<std::uint8_t>(p, big);
+    case ScalarType::Int16: return load<std::int16_t>(p, big);
+    case ScalarType::UInt16: return load<std::uint16_t>(p, big);
+    case ScalarType::Int32: return load<std::int32_t>(p, big);
+    case ScalarType::UInt32: return load<std::uint32_t>(p, big);
+    case ScalarType::Int64: return static_cast<double>(load<std::int64_t>(p, big));
+    case ScalarType::UInt64: return static_cast<double>(load<std::uint64_t>(p, big));
+    case ScalarType::Float32: return load<float>(p, big);
+    case ScalarType::Float64: return load<double>(p, big);
   }
   return 0.0;
 }
 
-bool load_as_int64(const void* p, Scalar s, bool big, std::int64_t& out) {
+bool load_as_int64(const void* p, ScalarType s, bool big, std::int64_t& out) {
   switch (s) {
-    case Scalar::Int8: out = load<std::int8_t>(p, big); return true;
-    case Scalar::UInt8: out = load<std::uint8_t>(p, big); return true;
-    case Scalar::Int16: out = load<std::int16_t>(p, big); return true;
-    case Scalar::UInt16: out = load<std::uint16_t>(p, big); return true;
-    case Scalar::Int32: out = load<std::int32_t>(p, big); return true;
-    case Scalar::UInt32: out = load<std::uint32_t>(p, big); return true;
-    case Scalar::Int64: out = load<std::int64_t>(p, big); return true;
-    case Scalar::UInt64: {
+    case ScalarType::Int8: out = load<std::int8_t>(p, big); return true;
+    case ScalarType::UInt8: out = load<std::uint8_t>(p, big); return true;
+    case ScalarType::Int16: out = load<std::int16_t>(p, big); return true;
+    case ScalarType::UInt16: out = load<std::uint16_t>(p, big); return true;
+    case ScalarType::Int32: out = load<std::int32_t>(p, big); return true;
+    case ScalarType::UInt32: out = load<std::uint32_t>(p, big); return true;
+    case ScalarType::Int64: out = load<std::int64_t>(p, big); return true;
+    case ScalarType::UInt64: {
       const std::uint64_t u = load<std::uint64_t>(p, big);
       if (u > std::uint64_t(std::numeric_limits<std::int64_t>::max())) return false;
       out = static_cast<std::int64_t>(u);
       return true;
     }
-    case Scalar::Float32:
-    case Scalar::Float64: {
+    case ScalarType::Float32:
+    case ScalarType::Float64: {
       const double d = load_as_double(p, s, big);
       // Index arrays stored as floats happen (old writers); accept only exact integers.
       if (!(d >= -9.0e18 && d <= 9.0e18) || d != std::floor(d)) return false;

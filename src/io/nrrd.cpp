@@ -304,16 +304,10 @@ ImageGrid read_nrrd(const std::string& path) {
 }
 
 void write_nrrd(const ImageGrid& grid, const std::string& path) {
-  const char* type = "float";
-  switch (grid.type) {
-    case ScalarType::UInt8: type = "uint8"; break;
-    case ScalarType::Int8: type = "int8"; break;
-    case ScalarType::UInt16: type = "uint16"; break;
-    case ScalarType::Int16: type = "int16"; break;
-    case ScalarType::Int32: type = "int32"; break;
-    case ScalarType::Float32: type = "float"; break;
-    case ScalarType::Float64: type = "double"; break;
-  }
+  // NRRD's names are ours except for the two float types.
+  const char* type = grid.type == ScalarType::Float32   ? "float"
+                     : grid.type == ScalarType::Float64 ? "double"
+                                                        : scalar_type_name(grid.type);
   char header[1024];
   std::snprintf(header, sizeof header,
                 "NRRD0004\n# written by keymesh\ntype: %s\ndimension: 3\nsizes: %lld %lld %lld\n"

@@ -24,8 +24,8 @@ enum class Format { Ascii, BinaryLittle, BinaryBig };
 struct Property {
   std::string name;
   bool is_list = false;
-  Scalar type = Scalar::Float32;        // scalar type, or list item type
-  Scalar count_type = Scalar::UInt8;    // list count type
+  ScalarType type = ScalarType::Float32;        // scalar type, or list item type
+  ScalarType count_type = ScalarType::UInt8;    // list count type
 };
 
 struct Element {
@@ -34,15 +34,15 @@ struct Element {
   std::vector<Property> props;
 };
 
-std::optional<Scalar> ply_scalar(std::string_view t) {
-  if (t == "char" || t == "int8") return Scalar::Int8;
-  if (t == "uchar" || t == "uint8") return Scalar::UInt8;
-  if (t == "short" || t == "int16") return Scalar::Int16;
-  if (t == "ushort" || t == "uint16") return Scalar::UInt16;
-  if (t == "int" || t == "int32") return Scalar::Int32;
-  if (t == "uint" || t == "uint32") return Scalar::UInt32;
-  if (t == "float" || t == "float32") return Scalar::Float32;
-  if (t == "double" || t == "float64") return Scalar::Float64;
+std::optional<ScalarType> ply_scalar(std::string_view t) {
+  if (t == "char" || t == "int8") return ScalarType::Int8;
+  if (t == "uchar" || t == "uint8") return ScalarType::UInt8;
+  if (t == "short" || t == "int16") return ScalarType::Int16;
+  if (t == "ushort" || t == "uint16") return ScalarType::UInt16;
+  if (t == "int" || t == "int32") return ScalarType::Int32;
+  if (t == "uint" || t == "uint32") return ScalarType::UInt32;
+  if (t == "float" || t == "float32") return ScalarType::Float32;
+  if (t == "double" || t == "float64") return ScalarType::Float64;
   return std::nullopt;
 }
 
@@ -64,7 +64,7 @@ class ValueReader {
   ValueReader(std::string_view body, Format format, const std::string& path)
       : format_(format), bytes_(body, path), text_(body), path_(path) {}
 
-  double read_double(Scalar s, std::string_view what) {
+  double read_double(ScalarType s, std::string_view what) {
     if (format_ != Format::Ascii) return load_as_double(bytes_.take(scalar_size(s), what), s, big());
     const std::string_view t = token(what);
     double v = 0;
@@ -72,7 +72,7 @@ class ValueReader {
     return v;
   }
 
-  std::int64_t read_int(Scalar s, std::string_view what) {
+  std::int64_t read_int(ScalarType s, std::string_view what) {
     std::int64_t v = 0;
     if (format_ != Format::Ascii) {
       if (!load_as_int64(bytes_.take(scalar_size(s), what), s, big(), v))

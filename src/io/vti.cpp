@@ -18,7 +18,6 @@ namespace keymesh::io {
 namespace {
 
 using namespace vtk_xml;
-using mesh_bytes::Scalar;
 
 std::vector<double> numbers(const std::string& path, const std::string& what, const std::string* text, std::size_t n) {
   if (!text) throw InputError(path + ": <ImageData> has no " + what);
@@ -34,19 +33,11 @@ std::vector<double> numbers(const std::string& path, const std::string& what, co
   return v;
 }
 
-ScalarType grid_type(const std::string& path, Scalar s, const std::string& declared) {
-  switch (s) {
-    case Scalar::Int8: return ScalarType::Int8;
-    case Scalar::UInt8: return ScalarType::UInt8;
-    case Scalar::Int16: return ScalarType::Int16;
-    case Scalar::UInt16: return ScalarType::UInt16;
-    case Scalar::Int32: return ScalarType::Int32;
-    case Scalar::Float32: return ScalarType::Float32;
-    case Scalar::Float64: return ScalarType::Float64;
-    default:
-      throw InputError(path + ": point array type " + declared +
-                       " is not supported (Int8, UInt8, Int16, UInt16, Int32, Float32, Float64)");
-  }
+// Grid arrays hold the grid types only (is_grid_scalar).
+ScalarType grid_type(const std::string& path, ScalarType s, const std::string& declared) {
+  if (is_grid_scalar(s)) return s;
+  throw InputError(path + ": point array type " + declared +
+                   " is not supported (Int8, UInt8, Int16, UInt16, Int32, Float32, Float64)");
 }
 
 // The XML part of a file whose arrays are appended: everything up to the
@@ -139,7 +130,7 @@ std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& d
     if (!off || !mesh_bytes::parse_int64(*off, offset) || offset < 0)
       throw InputError(path + ": point array has a bad appended offset");
     const std::uint64_t at = data.size() + static_cast<std::uint64_t>(offset);
-    const std::size_t hs = ctx.header == Scalar::UInt64 ? 8 : 4;
+    const std::size_t hs = ctx.header == ScalarType::UInt64 ? 8 : 4;
     unsigned char h[8] = {};
     detail::read_exact(path, at, h, hs, "the point array's size header");
     const std::uint64_t array_bytes = hs == 8 ? mesh_bytes::load<std::uint64_t>(h, ctx.big_endian)
@@ -212,16 +203,7 @@ VolumeLayout vti_layout(const std::string& path) {
 }
 
 void write_vti(const ImageGrid& grid, const std::string& path) {
-  const char* type = "Float32";
-  switch (grid.type) {
-    case ScalarType::UInt8: type = "UInt8"; break;
-    case ScalarType::Int8: type = "Int8"; break;
-    case ScalarType::UInt16: type = "UInt16"; break;
-    case ScalarType::Int16: type = "Int16"; break;
-    case ScalarType::Int32: type = "Int32"; break;
-    case ScalarType::Float32: type = "Float32"; break;
-    case ScalarType::Float64: type = "Float64"; break;
-  }
+  const char* type = vtk_type_name(grid.type);
   const std::string name = xml_escape(grid.name);
   char extent[256], geometry[512];
   std::snprintf(extent, sizeof extent, "0 %lld 0 %lld 0 %lld", static_cast<long long>(grid.dims[0] - 1),

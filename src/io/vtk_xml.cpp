@@ -195,17 +195,18 @@ ParsedXml parse_xml(std::string_view doc, const std::string& path) {
 
 // ---- DataArray decoding ---------------------------------------------------
 
-std::optional<Scalar> vtk_scalar(std::string_view t) {
-  if (t == "Int8" || t == "Char") return Scalar::Int8;
-  if (t == "UInt8") return Scalar::UInt8;
-  if (t == "Int16") return Scalar::Int16;
-  if (t == "UInt16") return Scalar::UInt16;
-  if (t == "Int32") return Scalar::Int32;
-  if (t == "UInt32") return Scalar::UInt32;
-  if (t == "Int64") return Scalar::Int64;
-  if (t == "UInt64") return Scalar::UInt64;
-  if (t == "Float32") return Scalar::Float32;
-  if (t == "Float64") return Scalar::Float64;
+namespace {
+// VTK's DataArray type names, in ScalarType's order.
+constexpr const char* kVtkTypeNames[] = {"UInt8",   "Int8",    "UInt16", "Int16", "Int32",
+                                         "Float32", "Float64", "UInt32", "Int64", "UInt64"};
+}  // namespace
+
+const char* vtk_type_name(ScalarType s) { return kVtkTypeNames[static_cast<std::size_t>(s)]; }
+
+std::optional<ScalarType> vtk_scalar(std::string_view t) {
+  if (t == "Char") return ScalarType::Int8;  // VTK's legacy name of Int8
+  for (std::size_t i = 0; i < std::size(kVtkTypeNames); ++i)
+    if (t == kVtkTypeNames[i]) return static_cast<ScalarType>(i);
   return std::nullopt;
 }
 
@@ -223,7 +224,7 @@ class RawSource {
 };
 
 std::uint64_t header_value(const std::string& h, std::size_t i, const Context& ctx) {
-  return ctx.header == Scalar::UInt64 ? load<std::uint64_t>(h.data() + 8 * i, ctx.big_endian)
+  return ctx.header == ScalarType::UInt64 ? load<std::uint64_t>(h.data() + 8 * i, ctx.big_endian)
                                       : load<std::uint32_t>(h.data() + 4 * i, ctx.big_endian);
 }
 
@@ -307,7 +308,7 @@ Array decode_array(const XmlNode& node, const Context& ctx, const std::string& w
   const std::string format = fmt ? *fmt : std::string("ascii");
   if (format == "ascii") {
     TokenCursor tok(node.text);
-    a.type = Scalar::Float64;
+    a.type = ScalarType::Float64;
     a.big = std::endian::native == std::endian::big;
     std::string_view t;
     while (!(t = tok.next()).empty()) {
@@ -372,13 +373,13 @@ Context file_context(const ParsedXml& xml, const std::string& path, std::string_
   const std::string* t = root.attr("type");
   if (!t || *t != type)
     throw InputError(path + ": VTK file type '" + (t ? *t : std::string("?")) + "' is not " + std::string(type));
-  Context ctx{path, false, Scalar::UInt32, {}, {}, {}};
+  Context ctx{path, false, ScalarType::UInt32, {}, {}, {}};
   if (const std::string* bo = root.attr("byte_order")) {
     if (*bo == "BigEndian") ctx.big_endian = true;
     else if (*bo != "LittleEndian") throw InputError(path + ": unknown byte_order '" + *bo + "'");
   }
   if (const std::string* ht = root.attr("header_type")) {
-    if (*ht == "UInt64") ctx.header = Scalar::UInt64;
+    if (*ht == "UInt64") ctx.header = ScalarType::UInt64;
     else if (*ht != "UInt32") throw InputError(path + ": unsupported header_type '" + *ht + "'");
   }
   if (const std::string* comp = root.attr("compressor")) ctx.compressor = *comp;

@@ -27,18 +27,18 @@ namespace {
 
 // Calls f(T{}) with the C++ type of the file's scalar type s.
 template <class F>
-decltype(auto) with_type(Scalar s, F&& f) {
+decltype(auto) with_type(ScalarType s, F&& f) {
   switch (s) {
-    case Scalar::Int8: return f(std::int8_t{});
-    case Scalar::UInt8: return f(std::uint8_t{});
-    case Scalar::Int16: return f(std::int16_t{});
-    case Scalar::UInt16: return f(std::uint16_t{});
-    case Scalar::Int32: return f(std::int32_t{});
-    case Scalar::UInt32: return f(std::uint32_t{});
-    case Scalar::Int64: return f(std::int64_t{});
-    case Scalar::UInt64: return f(std::uint64_t{});
-    case Scalar::Float32: return f(float{});
-    case Scalar::Float64: return f(double{});
+    case ScalarType::Int8: return f(std::int8_t{});
+    case ScalarType::UInt8: return f(std::uint8_t{});
+    case ScalarType::Int16: return f(std::int16_t{});
+    case ScalarType::UInt16: return f(std::uint16_t{});
+    case ScalarType::Int32: return f(std::int32_t{});
+    case ScalarType::UInt32: return f(std::uint32_t{});
+    case ScalarType::Int64: return f(std::int64_t{});
+    case ScalarType::UInt64: return f(std::uint64_t{});
+    case ScalarType::Float32: return f(float{});
+    case ScalarType::Float64: return f(double{});
   }
   return f(double{});
 }
@@ -47,7 +47,7 @@ decltype(auto) with_type(Scalar s, F&& f) {
 // appended raw and uncompressed (the connectivity of 82.9 M tets is 1.3 GB
 // that need not be copied before they are converted).
 struct Values {
-  Scalar type = Scalar::Float64;
+  ScalarType type = ScalarType::Float64;
   bool big = false;
   int components = 1;
   std::string_view bytes;
@@ -61,7 +61,7 @@ Values get_array(const XmlNode& node, const Context& ctx, const std::string& wha
   const std::string* type_attr = node.attr("type");
   const std::string* offset_attr = node.attr("offset");
   const std::string* comps_attr = node.attr("NumberOfComponents");
-  Scalar type = Scalar::Float64;
+  ScalarType type = ScalarType::Float64;
   bool known_type = false;
   if (type_attr)
     if (const auto t = vtk_scalar(*type_attr)) type = *t, known_type = true;
@@ -73,7 +73,7 @@ Values get_array(const XmlNode& node, const Context& ctx, const std::string& wha
     const std::uint64_t left = ctx.appended.size();
     if (std::uint64_t(offset) <= left && left - std::uint64_t(offset) >= hs) {
       const char* h = ctx.appended.data() + offset;
-      const std::uint64_t n = ctx.header == Scalar::UInt64 ? load<std::uint64_t>(h, ctx.big_endian)
+      const std::uint64_t n = ctx.header == ScalarType::UInt64 ? load<std::uint64_t>(h, ctx.big_endian)
                                                            : load<std::uint32_t>(h, ctx.big_endian);
       const std::uint64_t size = scalar_size(type);
       if (n <= left - std::uint64_t(offset) - hs && n % size == 0 &&

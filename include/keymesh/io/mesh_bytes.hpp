@@ -14,6 +14,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/mesh/scalar_type.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
 
 namespace keymesh::io::mesh_bytes {
@@ -56,17 +57,13 @@ void append_le(std::string& out, T v) {
   out.append(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 
-// ---- scalar types named by files -----------------------------------------
+// ---- samples of a file's scalar type --------------------------------------
 
-enum class Scalar { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64 };
-
-std::size_t scalar_size(Scalar s);
-bool scalar_is_float(Scalar s);
 // Loads one value of type s at p as double / as int64 (a UInt64 above
 // INT64_MAX or a non-integral float throws via the caller's checks).
-double load_as_double(const void* p, Scalar s, bool big_endian);
+double load_as_double(const void* p, ScalarType s, bool big_endian);
 // Returns false when the value is not an integer representable as int64.
-bool load_as_int64(const void* p, Scalar s, bool big_endian, std::int64_t& out);
+bool load_as_int64(const void* p, ScalarType s, bool big_endian, std::int64_t& out);
 
 // ---- bounds-checked binary cursor ----------------------------------------
 

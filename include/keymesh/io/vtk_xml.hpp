@@ -15,8 +15,6 @@
 
 namespace keymesh::io::vtk_xml {
 
-using mesh_bytes::Scalar;
-
 // An element. Children are owned; the destructor frees a subtree with an
 // explicit stack rather than by recursion, so no nesting can overflow the
 // call stack (parse_xml also refuses nesting deeper than kMaxXmlDepth).
@@ -59,12 +57,14 @@ struct ParsedXml {
 // bytes may contain anything, including '<'.
 ParsedXml parse_xml(std::string_view doc, const std::string& path);
 
-std::optional<Scalar> vtk_scalar(std::string_view t);
+std::optional<ScalarType> vtk_scalar(std::string_view t);
+// VTK's name of a type ("UInt8", "Float32", ...), as DataArray type= writes it.
+const char* vtk_type_name(ScalarType s);
 
 struct Context {
   const std::string& path;
   bool big_endian = false;
-  Scalar header = Scalar::UInt32;
+  ScalarType header = ScalarType::UInt32;
   std::string compressor;  // "" or the compressor's class name
   std::optional<std::string> appended_encoding;
   std::string_view appended;
@@ -76,16 +76,16 @@ Context file_context(const ParsedXml& xml, const std::string& path, std::string_
 
 // A decoded array: values in `bytes` of `type`, byte order `big`.
 struct Array {
-  Scalar type = Scalar::Float64;
+  ScalarType type = ScalarType::Float64;
   bool big = false;
   int components = 1;
   std::string bytes;
-  std::size_t count() const { return bytes.size() / mesh_bytes::scalar_size(type); }
+  std::size_t count() const { return bytes.size() / scalar_size(type); }
   double as_double(std::size_t i) const {
-    return mesh_bytes::load_as_double(bytes.data() + i * mesh_bytes::scalar_size(type), type, big);
+    return mesh_bytes::load_as_double(bytes.data() + i * scalar_size(type), type, big);
   }
   bool as_int(std::size_t i, std::int64_t& v) const {
-    return mesh_bytes::load_as_int64(bytes.data() + i * mesh_bytes::scalar_size(type), type, big, v);
+    return mesh_bytes::load_as_int64(bytes.data() + i * scalar_size(type), type, big, v);
   }
 };
 

@@ -10,18 +10,9 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/types.hpp"
+#include "keymesh/mesh/scalar_type.hpp"
 
 namespace keymesh {
-
-enum class ScalarType : std::uint8_t { UInt8, Int8, UInt16, Int16, Int32, Float32, Float64 };
-
-// Size in bytes of one sample.
-std::size_t scalar_size(ScalarType type);
-// "uint8", "int8", "uint16", "int16", "int32", "float32", "float64".
-const char* scalar_type_name(ScalarType type);
-// Parses the names above and common aliases ("uchar", "float", "double", ...);
-// throws InputError naming the text when unknown.
-ScalarType parse_scalar_type(const std::string& text);
 
 struct ImageGrid {
   std::array<Id, 3> dims{0, 0, 0};           // number of points along x, y, z
@@ -59,8 +50,11 @@ decltype(auto) visit_scalars(const ImageGrid& grid, F&& f) {
     case ScalarType::Int32: return f(reinterpret_cast<const std::int32_t*>(grid.data()));
     case ScalarType::Float32: return f(reinterpret_cast<const float*>(grid.data()));
     case ScalarType::Float64: return f(reinterpret_cast<const double*>(grid.data()));
+    case ScalarType::UInt32:
+    case ScalarType::Int64:
+    case ScalarType::UInt64: break;  // not a grid type (is_grid_scalar): every reader refuses it
   }
-  throw InputError("unknown scalar type");
+  throw InputError(std::string("a grid of ") + scalar_type_name(grid.type) + " samples is not supported");
 }
 
 // Throws InputError "<what>: ..." unless the origin and every grid point
