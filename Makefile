@@ -19,7 +19,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
 # and those `make bench` adds for its peers, plots and pictures.
 BENCH_PACKAGES = libthrust-dev libtbb-dev python3-openvdb python3-matplotlib xvfb
 
-.PHONY: all deps build demo test bench scaling clean sanitize sanitize-quick fuzz
+.PHONY: all deps build demo test bench scaling clean sanitize sanitize-quick fuzz fuzz-build fuzz-run
 
 all: build
 
@@ -69,25 +69,27 @@ bench: build
 SANITIZE_CMAKE = -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEYMESH_PYTHON=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_CUDA=OFF
 TSAN_FILTER ?= *Threads*:ExclusiveScan*:BitsNeeded*:Contour*:ContourTets*:Tetrahedralize*:Subdivide*:Coarsen*:Dual*:Curvature*:Incidence*:TopologyTest*
 SANITIZER_ENV = KEYMESH_HUGE_PAGES=0 ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
+  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan_suppressions.txt \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:ignore_noninstrumented_modules=1 \
   OMP_TOOL_LIBRARIES=/usr/lib/llvm-14/lib/libarcher.so
 
-# The short sanitized run of `make test`: the keymesh command alone under
-# ASan+UBSan (-O1) on the hostile-input and contour CLI tests and every
-# fuzz corpus and regression file (tests/sanitized_cli.py), then every
-# libFuzzer target (ASan+UBSan too) for FUZZ_QUICK_SECONDS each (0 skips).
+# The short sanitized run of `make test`: one clang build (build-fuzz,
+# ASan + UBSan + libFuzzer's coverage instrumentation, -O1) gives both the
+# `keymesh` command, run on the hostile-input, contour and formats CLI tests
+# and every fuzz corpus and regression file (tests/sanitized_cli.py), and
+# the libFuzzer targets, each run for FUZZ_QUICK_SECONDS (0 skips them).
+# One instrumented build instead of two (a gcc ASan build of keymesh, then
+# the clang fuzz build) keeps CI's 2-core `make test` under 20 minutes.
 FUZZ_QUICK_SECONDS ?= 10
 # ... and at most FUZZ_QUICK_RUNS inputs from seed 1, so that a green run is
 # the same run on any machine as fast (a gate must not fail by chance).
 FUZZ_QUICK_RUNS ?= 4000
 sanitize-quick: deps
-	@echo "make test: short sanitized run (ASan+UBSan keymesh in build-asan-quick)"
-	@cmake -S . -B build-asan-quick $(SANITIZE_CMAKE) -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_SANITIZE=address,undefined \
-	  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" >/dev/null
-	@cmake --build build-asan-quick -j $(JOBS) --target keymesh
-	@$(SANITIZER_ENV) $(PYTHON) tests/sanitized_cli.py build-asan-quick/keymesh
+	@echo "make test: short sanitized run (ASan+UBSan keymesh and fuzzers, one clang build in build-fuzz)"
+	@$(MAKE) --no-print-directory fuzz-build FUZZ_BUILD_FLAGS='-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"' FUZZ_TARGETS="keymesh keymesh_fuzzers"
+	@$(SANITIZER_ENV) $(PYTHON) tests/sanitized_cli.py build-fuzz/keymesh
 ifneq ($(FUZZ_QUICK_SECONDS),0)
-	@$(MAKE) --no-print-directory fuzz FUZZ_SECONDS=$(FUZZ_QUICK_SECONDS) FUZZ_FLAGS="-seed=1 -runs=$(FUZZ_QUICK_RUNS)"
+	@$(MAKE) --no-print-directory fuzz-run FUZZ_SECONDS=$(FUZZ_QUICK_SECONDS) FUZZ_FLAGS="-seed=1 -runs=$(FUZZ_QUICK_RUNS)"
 endif
 
 sanitize: deps
@@ -104,10 +106,14 @@ sanitize: deps
 # tests/fuzz/regressions/<target>/ once fixed; `make test` replays both).
 FUZZ_SECONDS ?= 60
 FUZZ_FLAGS ?= -rss_limit_mb=2048 -malloc_limit_mb=256 -timeout=10 -max_len=65536
-fuzz: deps
+FUZZ_BUILD_FLAGS ?=
+FUZZ_TARGETS ?= keymesh_fuzzers
+fuzz: fuzz-build fuzz-run
+fuzz-build: deps
 	@CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEYMESH_FUZZ=ON \
-	  -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_PYTHON=OFF -DKEYMESH_CUDA=OFF $(CMAKE_FLAGS) >/dev/null
-	@cmake --build build-fuzz -j $(JOBS) --target keymesh_fuzzers
+	  -DKEYMESH_BUILD_TESTS=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_PYTHON=OFF -DKEYMESH_CUDA=OFF $(CMAKE_FLAGS) $(FUZZ_BUILD_FLAGS) >/dev/null
+	@cmake --build build-fuzz -j $(JOBS) --target $(FUZZ_TARGETS)
+fuzz-run:
 	@status=0; for src in tests/fuzz/*_fuzz.cpp; do \
 	  t=$$(basename $$src _fuzz.cpp); \
 	  mkdir -p build-fuzz/corpus/$$t build-fuzz/crashes/$$t; cp -n tests/fuzz/corpus/$$t/* build-fuzz/corpus/$$t/ 2>/dev/null; \

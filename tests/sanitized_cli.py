@@ -1,11 +1,11 @@
 """The short sanitized run of `make test` (issue 11): the `keymesh` command
-built with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan-quick)
+built with AddressSanitizer + UndefinedBehaviorSanitizer (build-fuzz: the clang build that also makes the fuzzers)
 runs the hostile-input, contour and formats (DICOM, Zarr, glTF) CLI tests,
 then reads every file of the fuzz seed corpus and of tests/fuzz/regressions
 with `keymesh info`: each must end with exit 0 or 1 and no sanitizer report.
 `make sanitize` is the whole suite under ASan/UBSan and TSan.
 
-Usage: sanitized_cli.py BUILD-ASAN-QUICK/keymesh (with ASAN_OPTIONS set)."""
+Usage: sanitized_cli.py build-fuzz/keymesh (with ASAN_OPTIONS set)."""
 import os
 import shutil
 import subprocess
