@@ -3,7 +3,7 @@
 
 #include "command.hpp"
 #include "keymesh/io/output_transaction.hpp"
-#include "keymesh/analyze/topology.hpp"
+#include "keymesh/analyze/report_fields.hpp"
 #include "keymesh/io/mesh_io.hpp"
 
 namespace keymesh::cli {
@@ -38,25 +38,9 @@ Register reg{Command{
             (long long)t.nonmanifold_edges, (long long)t.nonmanifold_vertices, (long long)t.duplicate_points,
             (long long)t.unused_points, (long long)t.degenerate_cells, (long long)t.components,
             (long long)t.euler_characteristic, t.closed_manifold ? "yes" : "no");
-        if (!o->common.report_path.empty()) {
-          nlohmann::json r;
-          r["input"] = o->input;
-          r["points"] = t.points;
-          r["cells"] = t.cells;
-          r["edges"] = t.edges;
-          r["boundary_edges"] = t.boundary_edges;
-          r["nonmanifold_edges"] = t.nonmanifold_edges;
-          r["nonmanifold_vertices"] = t.nonmanifold_vertices;
-          r["duplicate_points"] = t.duplicate_points;
-          r["unused_points"] = t.unused_points;
-          r["degenerate_cells"] = t.degenerate_cells;
-          r["components"] = t.components;
-          r["euler_characteristic"] = t.euler_characteristic;
-          r["closed_manifold"] = t.closed_manifold;
-          r["threads"] = threads;
-          r["seconds"] = timer.seconds();
-          write_report(o->common.report_path, r);
-        }
+        nlohmann::json r = {{"input", o->input}};
+        analyze::visit_fields(t, [&](const char* name, const auto& value) { r[name] = value; });
+        finish_report(o->common, r, threads, timer, PeakRss::Omit);
         if (o->expect_closed && !t.closed_manifold) {
           // The check itself ran: its report is written though the exit is 1.
           if (io::OutputTransaction* outputs = io::OutputTransaction::current()) outputs->commit();

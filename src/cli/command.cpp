@@ -1,18 +1,17 @@
 #include "command.hpp"
 
-#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 
 #include "keymesh/core/work_estimate.hpp"
-#include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/input_file.hpp"
 #include "keymesh/parallel/threads.hpp"
 
@@ -30,7 +29,16 @@ void add_common_options(CLI::App& cmd, CommonOptions& common) {
                  "or the address-space limit when lower)")
       ->check(size_validator());
   cmd.add_option("--backend", common.backend, "cpu (threads) or cuda (NVIDIA GPU; output identical to cpu)")
-      ->check(CLI::IsMember({"cpu", "cuda"}));
+      ->check(one_of<generate::Backend>());
+}
+
+int refuse_non_finite_isovalues(const char* command, const std::vector<double>& isovalues) {
+  for (double iso : isovalues)
+    if (!std::isfinite(iso)) {
+      std::fprintf(stderr, "keymesh %s: --iso %g is not a finite number\n", command, iso);
+      return 2;
+    }
+  return 0;
 }
 
 bool parse_size(const std::string& text, std::size_t& out) {
@@ -87,43 +95,8 @@ int require_cpu_backend(const CommonOptions& common, const char* what) {
 
 int apply_threads(const CommonOptions& common) { return parallel::set_thread_count(common.threads); }
 
-StageTimer::StageTimer() : start_(std::chrono::steady_clock::now()) {}
-
-void StageTimer::add(const std::string& name, double seconds) {
-  for (auto& [n, s] : stages_)
-    if (n == name) {
-      s += seconds;
-      return;
-    }
-  stages_.emplace_back(name, seconds);
-}
-
-double StageTimer::total() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-}
-
-nlohmann::json StageTimer::seconds() const {
-  nlohmann::json j = nlohmann::json::object();
-  j["total"] = total();
-  for (const auto& [n, s] : stages_) j[n] = s;
-  return j;
-}
-
 void Progress::say(const std::string& line) const {
   if (enabled_) std::fprintf(stderr, "keymesh: %s\n", line.c_str());
-}
-
-void write_report(const std::string& path, const nlohmann::json& report) {
-  io::AtomicFile file(path);
-  file.write(report.dump(2));
-  file.write("\n");
-  file.commit();
-}
-
-double peak_rss_mib() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
 long long file_size(const std::string& path) {

@@ -3,7 +3,6 @@
 // file adds itself to, stage timing, progress on stderr and --report JSON.
 #include <CLI/CLI.hpp>
 
-#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -12,7 +11,9 @@
 
 #include "keymesh/core/progress.hpp"
 #include "keymesh/core/work_estimate.hpp"
+#include "keymesh/generate/option_names.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
+#include "report.hpp"
 
 namespace keymesh::cli {
 
@@ -44,34 +45,19 @@ int require_cpu_backend(const CommonOptions& common, const char* what);
 
 void add_common_options(CLI::App& cmd, CommonOptions& common);
 
+// A CLI11 check that accepts the names of the library's option enum E
+// (generate/option_names.hpp), so help lists what the library parses.
+template <class E>
+CLI::IsMember one_of() {
+  return CLI::IsMember(generate::option_names<E>());
+}
+
+// 0 when every --iso is finite; otherwise "keymesh <command>: --iso V is not
+// a finite number" and 2 (a usage error, found before any work).
+int refuse_non_finite_isovalues(const char* command, const std::vector<double>& isovalues);
+
 // Applies --threads and returns the count in force.
 int apply_threads(const CommonOptions& common);
-
-// Wall-clock stages in the order they ran, for --report "seconds".
-class StageTimer {
- public:
-  StageTimer();
-  // Runs f() as stage `name` and records its duration.
-  template <class F>
-  decltype(auto) run(const std::string& name, F&& f) {
-    const auto t0 = std::chrono::steady_clock::now();
-    struct Record {
-      StageTimer* timer;
-      std::string name;
-      std::chrono::steady_clock::time_point t0;
-      ~Record() { timer->add(name, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()); }
-    } record{this, name, t0};
-    return f();
-  }
-  void add(const std::string& name, double seconds);
-  // {"total": ..., "<stage>": ..., ...}
-  nlohmann::json seconds() const;
-  double total() const;
-
- private:
-  std::chrono::steady_clock::time_point start_;
-  std::vector<std::pair<std::string, double>> stages_;
-};
 
 // Progress lines on stderr ("keymesh: reading X"), only for work expected to
 // take over about a second and never with --quiet.
@@ -92,12 +78,6 @@ class Progress {
   bool enabled_;
   progress::ScopedHook hook_;
 };
-
-// Writes the report atomically (temporary file, then rename).
-void write_report(const std::string& path, const nlohmann::json& report);
-
-// Peak resident set size of this process in MiB.
-double peak_rss_mib();
 
 // Size of a file in bytes, 0 when it cannot be read.
 long long file_size(const std::string& path);

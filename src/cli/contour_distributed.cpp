@@ -1,11 +1,12 @@
-#include "contour_distributed.hpp"
-
+// `mpirun -np P keymesh contour VOLUME -o OUT`: the distributed contour's
+// command-line side: each rank reads its slab, the mesh is written as one
+// piece per rank (.pvtp) or gathered on rank 0, rank 0 reports.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <numeric>
+#include <memory>
 
-#include "command.hpp"
+#include "contour_cli.hpp"
 #include "keymesh/distributed/contour_distributed.hpp"
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/io/mesh_io.hpp"
@@ -20,6 +21,10 @@ bool ends_with(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && std::equal(tail.rbegin(), tail.rend(), s.rbegin());
 }
 
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 nlohmann::json rank_json(const distributed::RankStats& s) {
   return {{"first_plane", s.first_plane},       {"planes", s.planes},
           {"points", s.points},                 {"points_owned", s.points_owned},
@@ -31,118 +36,127 @@ nlohmann::json rank_json(const distributed::RankStats& s) {
           {"output", s.output}};
 }
 
-}  // namespace
-
-int run_distributed_contour(const DistributedContourJob& job) {
-  const int rank = distributed::rank(), ranks = distributed::size();
-  const bool pieces = ends_with(job.output, ".pvtp");
-  if (pieces && job.gather) {
-    if (rank == 0)
-      std::fprintf(stderr, "keymesh contour: --gather writes one file; %s is an index of pieces (use .vtp .ply ...)\n",
-                   job.output.c_str());
-    return 2;
-  }
-  StageTimer timer;
-  // Checks every rank makes alike: refused with one message, no MPI_Abort.
-  std::unique_ptr<PlaneSource> source;
+// This rank's planes, once every rank has made the checks all make alike:
+// a failure is said once (by rank 0), with no MPI_Abort. Null on failure.
+std::unique_ptr<PlaneSource> open_slab_source(const ContourCli& o, const generate::ContourOptions& options) {
   try {
-    source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
-    distributed::require_distributable(source->header(), job.options, ranks);
+    const io::RawOptions raw = o.raw_input.given() ? o.raw_input.options() : io::RawOptions{};
+    auto source = io::open_volume_planes(o.input, o.raw_input.given() ? &raw : nullptr);
+    distributed::require_distributable(source->header(), options, distributed::size());
+    return source;
   } catch (const std::exception& e) {
-    if (rank == 0) std::fprintf(stderr, "keymesh: %s\n", e.what());
-    return 1;
+    if (distributed::rank() == 0) std::fprintf(stderr, "keymesh: %s\n", e.what());
+    return nullptr;
   }
-  distributed::ContourPiece piece = timer.run("contour", [&] { return distributed::contour_piece(*source, job.options, job.balance); });
-  SurfaceMesh whole;
-  double total_points = static_cast<double>(piece.numbering.total);
-  if (pieces) {
-    // Every rank writes its piece; rank 0 writes the index once all exist,
-    // so a failure anywhere leaves no index and no pieces.
-    namespace fs = std::filesystem;
-    const fs::path index(job.output);
-    const std::string stem = index.stem().string();
-    auto piece_name = [&](int q) { return stem + "_" + std::to_string(q) + ".vtp"; };
-    const fs::path mine = index.parent_path() / piece_name(rank);
-    bool ok = true;
-    timer.run("write", [&] {
-      const auto t0 = std::chrono::steady_clock::now();
-      try {
-        io::write_vtp(piece.mesh, mine.string(), &piece.numbering.ids);
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "keymesh: rank %d: %s\n", rank, e.what());
-        ok = false;
-      }
-      ok = distributed::all_ok(ok);
-      if (ok && rank == 0) {
-        std::vector<std::string> names;
-        for (int q = 0; q < ranks; ++q) names.push_back(piece_name(q));
-        try {
-          io::write_pvtp(job.output, piece.mesh, names, true);
-        } catch (const std::exception& e) {
-          std::fprintf(stderr, "keymesh: %s\n", e.what());
-          ok = false;
-        }
-      }
-      ok = distributed::all_ok(ok);
-      if (!ok) {
-        std::error_code ec;
-        fs::remove(mine, ec);
-      }
-      piece.stats.output = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    });
-    if (!ok) return 1;
-  } else {
-    whole = timer.run("gather", [&] { return distributed::gather(piece); });
-    bool ok = true;
-    if (rank == 0) {
-      try {
-        const auto t0 = std::chrono::steady_clock::now();
-        timer.run("write", [&] { io::write_mesh(whole, job.output); });
-        piece.stats.output += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "keymesh: %s\n", e.what());
-        ok = false;
-      }
-    }
-    if (!distributed::all_ok(ok)) return 1;
-  }
-  const std::vector<distributed::RankStats> all = distributed::gather_stats(piece.stats);
-  if (rank != 0) return 0;
+}
 
+// Every rank writes its piece; rank 0 writes the index once all exist, so a
+// failure anywhere leaves no index and no pieces. True when all succeeded.
+bool write_pieces(distributed::ContourPiece& piece, const std::string& output) {
+  namespace fs = std::filesystem;
+  const int rank = distributed::rank(), ranks = distributed::size();
+  const fs::path index(output);
+  const std::string stem = index.stem().string();
+  auto piece_name = [&](int q) { return stem + "_" + std::to_string(q) + ".vtp"; };
+  const fs::path mine = index.parent_path() / piece_name(rank);
+  const auto t0 = std::chrono::steady_clock::now();
+  bool ok = true;
+  try {
+    io::write_vtp(piece.mesh, mine.string(), &piece.numbering.ids);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "keymesh: rank %d: %s\n", rank, e.what());
+    ok = false;
+  }
+  ok = distributed::all_ok(ok);
+  if (ok && rank == 0) {
+    std::vector<std::string> names;
+    for (int q = 0; q < ranks; ++q) names.push_back(piece_name(q));
+    try {
+      io::write_pvtp(output, piece.mesh, names, true);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "keymesh: %s\n", e.what());
+      ok = false;
+    }
+  }
+  ok = distributed::all_ok(ok);
+  if (!ok) {
+    std::error_code ec;
+    fs::remove(mine, ec);
+  }
+  piece.stats.output = seconds_since(t0);
+  return ok;
+}
+
+// The whole mesh gathered on rank 0, which writes it. True when it was written.
+bool write_gathered(distributed::ContourPiece& piece, const std::string& output, StageTimer& timer) {
+  const SurfaceMesh whole = timer.run("gather", [&] { return distributed::gather(piece); });
+  bool ok = true;
+  if (distributed::rank() == 0) {
+    try {
+      const auto t0 = std::chrono::steady_clock::now();
+      timer.run("write", [&] { io::write_mesh(whole, output); });
+      piece.stats.output += seconds_since(t0);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "keymesh: %s\n", e.what());
+      ok = false;
+    }
+  }
+  return distributed::all_ok(ok);
+}
+
+// Rank 0's summary line and report, from every rank's statistics.
+void report_distributed(const ContourCli& o, const PlaneSource& source, double total_points,
+                        const std::vector<distributed::RankStats>& all, int threads, const StageTimer& timer) {
+  const int ranks = distributed::size();
   double triangles = 0, bytes = 0, max_tris = 0;
   for (const auto& s : all) {
     triangles += s.triangles;
     bytes += s.bytes_sent;
     max_tris = std::max(max_tris, s.triangles);
   }
-  if (!job.quiet)
+  if (!o.common.quiet)
     std::fprintf(stderr, "keymesh: %lld points, %lld triangles on %d ranks -> %s\n",
-                 static_cast<long long>(total_points), static_cast<long long>(triangles), ranks, job.output.c_str());
-  if (!job.report_path.empty()) {
-    nlohmann::json r;
-    r["input"] = job.input;
-    r["output"] = job.output;
-    r["dims"] = source->header().dims;
-    r["scalar_type"] = scalar_type_name(source->header().type);
-    r["grid"] = "voxels";
-    r["isovalues"] = job.options.isovalues;
-    r["weld"] = job.weld;
-    r["normals"] = job.normals;
-    r["points"] = static_cast<long long>(total_points);
-    r["cells"] = static_cast<long long>(triangles);
-    r["threads"] = job.threads;
-    r["ranks"] = ranks;
-    r["seconds"] = timer.seconds();
-    nlohmann::json per_rank = nlohmann::json::array();
-    for (const auto& s : all) per_rank.push_back(rank_json(s));
-    r["distributed"] = {{"ranks", ranks},
-                        {"output", pieces ? "pieces" : "gathered"},
-                        {"bytes_exchanged", bytes},
-                        {"triangle_imbalance", triangles > 0 ? max_tris * ranks / triangles : 1.0},
-                        {"per_rank", per_rank}};
-    r["peak_rss_mib"] = peak_rss_mib();
-    write_report(job.report_path, r);
+                 static_cast<long long>(total_points), static_cast<long long>(triangles), ranks, o.output.c_str());
+  if (o.common.report_path.empty()) return;
+  nlohmann::json r = contour_report(o, static_cast<long long>(total_points), static_cast<long long>(triangles),
+                                    threads, timer);
+  r["dims"] = source.header().dims;
+  r["scalar_type"] = scalar_type_name(source.header().type);
+  r["grid"] = "voxels";
+  r["ranks"] = ranks;
+  nlohmann::json per_rank = nlohmann::json::array();
+  for (const auto& s : all) per_rank.push_back(rank_json(s));
+  r["distributed"] = {{"ranks", ranks},
+                      {"output", ends_with(o.output, ".pvtp") ? "pieces" : "gathered"},
+                      {"bytes_exchanged", bytes},
+                      {"triangle_imbalance", triangles > 0 ? max_tris * ranks / triangles : 1.0},
+                      {"per_rank", per_rank}};
+  r["peak_rss_mib"] = peak_rss_mib();
+  write_report(o.common.report_path, r);
+}
+
+}  // namespace
+
+int run_distributed_contour(const ContourCli& o, const generate::ContourOptions& options, int threads) {
+  const bool pieces = ends_with(o.output, ".pvtp");
+  if (pieces && o.gather) {
+    if (distributed::rank() == 0)
+      std::fprintf(stderr, "keymesh contour: --gather writes one file; %s is an index of pieces (use .vtp .ply ...)\n",
+                   o.output.c_str());
+    return 2;
   }
+  StageTimer timer;
+  const std::unique_ptr<PlaneSource> source = open_slab_source(o, options);
+  if (!source) return 1;
+  distributed::ContourPiece piece =
+      timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance); });
+  const double total_points = static_cast<double>(piece.numbering.total);
+  const bool written = pieces ? timer.run("write", [&] { return write_pieces(piece, o.output); })
+                              : write_gathered(piece, o.output, timer);
+  if (!written) return 1;
+  const std::vector<distributed::RankStats> all = distributed::gather_stats(piece.stats);
+  if (distributed::rank() != 0) return 0;
+  report_distributed(o, *source, total_points, all, threads, timer);
   return 0;
 }
 

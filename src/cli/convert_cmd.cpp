@@ -94,19 +94,10 @@ Register reg{Command{
           progress.say("writing " + o->output);
           timer.run("write", [&] { io::write_volume(v, o->output); });
         }
-        if (!o->common.quiet)
-          std::fprintf(stderr, "keymesh: %lld points, %lld cells -> %s\n", points, cells, o->output.c_str());
-        if (!o->common.report_path.empty()) {
-          r.update({{"input", o->input},
-                    {"output", o->output},
-                    {"kind", in == Kind::Grid ? "grid" : in == Kind::Surface ? "mesh" : "volume"},
-                    {"points", points},
-                    {"cells", cells},
-                    {"threads", threads},
-                    {"seconds", timer.seconds()},
-                    {"peak_rss_mib", peak_rss_mib()}});
-          write_report(o->common.report_path, r);
-        }
+        say_written(o->common, points, cells, "cells", o->output);
+        r.update(files_and_counts(o->input, o->output, points, cells));
+        r["kind"] = in == Kind::Grid ? "grid" : in == Kind::Surface ? "mesh" : "volume";
+        finish_report(o->common, r, threads, timer, PeakRss::Include);
         return 0;
       };
     }}};

@@ -42,21 +42,13 @@ Register reg{Command{
             std::fprintf(stderr, "keymesh: %lld boundary fans, %lld non-manifold points, %lld fans skipped\n",
                          (long long)st.boundary_fans, (long long)st.nonmanifold_points, (long long)st.skipped_fans);
         }
-        if (!o->common.report_path.empty()) {
-          nlohmann::json r;
-          r["input"] = o->input;
-          r["output"] = o->output;
-          r["input_points"] = m.num_points();
-          r["input_cells"] = m.num_cells();
-          r["points"] = d.num_points();
-          r["cells"] = d.num_cells();
-          r["boundary_fans"] = st.boundary_fans;
-          r["nonmanifold_points"] = st.nonmanifold_points;
-          r["skipped_fans"] = st.skipped_fans;
-          r["threads"] = threads;
-          r["seconds"] = timer.seconds();
-          write_report(o->common.report_path, r);
-        }
+        nlohmann::json r = files_and_counts(o->input, o->output, d.num_points(), d.num_cells());
+        r["input_points"] = m.num_points();
+        r["input_cells"] = m.num_cells();
+        r["boundary_fans"] = st.boundary_fans;
+        r["nonmanifold_points"] = st.nonmanifold_points;
+        r["skipped_fans"] = st.skipped_fans;
+        finish_report(o->common, r, threads, timer, PeakRss::Omit);
         return 0;
       };
     }}};

@@ -36,15 +36,8 @@ Register reg{Command{
         const ImageGrid grid = timer.run("generate", [&] { return generate::spherical_distance(o->size); });
         progress.say("writing " + o->output);
         timer.run("write", [&] { io::write_volume(grid, o->output); });
-        if (!o->common.report_path.empty()) {
-          nlohmann::json r;
-          r["dataset"] = o->dataset;
-          r["dims"] = grid.dims;
-          r["points"] = grid.num_points();
-          r["threads"] = threads;
-          r["seconds"] = timer.seconds();
-          write_report(o->common.report_path, r);
-        }
+        nlohmann::json r = {{"dataset", o->dataset}, {"dims", grid.dims}, {"points", grid.num_points()}};
+        finish_report(o->common, r, threads, timer, PeakRss::Omit);
         return 0;
       };
     }}};

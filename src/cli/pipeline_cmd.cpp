@@ -1,6 +1,5 @@
 // keymesh pipeline IN -o OUT --iso V [--coarsen] [--subdivide K] [--dual]
 // [--curvature]: the paper's Figure 8 chain in memory, every stage keyed.
-#include <cmath>
 #include <cstdio>
 
 #include "command.hpp"
@@ -27,6 +26,52 @@ struct PipelineCli {
   CommonOptions common;
 };
 
+// Contour, then the optional stages in the paper's order, all in memory.
+SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& r) {
+  generate::ContourOptions opt;
+  opt.isovalues = o.isovalues;
+  opt.coarsen = o.coarsen;
+  opt.curvature = o.curvature;
+  opt.backend = generate::parse_option<generate::Backend>(o.common.backend);
+  opt.normals = generate::parse_option<generate::ContourNormals>(o.normals);
+  SurfaceMesh mesh;
+  if (io::is_grid_file(o.input)) {
+    const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
+    mesh = timer.run("contour", [&] { return generate::contour(g, opt); });
+  } else {
+    const ImageGrid g = timer.run("read", [&] { return io::read_volume(o.input); });
+    mesh = timer.run("contour", [&] { return backend::contour(g, opt); });
+  }
+  r["contour_cells"] = mesh.num_cells();
+  if (o.subdivide > 0) {
+    generate::SubdivideOptions so;
+    so.levels = o.subdivide;
+    so.scheme = generate::parse_option<generate::SubdivideScheme>(o.scheme);
+    mesh = timer.run("subdivide", [&] { return generate::subdivide(mesh, so); });
+  }
+  if (o.dual) mesh = timer.run("dual", [&] { return generate::dual(mesh); });
+  return mesh;
+}
+
+int run_pipeline(const PipelineCli& o) {
+  if (int rc = refuse_non_finite_isovalues("pipeline", o.isovalues)) return rc;
+  if (o.scheme == "bezier" && o.normals == "none") {
+    std::fprintf(stderr, "keymesh pipeline: --scheme bezier needs --normals average or gradient\n");
+    return 2;
+  }
+  const int threads = apply_threads(o.common);
+  StageTimer timer;
+  if (o.common.backend == "cuda" && (o.subdivide > 0 || o.dual))
+    if (int rc = require_cpu_backend(o.common, "subdivision and the dual")) return rc;
+  nlohmann::json r;
+  const SurfaceMesh mesh = run_stages(o, timer, r);
+  timer.run("write", [&] { io::write_mesh(mesh, o.output); });
+  say_written(o.common, mesh.num_points(), mesh.num_cells(), "cells", o.output);
+  r.update(files_and_counts(o.input, o.output, mesh.num_points(), mesh.num_cells()));
+  finish_report(o.common, r, threads, timer, PeakRss::Include);
+  return 0;
+}
+
 Register reg{Command{
     "pipeline", "contour, then optionally coarsen, subdivide and take the dual, in memory (the paper's Figure 8)",
     [](CLI::App& cmd) -> std::function<int()> {
@@ -39,66 +84,12 @@ Register reg{Command{
       cmd.add_flag("--curvature", o->curvature, "mean curvature from the volume (voxel grids), carried along");
       cmd.add_option("--subdivide", o->subdivide, "levels of 1->4 subdivision")->check(CLI::Range(0, 6));
       cmd.add_option("--scheme", o->scheme, "subdivision positions: linear or bezier")
-          ->check(CLI::IsMember({"linear", "bezier"}));
+          ->check(one_of<generate::SubdivideScheme>());
       cmd.add_option("--normals", o->normals, "none, gradient or average (bezier needs normals)")
-          ->check(CLI::IsMember({"none", "gradient", "average"}));
+          ->check(one_of<generate::ContourNormals>());
       cmd.add_flag("--dual", o->dual, "finish with the dual mesh");
       add_common_options(cmd, o->common);
-      return [o]() {
-        for (double iso : o->isovalues)
-          if (!std::isfinite(iso)) {
-            std::fprintf(stderr, "keymesh pipeline: --iso %g is not a finite number\n", iso);
-            return 2;
-          }
-        if (o->scheme == "bezier" && o->normals == "none") {
-          std::fprintf(stderr, "keymesh pipeline: --scheme bezier needs --normals average or gradient\n");
-          return 2;
-        }
-        const int threads = apply_threads(o->common);
-        StageTimer timer;
-        generate::ContourOptions opt;
-        opt.isovalues = o->isovalues;
-        opt.coarsen = o->coarsen;
-        opt.curvature = o->curvature;
-        opt.backend = o->common.backend == "cuda" ? generate::Backend::Cuda : generate::Backend::Cpu;
-        if (opt.backend == generate::Backend::Cuda && (o->subdivide > 0 || o->dual))
-          if (int rc = require_cpu_backend(o->common, "subdivision and the dual")) return rc;
-        opt.normals = o->normals == "gradient"  ? generate::ContourNormals::Gradient
-                      : o->normals == "average" ? generate::ContourNormals::Average
-                                                : generate::ContourNormals::None;
-        SurfaceMesh mesh;
-        if (io::is_grid_file(o->input)) {
-          const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o->input); });
-          mesh = timer.run("contour", [&] { return generate::contour(g, opt); });
-        } else {
-          const ImageGrid g = timer.run("read", [&] { return io::read_volume(o->input); });
-          mesh = timer.run("contour", [&] { return backend::contour(g, opt); });
-        }
-        nlohmann::json r;
-        r["contour_cells"] = mesh.num_cells();
-        if (o->subdivide > 0) {
-          generate::SubdivideOptions so;
-          so.levels = o->subdivide;
-          so.scheme = o->scheme == "bezier" ? generate::SubdivideScheme::Bezier : generate::SubdivideScheme::Linear;
-          mesh = timer.run("subdivide", [&] { return generate::subdivide(mesh, so); });
-        }
-        if (o->dual) mesh = timer.run("dual", [&] { return generate::dual(mesh); });
-        timer.run("write", [&] { io::write_mesh(mesh, o->output); });
-        if (!o->common.quiet)
-          std::fprintf(stderr, "keymesh: %lld points, %lld cells -> %s\n", (long long)mesh.num_points(),
-                       (long long)mesh.num_cells(), o->output.c_str());
-        if (!o->common.report_path.empty()) {
-          r["input"] = o->input;
-          r["output"] = o->output;
-          r["points"] = mesh.num_points();
-          r["cells"] = mesh.num_cells();
-          r["threads"] = threads;
-          r["seconds"] = timer.seconds();
-          r["peak_rss_mib"] = peak_rss_mib();
-          write_report(o->common.report_path, r);
-        }
-        return 0;
-      };
+      return [o]() { return run_pipeline(*o); };
     }}};
 
 }  // namespace

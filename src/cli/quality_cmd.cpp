@@ -3,7 +3,7 @@
 #include <string>
 
 #include "command.hpp"
-#include "keymesh/analyze/quality.hpp"
+#include "keymesh/analyze/report_fields.hpp"
 #include "keymesh/io/mesh_io.hpp"
 
 namespace keymesh::cli {
@@ -34,20 +34,9 @@ Register reg{Command{
         for (int b = 0; b < 10; ++b)
           std::printf("  %.1f-%.1f %10lld %s\n", b / 10.0, (b + 1) / 10.0, (long long)q.histogram[b],
                       std::string(static_cast<std::size_t>(50 * q.histogram[b] / most), '#').c_str());
-        if (!o->common.report_path.empty()) {
-          nlohmann::json r;
-          r["input"] = o->input;
-          r["points"] = mesh.num_points();
-          r["cells"] = q.triangles;
-          r["min"] = q.min;
-          r["median"] = q.median;
-          r["mean"] = q.mean;
-          r["fraction_above_0_6"] = q.fraction_above_0_6;
-          r["histogram"] = q.histogram;
-          r["threads"] = threads;
-          r["seconds"] = timer.seconds();
-          write_report(o->common.report_path, r);
-        }
+        nlohmann::json r = {{"input", o->input}, {"points", mesh.num_points()}};
+        analyze::visit_fields(q, [&](const char* name, const auto& value) { r[name] = value; });
+        finish_report(o->common, r, threads, timer, PeakRss::Omit);
         return 0;
       };
     }}};

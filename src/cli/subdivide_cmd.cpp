@@ -32,9 +32,9 @@ Register reg{Command{
       cmd.add_option("--levels,-k", o->levels, "subdivision levels")->check(CLI::Range(0, 8));
       cmd.add_option("--scheme", o->scheme,
                      "linear (edge midpoints) or bezier (PN triangles from the point normals; surfaces only)")
-          ->check(CLI::IsMember({"linear", "bezier"}));
+          ->check(one_of<generate::SubdivideScheme>());
       cmd.add_option("--weld", o->weld, "keyreduce (edge keys) or vertexweld (coordinates, the baseline)")
-          ->check(CLI::IsMember({"keyreduce", "vertexweld"}));
+          ->check(one_of<generate::SubdivideWeld>());
       add_common_options(cmd, o->common);
       return [o]() {
         if (int rc = require_cpu_backend(o->common, "subdivision")) return rc;
@@ -43,8 +43,8 @@ Register reg{Command{
         Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
         generate::SubdivideOptions opt;
         opt.levels = o->levels;
-        opt.scheme = o->scheme == "bezier" ? generate::SubdivideScheme::Bezier : generate::SubdivideScheme::Linear;
-        opt.weld = o->weld == "vertexweld" ? generate::SubdivideWeld::VertexWeld : generate::SubdivideWeld::KeyReduce;
+        opt.scheme = generate::parse_option<generate::SubdivideScheme>(o->scheme);
+        opt.weld = generate::parse_option<generate::SubdivideWeld>(o->weld);
         const bool grid_in = io::is_grid_file(o->input);
         if (grid_in ? is_mesh_path(o->output) : !is_mesh_path(o->output)) {
           std::fprintf(stderr, "keymesh subdivide: %s: a %s subdivides into a %s\n", o->output.c_str(),
@@ -75,25 +75,14 @@ Register reg{Command{
           timer.run("write", [&] { io::write_mesh(s, o->output); });
           in_points = m.num_points(), in_cells = m.num_cells(), points = s.num_points(), cells = s.num_cells();
         }
-        if (!o->common.quiet)
-          std::fprintf(stderr, "keymesh: %lld points, %lld cells -> %s\n", (long long)points, (long long)cells,
-                       o->output.c_str());
-        if (!o->common.report_path.empty()) {
-          nlohmann::json r;
-          r["input"] = o->input;
-          r["output"] = o->output;
-          r["levels"] = o->levels;
-          r["scheme"] = o->scheme;
-          r["weld"] = o->weld;
-          r["input_points"] = in_points;
-          r["input_cells"] = in_cells;
-          r["points"] = points;
-          r["cells"] = cells;
-          r["threads"] = threads;
-          r["seconds"] = timer.seconds();
-          r["peak_rss_mib"] = peak_rss_mib();
-          write_report(o->common.report_path, r);
-        }
+        say_written(o->common, points, cells, "cells", o->output);
+        nlohmann::json r = files_and_counts(o->input, o->output, points, cells);
+        r["levels"] = o->levels;
+        r["scheme"] = o->scheme;
+        r["weld"] = o->weld;
+        r["input_points"] = in_points;
+        r["input_cells"] = in_cells;
+        finish_report(o->common, r, threads, timer, PeakRss::Include);
         return 0;
       };
     }}};

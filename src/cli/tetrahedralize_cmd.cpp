@@ -33,7 +33,7 @@ Register reg{Command{
       cmd.add_option("--weld", o->weld,
                      "scheme 24: face centres shared by KEY-REDUCE on face keys (keyreduce) or by coordinates "
                      "(vertexweld, the baseline)")
-          ->check(CLI::IsMember({"keyreduce", "vertexweld"}));
+          ->check(one_of<generate::SubdivideWeld>());
       add_common_options(cmd, o->common);
       return [o]() {
         if (int rc = require_cpu_backend(o->common, "tetrahedralization")) return rc;
@@ -41,6 +41,8 @@ Register reg{Command{
         StageTimer timer;
         Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
         progress.say("reading " + o->input);
+        const bool vertexweld =
+            generate::parse_option<generate::SubdivideWeld>(o->weld) == generate::SubdivideWeld::VertexWeld;
         UnstructuredGrid tets;
         nlohmann::json r;
         if (io::is_grid_file(o->input)) {
@@ -49,7 +51,7 @@ Register reg{Command{
                                              field_components(hexes.point_fields)),
                      memory_budget(o->common), o->input + ": tetrahedralize --scheme " + std::to_string(o->scheme));
           tets = timer.run("tetrahedralize", [&] {
-            return o->scheme == 24 ? generate::tetrahedralize24(hexes, o->weld == "vertexweld")
+            return o->scheme == 24 ? generate::tetrahedralize24(hexes, vertexweld)
                                    : generate::tetrahedralize5(hexes);
           });
           r["input_cells"] = hexes.num_cells();
@@ -66,28 +68,18 @@ Register reg{Command{
           progress.say("tetrahedralizing " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
                        std::to_string(grid.dims[2]));
           tets = timer.run("tetrahedralize", [&] {
-            return o->scheme == 24 ? generate::tetrahedralize24(grid, o->weld == "vertexweld")
+            return o->scheme == 24 ? generate::tetrahedralize24(grid, vertexweld)
                                    : generate::tetrahedralize5(grid);
           });
           r["dims"] = grid.dims;
         }
         progress.say("writing " + o->output);
         timer.run("write", [&] { io::write_grid(tets, o->output); });
-        if (!o->common.quiet)
-          std::fprintf(stderr, "keymesh: %lld points, %lld tetrahedra -> %s\n", (long long)tets.num_points(),
-                       (long long)tets.num_cells(), o->output.c_str());
-        if (!o->common.report_path.empty()) {
-          r["input"] = o->input;
-          r["output"] = o->output;
-          r["scheme"] = o->scheme;
-          r["weld"] = o->weld;
-          r["points"] = tets.num_points();
-          r["cells"] = tets.num_cells();
-          r["threads"] = threads;
-          r["seconds"] = timer.seconds();
-          r["peak_rss_mib"] = peak_rss_mib();
-          write_report(o->common.report_path, r);
-        }
+        say_written(o->common, tets.num_points(), tets.num_cells(), "tetrahedra", o->output);
+        r.update(files_and_counts(o->input, o->output, tets.num_points(), tets.num_cells()));
+        r["scheme"] = o->scheme;
+        r["weld"] = o->weld;
+        finish_report(o->common, r, threads, timer, PeakRss::Include);
         return 0;
       };
     }}};

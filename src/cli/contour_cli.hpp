@@ -1,0 +1,48 @@
+#pragma once
+// `keymesh contour`: its options as given, and the pieces its paths share.
+// The paths (src/cli/contour_cmd.cpp, contour_distributed.cpp):
+//   run_voxels    a volume read whole, marching cubes;
+//   run_tets      a tetrahedral grid (.vtu .vtk), marching tetrahedra;
+//   run_streamed  --memory-limit: the volume in slabs of z-planes;
+//   run_distributed_contour  under mpirun: each rank reads and contours its slab.
+#include <string>
+#include <vector>
+
+#include "command.hpp"
+#include "raw_input.hpp"
+#include "keymesh/generate/contour.hpp"
+
+namespace keymesh::cli {
+
+struct ContourCli {
+  std::string input, output;
+  std::vector<double> isovalues;
+  std::string weld = "keyreduce";
+  std::string normals = "none";
+  bool no_scalars = false;
+  bool coarsen = false;
+  bool curvature = false;
+  std::string array;         // tet grids: the point field to contour
+  std::string memory_limit;  // stream the volume in slabs
+  bool gather = false;       // under mpirun: one file from rank 0
+  bool balance = false;      // under mpirun: slabs by work
+  RawInputCli raw_input;     // a headerless .raw volume
+  CommonOptions common;
+};
+
+// The library's options for the options given (names parsed by
+// generate/option_names.hpp; checked already by the CLI).
+generate::ContourOptions contour_options(const ContourCli& o);
+
+// The report keys every path has: the files, isovalues, weld and normals
+// as given, the counts, threads and per-stage seconds.
+nlohmann::json contour_report(const ContourCli& o, long long points, long long cells, int threads,
+                              const StageTimer& timer);
+
+// Output OUT.pvtp: one OUT_<rank>.vtp piece per rank (points with their
+// global ids) and the index; any other extension (or --gather): the whole
+// mesh gathered on rank 0, byte-identical to the single-process file.
+// Returns the exit code (every rank returns the same).
+int run_distributed_contour(const ContourCli& o, const generate::ContourOptions& options, int threads);
+
+}  // namespace keymesh::cli
