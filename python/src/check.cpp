@@ -1,6 +1,6 @@
 // keymesh.check: the topology report of `keymesh check`.
 #include "common.hpp"
-#include "keymesh/analyze/topology.hpp"
+#include "keymesh/analyze/report_fields.hpp"
 
 namespace keymesh::python {
 
@@ -16,18 +16,7 @@ py::dict check(const py::handle& mesh_obj, int threads) {
     t = analyze::check_topology(mesh);
   }
   py::dict r;
-  r["points"] = t.points;
-  r["cells"] = t.cells;
-  r["edges"] = t.edges;
-  r["boundary_edges"] = t.boundary_edges;
-  r["nonmanifold_edges"] = t.nonmanifold_edges;
-  r["nonmanifold_vertices"] = t.nonmanifold_vertices;
-  r["duplicate_points"] = t.duplicate_points;
-  r["unused_points"] = t.unused_points;
-  r["degenerate_cells"] = t.degenerate_cells;
-  r["components"] = t.components;
-  r["euler_characteristic"] = t.euler_characteristic;
-  r["closed_manifold"] = t.closed_manifold;
+  analyze::visit_fields(t, [&](const char* name, const auto& value) { r[name] = value; });
   return r;
 }
 

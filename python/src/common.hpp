@@ -82,6 +82,27 @@ py::array grid_view(const ImageGrid& grid, py::handle owner);
 // A sequence of 3 numbers (spacing, origin); TypeError / ValueError naming `what`.
 std::array<double, 3> triple(const py::handle& obj, const char* what);
 
+// How a numpy volume (axis 0 = x) becomes the library's x-fastest grid:
+//  - Fortran: a Fortran-ordered array is read in place, any other is copied
+//    into that order once;
+//  - CAsReversedAxes: a Fortran-ordered array is read in place, any other is
+//    made C-contiguous (numpy's default: no copy) and read as the grid with
+//    the axes reversed; the caller mirrors its output back (contour).
+enum class VolumeOrder { Fortran, CAsReversedAxes };
+
+// The grid over a numpy volume's samples: `array` holds them (keep it alive
+// while `grid` is used), `reversed` says the grid's x is the array's axis 2.
+struct ArrayVolume {
+  ImageGrid grid;
+  py::array array;
+  bool reversed = false;
+};
+// TypeError `not_an_array` when `volume` is no array, ValueError unless 3-D,
+// TypeError for a dtype the library has no scalar type for; spacing and
+// origin (None: 1 and 0) are given along the array's axes.
+ArrayVolume view_array_volume(const py::object& volume, const py::object& spacing, const py::object& origin,
+                              VolumeOrder order, const char* not_an_array);
+
 // SurfaceMesh <-> (points, cells, offsets, point_data) of a Python Mesh.
 // to_python moves every array into numpy without a copy; triangle meshes
 // give cells of shape (m, 3) and offsets None, polygon meshes a flat

@@ -9,9 +9,10 @@
 
 #include "common.hpp"
 #include "keymesh/analyze/incidence.hpp"
-#include "keymesh/analyze/quality.hpp"
+#include "keymesh/analyze/report_fields.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/dual.hpp"
+#include "keymesh/generate/option_names.hpp"
 #include "keymesh/generate/subdivide.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 
@@ -35,26 +36,18 @@ ImageGrid volume_grid(const py::object& volume, const py::object& spacing, const
     keep = volume;
     return g;
   }
-  py::array a = py::array::ensure(volume);
-  if (!a) throw py::type_error("volume must be a 3-D numpy array, a keymesh.Volume or a keymesh.Grid");
-  if (a.ndim() != 3) throw py::value_error("volume must be 3-D (axis 0 = x), got ndim=" + std::to_string(a.ndim()));
-  ImageGrid g;
-  g.type = scalar_type_of(a.dtype(), "volume");
-  a = py::module_::import("numpy").attr("asfortranarray")(a, a.dtype().attr("newbyteorder")("="));
-  keep = a;
-  for (int k = 0; k < 3; ++k) g.dims[k] = a.shape(k);
-  if (!spacing.is_none()) g.spacing = triple(spacing, "spacing");
-  if (!origin.is_none()) g.origin = triple(origin, "origin");
-  g.external = static_cast<const std::byte*>(a.data());
-  return g;
+  ArrayVolume view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
+                                      "volume must be a 3-D numpy array, a keymesh.Volume or a keymesh.Grid");
+  keep = view.array;
+  return view.grid;
 }
 
 py::tuple tetrahedralize(const py::object& input, int scheme, const std::string& weld, const py::object& spacing,
                          const py::object& origin, int threads, const py::object& callback) {
   check_threads(threads);
   if (scheme != 5 && scheme != 24) throw py::value_error("scheme must be 5 or 24, got " + std::to_string(scheme));
-  if (weld != "keyreduce" && weld != "vertexweld")
-    throw py::value_error("weld must be 'keyreduce' or 'vertexweld', got '" + weld + "'");
+  // scheme 24's face centres: by face keys or by coordinates, subdivision's two choices
+  const bool vw = generate::parse_option<generate::SubdivideWeld>(weld) == generate::SubdivideWeld::VertexWeld;
   const PythonProgress progress(callback);
   const bool from_grid = py::hasattr(input, "cells") && py::hasattr(input, "points");
   UnstructuredGrid hexes;
@@ -68,7 +61,6 @@ py::tuple tetrahedralize(const py::object& input, int scheme, const std::string&
     ThreadScope scope(threads);
     auto hook = progress.install();
     progress::report("tetrahedralize", 0.0);
-    const bool vw = weld == "vertexweld";
     if (from_grid) tets = scheme == 24 ? generate::tetrahedralize24(hexes, vw) : generate::tetrahedralize5(hexes);
     else tets = scheme == 24 ? generate::tetrahedralize24(volume, vw) : generate::tetrahedralize5(volume);
     progress::report("tetrahedralize", 1.0);
@@ -78,15 +70,23 @@ py::tuple tetrahedralize(const py::object& input, int scheme, const std::string&
 
 generate::SubdivideOptions subdivide_options(int levels, const std::string& scheme, const std::string& weld) {
   if (levels < 0 || levels > 8) throw py::value_error("levels must be in [0, 8], got " + std::to_string(levels));
-  if (scheme != "linear" && scheme != "bezier")
-    throw py::value_error("scheme must be 'linear' or 'bezier', got '" + scheme + "'");
-  if (weld != "keyreduce" && weld != "vertexweld")
-    throw py::value_error("weld must be 'keyreduce' or 'vertexweld', got '" + weld + "'");
   generate::SubdivideOptions opt;
-  opt.scheme = scheme == "bezier" ? generate::SubdivideScheme::Bezier : generate::SubdivideScheme::Linear;
-  opt.weld = weld == "vertexweld" ? generate::SubdivideWeld::VertexWeld : generate::SubdivideWeld::KeyReduce;
+  opt.scheme = generate::parse_option<generate::SubdivideScheme>(scheme);
+  opt.weld = generate::parse_option<generate::SubdivideWeld>(weld);
   opt.levels = levels;
   return opt;
+}
+
+// A surface (1 -> 4) or tet grid (1 -> 8) subdivided with the GIL released.
+template <class Geometry>
+Geometry subdivide_released(Geometry geometry, const generate::SubdivideOptions& opt, int threads,
+                            const PythonProgress& progress) {
+  py::gil_scoped_release release;
+  ThreadScope scope(threads);
+  auto hook = progress.install();
+  geometry = generate::subdivide(geometry, opt);  // reports every level
+  progress::report("subdivide", 1.0);
+  return geometry;
 }
 
 py::tuple subdivide_mesh(const py::handle& mesh_obj, int levels, const std::string& scheme, const std::string& weld,
@@ -94,15 +94,7 @@ py::tuple subdivide_mesh(const py::handle& mesh_obj, int levels, const std::stri
   check_threads(threads);
   const auto opt = subdivide_options(levels, scheme, weld);
   const PythonProgress progress(callback);
-  SurfaceMesh mesh = mesh_from_python(mesh_obj);
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    auto hook = progress.install();
-    mesh = generate::subdivide(mesh, opt);  // reports every level
-    progress::report("subdivide", 1.0);
-  }
-  return mesh_to_python(std::move(mesh));
+  return mesh_to_python(subdivide_released(mesh_from_python(mesh_obj), opt, threads, progress));
 }
 
 py::tuple subdivide_grid(const py::handle& grid_obj, int levels, const std::string& scheme, const std::string& weld,
@@ -112,15 +104,7 @@ py::tuple subdivide_grid(const py::handle& grid_obj, int levels, const std::stri
   if (opt.scheme == generate::SubdivideScheme::Bezier)
     throw py::value_error("scheme='bezier' is for surfaces; tets use 'linear'");
   const PythonProgress progress(callback);
-  UnstructuredGrid grid = grid_from_python(grid_obj);
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    auto hook = progress.install();
-    grid = generate::subdivide(grid, opt);
-    progress::report("subdivide", 1.0);
-  }
-  return grid_to_python(std::move(grid));
+  return grid_to_python(subdivide_released(grid_from_python(grid_obj), opt, threads, progress));
 }
 
 py::tuple dual(const py::handle& mesh_obj, int threads, const py::object& callback) {
@@ -157,12 +141,7 @@ py::dict quality(const py::handle& mesh_obj, bool per_cell, int threads) {
   }
   py::dict r;
   r["points"] = mesh.num_points();
-  r["cells"] = q.triangles;
-  r["min"] = q.min;
-  r["median"] = q.median;
-  r["mean"] = q.mean;
-  r["fraction_above_0_6"] = q.fraction_above_0_6;
-  r["histogram"] = py::cast(std::vector<Id>(q.histogram.begin(), q.histogram.end()));
+  analyze::visit_fields(q, [&](const char* name, const auto& value) { r[name] = value; });
   if (per_cell) {
     const auto n = static_cast<py::ssize_t>(each.size());
     r["per_cell"] = adopt(std::move(each), {n});
