@@ -9,12 +9,7 @@ namespace {
 py::dict check(const py::handle& mesh_obj, int threads) {
   check_threads(threads);
   const SurfaceMesh mesh = mesh_from_python(mesh_obj);
-  analyze::TopologyReport t;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    t = analyze::check_topology(mesh);
-  }
+  const analyze::TopologyReport t = run_released(threads, [&] { return analyze::check_topology(mesh); });
   py::dict r;
   analyze::visit_fields(t, [&](const char* name, const auto& value) { r[name] = value; });
   return r;

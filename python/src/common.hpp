@@ -65,6 +65,23 @@ class PythonProgress {
   py::object callback_;
 };
 
+// Runs f() the way every long call runs: the GIL released, `threads`
+// workers (restored after), and, when given, the progress hook installed
+// (Ctrl-C and progress= at every stage the library reports).
+template <class F>
+decltype(auto) run_released(int threads, F&& f) {
+  py::gil_scoped_release release;
+  ThreadScope scope(threads);
+  return f();
+}
+template <class F>
+decltype(auto) run_released(int threads, const PythonProgress& progress, F&& f) {
+  py::gil_scoped_release release;
+  ThreadScope scope(threads);
+  auto hook = progress.install();
+  return f();
+}
+
 // ValueError unless threads >= 0.
 void check_threads(int threads);
 

@@ -92,10 +92,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   SurfaceMesh mesh;
   generate::ContourStats stats;
   double contour_s = 0, mirror_s = 0;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    auto hook = progress.install();
+  run_released(threads, progress, [&] {
     progress::report("contour", 0.0);
     auto t0 = Clock::now();
     mesh = generate::contour(grid, opt, &stats);
@@ -104,7 +101,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
     if (view.reversed) swap_x_z(mesh);
     mirror_s = seconds_since(t0);
     progress::report("contour", 1.0);
-  }
+  });
   py::dict info = contour_info(stats, contour_s, mirror_s);
   return py::make_tuple(mesh_to_python(std::move(mesh)), info);
 }

@@ -47,13 +47,8 @@ py::tuple marching_cubes(const py::array_t<float, py::array::c_style>& volume, d
     opt.mask = mask.data();
   }
   const std::array<Id, 3> shape{volume.shape(0), volume.shape(1), volume.shape(2)};
-  generate::ClassicMarchingCubes r;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    auto hook = progress.install();
-    r = generate::classic_marching_cubes(volume.data(), shape, table, opt);
-  }
+  generate::ClassicMarchingCubes r = run_released(
+      threads, progress, [&] { return generate::classic_marching_cubes(volume.data(), shape, table, opt); });
   const auto v = static_cast<py::ssize_t>(r.values.size());
   const auto f = static_cast<py::ssize_t>(r.faces.size() / 3);
   return py::make_tuple(adopt(std::move(r.vertices), {v, 3}), adopt(std::move(r.faces), {f, 3}),

@@ -55,16 +55,14 @@ py::tuple tetrahedralize(const py::object& input, int scheme, const std::string&
   py::object keep;
   if (from_grid) hexes = grid_from_python(input);
   else volume = volume_grid(input, spacing, origin, keep);
-  UnstructuredGrid tets;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    auto hook = progress.install();
+  UnstructuredGrid tets = run_released(threads, progress, [&] {
     progress::report("tetrahedralize", 0.0);
-    if (from_grid) tets = scheme == 24 ? generate::tetrahedralize24(hexes, vw) : generate::tetrahedralize5(hexes);
-    else tets = scheme == 24 ? generate::tetrahedralize24(volume, vw) : generate::tetrahedralize5(volume);
+    UnstructuredGrid t;
+    if (from_grid) t = scheme == 24 ? generate::tetrahedralize24(hexes, vw) : generate::tetrahedralize5(hexes);
+    else t = scheme == 24 ? generate::tetrahedralize24(volume, vw) : generate::tetrahedralize5(volume);
     progress::report("tetrahedralize", 1.0);
-  }
+    return t;
+  });
   return grid_to_python(std::move(tets));
 }
 
@@ -81,12 +79,11 @@ generate::SubdivideOptions subdivide_options(int levels, const std::string& sche
 template <class Geometry>
 Geometry subdivide_released(Geometry geometry, const generate::SubdivideOptions& opt, int threads,
                             const PythonProgress& progress) {
-  py::gil_scoped_release release;
-  ThreadScope scope(threads);
-  auto hook = progress.install();
-  geometry = generate::subdivide(geometry, opt);  // reports every level
-  progress::report("subdivide", 1.0);
-  return geometry;
+  return run_released(threads, progress, [&] {
+    Geometry subdivided = generate::subdivide(geometry, opt);  // reports every level
+    progress::report("subdivide", 1.0);
+    return subdivided;
+  });
 }
 
 py::tuple subdivide_mesh(const py::handle& mesh_obj, int levels, const std::string& scheme, const std::string& weld,
@@ -111,16 +108,13 @@ py::tuple dual(const py::handle& mesh_obj, int threads, const py::object& callba
   check_threads(threads);
   const PythonProgress progress(callback);
   const SurfaceMesh mesh = mesh_from_python(mesh_obj);
-  SurfaceMesh d;
   generate::DualStats st;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    auto hook = progress.install();
+  SurfaceMesh d = run_released(threads, progress, [&] {
     progress::report("dual", 0.0);
-    d = generate::dual(mesh, &st);
+    SurfaceMesh polygons = generate::dual(mesh, &st);
     progress::report("dual", 1.0);
-  }
+    return polygons;
+  });
   py::dict stats;
   stats["boundary_fans"] = st.boundary_fans;
   stats["nonmanifold_points"] = st.nonmanifold_points;
@@ -131,14 +125,11 @@ py::tuple dual(const py::handle& mesh_obj, int threads, const py::object& callba
 py::dict quality(const py::handle& mesh_obj, bool per_cell, int threads) {
   check_threads(threads);
   const SurfaceMesh mesh = mesh_from_python(mesh_obj);
-  analyze::QualityReport q;
   std::vector<double> each;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    q = analyze::quality(mesh);
+  const analyze::QualityReport q = run_released(threads, [&] {
     if (per_cell) each = analyze::triangle_quality(mesh);
-  }
+    return analyze::quality(mesh);
+  });
   py::dict r;
   r["points"] = mesh.num_points();
   analyze::visit_fields(q, [&](const char* name, const auto& value) { r[name] = value; });
@@ -147,6 +138,45 @@ py::dict quality(const py::handle& mesh_obj, bool per_cell, int threads) {
     r["per_cell"] = adopt(std::move(each), {n});
   }
   return r;
+}
+
+// Every point's key: the lattice point (origin + i * spacing) nearest to
+// it, numbered x-fastest over the lattice's bounding box (range: its size).
+struct LatticeKeys {
+  std::vector<std::uint64_t> keys;
+  std::uint64_t range = 1;
+};
+
+LatticeKeys lattice_keys(const SurfaceMesh& mesh, const std::array<double, 3>& s, const std::array<double, 3>& o) {
+  const Id n = mesh.num_points();
+  std::array<std::int64_t, 3> lo{0, 0, 0}, hi{0, 0, 0};
+  std::vector<std::int64_t> lattice(static_cast<std::size_t>(3 * n));
+  for (Id p = 0; p < n; ++p)
+    for (int a = 0; a < 3; ++a) {
+      const double t = std::floor((mesh.points[3 * p + a] - o[a]) / s[a] + 0.5);
+      if (!(std::fabs(t) < 9e15)) throw InputError("coarsen: point " + std::to_string(p) + " is not finite");
+      const auto i = static_cast<std::int64_t>(t);
+      lattice[3 * p + a] = i;
+      if (p == 0 || i < lo[a]) lo[a] = i;
+      if (p == 0 || i > hi[a]) hi[a] = i;
+    }
+  std::array<std::uint64_t, 3> extent{};
+  long double range = 1;
+  for (int a = 0; a < 3; ++a) {
+    extent[a] = static_cast<std::uint64_t>(hi[a] - lo[a] + 1);
+    range *= static_cast<long double>(extent[a]);
+  }
+  if (range > static_cast<long double>(std::uint64_t(1) << 40))
+    throw LimitError("coarsen: the mesh spans " + std::to_string(static_cast<double>(range)) +
+                     " lattice points; give the spacing of the grid it was contoured on");
+  LatticeKeys result;
+  result.keys.resize(static_cast<std::size_t>(n));
+  for (Id p = 0; p < n; ++p)
+    result.keys[p] = static_cast<std::uint64_t>(lattice[3 * p] - lo[0]) +
+                     extent[0] * (static_cast<std::uint64_t>(lattice[3 * p + 1] - lo[1]) +
+                                  extent[1] * static_cast<std::uint64_t>(lattice[3 * p + 2] - lo[2]));
+  result.range = n == 0 ? 1 : static_cast<std::uint64_t>(range);
+  return result;
 }
 
 // Coarsening an existing mesh: every point is keyed by the lattice point
@@ -161,46 +191,17 @@ py::tuple coarsen(const py::handle& mesh_obj, const py::object& spacing, const p
   for (int a = 0; a < 3; ++a)
     if (!(s[a] > 0) || !std::isfinite(s[a])) throw py::value_error("spacing must be positive and finite");
   const PythonProgress progress(callback);
-  SurfaceMesh mesh = mesh_from_python(mesh_obj);
-  SurfaceMesh out;
+  const SurfaceMesh mesh = mesh_from_python(mesh_obj);
   generate::CoarsenStats st;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    auto hook = progress.install();
+  SurfaceMesh out = run_released(threads, progress, [&] {
     progress::report("coarsen: keys", 0.0);
-    const Id n = mesh.num_points();
-    std::array<std::int64_t, 3> lo{0, 0, 0}, hi{0, 0, 0};
-    std::vector<std::int64_t> lattice(static_cast<std::size_t>(3 * n));
-    for (Id p = 0; p < n; ++p)
-      for (int a = 0; a < 3; ++a) {
-        const double t = std::floor((mesh.points[3 * p + a] - o[a]) / s[a] + 0.5);
-        if (!(std::fabs(t) < 9e15)) throw InputError("coarsen: point " + std::to_string(p) + " is not finite");
-        const auto i = static_cast<std::int64_t>(t);
-        lattice[3 * p + a] = i;
-        if (p == 0 || i < lo[a]) lo[a] = i;
-        if (p == 0 || i > hi[a]) hi[a] = i;
-      }
-    std::array<std::uint64_t, 3> extent{};
-    long double range = 1;
-    for (int a = 0; a < 3; ++a) {
-      extent[a] = static_cast<std::uint64_t>(hi[a] - lo[a] + 1);
-      range *= static_cast<long double>(extent[a]);
-    }
-    if (range > static_cast<long double>(std::uint64_t(1) << 40))
-      throw LimitError("coarsen: the mesh spans " + std::to_string(static_cast<double>(range)) +
-                       " lattice points; give the spacing of the grid it was contoured on");
-    std::vector<std::uint64_t> keys(static_cast<std::size_t>(n));
-    for (Id p = 0; p < n; ++p)
-      keys[p] = static_cast<std::uint64_t>(lattice[3 * p] - lo[0]) +
-                extent[0] * (static_cast<std::uint64_t>(lattice[3 * p + 1] - lo[1]) +
-                             extent[1] * static_cast<std::uint64_t>(lattice[3 * p + 2] - lo[2]));
-    lattice = {};
+    const LatticeKeys lattice = lattice_keys(mesh, s, o);
     progress::report("coarsen: merge", 0.3);
-    out = generate::coarsen(mesh, keys, n == 0 ? 1 : static_cast<std::uint64_t>(range), &st);
-    if (normals == "average" && mesh.find_point_field("Normals") != nullptr) generate::average_normals(out);
+    SurfaceMesh coarse = generate::coarsen(mesh, lattice.keys, lattice.range, &st);
+    if (normals == "average" && mesh.find_point_field("Normals") != nullptr) generate::average_normals(coarse);
     progress::report("coarsen", 1.0);
-  }
+    return coarse;
+  });
   py::dict stats;
   stats["points_before"] = st.points_before;
   stats["points_after"] = st.points_after;
@@ -220,14 +221,12 @@ py::tuple incidence(const py::handle& mesh_obj, int threads) {
   analyze::PointCells pc;
   std::vector<std::int64_t> neighbours;
   std::vector<std::uint32_t> cells;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
+  run_released(threads, [&] {
     pc = analyze::point_cells(mesh);
     cells.resize(pc.corners.size());
     for (std::size_t i = 0; i < cells.size(); ++i) cells[i] = pc.cell_of_corner[pc.corners[i]];
     neighbours = analyze::cell_neighbours(mesh);
-  }
+  });
   const auto n_off = static_cast<py::ssize_t>(pc.offsets.size());
   const auto n_cells = static_cast<py::ssize_t>(cells.size());
   py::array nb;

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -112,6 +113,19 @@ struct Command {
 };
 
 std::vector<Command>& registry();
+
+// A subcommand made of its options struct and two functions: `add_options`
+// declares the options on the CLI11 app, `run` gets them once parsed and
+// returns the exit code.
+template <class Options>
+Command make_command(std::string name, std::string description, void (*add_options)(CLI::App&, Options&),
+                     int (*run)(const Options&)) {
+  return Command{std::move(name), std::move(description), [add_options, run](CLI::App& cmd) -> std::function<int()> {
+                   auto options = std::make_shared<Options>();
+                   add_options(cmd, *options);
+                   return [options, run] { return run(*options); };
+                 }};
+}
 
 struct Register {
   explicit Register(Command c) { registry().push_back(std::move(c)); }

@@ -284,13 +284,9 @@ void add_contour_options(CLI::App& cmd, ContourCli& o) {
   add_common_options(cmd, o.common);
 }
 
-Register reg{Command{
+Register reg{make_command<ContourCli>(
     "contour", "isosurface of a volume (marching cubes) or a tet grid (marching tetrahedra), welded by edge keys",
-    [](CLI::App& cmd) -> std::function<int()> {
-      auto o = std::make_shared<ContourCli>();
-      add_contour_options(cmd, *o);
-      return [o]() { return run_contour(*o); };
-    }}};
+    add_contour_options, run_contour)};
 
 }  // namespace
 

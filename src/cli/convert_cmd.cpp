@@ -45,62 +45,65 @@ struct ConvertCli {
   CommonOptions common;
 };
 
-Register reg{Command{
-    "convert", "rewrite a grid (.vtu .vtk), surface (.ply .obj .stl .vtp; .glb out) or volume (.vti .nrrd .raw) in another format",
-    [](CLI::App& cmd) -> std::function<int()> {
-      auto o = std::make_shared<ConvertCli>();
-      cmd.add_option("input", o->input,
-                     "unstructured grid (.vtu .vtk), surface mesh (.ply .obj .stl .vtp) or volume "
-                     "(.vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or Zarr folder)")
-          ->required();
-      cmd.add_option("-o,--output", o->output, "output file of the same kind (volumes: .vti .nrrd .raw)")->required();
-      add_common_options(cmd, o->common);
-      return [o]() {
-        if (int rc = require_cpu_backend(o->common, "convert")) return rc;
-        const int threads = apply_threads(o->common);
-        const Kind in = kind_of(o->input, false), out = kind_of(o->output, true);
-        if (in == Kind::Unknown) {
-          std::fprintf(stderr, "keymesh: convert: %s: unknown input format\n", o->input.c_str());
-          return 2;
-        }
-        if (out == Kind::Unknown) {
-          std::fprintf(stderr, "keymesh: convert: %s: unknown output format\n", o->output.c_str());
-          return 2;
-        }
-        if (in != out) {
-          std::fprintf(stderr, "keymesh: convert: %s is %s and %s would be %s; convert keeps the kind of data\n",
-                       o->input.c_str(), kind_name(in), o->output.c_str(), kind_name(out));
-          return 2;
-        }
-        StageTimer timer;
-        Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
-        progress.say("reading " + o->input);
-        nlohmann::json r;
-        long long points = 0, cells = 0;
-        if (in == Kind::Grid) {
-          const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o->input); });
-          points = g.num_points(), cells = g.num_cells();
-          progress.say("writing " + o->output);
-          timer.run("write", [&] { io::write_grid(g, o->output); });
-        } else if (in == Kind::Surface) {
-          const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o->input); });
-          points = m.num_points(), cells = m.num_cells();
-          progress.say("writing " + o->output);
-          timer.run("write", [&] { io::write_mesh(m, o->output); });
-        } else {
-          const ImageGrid v = timer.run("read", [&] { return io::read_volume(o->input); });
-          points = v.num_points();
-          r["dims"] = v.dims;
-          progress.say("writing " + o->output);
-          timer.run("write", [&] { io::write_volume(v, o->output); });
-        }
-        say_written(o->common, points, cells, "cells", o->output);
-        r.update(files_and_counts(o->input, o->output, points, cells));
-        r["kind"] = in == Kind::Grid ? "grid" : in == Kind::Surface ? "mesh" : "volume";
-        finish_report(o->common, r, threads, timer, PeakRss::Include);
-        return 0;
-      };
-    }}};
+void add_convert_options(CLI::App& cmd, ConvertCli& o) {
+  cmd.add_option("input", o.input,
+                 "unstructured grid (.vtu .vtk), surface mesh (.ply .obj .stl .vtp) or volume "
+                 "(.vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or Zarr folder)")
+      ->required();
+  cmd.add_option("-o,--output", o.output, "output file of the same kind (volumes: .vti .nrrd .raw)")->required();
+  add_common_options(cmd, o.common);
+}
+
+int run_convert(const ConvertCli& o) {
+  if (int rc = require_cpu_backend(o.common, "convert")) return rc;
+  const int threads = apply_threads(o.common);
+  const Kind in = kind_of(o.input, false), out = kind_of(o.output, true);
+  if (in == Kind::Unknown) {
+    std::fprintf(stderr, "keymesh: convert: %s: unknown input format\n", o.input.c_str());
+    return 2;
+  }
+  if (out == Kind::Unknown) {
+    std::fprintf(stderr, "keymesh: convert: %s: unknown output format\n", o.output.c_str());
+    return 2;
+  }
+  if (in != out) {
+    std::fprintf(stderr, "keymesh: convert: %s is %s and %s would be %s; convert keeps the kind of data\n",
+                 o.input.c_str(), kind_name(in), o.output.c_str(), kind_name(out));
+    return 2;
+  }
+  StageTimer timer;
+  Progress progress(o.common.quiet, file_size(o.input) > (64ll << 20));
+  progress.say("reading " + o.input);
+  nlohmann::json r;
+  long long points = 0, cells = 0;
+  if (in == Kind::Grid) {
+    const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
+    points = g.num_points(), cells = g.num_cells();
+    progress.say("writing " + o.output);
+    timer.run("write", [&] { io::write_grid(g, o.output); });
+  } else if (in == Kind::Surface) {
+    const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o.input); });
+    points = m.num_points(), cells = m.num_cells();
+    progress.say("writing " + o.output);
+    timer.run("write", [&] { io::write_mesh(m, o.output); });
+  } else {
+    const ImageGrid v = timer.run("read", [&] { return io::read_volume(o.input); });
+    points = v.num_points();
+    r["dims"] = v.dims;
+    progress.say("writing " + o.output);
+    timer.run("write", [&] { io::write_volume(v, o.output); });
+  }
+  say_written(o.common, points, cells, "cells", o.output);
+  r.update(files_and_counts(o.input, o.output, points, cells));
+  r["kind"] = in == Kind::Grid ? "grid" : in == Kind::Surface ? "mesh" : "volume";
+  finish_report(o.common, r, threads, timer, PeakRss::Include);
+  return 0;
+}
+
+Register reg{make_command<ConvertCli>(
+    "convert",
+    "rewrite a grid (.vtu .vtk), surface (.ply .obj .stl .vtp; .glb out) or volume (.vti .nrrd .raw) in another format",
+    add_convert_options, run_convert)};
 
 }  // namespace
 

@@ -15,43 +15,45 @@ struct DualCli {
   CommonOptions common;
 };
 
-Register reg{Command{
+void add_dual_options(CLI::App& cmd, DualCli& o) {
+  cmd.add_option("input", o.input, "polygon surface (.vtp .ply .obj .stl)")->required();
+  cmd.add_option("-o,--output", o.output, "output polygons (.vtp .obj .ply)")->required();
+  add_common_options(cmd, o.common);
+}
+
+int run_dual(const DualCli& o) {
+  if (int rc = require_cpu_backend(o.common, "the dual")) return rc;
+  if (!is_mesh_path(o.output) || o.output.size() < 4 ||
+      o.output.compare(o.output.size() - 4, 4, ".stl") == 0) {
+    std::fprintf(stderr, "keymesh dual: %s: write polygons as .vtp, .obj or .ply\n", o.output.c_str());
+    return 2;
+  }
+  const int threads = apply_threads(o.common);
+  StageTimer timer;
+  const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o.input); });
+  generate::DualStats st;
+  const SurfaceMesh d = timer.run("dual", [&] { return generate::dual(m, &st); });
+  timer.run("write", [&] { io::write_mesh(d, o.output); });
+  if (!o.common.quiet) {
+    std::fprintf(stderr, "keymesh: %lld points, %lld polygons -> %s\n", (long long)d.num_points(),
+                 (long long)d.num_cells(), o.output.c_str());
+    if (st.boundary_fans || st.nonmanifold_points || st.skipped_fans)
+      std::fprintf(stderr, "keymesh: %lld boundary fans, %lld non-manifold points, %lld fans skipped\n",
+                   (long long)st.boundary_fans, (long long)st.nonmanifold_points, (long long)st.skipped_fans);
+  }
+  nlohmann::json r = files_and_counts(o.input, o.output, d.num_points(), d.num_cells());
+  r["input_points"] = m.num_points();
+  r["input_cells"] = m.num_cells();
+  r["boundary_fans"] = st.boundary_fans;
+  r["nonmanifold_points"] = st.nonmanifold_points;
+  r["skipped_fans"] = st.skipped_fans;
+  finish_report(o.common, r, threads, timer, PeakRss::Omit);
+  return 0;
+}
+
+Register reg{make_command<DualCli>(
     "dual", "the dual of a polygon surface: a polygon per point through the centroids of its cells",
-    [](CLI::App& cmd) -> std::function<int()> {
-      auto o = std::make_shared<DualCli>();
-      cmd.add_option("input", o->input, "polygon surface (.vtp .ply .obj .stl)")->required();
-      cmd.add_option("-o,--output", o->output, "output polygons (.vtp .obj .ply)")->required();
-      add_common_options(cmd, o->common);
-      return [o]() {
-        if (int rc = require_cpu_backend(o->common, "the dual")) return rc;
-        if (!is_mesh_path(o->output) || o->output.size() < 4 ||
-            o->output.compare(o->output.size() - 4, 4, ".stl") == 0) {
-          std::fprintf(stderr, "keymesh dual: %s: write polygons as .vtp, .obj or .ply\n", o->output.c_str());
-          return 2;
-        }
-        const int threads = apply_threads(o->common);
-        StageTimer timer;
-        const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o->input); });
-        generate::DualStats st;
-        const SurfaceMesh d = timer.run("dual", [&] { return generate::dual(m, &st); });
-        timer.run("write", [&] { io::write_mesh(d, o->output); });
-        if (!o->common.quiet) {
-          std::fprintf(stderr, "keymesh: %lld points, %lld polygons -> %s\n", (long long)d.num_points(),
-                       (long long)d.num_cells(), o->output.c_str());
-          if (st.boundary_fans || st.nonmanifold_points || st.skipped_fans)
-            std::fprintf(stderr, "keymesh: %lld boundary fans, %lld non-manifold points, %lld fans skipped\n",
-                         (long long)st.boundary_fans, (long long)st.nonmanifold_points, (long long)st.skipped_fans);
-        }
-        nlohmann::json r = files_and_counts(o->input, o->output, d.num_points(), d.num_cells());
-        r["input_points"] = m.num_points();
-        r["input_cells"] = m.num_cells();
-        r["boundary_fans"] = st.boundary_fans;
-        r["nonmanifold_points"] = st.nonmanifold_points;
-        r["skipped_fans"] = st.skipped_fans;
-        finish_report(o->common, r, threads, timer, PeakRss::Omit);
-        return 0;
-      };
-    }}};
+    add_dual_options, run_dual)};
 
 }  // namespace
 

@@ -72,25 +72,25 @@ int run_pipeline(const PipelineCli& o) {
   return 0;
 }
 
-Register reg{Command{
+void add_pipeline_options(CLI::App& cmd, PipelineCli& o) {
+  cmd.add_option("input", o.input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or tet grid (.vtu .vtk)")
+      ->required();
+  cmd.add_option("-o,--output", o.output, "output surface (.vtp .ply .obj; .stl without --dual)")->required();
+  cmd.add_option("--iso", o.isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
+  cmd.add_flag("--coarsen", o.coarsen, "merge points by nearest grid point during the contour");
+  cmd.add_flag("--curvature", o.curvature, "mean curvature from the volume (voxel grids), carried along");
+  cmd.add_option("--subdivide", o.subdivide, "levels of 1->4 subdivision")->check(CLI::Range(0, 6));
+  cmd.add_option("--scheme", o.scheme, "subdivision positions: linear or bezier")
+      ->check(one_of<generate::SubdivideScheme>());
+  cmd.add_option("--normals", o.normals, "none, gradient or average (bezier needs normals)")
+      ->check(one_of<generate::ContourNormals>());
+  cmd.add_flag("--dual", o.dual, "finish with the dual mesh");
+  add_common_options(cmd, o.common);
+}
+
+Register reg{make_command<PipelineCli>(
     "pipeline", "contour, then optionally coarsen, subdivide and take the dual, in memory (the paper's Figure 8)",
-    [](CLI::App& cmd) -> std::function<int()> {
-      auto o = std::make_shared<PipelineCli>();
-      cmd.add_option("input", o->input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or tet grid (.vtu .vtk)")
-          ->required();
-      cmd.add_option("-o,--output", o->output, "output surface (.vtp .ply .obj; .stl without --dual)")->required();
-      cmd.add_option("--iso", o->isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
-      cmd.add_flag("--coarsen", o->coarsen, "merge points by nearest grid point during the contour");
-      cmd.add_flag("--curvature", o->curvature, "mean curvature from the volume (voxel grids), carried along");
-      cmd.add_option("--subdivide", o->subdivide, "levels of 1->4 subdivision")->check(CLI::Range(0, 6));
-      cmd.add_option("--scheme", o->scheme, "subdivision positions: linear or bezier")
-          ->check(one_of<generate::SubdivideScheme>());
-      cmd.add_option("--normals", o->normals, "none, gradient or average (bezier needs normals)")
-          ->check(one_of<generate::ContourNormals>());
-      cmd.add_flag("--dual", o->dual, "finish with the dual mesh");
-      add_common_options(cmd, o->common);
-      return [o]() { return run_pipeline(*o); };
-    }}};
+    add_pipeline_options, run_pipeline)};
 
 }  // namespace
 

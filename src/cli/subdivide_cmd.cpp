@@ -23,69 +23,71 @@ struct SubdivideCli {
   CommonOptions common;
 };
 
-Register reg{Command{
+void add_subdivide_options(CLI::App& cmd, SubdivideCli& o) {
+  cmd.add_option("input", o.input, "triangle surface (.vtp .ply .obj .stl) or tet grid (.vtu .vtk)")->required();
+  cmd.add_option("-o,--output", o.output, "output of the same kind")->required();
+  cmd.add_option("--levels,-k", o.levels, "subdivision levels")->check(CLI::Range(0, 8));
+  cmd.add_option("--scheme", o.scheme,
+                 "linear (edge midpoints) or bezier (PN triangles from the point normals; surfaces only)")
+      ->check(one_of<generate::SubdivideScheme>());
+  cmd.add_option("--weld", o.weld, "keyreduce (edge keys) or vertexweld (coordinates, the baseline)")
+      ->check(one_of<generate::SubdivideWeld>());
+  add_common_options(cmd, o.common);
+}
+
+int run_subdivide(const SubdivideCli& o) {
+  if (int rc = require_cpu_backend(o.common, "subdivision")) return rc;
+  const int threads = apply_threads(o.common);
+  StageTimer timer;
+  Progress progress(o.common.quiet, file_size(o.input) > (64ll << 20));
+  generate::SubdivideOptions opt;
+  opt.levels = o.levels;
+  opt.scheme = generate::parse_option<generate::SubdivideScheme>(o.scheme);
+  opt.weld = generate::parse_option<generate::SubdivideWeld>(o.weld);
+  const bool grid_in = io::is_grid_file(o.input);
+  if (grid_in ? is_mesh_path(o.output) : !is_mesh_path(o.output)) {
+    std::fprintf(stderr, "keymesh subdivide: %s: a %s subdivides into a %s\n", o.output.c_str(),
+                 grid_in ? "tet grid" : "surface", grid_in ? "grid (.vtu .vtk)" : "surface (.vtp .ply .obj .stl)");
+    return 2;
+  }
+  if (grid_in && opt.scheme == generate::SubdivideScheme::Bezier) {
+    std::fprintf(stderr, "keymesh subdivide: --scheme bezier is for surfaces; tets use linear\n");
+    return 2;
+  }
+  progress.say("reading " + o.input);
+  Id points = 0, cells = 0, in_points = 0, in_cells = 0;
+  if (grid_in) {
+    const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
+    check_work(estimate_subdivide_tets(g.num_points(), g.num_cells(), o.levels, field_components(g.point_fields)),
+               memory_budget(o.common), o.input + ": subdivide --levels " + std::to_string(o.levels),
+               kMaxPoints);
+    const UnstructuredGrid s = timer.run("subdivide", [&] { return generate::subdivide(g, opt); });
+    timer.run("write", [&] { io::write_grid(s, o.output); });
+    in_points = g.num_points(), in_cells = g.num_cells(), points = s.num_points(), cells = s.num_cells();
+  } else {
+    const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o.input); });
+    check_work(estimate_subdivide_triangles(m.num_points(), m.num_cells(), o.levels,
+                                            field_components(m.point_fields)),
+               memory_budget(o.common), o.input + ": subdivide --levels " + std::to_string(o.levels),
+               kMaxPoints, kMaxPoints / 3);
+    const SurfaceMesh s = timer.run("subdivide", [&] { return generate::subdivide(m, opt); });
+    timer.run("write", [&] { io::write_mesh(s, o.output); });
+    in_points = m.num_points(), in_cells = m.num_cells(), points = s.num_points(), cells = s.num_cells();
+  }
+  say_written(o.common, points, cells, "cells", o.output);
+  nlohmann::json r = files_and_counts(o.input, o.output, points, cells);
+  r["levels"] = o.levels;
+  r["scheme"] = o.scheme;
+  r["weld"] = o.weld;
+  r["input_points"] = in_points;
+  r["input_cells"] = in_cells;
+  finish_report(o.common, r, threads, timer, PeakRss::Include);
+  return 0;
+}
+
+Register reg{make_command<SubdivideCli>(
     "subdivide", "split triangles 1->4 or tetrahedra 1->8, new points keyed by the parent edge",
-    [](CLI::App& cmd) -> std::function<int()> {
-      auto o = std::make_shared<SubdivideCli>();
-      cmd.add_option("input", o->input, "triangle surface (.vtp .ply .obj .stl) or tet grid (.vtu .vtk)")->required();
-      cmd.add_option("-o,--output", o->output, "output of the same kind")->required();
-      cmd.add_option("--levels,-k", o->levels, "subdivision levels")->check(CLI::Range(0, 8));
-      cmd.add_option("--scheme", o->scheme,
-                     "linear (edge midpoints) or bezier (PN triangles from the point normals; surfaces only)")
-          ->check(one_of<generate::SubdivideScheme>());
-      cmd.add_option("--weld", o->weld, "keyreduce (edge keys) or vertexweld (coordinates, the baseline)")
-          ->check(one_of<generate::SubdivideWeld>());
-      add_common_options(cmd, o->common);
-      return [o]() {
-        if (int rc = require_cpu_backend(o->common, "subdivision")) return rc;
-        const int threads = apply_threads(o->common);
-        StageTimer timer;
-        Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
-        generate::SubdivideOptions opt;
-        opt.levels = o->levels;
-        opt.scheme = generate::parse_option<generate::SubdivideScheme>(o->scheme);
-        opt.weld = generate::parse_option<generate::SubdivideWeld>(o->weld);
-        const bool grid_in = io::is_grid_file(o->input);
-        if (grid_in ? is_mesh_path(o->output) : !is_mesh_path(o->output)) {
-          std::fprintf(stderr, "keymesh subdivide: %s: a %s subdivides into a %s\n", o->output.c_str(),
-                       grid_in ? "tet grid" : "surface", grid_in ? "grid (.vtu .vtk)" : "surface (.vtp .ply .obj .stl)");
-          return 2;
-        }
-        if (grid_in && opt.scheme == generate::SubdivideScheme::Bezier) {
-          std::fprintf(stderr, "keymesh subdivide: --scheme bezier is for surfaces; tets use linear\n");
-          return 2;
-        }
-        progress.say("reading " + o->input);
-        Id points = 0, cells = 0, in_points = 0, in_cells = 0;
-        if (grid_in) {
-          const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o->input); });
-          check_work(estimate_subdivide_tets(g.num_points(), g.num_cells(), o->levels, field_components(g.point_fields)),
-                     memory_budget(o->common), o->input + ": subdivide --levels " + std::to_string(o->levels),
-                     kMaxPoints);
-          const UnstructuredGrid s = timer.run("subdivide", [&] { return generate::subdivide(g, opt); });
-          timer.run("write", [&] { io::write_grid(s, o->output); });
-          in_points = g.num_points(), in_cells = g.num_cells(), points = s.num_points(), cells = s.num_cells();
-        } else {
-          const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o->input); });
-          check_work(estimate_subdivide_triangles(m.num_points(), m.num_cells(), o->levels,
-                                                  field_components(m.point_fields)),
-                     memory_budget(o->common), o->input + ": subdivide --levels " + std::to_string(o->levels),
-                     kMaxPoints, kMaxPoints / 3);
-          const SurfaceMesh s = timer.run("subdivide", [&] { return generate::subdivide(m, opt); });
-          timer.run("write", [&] { io::write_mesh(s, o->output); });
-          in_points = m.num_points(), in_cells = m.num_cells(), points = s.num_points(), cells = s.num_cells();
-        }
-        say_written(o->common, points, cells, "cells", o->output);
-        nlohmann::json r = files_and_counts(o->input, o->output, points, cells);
-        r["levels"] = o->levels;
-        r["scheme"] = o->scheme;
-        r["weld"] = o->weld;
-        r["input_points"] = in_points;
-        r["input_cells"] = in_cells;
-        finish_report(o->common, r, threads, timer, PeakRss::Include);
-        return 0;
-      };
-    }}};
+    add_subdivide_options, run_subdivide)};
 
 }  // namespace
 

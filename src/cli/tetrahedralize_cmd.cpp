@@ -19,70 +19,72 @@ struct TetrahedralizeCli {
   CommonOptions common;
 };
 
-Register reg{Command{
+void add_tetrahedralize_options(CLI::App& cmd, TetrahedralizeCli& o) {
+  cmd.add_option("input", o.input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or hexahedral grid (.vtu .vtk)")
+      ->required();
+  cmd.add_option("-o,--output", o.output, "output tetrahedral grid (.vtu or .vtk)")->required();
+  cmd.add_option("--scheme", o.scheme,
+                 "5: five tets per hexahedron, alternating so neighbouring faces match (the minimal split); "
+                 "24: face-centred, 24 tets per hexahedron from its centre and its face centres")
+      ->check(CLI::IsMember({5, 24}));
+  cmd.add_option("--weld", o.weld,
+                 "scheme 24: face centres shared by KEY-REDUCE on face keys (keyreduce) or by coordinates "
+                 "(vertexweld, the baseline)")
+      ->check(one_of<generate::SubdivideWeld>());
+  add_common_options(cmd, o.common);
+}
+
+int run_tetrahedralize(const TetrahedralizeCli& o) {
+  if (int rc = require_cpu_backend(o.common, "tetrahedralization")) return rc;
+  const int threads = apply_threads(o.common);
+  StageTimer timer;
+  Progress progress(o.common.quiet, file_size(o.input) > (64ll << 20));
+  progress.say("reading " + o.input);
+  const bool vertexweld =
+      generate::parse_option<generate::SubdivideWeld>(o.weld) == generate::SubdivideWeld::VertexWeld;
+  UnstructuredGrid tets;
+  nlohmann::json r;
+  if (io::is_grid_file(o.input)) {
+    const UnstructuredGrid hexes = timer.run("read", [&] { return io::read_grid(o.input); });
+    check_work(estimate_tetrahedralize(hexes.num_points(), hexes.num_cells(), o.scheme,
+                                       field_components(hexes.point_fields)),
+               memory_budget(o.common), o.input + ": tetrahedralize --scheme " + std::to_string(o.scheme));
+    tets = timer.run("tetrahedralize", [&] {
+      return o.scheme == 24 ? generate::tetrahedralize24(hexes, vertexweld)
+                             : generate::tetrahedralize5(hexes);
+    });
+    r["input_cells"] = hexes.num_cells();
+  } else {
+    const ImageGrid grid = timer.run("read", [&] { return io::read_volume(o.input); });
+    const auto voxels = [&] {
+      std::uint64_t n = 1;
+      for (Id d : grid.dims) n = saturating_mul(n, static_cast<std::uint64_t>(std::max<Id>(d - 1, 0)));
+      return n;
+    }();
+    check_work(estimate_tetrahedralize(static_cast<std::uint64_t>(grid.num_points()), voxels, o.scheme, 1),
+               memory_budget(o.common), o.input + ": tetrahedralize --scheme " + std::to_string(o.scheme));
+    progress.enable_if(grid.num_points() > (1ll << 24));
+    progress.say("tetrahedralizing " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
+                 std::to_string(grid.dims[2]));
+    tets = timer.run("tetrahedralize", [&] {
+      return o.scheme == 24 ? generate::tetrahedralize24(grid, vertexweld)
+                             : generate::tetrahedralize5(grid);
+    });
+    r["dims"] = grid.dims;
+  }
+  progress.say("writing " + o.output);
+  timer.run("write", [&] { io::write_grid(tets, o.output); });
+  say_written(o.common, tets.num_points(), tets.num_cells(), "tetrahedra", o.output);
+  r.update(files_and_counts(o.input, o.output, tets.num_points(), tets.num_cells()));
+  r["scheme"] = o.scheme;
+  r["weld"] = o.weld;
+  finish_report(o.common, r, threads, timer, PeakRss::Include);
+  return 0;
+}
+
+Register reg{make_command<TetrahedralizeCli>(
     "tetrahedralize", "split the voxels of a volume (or the hexahedra of a .vtu/.vtk) into tetrahedra",
-    [](CLI::App& cmd) -> std::function<int()> {
-      auto o = std::make_shared<TetrahedralizeCli>();
-      cmd.add_option("input", o->input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or hexahedral grid (.vtu .vtk)")
-          ->required();
-      cmd.add_option("-o,--output", o->output, "output tetrahedral grid (.vtu or .vtk)")->required();
-      cmd.add_option("--scheme", o->scheme,
-                     "5: five tets per hexahedron, alternating so neighbouring faces match (the minimal split); "
-                     "24: face-centred, 24 tets per hexahedron from its centre and its face centres")
-          ->check(CLI::IsMember({5, 24}));
-      cmd.add_option("--weld", o->weld,
-                     "scheme 24: face centres shared by KEY-REDUCE on face keys (keyreduce) or by coordinates "
-                     "(vertexweld, the baseline)")
-          ->check(one_of<generate::SubdivideWeld>());
-      add_common_options(cmd, o->common);
-      return [o]() {
-        if (int rc = require_cpu_backend(o->common, "tetrahedralization")) return rc;
-        const int threads = apply_threads(o->common);
-        StageTimer timer;
-        Progress progress(o->common.quiet, file_size(o->input) > (64ll << 20));
-        progress.say("reading " + o->input);
-        const bool vertexweld =
-            generate::parse_option<generate::SubdivideWeld>(o->weld) == generate::SubdivideWeld::VertexWeld;
-        UnstructuredGrid tets;
-        nlohmann::json r;
-        if (io::is_grid_file(o->input)) {
-          const UnstructuredGrid hexes = timer.run("read", [&] { return io::read_grid(o->input); });
-          check_work(estimate_tetrahedralize(hexes.num_points(), hexes.num_cells(), o->scheme,
-                                             field_components(hexes.point_fields)),
-                     memory_budget(o->common), o->input + ": tetrahedralize --scheme " + std::to_string(o->scheme));
-          tets = timer.run("tetrahedralize", [&] {
-            return o->scheme == 24 ? generate::tetrahedralize24(hexes, vertexweld)
-                                   : generate::tetrahedralize5(hexes);
-          });
-          r["input_cells"] = hexes.num_cells();
-        } else {
-          const ImageGrid grid = timer.run("read", [&] { return io::read_volume(o->input); });
-          const auto voxels = [&] {
-            std::uint64_t n = 1;
-            for (Id d : grid.dims) n = saturating_mul(n, static_cast<std::uint64_t>(std::max<Id>(d - 1, 0)));
-            return n;
-          }();
-          check_work(estimate_tetrahedralize(static_cast<std::uint64_t>(grid.num_points()), voxels, o->scheme, 1),
-                     memory_budget(o->common), o->input + ": tetrahedralize --scheme " + std::to_string(o->scheme));
-          progress.enable_if(grid.num_points() > (1ll << 24));
-          progress.say("tetrahedralizing " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
-                       std::to_string(grid.dims[2]));
-          tets = timer.run("tetrahedralize", [&] {
-            return o->scheme == 24 ? generate::tetrahedralize24(grid, vertexweld)
-                                   : generate::tetrahedralize5(grid);
-          });
-          r["dims"] = grid.dims;
-        }
-        progress.say("writing " + o->output);
-        timer.run("write", [&] { io::write_grid(tets, o->output); });
-        say_written(o->common, tets.num_points(), tets.num_cells(), "tetrahedra", o->output);
-        r.update(files_and_counts(o->input, o->output, tets.num_points(), tets.num_cells()));
-        r["scheme"] = o->scheme;
-        r["weld"] = o->weld;
-        finish_report(o->common, r, threads, timer, PeakRss::Include);
-        return 0;
-      };
-    }}};
+    add_tetrahedralize_options, run_tetrahedralize)};
 
 }  // namespace
 
