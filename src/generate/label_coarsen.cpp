@@ -116,13 +116,26 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
       std::copy_n(s.mesh.cell_fields[i].values.begin() + c * t, c, fields[i].values.begin() + c * at);
     }
   }, 4096);
-  s.mesh.points = std::move(merged);
+  // Points no kept face uses (every face through them collapsed or
+  // cancelled) are dropped, the others renumbered in coarse-key order.
+  std::vector<Id> used(static_cast<std::size_t>(m + 1), 0);
+  parallel::for_each(3 * faces_out, [&](Id k) { used[conn[static_cast<std::size_t>(k)]] = 1; });
+  const Id m_used = parallel::exclusive_scan(used.data(), used.data(), m + 1);
+  std::vector<float> compact(static_cast<std::size_t>(3 * m_used));
+  parallel::for_each(m, [&](Id p) {
+    if (used[static_cast<std::size_t>(p + 1)] == used[static_cast<std::size_t>(p)]) return;
+    std::copy_n(merged.begin() + 3 * p, 3, compact.begin() + 3 * used[static_cast<std::size_t>(p)]);
+  });
+  parallel::for_each(3 * faces_out, [&](Id k) {
+    conn[static_cast<std::size_t>(k)] = static_cast<PointIndex>(used[conn[static_cast<std::size_t>(k)]]);
+  });
+  s.mesh.points = std::move(compact);
   s.mesh.connectivity = std::move(conn);
   s.mesh.cell_fields = std::move(fields);
   s.pair = std::move(pair);
   s.quads = false;
-  s.junction.assign(static_cast<std::size_t>(m), 0);
-  s.border_axes.assign(static_cast<std::size_t>(m), 0);
+  s.junction.assign(static_cast<std::size_t>(m_used), 0);
+  s.border_axes.assign(static_cast<std::size_t>(m_used), 0);
   s.cell_centre.clear();
   s.keys.clear();
   s.coarse.clear();

@@ -111,6 +111,8 @@ def coarsened(name, args):
         assert r["coarsen"] and r["triangles_before"] == len(T0) and r["triangles_after"] == len(T), r
         assert len(T) > 0 and len(P) < len(P0), (len(P), len(P0))
         assert (T[:, 0] != T[:, 1]).all() and (T[:, 1] != T[:, 2]).all() and (T[:, 0] != T[:, 2]).all()
+        # every point is used by a face: points whose faces all collapsed are dropped
+        assert len(np.unique(T)) == len(P), (len(np.unique(T)), len(P))
         label_cycles_closed(T, F)
         pairs_near_voxels(vol, P, T, F)
         one = os.path.join(D, "c1.vtp")
