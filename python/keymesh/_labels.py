@@ -49,7 +49,7 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
                    origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0), method: str = "surface_nets",
                    labels: Optional[Sequence[int]] = None, background: int = 0, per_label: bool = False,
                    smoothing: bool = True, smoothing_iterations: int = 16, relaxation: float = 0.5,
-                   threads: int = 0) -> LabelMesh:
+                   coarsen: bool = False, threads: int = 0) -> LabelMesh:
     """Surfaces between the regions of a label map, welded by history keys.
 
     Args:
@@ -74,6 +74,11 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
             the welded mesh: constrained to each point's cell for surface
             nets, Taubin for discrete marching cubes; triple lines smoothed
             along themselves. Output is identical at any thread count.
+        coarsen: after smoothing, merge points by a coarser key (surface
+            nets: a 2x2x2 block of cells; discrete marching cubes: the
+            nearest grid point), as ``keymesh labels --coarsen``: faces that
+            collapse are dropped, label pairs kept; each label's surface
+            stays closed (not necessarily 2-manifold).
         threads: worker threads, 0 = all cores.
 
     Returns:
@@ -89,7 +94,7 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
     wanted = [] if labels is None else [int(v) for v in np.asarray(labels).reshape(-1)]
     (points, cells, offsets, point_data), cell_data, info = _ext.contour_labels(
         volume, spacing, origin, method, wanted, int(background), bool(per_label), iterations, float(relaxation),
-        int(threads))
+        bool(coarsen), int(threads))
     last_labels_info.clear()
     last_labels_info.update(info)
     return LabelMesh(points, cells, point_data, offsets, cell_data)

@@ -19,7 +19,7 @@ generate::LabelMethod parse_method(const std::string& s) {
 py::tuple contour_labels(const py::object& volume, const py::object& spacing, const py::object& origin,
                          const std::string& method, const std::vector<std::int64_t>& labels,
                          std::int64_t background, bool per_label, int smoothing_iterations, double relaxation,
-                         int threads) {
+                         bool coarsen, int threads) {
   check_threads(threads);
   generate::LabelOptions opt;
   opt.method = parse_method(method);
@@ -28,6 +28,7 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   opt.per_label = per_label;
   opt.smooth_iterations = smoothing_iterations;
   opt.relaxation = relaxation;
+  opt.coarsen = coarsen;
   const ImageGrid* grid = nullptr;
   ImageGrid view;
   py::array array;
@@ -69,6 +70,7 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   info["generate"] = stats.generate;
   info["weld"] = stats.weld;
   info["smooth"] = stats.smooth;
+  info["coarsen"] = stats.coarsen;
   info["distinct_labels"] = stats.distinct_labels;
   info["surfaces"] = stats.surfaces;
   return py::make_tuple(mesh_to_python(std::move(mesh)), cell_data, info);
@@ -80,7 +82,7 @@ void register_labels(py::module_& m) {
   m.def("contour_labels", &contour_labels, py::arg("volume"), py::arg("spacing") = py::none(),
         py::arg("origin") = py::none(), py::arg("method") = "surface_nets",
         py::arg("labels") = std::vector<std::int64_t>{}, py::arg("background") = 0, py::arg("per_label") = false,
-        py::arg("smoothing_iterations") = 16, py::arg("relaxation") = 0.5, py::arg("threads") = 0,
+        py::arg("smoothing_iterations") = 16, py::arg("relaxation") = 0.5, py::arg("coarsen") = false, py::arg("threads") = 0,
         "Surfaces of a label map; returns ((points, cells, offsets, point_data), cell_data, info). "
         "Use keymesh.contour_labels, which wraps this in a Mesh.");
 }

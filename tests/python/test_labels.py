@@ -143,3 +143,33 @@ def test_white_noise_per_label_closed_manifolds(seed):
             region = np.pad(vol == lab, 1)
             expected = 2 * (skimage_measure.euler_number(region, connectivity=1) + filled_rings(region))
             assert len(np.unique(t)) - len(edges) + len(t) == expected, (method, lab)
+
+
+@pytest.mark.parametrize("method", ["surface_nets", "discrete_marching_cubes"])
+def test_coarsen_matches_the_command(method):
+    """coarsen=True is `keymesh labels --coarsen`: the same points and faces,
+    fewer of them than without, every point used by a face."""
+    vol = label_map(seed=9)
+    fine = keymesh.contour_labels(vol, spacing=(1.0, 2.0, 0.5), method=method, smoothing_iterations=4)
+    mesh = keymesh.contour_labels(vol, spacing=(1.0, 2.0, 0.5), method=method, smoothing_iterations=4, coarsen=True)
+    assert 0 < mesh.n_cells < fine.n_cells and mesh.n_points < fine.n_points
+    assert len(np.unique(mesh.cells)) == mesh.n_points
+    vtk = pytest.importorskip("vtk")
+    from vtk.util import numpy_support as ns
+    binary = os.environ.get("KEYMESH", os.path.join(os.path.dirname(keymesh.__file__), "..", "..", "keymesh"))
+    if not os.path.exists(binary):
+        pytest.skip("keymesh command not found")
+    with tempfile.TemporaryDirectory() as d:
+        vol_path, out = os.path.join(d, "v.vti"), os.path.join(d, "v.vtp")
+        _vti(vol, vol_path)
+        cli_method = "surfacenets" if method == "surface_nets" else "discrete-mc"
+        subprocess.run([binary, "labels", vol_path, "-o", out, "--method", cli_method, "--smooth", "4", "--coarsen",
+                        "-q"], check=True)
+        r = vtk.vtkXMLPolyDataReader()
+        r.SetFileName(out)
+        r.Update()
+        poly = r.GetOutput()
+        theirs = ns.vtk_to_numpy(poly.GetPoints().GetData())
+        assert theirs.shape == mesh.points.shape and np.array_equal(theirs, mesh.points)
+        cells = ns.vtk_to_numpy(poly.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+        assert np.array_equal(cells, mesh.cells)
