@@ -36,6 +36,14 @@ def test_matches_command_and_axis_convention():
     other = keymesh.contour_labels(np.asfortranarray(vol), spacing=(1.0, 2.0, 0.5), smoothing=False)
     assert (other.cells == mesh.cells).all() and (other.points == mesh.points).all()
     # The command on the same volume written as .vti gives the same points and faces.
+    poly, ns = _command_mesh(vol, "--smooth", "0")
+    assert poly.GetNumberOfPoints() == mesh.n_points and poly.GetNumberOfPolys() == mesh.n_cells
+    theirs = ns.vtk_to_numpy(poly.GetCellData().GetArray("boundary_labels"))
+    assert (theirs == bl).all()
+
+
+def _command_mesh(vol, *args):
+    """`keymesh labels` on vol (written as .vti) with args: (vtkPolyData, numpy_support)."""
     vtk = pytest.importorskip("vtk")
     from vtk.util import numpy_support as ns
     binary = os.environ.get("KEYMESH", os.path.join(os.path.dirname(keymesh.__file__), "..", "..", "keymesh"))
@@ -44,14 +52,13 @@ def test_matches_command_and_axis_convention():
     with tempfile.TemporaryDirectory() as d:
         vol_path, out = os.path.join(d, "v.vti"), os.path.join(d, "v.vtp")
         _vti(vol, vol_path)
-        subprocess.run([binary, "labels", vol_path, "-o", out, "--smooth", "0", "-q"], check=True)
+        subprocess.run([binary, "labels", vol_path, "-o", out, *args, "-q"], check=True)
         r = vtk.vtkXMLPolyDataReader()
         r.SetFileName(out)
         r.Update()
-        poly = r.GetOutput()
-        assert poly.GetNumberOfPoints() == mesh.n_points and poly.GetNumberOfPolys() == mesh.n_cells
-        theirs = ns.vtk_to_numpy(poly.GetCellData().GetArray("boundary_labels"))
-        assert (theirs == bl).all()
+        poly = vtk.vtkPolyData()
+        poly.DeepCopy(r.GetOutput())
+        return poly, ns
 
 
 def _vti(vol, path):
@@ -154,22 +161,9 @@ def test_coarsen_matches_the_command(method):
     mesh = keymesh.contour_labels(vol, spacing=(1.0, 2.0, 0.5), method=method, smoothing_iterations=4, coarsen=True)
     assert 0 < mesh.n_cells < fine.n_cells and mesh.n_points < fine.n_points
     assert len(np.unique(mesh.cells)) == mesh.n_points
-    vtk = pytest.importorskip("vtk")
-    from vtk.util import numpy_support as ns
-    binary = os.environ.get("KEYMESH", os.path.join(os.path.dirname(keymesh.__file__), "..", "..", "keymesh"))
-    if not os.path.exists(binary):
-        pytest.skip("keymesh command not found")
-    with tempfile.TemporaryDirectory() as d:
-        vol_path, out = os.path.join(d, "v.vti"), os.path.join(d, "v.vtp")
-        _vti(vol, vol_path)
-        cli_method = "surfacenets" if method == "surface_nets" else "discrete-mc"
-        subprocess.run([binary, "labels", vol_path, "-o", out, "--method", cli_method, "--smooth", "4", "--coarsen",
-                        "-q"], check=True)
-        r = vtk.vtkXMLPolyDataReader()
-        r.SetFileName(out)
-        r.Update()
-        poly = r.GetOutput()
-        theirs = ns.vtk_to_numpy(poly.GetPoints().GetData())
-        assert theirs.shape == mesh.points.shape and np.array_equal(theirs, mesh.points)
-        cells = ns.vtk_to_numpy(poly.GetPolys().GetConnectivityArray()).reshape(-1, 3)
-        assert np.array_equal(cells, mesh.cells)
+    cli_method = "surfacenets" if method == "surface_nets" else "discrete-mc"
+    poly, ns = _command_mesh(vol, "--method", cli_method, "--smooth", "4", "--coarsen")
+    theirs = ns.vtk_to_numpy(poly.GetPoints().GetData())
+    assert theirs.shape == mesh.points.shape and np.array_equal(theirs, mesh.points)
+    cells = ns.vtk_to_numpy(poly.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+    assert np.array_equal(cells, mesh.cells)
