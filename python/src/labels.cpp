@@ -30,34 +30,16 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   opt.relaxation = relaxation;
   opt.coarsen = coarsen;
   const ImageGrid* grid = nullptr;
-  ImageGrid view;
-  py::array array;
+  ArrayVolume view;
   if (py::isinstance<Volume>(volume)) {
     grid = &volume.cast<Volume&>().grid;
   } else {
-    array = py::array::ensure(volume);
-    if (!array) throw py::type_error("volume must be a 3-D numpy array or a keymesh.Volume");
-    if (array.ndim() != 3)
-      throw py::value_error("volume must be 3-D (axis 0 = x), got ndim=" + std::to_string(array.ndim()));
-    view.type = scalar_type_of(array.dtype(), "volume");
-    if (!array.dtype().attr("isnative").cast<bool>())
-      array = array.attr("astype")(array.dtype().attr("newbyteorder")("="));
-    array = py::array::ensure(array, py::array::f_style);
-    const auto s = spacing.is_none() ? std::array<double, 3>{1, 1, 1} : triple(spacing, "spacing");
-    const auto o = origin.is_none() ? std::array<double, 3>{0, 0, 0} : triple(origin, "origin");
-    for (int a = 0; a < 3; ++a) view.dims[a] = array.shape(a);
-    view.spacing = s;
-    view.origin = o;
-    view.external = static_cast<const std::byte*>(array.data());
-    grid = &view;
+    view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
+                             "volume must be a 3-D numpy array or a keymesh.Volume");
+    grid = &view.grid;
   }
-  SurfaceMesh mesh;
   generate::LabelStats stats;
-  {
-    py::gil_scoped_release release;
-    ThreadScope scope(threads);
-    mesh = generate::contour_labels(*grid, opt, &stats);
-  }
+  SurfaceMesh mesh = run_released(threads, [&] { return generate::contour_labels(*grid, opt, &stats); });
   py::dict cell_data;
   for (Field& f : mesh.cell_fields) {
     const auto n = static_cast<py::ssize_t>(f.values.size() / static_cast<std::size_t>(f.components));
