@@ -83,10 +83,15 @@ void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, 
     while (active) {
       const int bit = std::countr_zero(active);
       active &= active - 1;
-      const unsigned cube_case = static_cast<unsigned>(((a >> bit) & 1) | (((a1 >> bit) & 1) << 1) |
-                                                       (((b >> bit) & 1) << 2) | (((b1 >> bit) & 1) << 3) |
-                                                       (((c >> bit) & 1) << 4) | (((c1 >> bit) & 1) << 5) |
-                                                       (((d >> bit) & 1) << 6) | (((d1 >> bit) & 1) << 7));
+      // Corners i and i + 1 of a row are bits `bit` and `bit + 1` of its
+      // word, two bits in case order, read with one shift; only bit 63 takes
+      // corner i + 1 from the next word.
+      const unsigned cube_case =
+          bit < 63 ? static_cast<unsigned>(((a >> bit) & 3) | (((b >> bit) & 3) << 2) | (((c >> bit) & 3) << 4) |
+                                           (((d >> bit) & 3) << 6))
+                   : static_cast<unsigned>((a >> 63) | ((a1 >> 63) << 1) | ((b >> 63) << 2) | ((b1 >> 63) << 3) |
+                                           ((c >> 63) << 4) | ((c1 >> 63) << 5) | ((d >> 63) << 6) |
+                                           ((d1 >> 63) << 7));
       f(64 * q + bit, cube_case);
     }
   }
