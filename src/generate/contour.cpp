@@ -283,18 +283,14 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   progress::report("triangles", 0.4);
   auto t0 = Clock::now();
   parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
-  for (Id iso = 0; iso < n_iso; ++iso) write_triangles(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data());
-  st.generate += seconds_since(t0);
-
-  progress::report("points", 0.7);
-  t0 = Clock::now();
   std::vector<std::uint64_t> coarse;
   const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse, true);
+  // Triangles and points in one pass over the rows (st.generate holds both).
   for (Id iso = 0; iso < n_iso; ++iso)
-    for_each_row_point(bits[iso], s, kb, ke, rows[iso], [&](Id id, Id i, Id j, Id k, int axis) {
+    write_rows(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data(), [&](Id id, Id i, Id j, Id k, int axis) {
       write(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
     });
-  st.fields += seconds_since(t0);
+  st.generate += seconds_since(t0);
   finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n), st);
   return mesh;
 }

@@ -105,7 +105,10 @@ struct RowIds {
 
   RowIds(std::uint32_t* scratch, Id nx) : ids{scratch, scratch + nx, scratch + 2 * nx} {}
 
-  void fill(const RowCuts& cuts, Id first) {
+  // Also calls cut(id, i, x, y, z) at every position, id the position's
+  // first id (the point writer of the row that owns it; a no-op otherwise).
+  template <class Cut>
+  void fill(const RowCuts& cuts, Id first, Cut&& cut) {
     auto id = static_cast<std::uint32_t>(first);
     // Branch-free: every axis gets the running id, which moves on past the
     // edges that are cut.
@@ -113,6 +116,7 @@ struct RowIds {
       ids[0][i] = id;
       ids[1][i] = id + x;
       ids[2][i] = id + x + y;
+      cut(id, i, x, y, z);
       id += x + y + z;
     });
   }
@@ -151,12 +155,18 @@ inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke,
 }
 
 // Writes the triangles of voxel rows (j, k), k in [kb, ke), with final point
-// ids, to connectivity (3 per triangle) at their scanned offsets. A voxel's
-// 12 edges lie in grid rows (j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1);
-// their ids come from those rows' RowIds. Voxel rows are taken in runs of
-// consecutive j, so rows j + 1 of one voxel row are rows j of the next.
-inline void write_triangles(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc,
-                            PointIndex* connectivity) {
+// ids, to connectivity (3 per triangle) at their scanned offsets, and calls
+// emit(id, i, j, k, axis) once for every cut edge of grid rows of planes
+// [kb, ke], id its point id (key order). A voxel's 12 edges lie in grid rows
+// (j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1); their ids come from those
+// rows' RowIds. Voxel rows are taken in runs of consecutive j, so rows j + 1
+// of one voxel row are rows j of the next. The points of a grid row are
+// emitted while its ids are filled, by the one task that owns the row: the
+// task of its run in layer k (and the last layer's for plane ke), so no row
+// is read again for its points.
+template <class Emit>
+void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc,
+                PointIndex* connectivity, Emit&& emit) {
   const auto& table = marching_cubes_table();
   const Id layers = ke - kb;
   constexpr Id kRun = 16;  // voxel rows per task
@@ -164,18 +174,31 @@ inline void write_triangles(const InsideBits& bits, const GridShape& s, Id kb, I
   parallel::for_each_dynamic(layers * runs_per_layer, [&](Id task) {
     const Id k = kb + task / runs_per_layer;
     const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
-    auto first = [&](Id j, Id k_) { return rc.point_first[(k_ - kb) * s.ny + j]; };
+    // Grid row (j, k_) as a voxel row of this task sees it: its ids, and its
+    // points when this task owns it (rows j_begin .. j_end - 1, and the last
+    // row ny - 1, of plane k; of plane ke too in the last layer).
+    auto fill = [&](RowIds& row, Id j, Id k_) {
+      const RowCuts cuts(bits, s, j, k_, ke);
+      const Id first = rc.point_first[(k_ - kb) * s.ny + j];
+      const bool owned = (k_ == k || k_ == ke) && (j < j_end || j == s.ny - 1);
+      if (!owned) return row.fill(cuts, first, [](std::uint32_t, Id, std::uint32_t, std::uint32_t, std::uint32_t) {});
+      row.fill(cuts, first, [&](std::uint32_t id, Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+        if (x) emit(Id{id}, i, j, k_, 0);
+        if (y) emit(Id{id + x}, i, j, k_, 1);
+        if (z) emit(Id{id + x + y}, i, j, k_, 2);
+      });
+    };
     // Rows (j, k), (j, k + 1) of the current voxel row, and the next j's,
     // in this thread's scratch.
     thread_local std::vector<std::uint32_t> scratch;
     if (static_cast<Id>(scratch.size()) < 12 * s.nx) scratch.resize(static_cast<std::size_t>(12 * s.nx));
     RowIds lo[2] = {RowIds(scratch.data(), s.nx), RowIds(scratch.data() + 3 * s.nx, s.nx)};
     RowIds hi[2] = {RowIds(scratch.data() + 6 * s.nx, s.nx), RowIds(scratch.data() + 9 * s.nx, s.nx)};
-    lo[0].fill(RowCuts(bits, s, j_begin, k, ke), first(j_begin, k));
-    lo[1].fill(RowCuts(bits, s, j_begin, k + 1, ke), first(j_begin, k + 1));
+    fill(lo[0], j_begin, k);
+    fill(lo[1], j_begin, k + 1);
     for (Id j = j_begin; j < j_end; ++j) {
-      hi[0].fill(RowCuts(bits, s, j + 1, k, ke), first(j + 1, k));
-      hi[1].fill(RowCuts(bits, s, j + 1, k + 1, ke), first(j + 1, k + 1));
+      fill(hi[0], j + 1, k);
+      fill(hi[1], j + 1, k + 1);
       // Cube edge e's id at voxel i is edge_ids[e][i]: its row's array for
       // its axis, shifted by its x offset.
       const std::uint32_t* edge_ids[12];
@@ -194,22 +217,6 @@ inline void write_triangles(const InsideBits& bits, const GridShape& s, Id kb, I
       std::swap(lo[1], hi[1]);
     }
   }, 1);
-}
-
-// Calls emit(id, i, j, k, axis) for every cut edge of grid rows of planes
-// [kb, ke], id its point id (key order).
-template <class Emit>
-void for_each_row_point(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc, Emit&& emit) {
-  const Id grid_rows = s.ny * (ke - kb + 1);
-  parallel::for_each_dynamic(grid_rows, [&](Id r) {
-    const Id j = r % s.ny, k = kb + r / s.ny;
-    Id id = rc.point_first[r];
-    RowCuts(bits, s, j, k, ke).for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-      if (x) emit(id++, i, j, k, 0);
-      if (y) emit(id++, i, j, k, 1);
-      if (z) emit(id++, i, j, k, 2);
-    });
-  }, 8);
 }
 
 }  // namespace keymesh::generate
