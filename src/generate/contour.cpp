@@ -283,6 +283,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   progress::report("triangles", 0.4);
   auto t0 = Clock::now();
   parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
+  progress::report("points", 0.5);
   std::vector<std::uint64_t> coarse;
   const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse, true);
   // Triangles and points in one pass over the rows (st.generate holds both).
