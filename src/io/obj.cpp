@@ -8,9 +8,13 @@
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/mesh_bytes.hpp"
 
+#include "checked_mesh.hpp"
+
 namespace keymesh::io {
 
 using namespace mesh_bytes;
+
+SurfaceMesh read_obj(const std::string& path) { return parse_obj(read_whole_file(path), path); }
 
 namespace {
 
@@ -25,25 +29,7 @@ bool resolve_index(std::string_view token, std::int64_t count, std::int64_t& out
 
 }  // namespace
 
-SurfaceMesh read_obj(const std::string& path) {
-  const std::string data = read_whole_file(path);
-  return parse_obj(data, path);
-}
-
-namespace {
-SurfaceMesh parse_obj_unchecked(std::string_view data, const std::string& path);
-}  // namespace
-
-// The parser's result is checked here (non-finite coordinates included), not
-// only by read_mesh: every caller of a parser relies on it.
 SurfaceMesh parse_obj(std::string_view data, const std::string& path) {
-  SurfaceMesh mesh = parse_obj_unchecked(data, path);
-  validate_mesh(mesh, path);
-  return mesh;
-}
-
-namespace {
-SurfaceMesh parse_obj_unchecked(std::string_view data, const std::string& path) {
   SurfaceMesh mesh;
   std::vector<float> normals;                 // vn lines, 3 per normal
   std::vector<std::int64_t> corner_normal;    // per connectivity entry, -1 when absent
@@ -126,9 +112,8 @@ SurfaceMesh parse_obj_unchecked(std::string_view data, const std::string& path) 
       mesh.point_fields.push_back(std::move(f));
     }
   }
-  return mesh;
+  return checked_mesh(std::move(mesh), path);
 }
-}  // namespace
 
 void write_obj(const SurfaceMesh& mesh, const std::string& path) {
   validate_mesh(mesh, path);

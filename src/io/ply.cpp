@@ -13,9 +13,13 @@
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/mesh_bytes.hpp"
 
+#include "checked_mesh.hpp"
+
 namespace keymesh::io {
 
 using namespace mesh_bytes;
+
+SurfaceMesh read_ply(const std::string& path) { return parse_ply(read_whole_file(path), path); }
 
 namespace {
 
@@ -133,25 +137,7 @@ struct FieldPlan {
 
 }  // namespace
 
-SurfaceMesh read_ply(const std::string& path) {
-  const std::string data = read_whole_file(path);
-  return parse_ply(data, path);
-}
-
-namespace {
-SurfaceMesh parse_ply_unchecked(std::string_view data, const std::string& path);
-}  // namespace
-
-// The parser's result is checked here (non-finite coordinates included), not
-// only by read_mesh: every caller of a parser relies on it.
 SurfaceMesh parse_ply(std::string_view data, const std::string& path) {
-  SurfaceMesh mesh = parse_ply_unchecked(data, path);
-  validate_mesh(mesh, path);
-  return mesh;
-}
-
-namespace {
-SurfaceMesh parse_ply_unchecked(std::string_view data, const std::string& path) {
   // ---- header ---------------------------------------------------------------
   std::size_t pos = 0;
   auto next_line = [&](std::string_view& line) {
@@ -352,9 +338,8 @@ SurfaceMesh parse_ply_unchecked(std::string_view data, const std::string& path) 
   }
   compact_offsets(mesh);
   if (mesh.offsets.size() == 1) mesh.offsets.clear();  // a face element with no faces
-  return mesh;
+  return checked_mesh(std::move(mesh), path);
 }
-}  // namespace
 
 namespace {
 

@@ -10,9 +10,13 @@
 #include "keymesh/io/mesh_bytes.hpp"
 #include "keymesh/weld/vertex_weld.hpp"
 
+#include "checked_mesh.hpp"
+
 namespace keymesh::io {
 
 using namespace mesh_bytes;
+
+SurfaceMesh read_stl(const std::string& path) { return parse_stl(read_whole_file(path), path); }
 
 namespace {
 
@@ -102,40 +106,21 @@ bool starts_with_solid(std::string_view data) {
 
 }  // namespace
 
-SurfaceMesh read_stl(const std::string& path) {
-  const std::string data = read_whole_file(path);
-  return parse_stl(data, path);
-}
-
-namespace {
-SurfaceMesh parse_stl_unchecked(std::string_view data, const std::string& path);
-}  // namespace
-
-// The parser's result is checked here (non-finite coordinates included), not
-// only by read_mesh: every caller of a parser relies on it.
 SurfaceMesh parse_stl(std::string_view data, const std::string& path) {
-  SurfaceMesh mesh = parse_stl_unchecked(data, path);
-  validate_mesh(mesh, path);
-  return mesh;
-}
-
-namespace {
-SurfaceMesh parse_stl_unchecked(std::string_view data, const std::string& path) {
   // Many binary writers start the 80-byte header with "solid" too, so the
   // exact binary size decides first.
   if (data.size() >= 84) {
     const std::uint32_t count = load<std::uint32_t>(data.data() + 80, false);
     const std::uint64_t expected = 84 + 50 * std::uint64_t{count};
-    if (expected == data.size()) return parse_binary(data, count, path);
+    if (expected == data.size()) return checked_mesh(parse_binary(data, count, path), path);
     if (!starts_with_solid(data))
       throw InputError(path + ": binary STL declares " + std::to_string(count) + " triangles (" +
                        std::to_string(expected) + " bytes) but the file has " + std::to_string(data.size()) +
                        " bytes");
   }
   if (!starts_with_solid(data)) throw InputError(path + ": not an STL file (too short for binary, no 'solid')");
-  return parse_ascii(data, path);
+  return checked_mesh(parse_ascii(data, path), path);
 }
-}  // namespace
 
 void write_stl(const SurfaceMesh& mesh, const std::string& path) {
   validate_mesh(mesh, path);
