@@ -129,16 +129,48 @@ class ValueReader {
   const std::string& path_;
 };
 
-// A vertex-element field read from one or more scalar properties.
-struct FieldPlan {
-  std::string name;
-  std::vector<std::size_t> props;  // property indices, one per component
+// The header: the body's encoding, the elements in file order, and where the
+// body starts.
+struct Header {
+  Format format = Format::Ascii;
+  std::vector<Element> elements;
+  std::size_t body = 0;
 };
 
-}  // namespace
+std::string header_line_text(std::string_view line) { return "'" + std::string(line.substr(0, 80)) + "'"; }
 
-SurfaceMesh parse_ply(std::string_view data, const std::string& path) {
-  // ---- header ---------------------------------------------------------------
+Format parse_format(const std::vector<std::string_view>& w, const std::string& path) {
+  if (w.size() < 2) throw InputError(path + ": PLY format line without a format");
+  if (w[1] == "ascii") return Format::Ascii;
+  if (w[1] == "binary_little_endian") return Format::BinaryLittle;
+  if (w[1] == "binary_big_endian") return Format::BinaryBig;
+  throw InputError(path + ": unknown PLY format '" + std::string(w[1]) + "'");
+}
+
+// "property <type> <name>" or "property list <count type> <item type> <name>".
+Property parse_property(const std::vector<std::string_view>& w, std::string_view line, const std::string& path) {
+  Property p;
+  if (w.size() >= 5 && w[1] == "list") {
+    const auto ct = ply_scalar(w[2]);
+    const auto it = ply_scalar(w[3]);
+    if (!ct || !it) throw InputError(path + ": unknown PLY type in " + header_line_text(line));
+    if (scalar_is_float(*ct)) throw InputError(path + ": PLY list count type must be an integer type");
+    p.is_list = true;
+    p.count_type = *ct;
+    p.type = *it;
+    p.name = std::string(w[4]);
+  } else if (w.size() >= 3) {
+    const auto t = ply_scalar(w[1]);
+    if (!t) throw InputError(path + ": unknown PLY type in " + header_line_text(line));
+    p.type = *t;
+    p.name = std::string(w[2]);
+  } else {
+    throw InputError(path + ": bad PLY property line " + header_line_text(line));
+  }
+  return p;
+}
+
+Header read_header(std::string_view data, const std::string& path) {
   std::size_t pos = 0;
   auto next_line = [&](std::string_view& line) {
     if (pos >= data.size()) return false;
@@ -152,186 +184,206 @@ SurfaceMesh parse_ply(std::string_view data, const std::string& path) {
   };
   std::string_view line;
   if (!next_line(line) || line != "ply") throw InputError(path + ": not a PLY file (missing 'ply' magic)");
+  Header h;
   std::optional<Format> format;
-  std::vector<Element> elements;
   bool ended = false;
-  while (next_line(line)) {
+  while (!ended && next_line(line)) {
     const auto w = split_words(line);
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "end_header") {
       ended = true;
-      break;
-    }
-    if (w[0] == "format") {
-      if (w.size() < 2) throw InputError(path + ": PLY format line without a format");
-      if (w[1] == "ascii") format = Format::Ascii;
-      else if (w[1] == "binary_little_endian") format = Format::BinaryLittle;
-      else if (w[1] == "binary_big_endian") format = Format::BinaryBig;
-      else throw InputError(path + ": unknown PLY format '" + std::string(w[1]) + "'");
+    } else if (w[0] == "format") {
+      format = parse_format(w, path);
     } else if (w[0] == "element") {
       std::int64_t count = 0;
       if (w.size() < 3 || !parse_int64(w[2], count) || count < 0)
-        throw InputError(path + ": bad PLY element line '" + std::string(line.substr(0, 80)) + "'");
-      elements.push_back({std::string(w[1]), static_cast<std::uint64_t>(count), {}});
+        throw InputError(path + ": bad PLY element line " + header_line_text(line));
+      h.elements.push_back({std::string(w[1]), static_cast<std::uint64_t>(count), {}});
     } else if (w[0] == "property") {
-      if (elements.empty()) throw InputError(path + ": PLY property before any element");
-      Property p;
-      if (w.size() >= 5 && w[1] == "list") {
-        const auto ct = ply_scalar(w[2]);
-        const auto it = ply_scalar(w[3]);
-        if (!ct || !it) throw InputError(path + ": unknown PLY type in '" + std::string(line.substr(0, 80)) + "'");
-        if (scalar_is_float(*ct)) throw InputError(path + ": PLY list count type must be an integer type");
-        p.is_list = true;
-        p.count_type = *ct;
-        p.type = *it;
-        p.name = std::string(w[4]);
-      } else if (w.size() >= 3) {
-        const auto t = ply_scalar(w[1]);
-        if (!t) throw InputError(path + ": unknown PLY type in '" + std::string(line.substr(0, 80)) + "'");
-        p.type = *t;
-        p.name = std::string(w[2]);
-      } else {
-        throw InputError(path + ": bad PLY property line '" + std::string(line.substr(0, 80)) + "'");
-      }
-      elements.back().props.push_back(std::move(p));
+      if (h.elements.empty()) throw InputError(path + ": PLY property before any element");
+      h.elements.back().props.push_back(parse_property(w, line, path));
     } else {
-      throw InputError(path + ": unknown PLY header line '" + std::string(line.substr(0, 80)) + "'");
+      throw InputError(path + ": unknown PLY header line " + header_line_text(line));
     }
   }
   if (!ended) throw InputError(path + ": truncated PLY header (no end_header)");
   if (!format) throw InputError(path + ": PLY header has no format line");
+  h.format = *format;
+  h.body = pos;
+  return h;
+}
 
-  // ---- plan -------------------------------------------------------------------
+// Refuses a record count the rest of the file cannot hold, before anything
+// is allocated for it.
+void check_record_count(const Element& e, const ValueReader& in, bool ascii, const std::string& path) {
+  std::uint64_t min_record = 0;
+  for (const auto& p : e.props) min_record += ascii ? 2 : scalar_size(p.is_list ? p.count_type : p.type);
+  if (e.count > (in.remaining() + 1) / min_record)
+    throw InputError(path + ": element '" + e.name + "' declares " + std::to_string(e.count) +
+                     " records, more than the file can hold");
+}
+
+// A vertex-element field read from one or more scalar properties.
+struct FieldPlan {
+  std::string name;
+  std::vector<std::size_t> props;  // property indices, one per component
+};
+
+// Where each vertex property goes: a coordinate, a field component, or
+// nowhere (list properties, skipped).
+struct VertexLayout {
+  std::vector<FieldPlan> fields;
+  std::vector<int> coordinate;                                  // 0..2 for x y z, -1 otherwise
+  std::vector<std::pair<std::size_t, std::size_t>> field_slot;  // (field, component) of the others
+};
+
+// The fields of the scalar properties that are not x y z: nx ny nz as
+// "Normals", runs p_0, p_1, ... as one field "p" (as keymesh writes
+// multi-component fields), every other property as a 1-component field.
+std::vector<FieldPlan> plan_vertex_fields(const Element& e, const std::size_t xyz[3],
+                                          const std::optional<std::size_t> nxyz[3]) {
+  const bool normals = nxyz[0] && nxyz[1] && nxyz[2];
+  std::vector<FieldPlan> plans;
+  if (normals) plans.push_back({"Normals", {*nxyz[0], *nxyz[1], *nxyz[2]}});
+  for (std::size_t i = 0; i < e.props.size();) {
+    const auto& p = e.props[i];
+    if (p.is_list || i == xyz[0] || i == xyz[1] || i == xyz[2] ||
+        (normals && (i == *nxyz[0] || i == *nxyz[1] || i == *nxyz[2]))) {
+      ++i;
+      continue;
+    }
+    std::size_t run = 0;
+    std::string base;
+    if (p.name.size() > 2 && p.name.compare(p.name.size() - 2, 2, "_0") == 0) {
+      base = p.name.substr(0, p.name.size() - 2);
+      while (i + run < e.props.size() && !e.props[i + run].is_list &&
+             e.props[i + run].name == base + "_" + std::to_string(run))
+        ++run;
+    }
+    if (run >= 2) {
+      FieldPlan plan{base, {}};
+      for (std::size_t k = 0; k < run; ++k) plan.props.push_back(i + k);
+      plans.push_back(std::move(plan));
+      i += run;
+    } else {
+      plans.push_back({p.name, {i}});
+      ++i;
+    }
+  }
+  return plans;
+}
+
+VertexLayout plan_vertex(const Element& e, const std::string& path) {
+  std::optional<std::size_t> found[6];  // x y z nx ny nz
+  static const char* const kNames[6] = {"x", "y", "z", "nx", "ny", "nz"};
+  for (std::size_t i = 0; i < e.props.size(); ++i) {
+    if (e.props[i].is_list) continue;
+    for (int k = 0; k < 6; ++k)
+      if (e.props[i].name == kNames[k]) found[k] = i;
+  }
+  if (!found[0] || !found[1] || !found[2]) throw InputError(path + ": PLY vertex element lacks x, y or z");
+  const std::size_t xyz[3] = {*found[0], *found[1], *found[2]};
+  VertexLayout layout;
+  layout.fields = plan_vertex_fields(e, xyz, found + 3);
+  layout.coordinate.assign(e.props.size(), -1);
+  for (int a = 0; a < 3; ++a) layout.coordinate[xyz[a]] = a;
+  layout.field_slot.assign(e.props.size(), {SIZE_MAX, 0});
+  for (std::size_t f = 0; f < layout.fields.size(); ++f)
+    for (std::size_t k = 0; k < layout.fields[f].props.size(); ++k) layout.field_slot[layout.fields[f].props[k]] = {f, k};
+  return layout;
+}
+
+void read_vertices(const Element& e, ValueReader& in, SurfaceMesh& mesh, const std::string& path) {
+  if (e.count > std::numeric_limits<PointIndex>::max())
+    throw LimitError(path + ": " + std::to_string(e.count) + " vertices exceed 2^32 - 1");
+  const VertexLayout layout = plan_vertex(e, path);
+  const std::string what = "element '" + e.name + "'";
+  mesh.points.resize(3 * e.count);
+  mesh.point_fields.resize(layout.fields.size());
+  for (std::size_t f = 0; f < layout.fields.size(); ++f) {
+    mesh.point_fields[f].name = layout.fields[f].name;
+    mesh.point_fields[f].components = static_cast<int>(layout.fields[f].props.size());
+    mesh.point_fields[f].values.resize(e.count * layout.fields[f].props.size());
+  }
+  for (std::uint64_t r = 0; r < e.count; ++r) {
+    for (std::size_t i = 0; i < e.props.size(); ++i) {
+      const auto& p = e.props[i];
+      if (p.is_list) {
+        in.skip(p, what);
+      } else if (layout.coordinate[i] >= 0) {
+        mesh.points[3 * r + layout.coordinate[i]] = static_cast<float>(in.read_double(p.type, what));
+      } else {
+        const auto [f, k] = layout.field_slot[i];
+        Field& fd = mesh.point_fields[f];
+        fd.values[r * fd.components + k] = static_cast<float>(in.read_double(p.type, what));
+      }
+    }
+  }
+}
+
+// One face's vertex_indices list, appended to the mesh's cells.
+void read_face(const Property& p, std::uint64_t r, std::uint64_t num_points, ValueReader& in, SurfaceMesh& mesh,
+               const std::string& what, const std::string& path) {
+  const std::int64_t n = in.read_int(p.count_type, what);
+  if (n < 3)
+    throw InputError(path + ": face " + std::to_string(r) + " has " + std::to_string(n) +
+                     " vertices (at least 3 needed)");
+  if (static_cast<std::uint64_t>(n) > in.remaining())
+    throw InputError(path + ": truncated file: face " + std::to_string(r) + " declares " + std::to_string(n) +
+                     " vertices");
+  for (std::int64_t k = 0; k < n; ++k) {
+    const std::int64_t id = in.read_int(p.type, what);
+    if (id < 0 || static_cast<std::uint64_t>(id) >= num_points)
+      throw InputError(path + ": face " + std::to_string(r) + " refers to vertex " + std::to_string(id) +
+                       " out of range (" + std::to_string(num_points) + " vertices)");
+    mesh.connectivity.push_back(static_cast<PointIndex>(id));
+  }
+  mesh.offsets.push_back(mesh.connectivity.size());
+}
+
+void read_faces(const Element& e, std::uint64_t num_points, ValueReader& in, SurfaceMesh& mesh,
+                const std::string& path) {
+  std::optional<std::size_t> plist;
+  for (std::size_t i = 0; i < e.props.size(); ++i)
+    if (e.props[i].is_list && (e.props[i].name == "vertex_indices" || e.props[i].name == "vertex_index")) plist = i;
+  if (!plist) throw InputError(path + ": PLY face element has no vertex_indices list");
+  if (scalar_is_float(e.props[*plist].type)) throw InputError(path + ": PLY vertex_indices must be integers");
+  const std::string what = "element '" + e.name + "'";
+  mesh.offsets.reserve(e.count + 1);
+  mesh.offsets.push_back(0);
+  mesh.connectivity.reserve(3 * e.count);
+  for (std::uint64_t r = 0; r < e.count; ++r)
+    for (std::size_t i = 0; i < e.props.size(); ++i) {
+      if (i == *plist) read_face(e.props[i], r, num_points, in, mesh, what, path);
+      else in.skip(e.props[i], what);
+    }
+}
+
+}  // namespace
+
+// The header, then every element in file order: the vertex element, the
+// first face element, and the others skipped.
+SurfaceMesh parse_ply(std::string_view data, const std::string& path) {
+  const Header header = read_header(data, path);
   const Element* vertex = nullptr;
-  for (const auto& e : elements)
+  for (const auto& e : header.elements)
     if (e.name == "vertex") vertex = &e;
   const std::uint64_t num_points = vertex ? vertex->count : 0;
 
   SurfaceMesh mesh;
-  ValueReader in(data.substr(pos), *format, path);
-  const bool ascii = *format == Format::Ascii;
+  ValueReader in(data.substr(header.body), header.format, path);
   bool have_faces = false;
-
-  for (const Element& e : elements) {
+  for (const Element& e : header.elements) {
     if (e.count == 0) continue;
     if (e.props.empty()) continue;  // nothing stored per record
-    // Refuse counts the rest of the file cannot hold before allocating anything.
-    std::uint64_t min_record = 0;
-    for (const auto& p : e.props) min_record += ascii ? 2 : scalar_size(p.is_list ? p.count_type : p.type);
-    if (e.count > (in.remaining() + 1) / min_record)
-      throw InputError(path + ": element '" + e.name + "' declares " + std::to_string(e.count) +
-                       " records, more than the file can hold");
-    const std::string what = "element '" + e.name + "'";
-
+    check_record_count(e, in, header.format == Format::Ascii, path);
     if (&e == vertex) {
-      if (e.count > std::numeric_limits<PointIndex>::max())
-        throw LimitError(path + ": " + std::to_string(e.count) + " vertices exceed 2^32 - 1");
-      std::optional<std::size_t> px, py, pz, pnx, pny, pnz;
-      for (std::size_t i = 0; i < e.props.size(); ++i) {
-        const auto& p = e.props[i];
-        if (p.is_list) continue;
-        if (p.name == "x") px = i;
-        else if (p.name == "y") py = i;
-        else if (p.name == "z") pz = i;
-        else if (p.name == "nx") pnx = i;
-        else if (p.name == "ny") pny = i;
-        else if (p.name == "nz") pnz = i;
-      }
-      if (!px || !py || !pz) throw InputError(path + ": PLY vertex element lacks x, y or z");
-      const bool normals = pnx && pny && pnz;
-      std::vector<FieldPlan> plans;
-      if (normals) plans.push_back({"Normals", {*pnx, *pny, *pnz}});
-      // Group p_0, p_1, ... runs (as keymesh writes multi-component fields).
-      for (std::size_t i = 0; i < e.props.size();) {
-        const auto& p = e.props[i];
-        if (p.is_list || i == *px || i == *py || i == *pz ||
-            (normals && (i == *pnx || i == *pny || i == *pnz))) {
-          ++i;
-          continue;
-        }
-        std::size_t run = 0;
-        std::string base;
-        if (p.name.size() > 2 && p.name.compare(p.name.size() - 2, 2, "_0") == 0) {
-          base = p.name.substr(0, p.name.size() - 2);
-          while (i + run < e.props.size() && !e.props[i + run].is_list &&
-                 e.props[i + run].name == base + "_" + std::to_string(run))
-            ++run;
-        }
-        if (run >= 2) {
-          FieldPlan plan{base, {}};
-          for (std::size_t k = 0; k < run; ++k) plan.props.push_back(i + k);
-          plans.push_back(std::move(plan));
-          i += run;
-        } else {
-          plans.push_back({p.name, {i}});
-          ++i;
-        }
-      }
-      // Where each property goes: slot 0..2 = xyz, then field component slots.
-      std::vector<int> target(e.props.size(), -1);
-      target[*px] = 0;
-      target[*py] = 1;
-      target[*pz] = 2;
-      std::vector<std::pair<std::size_t, std::size_t>> field_slot(e.props.size(), {SIZE_MAX, 0});
-      for (std::size_t f = 0; f < plans.size(); ++f)
-        for (std::size_t k = 0; k < plans[f].props.size(); ++k) field_slot[plans[f].props[k]] = {f, k};
-      mesh.points.resize(3 * e.count);
-      mesh.point_fields.resize(plans.size());
-      for (std::size_t f = 0; f < plans.size(); ++f) {
-        mesh.point_fields[f].name = plans[f].name;
-        mesh.point_fields[f].components = static_cast<int>(plans[f].props.size());
-        mesh.point_fields[f].values.resize(e.count * plans[f].props.size());
-      }
-      for (std::uint64_t r = 0; r < e.count; ++r) {
-        for (std::size_t i = 0; i < e.props.size(); ++i) {
-          const auto& p = e.props[i];
-          if (p.is_list) {
-            in.skip(p, what);
-          } else if (target[i] >= 0) {
-            mesh.points[3 * r + target[i]] = static_cast<float>(in.read_double(p.type, what));
-          } else {
-            const auto [f, k] = field_slot[i];
-            Field& fd = mesh.point_fields[f];
-            fd.values[r * fd.components + k] = static_cast<float>(in.read_double(p.type, what));
-          }
-        }
-      }
+      read_vertices(e, in, mesh, path);
     } else if (e.name == "face" && !have_faces) {
-      std::optional<std::size_t> plist;
-      for (std::size_t i = 0; i < e.props.size(); ++i)
-        if (e.props[i].is_list && (e.props[i].name == "vertex_indices" || e.props[i].name == "vertex_index"))
-          plist = i;
-      if (!plist) throw InputError(path + ": PLY face element has no vertex_indices list");
-      if (scalar_is_float(e.props[*plist].type)) throw InputError(path + ": PLY vertex_indices must be integers");
+      read_faces(e, num_points, in, mesh, path);
       have_faces = true;
-      mesh.offsets.reserve(e.count + 1);
-      mesh.offsets.push_back(0);
-      mesh.connectivity.reserve(3 * e.count);
-      for (std::uint64_t r = 0; r < e.count; ++r) {
-        for (std::size_t i = 0; i < e.props.size(); ++i) {
-          const auto& p = e.props[i];
-          if (i != *plist) {
-            in.skip(p, what);
-            continue;
-          }
-          const std::int64_t n = in.read_int(p.count_type, what);
-          if (n < 3)
-            throw InputError(path + ": face " + std::to_string(r) + " has " + std::to_string(n) +
-                             " vertices (at least 3 needed)");
-          if (static_cast<std::uint64_t>(n) > in.remaining())
-            throw InputError(path + ": truncated file: face " + std::to_string(r) + " declares " + std::to_string(n) +
-                             " vertices");
-          for (std::int64_t k = 0; k < n; ++k) {
-            const std::int64_t id = in.read_int(p.type, what);
-            if (id < 0 || static_cast<std::uint64_t>(id) >= num_points)
-              throw InputError(path + ": face " + std::to_string(r) + " refers to vertex " + std::to_string(id) +
-                               " out of range (" + std::to_string(num_points) + " vertices)");
-            mesh.connectivity.push_back(static_cast<PointIndex>(id));
-          }
-          mesh.offsets.push_back(mesh.connectivity.size());
-        }
-      }
     } else {
+      const std::string what = "element '" + e.name + "'";
       for (std::uint64_t r = 0; r < e.count; ++r)
         for (const auto& p : e.props) in.skip(p, what);
     }
