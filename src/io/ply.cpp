@@ -402,6 +402,57 @@ std::string ply_name(const std::string& name) {
   return out;
 }
 
+// A field's property names: its own for one component, base_0, base_1, ...
+// otherwise.
+std::vector<std::string> property_names(const std::string& base, int components) {
+  std::vector<std::string> names;
+  if (components == 1) names.push_back(base);
+  else
+    for (int k = 0; k < components; ++k) names.push_back(base + "_" + std::to_string(k));
+  return names;
+}
+
+// The "property float" lines of the vertex element: x y z, then every point
+// field's components. Every vertex property once: a field whose PLY name is
+// taken (a field named x, nx, or one named like another's component) is
+// written as field_<name> (field_<name>_2, ... while that is taken too).
+std::string vertex_properties(const SurfaceMesh& mesh) {
+  std::set<std::string> taken{"x", "y", "z"};
+  const bool normals = std::any_of(mesh.point_fields.begin(), mesh.point_fields.end(),
+                                   [](const Field& f) { return f.name == "Normals" && f.components == 3; });
+  if (normals) taken.insert({"nx", "ny", "nz"});
+  std::string lines = "property float x\nproperty float y\nproperty float z\n";
+  bool normals_written = false;
+  for (const Field& f : mesh.point_fields) {
+    if (f.name == "Normals" && f.components == 3 && !normals_written) {
+      lines += "property float nx\nproperty float ny\nproperty float nz\n";
+      normals_written = true;
+      continue;
+    }
+    std::string base = ply_name(f.name);
+    auto names = property_names(base, f.components);
+    auto free = [&] {
+      return std::none_of(names.begin(), names.end(), [&](const std::string& name) { return taken.count(name) > 0; });
+    };
+    for (int attempt = 1; !free(); ++attempt) {
+      std::string renamed = "field_";
+      renamed += base;
+      if (attempt > 1) {
+        renamed += '_';
+        renamed.append(std::to_string(attempt));
+      }
+      names = property_names(renamed, f.components);
+    }
+    for (const std::string& name : names) {
+      taken.insert(name);
+      lines += "property float ";
+      lines += name;
+      lines += '\n';
+    }
+  }
+  return lines;
+}
+
 }  // namespace
 
 void write_ply(const SurfaceMesh& mesh, const std::string& path) {
@@ -414,49 +465,7 @@ void write_ply(const SurfaceMesh& mesh, const std::string& path) {
 
   std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by keymesh\n";
   header += "element vertex " + std::to_string(n) + "\n";
-  // Every vertex property once: a field whose PLY name is taken (a field
-  // named x, nx, or one named like another's component) is written as
-  // field_<name> (field_<name>_2, ... while that is taken too).
-  std::set<std::string> taken{"x", "y", "z"};
-  const bool normals = std::any_of(mesh.point_fields.begin(), mesh.point_fields.end(),
-                                   [](const Field& f) { return f.name == "Normals" && f.components == 3; });
-  if (normals) taken.insert({"nx", "ny", "nz"});
-  auto properties = [](const std::string& base, int components) {
-    std::vector<std::string> names;
-    if (components == 1) names.push_back(base);
-    else
-      for (int k = 0; k < components; ++k) names.push_back(base + "_" + std::to_string(k));
-    return names;
-  };
-  header += "property float x\nproperty float y\nproperty float z\n";
-  bool normals_written = false;
-  for (const Field& f : mesh.point_fields) {
-    if (f.name == "Normals" && f.components == 3 && !normals_written) {
-      header += "property float nx\nproperty float ny\nproperty float nz\n";
-      normals_written = true;
-      continue;
-    }
-    std::string base = ply_name(f.name);
-    auto names = properties(base, f.components);
-    auto free = [&] {
-      return std::none_of(names.begin(), names.end(), [&](const std::string& name) { return taken.count(name) > 0; });
-    };
-    for (int attempt = 1; !free(); ++attempt) {
-      std::string renamed = "field_";
-      renamed += base;
-      if (attempt > 1) {
-        renamed += '_';
-        renamed.append(std::to_string(attempt));
-      }
-      names = properties(renamed, f.components);
-    }
-    for (const std::string& name : names) {
-      taken.insert(name);
-      header += "property float ";
-      header += name;
-      header += '\n';
-    }
-  }
+  header += vertex_properties(mesh);
   header += "element face " + std::to_string(cells) + "\n";
   header += wide_count ? "property list uint uint vertex_indices\n" : "property list uchar uint vertex_indices\n";
   header += "end_header\n";
