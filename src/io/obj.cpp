@@ -1,5 +1,6 @@
 #include "keymesh/io/obj.hpp"
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -27,22 +28,85 @@ bool resolve_index(std::string_view token, std::int64_t count, std::int64_t& out
   return out >= 0 && out < count;
 }
 
+// Errors of a line: "<path>: line <n>: <what>".
+struct LineError {
+  const std::string& path;
+  std::size_t line = 0;
+  InputError operator()(const std::string& what) const {
+    return InputError(path + ": line " + std::to_string(line) + ": " + what);
+  }
+};
+
+// The vn normals read so far and which one each face corner names.
+struct CornerNormals {
+  std::vector<float> normals;          // vn lines, 3 per normal
+  std::vector<std::int64_t> of_corner;  // per connectivity entry, -1 when absent
+  bool usable = true;                   // false once a corner names none
+};
+
+// x y z of a "v" or "vn" line.
+std::array<double, 3> read_xyz(TokenCursor& tok, const LineError& fail, const char* what) {
+  std::array<double, 3> xyz;
+  for (double& c : xyz)
+    if (!parse_double(tok.next(), c)) throw fail(what);
+  return xyz;
+}
+
+// The corners of an "f" line (a, a/t, a//n, a/t/n), appended as one cell.
+void read_face(TokenCursor& tok, SurfaceMesh& mesh, CornerNormals& cn, const LineError& fail) {
+  const auto nv = static_cast<std::int64_t>(mesh.points.size() / 3);
+  const auto nn = static_cast<std::int64_t>(cn.normals.size() / 3);
+  std::size_t corners = 0;
+  for (std::string_view t = tok.next(); !t.empty(); t = tok.next(), ++corners) {
+    const std::size_t s1 = t.find('/');
+    const std::string_view vpart = t.substr(0, s1);
+    std::int64_t v = 0;
+    if (!resolve_index(vpart, nv, v))
+      throw fail("face vertex index '" + std::string(vpart.substr(0, 30)) + "' out of range (" +
+                 std::to_string(nv) + " vertices so far)");
+    mesh.connectivity.push_back(static_cast<PointIndex>(v));
+    std::int64_t n = -1;
+    if (s1 != std::string_view::npos) {
+      const std::size_t s2 = t.find('/', s1 + 1);
+      if (s2 != std::string_view::npos && s2 + 1 < t.size()) {
+        if (!resolve_index(t.substr(s2 + 1), nn, n)) throw fail("face normal index out of range");
+      }
+    }
+    if (n < 0) cn.usable = false;
+    if (cn.usable) cn.of_corner.push_back(n);
+  }
+  if (corners < 3) throw fail("face with " + std::to_string(corners) + " vertices (at least 3 needed)");
+  mesh.offsets.push_back(mesh.connectivity.size());
+}
+
+// Normals become a point field only when each point gets exactly one normal.
+void add_point_normals(SurfaceMesh& mesh, const CornerNormals& cn) {
+  if (!cn.usable || cn.normals.empty() || mesh.connectivity.empty()) return;
+  const std::size_t np = mesh.points.size() / 3;
+  std::vector<std::int64_t> of_point(np, -1);
+  for (std::size_t i = 0; i < mesh.connectivity.size(); ++i) {
+    std::int64_t& slot = of_point[mesh.connectivity[i]];
+    if (slot < 0) slot = cn.of_corner[i];
+    else if (slot != cn.of_corner[i]) return;
+  }
+  for (std::size_t p = 0; p < np; ++p)
+    if (of_point[p] < 0) return;  // unused point: no normal to give it
+  Field f{"Normals", 3, std::vector<float>(3 * np)};
+  for (std::size_t p = 0; p < np; ++p)
+    for (int a = 0; a < 3; ++a) f.values[3 * p + a] = cn.normals[3 * of_point[p] + a];
+  mesh.point_fields.push_back(std::move(f));
+}
+
 }  // namespace
 
 SurfaceMesh parse_obj(std::string_view data, const std::string& path) {
   SurfaceMesh mesh;
-  std::vector<float> normals;                 // vn lines, 3 per normal
-  std::vector<std::int64_t> corner_normal;    // per connectivity entry, -1 when absent
-  bool normals_usable = true;
+  CornerNormals cn;
   mesh.offsets.push_back(0);
-
+  LineError fail{path};
   std::size_t pos = 0;
-  std::size_t line_no = 0;
-  auto fail = [&](const std::string& what) -> InputError {
-    return InputError(path + ": line " + std::to_string(line_no) + ": " + what);
-  };
   while (pos < data.size()) {
-    ++line_no;
+    ++fail.line;
     std::size_t end = data.find('\n', pos);
     if (end == std::string_view::npos) end = data.size();
     std::string_view line = data.substr(pos, end - pos);
@@ -51,67 +115,20 @@ SurfaceMesh parse_obj(std::string_view data, const std::string& path) {
     TokenCursor tok(line);
     const std::string_view key = tok.next();
     if (key == "v") {
-      double xyz[3];
-      for (double& c : xyz)
-        if (!parse_double(tok.next(), c)) throw fail("bad vertex coordinate");
+      const auto xyz = read_xyz(tok, fail, "bad vertex coordinate");
       if (mesh.points.size() / 3 >= std::numeric_limits<PointIndex>::max())
         throw LimitError(path + ": more than 2^32 - 1 vertices");
       for (double c : xyz) mesh.points.push_back(static_cast<float>(c));
     } else if (key == "vn") {
-      double xyz[3];
-      for (double& c : xyz)
-        if (!parse_double(tok.next(), c)) throw fail("bad normal");
-      for (double c : xyz) normals.push_back(static_cast<float>(c));
+      for (double c : read_xyz(tok, fail, "bad normal")) cn.normals.push_back(static_cast<float>(c));
     } else if (key == "f") {
-      const auto nv = static_cast<std::int64_t>(mesh.points.size() / 3);
-      const auto nn = static_cast<std::int64_t>(normals.size() / 3);
-      std::size_t corners = 0;
-      for (std::string_view t = tok.next(); !t.empty(); t = tok.next(), ++corners) {
-        // a, a/t, a//n, a/t/n
-        const std::size_t s1 = t.find('/');
-        const std::string_view vpart = t.substr(0, s1);
-        std::int64_t v = 0;
-        if (!resolve_index(vpart, nv, v))
-          throw fail("face vertex index '" + std::string(vpart.substr(0, 30)) + "' out of range (" +
-                     std::to_string(nv) + " vertices so far)");
-        mesh.connectivity.push_back(static_cast<PointIndex>(v));
-        std::int64_t n = -1;
-        if (s1 != std::string_view::npos) {
-          const std::size_t s2 = t.find('/', s1 + 1);
-          if (s2 != std::string_view::npos && s2 + 1 < t.size()) {
-            if (!resolve_index(t.substr(s2 + 1), nn, n)) throw fail("face normal index out of range");
-          }
-        }
-        if (n < 0) normals_usable = false;
-        if (normals_usable) corner_normal.push_back(n);
-      }
-      if (corners < 3) throw fail("face with " + std::to_string(corners) + " vertices (at least 3 needed)");
-      mesh.offsets.push_back(mesh.connectivity.size());
+      read_face(tok, mesh, cn, fail);
     }
     // Everything else (vt, g, o, s, usemtl, mtllib, l, p, ...) carries no surface geometry.
   }
   if (mesh.offsets.size() == 1) mesh.offsets.clear();
   compact_offsets(mesh);
-
-  // Normals become a point field only when each point gets exactly one normal.
-  if (normals_usable && !normals.empty() && !mesh.connectivity.empty()) {
-    const std::size_t np = mesh.points.size() / 3;
-    std::vector<std::int64_t> of_point(np, -1);
-    bool consistent = true;
-    for (std::size_t i = 0; i < mesh.connectivity.size() && consistent; ++i) {
-      std::int64_t& slot = of_point[mesh.connectivity[i]];
-      if (slot < 0) slot = corner_normal[i];
-      else if (slot != corner_normal[i]) consistent = false;
-    }
-    for (std::size_t p = 0; p < np && consistent; ++p)
-      if (of_point[p] < 0) consistent = false;  // unused point: no normal to give it
-    if (consistent) {
-      Field f{"Normals", 3, std::vector<float>(3 * np)};
-      for (std::size_t p = 0; p < np; ++p)
-        for (int a = 0; a < 3; ++a) f.values[3 * p + a] = normals[3 * of_point[p] + a];
-      mesh.point_fields.push_back(std::move(f));
-    }
-  }
+  add_point_normals(mesh, cn);
   return checked_mesh(std::move(mesh), path);
 }
 
