@@ -107,136 +107,156 @@ std::vector<std::byte> read_gzip(const std::string& path, std::uint64_t offset, 
   }
 }
 
-}  // namespace
-
-VolumeLayout nrrd_layout(const std::string& path) {
-  InputFile header_file(path);
-  const std::uint64_t file_bytes = header_file.size();
-  std::FILE* f = header_file.stream();
-  // The header: text lines up to an empty line (or the end of a .nhdr).
-  std::string magic_line;
+// The header's fields by lower-case name, and the bytes of header text (where
+// attached samples start).
+struct NrrdHeader {
   std::map<std::string, std::string> field;
-  std::uint64_t data_offset = 0;
-  {
-    std::string line;
-    int c;
-    bool first = true;
-    std::uint64_t consumed = 0;
-    while (true) {
-      line.clear();
-      while ((c = std::fgetc(f)) != EOF && c != '\n') {
-        line.push_back(static_cast<char>(c));
-        if (line.size() > 65536) {
-          throw InputError(path + ": NRRD header line too long");
-        }
-      }
-      consumed += line.size() + (c == '\n' ? 1 : 0);
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      if (first) {
-        first = false;
-        if (line.rfind("NRRD000", 0) != 0) {
-          throw InputError(path + ": not a NRRD file (no NRRD000x magic)");
-        }
-        magic_line = line;
-        continue;
-      }
-      if (line.empty() || c == EOF) {
-        if (!line.empty() && line[0] != '#') {
-          const auto colon = line.find(':');
-          if (colon != std::string::npos) field[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 1));
-        }
-        break;
-      }
-      if (line[0] == '#') continue;
-      const auto sep = line.find(":=");  // key/value pairs: ignored
-      if (sep != std::string::npos && line.find(": ") == std::string::npos) continue;
-      const auto colon = line.find(':');
-      if (colon == std::string::npos) {
-        throw InputError(path + ": malformed NRRD header line '" + line.substr(0, 60) + "'");
-      }
-      field[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 1));
-    }
-    data_offset = consumed;
-  }
-  auto get = [&](const std::string& k) -> const std::string* {
+  std::uint64_t bytes = 0;
+
+  const std::string* get(const std::string& k) const {
     const auto it = field.find(k);
     return it == field.end() ? nullptr : &it->second;
-  };
-  const std::string* type = get("type");
-  const std::string* dimension = get("dimension");
-  const std::string* sizes = get("sizes");
-  if (!type || !dimension || !sizes) throw InputError(path + ": NRRD header lacks type, dimension or sizes");
-  const ScalarType st = nrrd_type(path, *type);
-  const auto size_words = words(*sizes);
-  const double dim_value = parse_number(path, "dimension", *dimension);
+  }
+  // A field teem spells two ways ("data file" / "datafile").
+  const std::string* get(const std::string& k, const std::string& other) const {
+    const std::string* v = get(k);
+    return v ? v : get(other);
+  }
+  void set(const std::string& line, std::size_t colon) {
+    field[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 1));
+  }
+};
+
+// One header line (without its newline); returns the character that ended
+// it, '\n' or EOF.
+int read_header_line(std::FILE* f, std::string& line, const std::string& path) {
+  line.clear();
+  int c;
+  while ((c = std::fgetc(f)) != EOF && c != '\n') {
+    line.push_back(static_cast<char>(c));
+    if (line.size() > 65536) throw InputError(path + ": NRRD header line too long");
+  }
+  return c;
+}
+
+// The header: text lines up to an empty line (or the end of a .nhdr).
+NrrdHeader read_header(std::FILE* f, const std::string& path) {
+  NrrdHeader h;
+  std::string line;
+  bool first = true;
+  while (true) {
+    const int c = read_header_line(f, line, path);
+    h.bytes += line.size() + (c == '\n' ? 1 : 0);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (first) {
+      first = false;
+      if (line.rfind("NRRD000", 0) != 0) throw InputError(path + ": not a NRRD file (no NRRD000x magic)");
+      continue;
+    }
+    if (line.empty() || c == EOF) {
+      if (!line.empty() && line[0] != '#') {
+        const auto colon = line.find(':');
+        if (colon != std::string::npos) h.set(line, colon);
+      }
+      return h;
+    }
+    if (line[0] == '#') continue;
+    const auto sep = line.find(":=");  // key/value pairs: ignored
+    if (sep != std::string::npos && line.find(": ") == std::string::npos) continue;
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) throw InputError(path + ": malformed NRRD header line '" + line.substr(0, 60) + "'");
+    h.set(line, colon);
+  }
+}
+
+// The sizes of every axis, and which three are the volume's.
+struct NrrdAxes {
+  std::vector<Id> sizes;
+  int first = 0;  // 1 when a leading 1-sample axis (e.g. one component) comes first
+  std::array<Id, 3> dims{};
+};
+
+NrrdAxes parse_axes(const std::string& dimension, const std::string& sizes, const std::string& path) {
+  const auto size_words = words(sizes);
+  const double dim_value = parse_number(path, "dimension", dimension);
   if (dim_value != static_cast<double>(size_words.size()))
-    throw InputError(path + ": NRRD dimension " + *dimension + " but " + std::to_string(size_words.size()) + " sizes");
-  std::vector<Id> sz;
+    throw InputError(path + ": NRRD dimension " + dimension + " but " + std::to_string(size_words.size()) + " sizes");
+  NrrdAxes axes;
   for (const auto& w : size_words) {
     const double v = parse_number(path, "sizes", w);
     if (v < 1 || v != std::floor(v) || v > 9.0e15) throw InputError(path + ": NRRD size '" + w + "' is not a positive integer");
-    sz.push_back(static_cast<Id>(v));
+    axes.sizes.push_back(static_cast<Id>(v));
   }
-  int first_axis = 0;
-  if (sz.size() == 4 && sz[0] == 1) first_axis = 1;  // a leading 1-sample axis (e.g. one component)
+  const auto& sz = axes.sizes;
+  if (sz.size() == 4 && sz[0] == 1) axes.first = 1;
   else if (sz.size() != 3)
     throw InputError(path + ": NRRD dimension " + std::to_string(sz.size()) + " (only 3D scalar volumes)");
-  const std::array<Id, 3> dims{sz[first_axis], sz[first_axis + 1], sz[first_axis + 2]};
-  bool big_endian = false;
-  if (const std::string* e = get("endian")) {
-    if (lower(*e) == "big") big_endian = true;
-    else if (lower(*e) != "little") throw InputError(path + ": NRRD endian '" + *e + "'");
-  }
+  axes.dims = {sz[axes.first], sz[axes.first + 1], sz[axes.first + 2]};
+  return axes;
+}
+
+// "raw" or "gzip".
+std::string parse_encoding(const NrrdHeader& h, const std::string& path) {
   std::string encoding = "raw";
-  if (const std::string* e = get("encoding")) encoding = lower(*e);
+  if (const std::string* e = h.get("encoding")) encoding = lower(*e);
   if (encoding == "gz") encoding = "gzip";
   if (encoding != "raw" && encoding != "gzip")
     throw InputError(path + ": NRRD encoding '" + encoding + "' is not supported (raw, gzip)");
-  std::array<double, 3> spacing{1, 1, 1}, origin{0, 0, 0};
-  if (const std::string* sp = get("spacings")) {
+  return encoding;
+}
+
+// Spacing from "spacings" or the lengths of the "space directions", origin
+// from "space origin", into the layout.
+void parse_geometry(const NrrdHeader& h, const NrrdAxes& axes, RawOptions& raw, const std::string& path) {
+  std::array<double, 3>& spacing = raw.spacing;
+  spacing = {1, 1, 1};
+  raw.origin = {0, 0, 0};
+  if (const std::string* sp = h.get("spacings")) {
     const auto w = words(*sp);
-    if (w.size() != sz.size()) throw InputError(path + ": NRRD spacings has " + std::to_string(w.size()) + " entries");
+    if (w.size() != axes.sizes.size())
+      throw InputError(path + ": NRRD spacings has " + std::to_string(w.size()) + " entries");
     for (int a = 0; a < 3; ++a) {
-      if (lower(w[first_axis + a]) == "nan") continue;
-      spacing[a] = std::abs(parse_number(path, "spacings", w[first_axis + a]));
+      if (lower(w[axes.first + a]) == "nan") continue;
+      spacing[a] = std::abs(parse_number(path, "spacings", w[axes.first + a]));
     }
-  } else if (const std::string* sd = get("space directions")) {
+  } else if (const std::string* sd = h.get("space directions")) {
     const auto v = vectors(path, "space directions", *sd);
-    if (v.size() != sz.size()) throw InputError(path + ": NRRD space directions has " + std::to_string(v.size()) + " entries");
+    if (v.size() != axes.sizes.size())
+      throw InputError(path + ": NRRD space directions has " + std::to_string(v.size()) + " entries");
     for (int a = 0; a < 3; ++a) {
       double len2 = 0;
-      for (double x : v[first_axis + a]) len2 += x * x;
+      for (double x : v[axes.first + a]) len2 += x * x;
       if (len2 > 0) spacing[a] = std::sqrt(len2);
     }
   }
-  if (const std::string* so = get("space origin")) {
+  if (const std::string* so = h.get("space origin")) {
     const auto v = vectors(path, "space origin", *so);
-    if (v.size() == 1 && v[0].size() == 3) origin = {v[0][0], v[0][1], v[0][2]};
+    if (v.size() == 1 && v[0].size() == 3) raw.origin = {v[0][0], v[0][1], v[0][2]};
   }
   for (int a = 0; a < 3; ++a)
     if (!(spacing[a] > 0)) throw InputError(path + ": NRRD spacing along axis " + std::to_string(a) + " is not positive");
-  // Where the samples are.
-  std::string data_path = path;
-  const std::string* data_file = get("data file");
-  if (!data_file) data_file = get("datafile");
-  if (data_file) {
-    if (data_file->rfind("LIST", 0) == 0 || data_file->find('%') != std::string::npos)
-      throw InputError(path + ": NRRD multi-file data is not supported");
-    std::filesystem::path p(*data_file);
-    if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
-    data_path = p.string();
-    data_offset = 0;
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(data_path, ec))
-      throw InputError(path + ": NRRD data file '" + data_path + "' is not a readable file");
-  }
-  // Skips before the data: whole lines, then bytes, in the data file. With
-  // gzip, teem applies them to the decompressed stream: not supported (a
-  // silent offset would read garbage).
-  const std::string* line_skip = get("line skip");
-  if (!line_skip) line_skip = get("lineskip");
-  const std::string* byte_skip = get("byte skip");
-  if (!byte_skip) byte_skip = get("byteskip");
+}
+
+// The file holding the samples: the header's own, or its "data file".
+std::string data_file_path(const std::string* data_file, const std::string& path) {
+  if (!data_file) return path;
+  if (data_file->rfind("LIST", 0) == 0 || data_file->find('%') != std::string::npos)
+    throw InputError(path + ": NRRD multi-file data is not supported");
+  std::filesystem::path p(*data_file);
+  if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(p.string(), ec))
+    throw InputError(path + ": NRRD data file '" + p.string() + "' is not a readable file");
+  return p.string();
+}
+
+// Where the samples start in `data_path` after the skips: whole lines, then
+// bytes. With gzip, teem applies them to the decompressed stream: not
+// supported (a silent offset would read garbage).
+std::uint64_t skip_to_samples(const NrrdHeader& h, const std::string& encoding, const std::string& data_path,
+                              std::uint64_t offset, const std::string& path) {
+  const std::string* line_skip = h.get("line skip", "lineskip");
+  const std::string* byte_skip = h.get("byte skip", "byteskip");
   if (encoding != "raw" && ((line_skip && parse_number(path, "line skip", *line_skip) != 0) ||
                             (byte_skip && parse_number(path, "byte skip", *byte_skip) != 0)))
     throw InputError(path + ": NRRD line skip / byte skip with " + encoding + " encoding is not supported");
@@ -245,14 +265,12 @@ VolumeLayout nrrd_layout(const std::string& path) {
     if (v < 0 || v != std::floor(v) || v > 1e12) throw InputError(path + ": NRRD line skip " + *line_skip + " is not supported");
     InputFile data_in(data_path);
     std::FILE* d = data_in.stream();
-    if (fseeko(d, static_cast<off_t>(data_offset), SEEK_SET) != 0)
+    if (fseeko(d, static_cast<off_t>(offset), SEEK_SET) != 0)
       throw InputError(path + ": cannot read the NRRD data file '" + data_path + "'");
     for (double lines = 0; lines < v;) {
       const int c = std::fgetc(d);
-      if (c == EOF) {
-        throw InputError(path + ": NRRD line skip " + *line_skip + " passes the end of '" + data_path + "'");
-      }
-      ++data_offset;
+      if (c == EOF) throw InputError(path + ": NRRD line skip " + *line_skip + " passes the end of '" + data_path + "'");
+      ++offset;
       if (c == '\n') ++lines;
     }
   }
@@ -260,11 +278,37 @@ VolumeLayout nrrd_layout(const std::string& path) {
     const double v = parse_number(path, "byte skip", *byte_skip);
     if (v < 0 || v != std::floor(v) || v > 9.0e15)
       throw InputError(path + ": NRRD byte skip " + *byte_skip + " is not supported");
-    data_offset += static_cast<std::uint64_t>(v);
+    offset += static_cast<std::uint64_t>(v);
   }
+  return offset;
+}
+
+}  // namespace
+
+VolumeLayout nrrd_layout(const std::string& path) {
+  InputFile header_file(path);
+  const std::uint64_t file_bytes = header_file.size();
+  const NrrdHeader h = read_header(header_file.stream(), path);
+  const std::string* type = h.get("type");
+  const std::string* dimension = h.get("dimension");
+  const std::string* sizes = h.get("sizes");
+  if (!type || !dimension || !sizes) throw InputError(path + ": NRRD header lacks type, dimension or sizes");
+  VolumeLayout layout;
+  layout.raw.type = nrrd_type(path, *type);
+  const NrrdAxes axes = parse_axes(*dimension, *sizes, path);
+  layout.raw.dims = axes.dims;
+  if (const std::string* e = h.get("endian")) {
+    if (lower(*e) == "big") layout.raw.big_endian = true;
+    else if (lower(*e) != "little") throw InputError(path + ": NRRD endian '" + *e + "'");
+  }
+  const std::string encoding = parse_encoding(h, path);
+  parse_geometry(h, axes, layout.raw, path);
+  const std::string* data_file = h.get("data file", "datafile");
+  const std::string data_path = data_file_path(data_file, path);
+  const std::uint64_t data_offset = skip_to_samples(h, encoding, data_path, data_file ? 0 : h.bytes, path);
   // Refuse a body shorter than declared before allocating.
   const std::uint64_t data_file_bytes = data_file ? detail::file_size_or_throw(data_path) : file_bytes;
-  const std::uint64_t need = detail::checked_byte_count(dims, st, path);
+  const std::uint64_t need = detail::checked_byte_count(axes.dims, layout.raw.type, path);
   const std::uint64_t body = data_file_bytes - std::min(data_file_bytes, data_offset);
   if (encoding == "raw" && need > body)
     throw InputError(data_path + ": NRRD data holds " + std::to_string(body) + " bytes, the header of " + path +
@@ -273,13 +317,7 @@ VolumeLayout nrrd_layout(const std::string& path) {
   if (encoding == "gzip" && need / 1032 > body + 64)
     throw InputError(data_path + ": NRRD gzip data of " + std::to_string(body) + " bytes cannot hold the " +
                      std::to_string(need) + " bytes the header of " + path + " declares (sizes " + *sizes + ")");
-  VolumeLayout layout;
   layout.data_path = data_path;
-  layout.raw.dims = dims;
-  layout.raw.type = st;
-  layout.raw.spacing = spacing;
-  layout.raw.origin = origin;
-  layout.raw.big_endian = big_endian;
   layout.raw.header_bytes = static_cast<Id>(data_offset);
   if (encoding != "raw") layout.compressed = encoding;
   return layout;
