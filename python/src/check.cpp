@@ -11,7 +11,7 @@ py::dict check(const py::handle& mesh_obj, int threads) {
   const SurfaceMesh mesh = mesh_from_python(mesh_obj);
   const analyze::TopologyReport t = run_released(threads, [&] { return analyze::check_topology(mesh); });
   py::dict r;
-  analyze::visit_fields(t, [&](const char* name, const auto& value) { r[name] = value; });
+  analyze::visit_fields(t, into(r));
   return r;
 }
 

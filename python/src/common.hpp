@@ -82,6 +82,24 @@ decltype(auto) run_released(int threads, const PythonProgress& progress, F&& f) 
   return f();
 }
 
+// run_released for a library call that reports no stages itself: progress
+// says (stage, 0) before f() and (stage, 1) after.
+template <class F>
+auto run_released_stage(int threads, const PythonProgress& progress, const char* stage, F&& f) {
+  return run_released(threads, progress, [&] {
+    progress::report(stage, 0.0);
+    auto result = f();
+    progress::report(stage, 1.0);
+    return result;
+  });
+}
+
+// The visitor that stores each (name, value) of analyze/ and
+// generate/report_fields.hpp in `dict`: visit_fields(stats, into(dict)).
+inline auto into(py::dict& dict) {
+  return [&dict](const char* name, const auto& value) { dict[name] = value; };
+}
+
 // ValueError unless threads >= 0.
 void check_threads(int threads);
 

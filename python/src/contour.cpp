@@ -18,6 +18,7 @@
 #include "common.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/generate/option_names.hpp"
+#include "keymesh/generate/report_fields.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::python {
@@ -62,11 +63,7 @@ py::dict contour_info(const generate::ContourStats& stats, double contour_s, dou
   info["copy"] = 0.0;  // the samples are read in place
   info["contour"] = contour_s;
   info["mirror"] = mirror_s;
-  info["classify"] = stats.classify;
-  info["generate"] = stats.generate;
-  info["weld"] = stats.weld;
-  info["fields"] = stats.fields;
-  info["coarsen"] = stats.coarsen;
+  generate::visit_stage_seconds(stats, into(info));
   info["triangles_before_coarsening"] = stats.triangles_before_coarsening;
   info["key_bits"] = stats.key_bits;
   info["zero_copy"] = true;

@@ -5,6 +5,7 @@
 // the generator).
 #include "common.hpp"
 #include "keymesh/generate/labels.hpp"
+#include "keymesh/generate/report_fields.hpp"
 
 namespace keymesh::python {
 
@@ -48,11 +49,7 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   }
   mesh.cell_fields.clear();
   py::dict info;
-  info["scan"] = stats.scan;
-  info["generate"] = stats.generate;
-  info["weld"] = stats.weld;
-  info["smooth"] = stats.smooth;
-  info["coarsen"] = stats.coarsen;
+  generate::visit_stage_seconds(stats, into(info));
   info["distinct_labels"] = stats.distinct_labels;
   info["surfaces"] = stats.surfaces;
   return py::make_tuple(mesh_to_python(std::move(mesh)), cell_data, info);

@@ -13,8 +13,10 @@
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/dual.hpp"
 #include "keymesh/generate/option_names.hpp"
+#include "keymesh/generate/report_fields.hpp"
 #include "keymesh/generate/subdivide.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/mesh/normals.hpp"
 
 namespace keymesh::python {
 
@@ -55,13 +57,9 @@ py::tuple tetrahedralize(const py::object& input, int scheme, const std::string&
   py::object keep;
   if (from_grid) hexes = grid_from_python(input);
   else volume = volume_grid(input, spacing, origin, keep);
-  UnstructuredGrid tets = run_released(threads, progress, [&] {
-    progress::report("tetrahedralize", 0.0);
-    UnstructuredGrid t;
-    if (from_grid) t = scheme == 24 ? generate::tetrahedralize24(hexes, vw) : generate::tetrahedralize5(hexes);
-    else t = scheme == 24 ? generate::tetrahedralize24(volume, vw) : generate::tetrahedralize5(volume);
-    progress::report("tetrahedralize", 1.0);
-    return t;
+  UnstructuredGrid tets = run_released_stage(threads, progress, "tetrahedralize", [&] {
+    if (from_grid) return scheme == 24 ? generate::tetrahedralize24(hexes, vw) : generate::tetrahedralize5(hexes);
+    return scheme == 24 ? generate::tetrahedralize24(volume, vw) : generate::tetrahedralize5(volume);
   });
   return grid_to_python(std::move(tets));
 }
@@ -109,16 +107,9 @@ py::tuple dual(const py::handle& mesh_obj, int threads, const py::object& callba
   const PythonProgress progress(callback);
   const SurfaceMesh mesh = mesh_from_python(mesh_obj);
   generate::DualStats st;
-  SurfaceMesh d = run_released(threads, progress, [&] {
-    progress::report("dual", 0.0);
-    SurfaceMesh polygons = generate::dual(mesh, &st);
-    progress::report("dual", 1.0);
-    return polygons;
-  });
+  SurfaceMesh d = run_released_stage(threads, progress, "dual", [&] { return generate::dual(mesh, &st); });
   py::dict stats;
-  stats["boundary_fans"] = st.boundary_fans;
-  stats["nonmanifold_points"] = st.nonmanifold_points;
-  stats["skipped_fans"] = st.skipped_fans;
+  generate::visit_fields(st, into(stats));
   return py::make_tuple(mesh_to_python(std::move(d)), stats);
 }
 
@@ -132,7 +123,7 @@ py::dict quality(const py::handle& mesh_obj, bool per_cell, int threads) {
   });
   py::dict r;
   r["points"] = mesh.num_points();
-  analyze::visit_fields(q, [&](const char* name, const auto& value) { r[name] = value; });
+  analyze::visit_fields(q, into(r));
   if (per_cell) {
     const auto n = static_cast<py::ssize_t>(each.size());
     r["per_cell"] = adopt(std::move(each), {n});
@@ -198,16 +189,12 @@ py::tuple coarsen(const py::handle& mesh_obj, const py::object& spacing, const p
     const LatticeKeys lattice = lattice_keys(mesh, s, o);
     progress::report("coarsen: merge", 0.3);
     SurfaceMesh coarse = generate::coarsen(mesh, lattice.keys, lattice.range, &st);
-    if (normals == "average" && mesh.find_point_field("Normals") != nullptr) generate::average_normals(coarse);
+    if (normals == "average" && mesh.find_point_field("Normals") != nullptr) average_normals(coarse);
     progress::report("coarsen", 1.0);
     return coarse;
   });
   py::dict stats;
-  stats["points_before"] = st.points_before;
-  stats["points_after"] = st.points_after;
-  stats["triangles_before"] = st.triangles_before;
-  stats["triangles_after"] = st.triangles_after;
-  stats["folded"] = st.folded;
+  generate::visit_fields(st, into(stats));
   return py::make_tuple(mesh_to_python(std::move(out)), stats);
 }
 

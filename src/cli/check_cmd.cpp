@@ -17,17 +17,15 @@ struct CheckCli {
 };
 
 void add_check_options(CLI::App& cmd, CheckCli& o) {
+  cmd.description("topology of a surface mesh: boundary and non-manifold edges, duplicates, Euler characteristic");
   cmd.add_option("mesh", o.input, "surface mesh (.vtp .ply .obj .stl)")->required();
   cmd.add_flag("--expect-closed", o.expect_closed, "exit 1 unless the mesh is a closed 2-manifold");
   add_common_options(cmd, o.common);
 }
 
-int run_check(const CheckCli& o) {
-  if (int rc = require_cpu_backend(o.common, "the topology check")) return rc;
-  const int threads = apply_threads(o.common);
-  StageTimer timer;
-  const SurfaceMesh mesh = timer.run("read", [&] { return io::read_mesh(o.input); });
-  const analyze::TopologyReport t = timer.run("check", [&] { return analyze::check_topology(mesh); });
+int run_check(const CheckCli& o, CommandRun& run) {
+  const SurfaceMesh mesh = run.stage("read", [&] { return io::read_mesh(o.input); });
+  const analyze::TopologyReport t = run.stage("check", [&] { return analyze::check_topology(mesh); });
   std::printf(
       "%s: %lld points, %lld cells, %lld edges\n"
       "  boundary edges %lld, non-manifold edges %lld, non-manifold vertices %lld\n"
@@ -38,20 +36,16 @@ int run_check(const CheckCli& o) {
       (long long)t.unused_points, (long long)t.degenerate_cells, (long long)t.components,
       (long long)t.euler_characteristic, t.closed_manifold ? "yes" : "no");
   nlohmann::json r = {{"input", o.input}};
-  analyze::visit_fields(t, [&](const char* name, const auto& value) { r[name] = value; });
-  finish_report(o.common, r, threads, timer, PeakRss::Omit);
-  if (o.expect_closed && !t.closed_manifold) {
-    // The check itself ran: its report is written though the exit is 1.
-    if (io::OutputTransaction* outputs = io::OutputTransaction::current()) outputs->commit();
-    std::fprintf(stderr, "keymesh: %s is not a closed 2-manifold\n", o.input.c_str());
-    return 1;
-  }
-  return 0;
+  analyze::visit_fields(t, into(r));
+  run.finish(r, PeakRss::Omit);
+  if (!o.expect_closed || t.closed_manifold) return 0;
+  // The check itself ran: its report is written though the exit is 1.
+  if (io::OutputTransaction* outputs = io::OutputTransaction::current()) outputs->commit();
+  std::fprintf(stderr, "keymesh: %s is not a closed 2-manifold\n", o.input.c_str());
+  return 1;
 }
 
-Register reg{make_command<CheckCli>(
-    "check", "topology of a surface mesh: boundary and non-manifold edges, duplicates, Euler characteristic",
-    add_check_options, run_check)};
+Register reg{make_cpu_command("check", "the topology check", add_check_options, run_check)};
 
 }  // namespace
 

@@ -8,6 +8,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "keymesh/core/progress.hpp"
@@ -124,6 +125,49 @@ Command make_command(std::string name, std::string description, void (*add_optio
                    auto options = std::make_shared<Options>();
                    add_options(cmd, *options);
                    return [options, run] { return run(*options); };
+                 }};
+}
+
+// The frame of a compute subcommand's run, set up before its own work:
+// --threads applied and the stages' timer started; finish() ends every run
+// that gets through, with its --report.
+class CommandRun {
+ public:
+  explicit CommandRun(const CommonOptions& common) : common_(common), threads_(apply_threads(common)) {}
+  int threads() const { return threads_; }
+  // Runs f() as stage `name` of the report's "seconds".
+  template <class F>
+  decltype(auto) stage(const std::string& name, F&& f) {
+    return timer_.run(name, std::forward<F>(f));
+  }
+  // finish_report (report.hpp) with this run's threads and stage times;
+  // returns 0, the exit code of a run that got this far.
+  int finish(nlohmann::json report, PeakRss peak) const {
+    finish_report(common_, std::move(report), threads_, timer_, peak);
+    return 0;
+  }
+
+ private:
+  const CommonOptions& common_;
+  int threads_;
+  StageTimer timer_;
+};
+
+// A subcommand with no GPU path, described by `add_options` (its help:
+// cmd.description() and the options): when chosen, --backend other than cpu
+// is refused naming `what` (require_cpu_backend), then `run` gets the parsed
+// options and a CommandRun.
+template <class Options>
+Command make_cpu_command(std::string name, const char* what, void (*add_options)(CLI::App&, Options&),
+                         int (*run)(const Options&, CommandRun&)) {
+  return Command{std::move(name), "", [what, add_options, run](CLI::App& cmd) -> std::function<int()> {
+                   auto options = std::make_shared<Options>();
+                   add_options(cmd, *options);
+                   return [options, what, run] {
+                     if (int rc = require_cpu_backend(options->common, what)) return rc;
+                     CommandRun frame(options->common);
+                     return run(*options, frame);
+                   };
                  }};
 }
 

@@ -15,16 +15,14 @@ struct GenerateOptions {
 };
 
 void add_generate_options(CLI::App& cmd, GenerateOptions& o) {
+  cmd.description("write a built-in dataset: `sphere` (Spherical Distance field, float32, size^3)");
   cmd.add_option("dataset", o.dataset, "dataset name")->required()->check(CLI::IsMember({"sphere"}));
   cmd.add_option("--size,-n", o.size, "points along each axis")->check(CLI::Range(2LL, 1LL << 20));
   cmd.add_option("-o,--output", o.output, "output volume (.vti, .nrrd or .raw)")->required();
   add_common_options(cmd, o.common);
 }
 
-int run_generate(const GenerateOptions& o) {
-  if (int rc = require_cpu_backend(o.common, "generate")) return rc;
-  const int threads = apply_threads(o.common);
-  StageTimer timer;
+int run_generate(const GenerateOptions& o, CommandRun& run) {
   Progress progress(o.common.quiet, o.size >= 384);
   // size^3 float32 samples, held once.
   const std::uint64_t n = static_cast<std::uint64_t>(o.size);
@@ -32,17 +30,14 @@ int run_generate(const GenerateOptions& o) {
   check_work({points, 0, saturating_mul(points, 4)}, memory_budget(o.common),
              o.output + ": generate " + o.dataset + " --size " + std::to_string(o.size));
   progress.say("generating the " + std::to_string(o.size) + "^3 spherical distance field");
-  const ImageGrid grid = timer.run("generate", [&] { return generate::spherical_distance(o.size); });
+  const ImageGrid grid = run.stage("generate", [&] { return generate::spherical_distance(o.size); });
   progress.say("writing " + o.output);
-  timer.run("write", [&] { io::write_volume(grid, o.output); });
+  run.stage("write", [&] { io::write_volume(grid, o.output); });
   nlohmann::json r = {{"dataset", o.dataset}, {"dims", grid.dims}, {"points", grid.num_points()}};
-  finish_report(o.common, r, threads, timer, PeakRss::Omit);
-  return 0;
+  return run.finish(r, PeakRss::Omit);
 }
 
-Register reg{make_command<GenerateOptions>(
-    "generate", "write a built-in dataset: `sphere` (Spherical Distance field, float32, size^3)",
-    add_generate_options, run_generate)};
+Register reg{make_cpu_command("generate", "generate", add_generate_options, run_generate)};
 
 }  // namespace
 

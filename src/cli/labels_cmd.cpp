@@ -10,6 +10,7 @@
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/generate/labels.hpp"
 #include "keymesh/generate/labels_stream.hpp"
+#include "keymesh/generate/report_fields.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/plane_source.hpp"
 #include "keymesh/io/volume_io.hpp"
@@ -105,31 +106,21 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
                  static_cast<long long>(mesh.num_cells()), job.output.c_str());
   if (job.common.report_path.empty()) return;
   const generate::LabelOptions& opt = job.options;
-  r["input"] = job.input;
-  r["output"] = job.output;
-  r["method"] = job.method;
-  r["per_label"] = opt.per_label;
-  r["background"] = opt.background;
-  r["smooth"] = opt.smooth_iterations;
-  r["relaxation"] = opt.relaxation;
-  r["coarsen"] = opt.coarsen;
+  r.update({{"input", job.input}, {"output", job.output}, {"method", job.method}, {"per_label", opt.per_label},
+            {"background", opt.background}, {"smooth", opt.smooth_iterations}, {"relaxation", opt.relaxation},
+            {"coarsen", opt.coarsen}, {"distinct_labels", stats.distinct_labels},
+            {"labels_extracted", stats.surfaces}, {"points", mesh.num_points()}, {"cells", mesh.num_cells()},
+            {"soup_points", stats.soup_corners}, {"threads", job.threads}});
   if (opt.coarsen) {
     r["triangles_before"] = stats.triangles_before_coarsening;
     r["triangles_after"] = mesh.num_cells();
   }
-  r["distinct_labels"] = stats.distinct_labels;
-  r["labels_extracted"] = stats.surfaces;
-  r["points"] = mesh.num_points();
-  r["cells"] = mesh.num_cells();
-  r["soup_points"] = stats.soup_corners;
-  r["threads"] = job.threads;
   nlohmann::json pairs = nlohmann::json::array();
   for (const auto& p : timer.run("count", [&] { return generate::label_pair_counts(mesh); }))
     pairs.push_back({{"labels", {p.first, p.second}}, {"points", p.points}, {"faces", p.faces}});
   r["pairs"] = pairs;
   auto seconds = timer.seconds();
-  seconds["labels_stages"] = {{"scan", stats.scan}, {"generate", stats.generate}, {"weld", stats.weld},
-                              {"smooth", stats.smooth}, {"coarsen", stats.coarsen}};
+  generate::visit_stage_seconds(stats, into(seconds["labels_stages"]));
   r["seconds"] = seconds;
   r["peak_rss_mib"] = peak_rss_mib();
   write_report(job.common.report_path, r);

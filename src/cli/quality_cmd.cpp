@@ -16,16 +16,14 @@ struct QualityCli {
 };
 
 void add_quality_options(CLI::App& cmd, QualityCli& o) {
+  cmd.description("triangle quality Q = 4 sqrt(3) area / sum of squared edge lengths: min, median, mean, histogram");
   cmd.add_option("mesh", o.input, "triangle mesh (.vtp .ply .obj .stl)")->required();
   add_common_options(cmd, o.common);
 }
 
-int run_quality(const QualityCli& o) {
-  if (int rc = require_cpu_backend(o.common, "the quality measure")) return rc;
-  const int threads = apply_threads(o.common);
-  StageTimer timer;
-  const SurfaceMesh mesh = timer.run("read", [&] { return io::read_mesh(o.input); });
-  const analyze::QualityReport q = timer.run("quality", [&] { return analyze::quality(mesh); });
+int run_quality(const QualityCli& o, CommandRun& run) {
+  const SurfaceMesh mesh = run.stage("read", [&] { return io::read_mesh(o.input); });
+  const analyze::QualityReport q = run.stage("quality", [&] { return analyze::quality(mesh); });
   std::printf("%s: %lld triangles\n  Q min %.4f, median %.4f, mean %.4f, Q > 0.6: %.1f%%\n", o.input.c_str(),
               (long long)q.triangles, q.min, q.median, q.mean, 100.0 * q.fraction_above_0_6);
   Id most = 1;
@@ -34,14 +32,11 @@ int run_quality(const QualityCli& o) {
     std::printf("  %.1f-%.1f %10lld %s\n", b / 10.0, (b + 1) / 10.0, (long long)q.histogram[b],
                 std::string(static_cast<std::size_t>(50 * q.histogram[b] / most), '#').c_str());
   nlohmann::json r = {{"input", o.input}, {"points", mesh.num_points()}};
-  analyze::visit_fields(q, [&](const char* name, const auto& value) { r[name] = value; });
-  finish_report(o.common, r, threads, timer, PeakRss::Omit);
-  return 0;
+  analyze::visit_fields(q, into(r));
+  return run.finish(r, PeakRss::Omit);
 }
 
-Register reg{make_command<QualityCli>(
-    "quality", "triangle quality Q = 4 sqrt(3) area / sum of squared edge lengths: min, median, mean, histogram",
-    add_quality_options, run_quality)};
+Register reg{make_cpu_command("quality", "the quality measure", add_quality_options, run_quality)};
 
 }  // namespace
 

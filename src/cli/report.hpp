@@ -50,6 +50,12 @@ void write_report(const std::string& path, const nlohmann::json& report);
 nlohmann::json files_and_counts(const std::string& input, const std::string& output, long long points,
                                 long long cells);
 
+// The visitor that stores each (name, value) of analyze/ and
+// generate/report_fields.hpp in `report`: visit_fields(stats, into(report)).
+inline auto into(nlohmann::json& report) {
+  return [&report](const char* name, const auto& value) { report[name] = value; };
+}
+
 // Whether a report carries "peak_rss_mib" (the commands that hold whole
 // volumes or meshes do; the light ones never did).
 enum class PeakRss { Omit, Include };

@@ -24,6 +24,7 @@ struct SubdivideCli {
 };
 
 void add_subdivide_options(CLI::App& cmd, SubdivideCli& o) {
+  cmd.description("split triangles 1->4 or tetrahedra 1->8, new points keyed by the parent edge");
   cmd.add_option("input", o.input, "triangle surface (.vtp .ply .obj .stl) or tet grid (.vtu .vtk)")->required();
   cmd.add_option("-o,--output", o.output, "output of the same kind")->required();
   cmd.add_option("--levels,-k", o.levels, "subdivision levels")->check(CLI::Range(0, 8));
@@ -35,10 +36,7 @@ void add_subdivide_options(CLI::App& cmd, SubdivideCli& o) {
   add_common_options(cmd, o.common);
 }
 
-int run_subdivide(const SubdivideCli& o) {
-  if (int rc = require_cpu_backend(o.common, "subdivision")) return rc;
-  const int threads = apply_threads(o.common);
-  StageTimer timer;
+int run_subdivide(const SubdivideCli& o, CommandRun& run) {
   Progress progress(o.common.quiet, file_size(o.input) > (64ll << 20));
   generate::SubdivideOptions opt;
   opt.levels = o.levels;
@@ -57,21 +55,21 @@ int run_subdivide(const SubdivideCli& o) {
   progress.say("reading " + o.input);
   Id points = 0, cells = 0, in_points = 0, in_cells = 0;
   if (grid_in) {
-    const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
+    const UnstructuredGrid g = run.stage("read", [&] { return io::read_grid(o.input); });
     check_work(estimate_subdivide_tets(g.num_points(), g.num_cells(), o.levels, field_components(g.point_fields)),
                memory_budget(o.common), o.input + ": subdivide --levels " + std::to_string(o.levels),
                kMaxPoints);
-    const UnstructuredGrid s = timer.run("subdivide", [&] { return generate::subdivide(g, opt); });
-    timer.run("write", [&] { io::write_grid(s, o.output); });
+    const UnstructuredGrid s = run.stage("subdivide", [&] { return generate::subdivide(g, opt); });
+    run.stage("write", [&] { io::write_grid(s, o.output); });
     in_points = g.num_points(), in_cells = g.num_cells(), points = s.num_points(), cells = s.num_cells();
   } else {
-    const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o.input); });
+    const SurfaceMesh m = run.stage("read", [&] { return io::read_mesh(o.input); });
     check_work(estimate_subdivide_triangles(m.num_points(), m.num_cells(), o.levels,
                                             field_components(m.point_fields)),
                memory_budget(o.common), o.input + ": subdivide --levels " + std::to_string(o.levels),
                kMaxPoints, kMaxPoints / 3);
-    const SurfaceMesh s = timer.run("subdivide", [&] { return generate::subdivide(m, opt); });
-    timer.run("write", [&] { io::write_mesh(s, o.output); });
+    const SurfaceMesh s = run.stage("subdivide", [&] { return generate::subdivide(m, opt); });
+    run.stage("write", [&] { io::write_mesh(s, o.output); });
     in_points = m.num_points(), in_cells = m.num_cells(), points = s.num_points(), cells = s.num_cells();
   }
   say_written(o.common, points, cells, "cells", o.output);
@@ -81,13 +79,10 @@ int run_subdivide(const SubdivideCli& o) {
   r["weld"] = o.weld;
   r["input_points"] = in_points;
   r["input_cells"] = in_cells;
-  finish_report(o.common, r, threads, timer, PeakRss::Include);
-  return 0;
+  return run.finish(r, PeakRss::Include);
 }
 
-Register reg{make_command<SubdivideCli>(
-    "subdivide", "split triangles 1->4 or tetrahedra 1->8, new points keyed by the parent edge",
-    add_subdivide_options, run_subdivide)};
+Register reg{make_cpu_command("subdivide", "subdivision", add_subdivide_options, run_subdivide)};
 
 }  // namespace
 

@@ -20,6 +20,7 @@ struct TetrahedralizeCli {
 };
 
 void add_tetrahedralize_options(CLI::App& cmd, TetrahedralizeCli& o) {
+  cmd.description("split the voxels of a volume (or the hexahedra of a .vtu/.vtk) into tetrahedra");
   cmd.add_option("input", o.input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or hexahedral grid (.vtu .vtk)")
       ->required();
   cmd.add_option("-o,--output", o.output, "output tetrahedral grid (.vtu or .vtk)")->required();
@@ -34,10 +35,7 @@ void add_tetrahedralize_options(CLI::App& cmd, TetrahedralizeCli& o) {
   add_common_options(cmd, o.common);
 }
 
-int run_tetrahedralize(const TetrahedralizeCli& o) {
-  if (int rc = require_cpu_backend(o.common, "tetrahedralization")) return rc;
-  const int threads = apply_threads(o.common);
-  StageTimer timer;
+int run_tetrahedralize(const TetrahedralizeCli& o, CommandRun& run) {
   Progress progress(o.common.quiet, file_size(o.input) > (64ll << 20));
   progress.say("reading " + o.input);
   const bool vertexweld =
@@ -45,17 +43,17 @@ int run_tetrahedralize(const TetrahedralizeCli& o) {
   UnstructuredGrid tets;
   nlohmann::json r;
   if (io::is_grid_file(o.input)) {
-    const UnstructuredGrid hexes = timer.run("read", [&] { return io::read_grid(o.input); });
+    const UnstructuredGrid hexes = run.stage("read", [&] { return io::read_grid(o.input); });
     check_work(estimate_tetrahedralize(hexes.num_points(), hexes.num_cells(), o.scheme,
                                        field_components(hexes.point_fields)),
                memory_budget(o.common), o.input + ": tetrahedralize --scheme " + std::to_string(o.scheme));
-    tets = timer.run("tetrahedralize", [&] {
+    tets = run.stage("tetrahedralize", [&] {
       return o.scheme == 24 ? generate::tetrahedralize24(hexes, vertexweld)
                              : generate::tetrahedralize5(hexes);
     });
     r["input_cells"] = hexes.num_cells();
   } else {
-    const ImageGrid grid = timer.run("read", [&] { return io::read_volume(o.input); });
+    const ImageGrid grid = run.stage("read", [&] { return io::read_volume(o.input); });
     const auto voxels = [&] {
       std::uint64_t n = 1;
       for (Id d : grid.dims) n = saturating_mul(n, static_cast<std::uint64_t>(std::max<Id>(d - 1, 0)));
@@ -66,25 +64,23 @@ int run_tetrahedralize(const TetrahedralizeCli& o) {
     progress.enable_if(grid.num_points() > (1ll << 24));
     progress.say("tetrahedralizing " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
                  std::to_string(grid.dims[2]));
-    tets = timer.run("tetrahedralize", [&] {
+    tets = run.stage("tetrahedralize", [&] {
       return o.scheme == 24 ? generate::tetrahedralize24(grid, vertexweld)
                              : generate::tetrahedralize5(grid);
     });
     r["dims"] = grid.dims;
   }
   progress.say("writing " + o.output);
-  timer.run("write", [&] { io::write_grid(tets, o.output); });
+  run.stage("write", [&] { io::write_grid(tets, o.output); });
   say_written(o.common, tets.num_points(), tets.num_cells(), "tetrahedra", o.output);
   r.update(files_and_counts(o.input, o.output, tets.num_points(), tets.num_cells()));
   r["scheme"] = o.scheme;
   r["weld"] = o.weld;
-  finish_report(o.common, r, threads, timer, PeakRss::Include);
-  return 0;
+  return run.finish(r, PeakRss::Include);
 }
 
-Register reg{make_command<TetrahedralizeCli>(
-    "tetrahedralize", "split the voxels of a volume (or the hexahedra of a .vtu/.vtk) into tetrahedra",
-    add_tetrahedralize_options, run_tetrahedralize)};
+Register reg{
+    make_cpu_command("tetrahedralize", "tetrahedralization", add_tetrahedralize_options, run_tetrahedralize)};
 
 }  // namespace
 

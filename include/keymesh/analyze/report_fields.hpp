@@ -4,24 +4,23 @@
 // and keymesh.quality() name the same numbers the same way.
 //
 //   visit_fields(report, [&](const char* name, const auto& value) { json[name] = value; });
+#include <utility>
+
 #include "keymesh/analyze/quality.hpp"
 #include "keymesh/analyze/topology.hpp"
 
 namespace keymesh::analyze {
 
+// The counts in the order `keymesh check` prints them, then closed_manifold.
 template <class Visit>
 void visit_fields(const TopologyReport& t, Visit&& visit) {
-  visit("points", t.points);
-  visit("cells", t.cells);
-  visit("edges", t.edges);
-  visit("boundary_edges", t.boundary_edges);
-  visit("nonmanifold_edges", t.nonmanifold_edges);
-  visit("nonmanifold_vertices", t.nonmanifold_vertices);
-  visit("duplicate_points", t.duplicate_points);
-  visit("unused_points", t.unused_points);
-  visit("degenerate_cells", t.degenerate_cells);
-  visit("components", t.components);
-  visit("euler_characteristic", t.euler_characteristic);
+  const std::pair<const char*, Id> counts[] = {
+      {"points", t.points}, {"cells", t.cells}, {"edges", t.edges}, {"boundary_edges", t.boundary_edges},
+      {"nonmanifold_edges", t.nonmanifold_edges}, {"nonmanifold_vertices", t.nonmanifold_vertices},
+      {"duplicate_points", t.duplicate_points}, {"unused_points", t.unused_points},
+      {"degenerate_cells", t.degenerate_cells}, {"components", t.components},
+      {"euler_characteristic", t.euler_characteristic}};
+  for (const auto& [name, count] : counts) visit(name, count);
   visit("closed_manifold", t.closed_manifold);
 }
 
@@ -29,10 +28,9 @@ void visit_fields(const TopologyReport& t, Visit&& visit) {
 template <class Visit>
 void visit_fields(const QualityReport& q, Visit&& visit) {
   visit("cells", q.triangles);
-  visit("min", q.min);
-  visit("median", q.median);
-  visit("mean", q.mean);
-  visit("fraction_above_0_6", q.fraction_above_0_6);
+  const std::pair<const char*, double> measures[] = {
+      {"min", q.min}, {"median", q.median}, {"mean", q.mean}, {"fraction_above_0_6", q.fraction_above_0_6}};
+  for (const auto& [name, measure] : measures) visit(name, measure);
   visit("histogram", q.histogram);
 }
 
