@@ -135,116 +135,204 @@ constexpr Id kFaceKeysPerCell = 6;
 // Only the edges of rows k in [rows.first, rows.second) of the box (its
 // z-planes, box coordinates) are visited: a slab of a streamed volume.
 template <class K>
-void generate_quads(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange, Soup<K>& soup) {
-  const auto& loops = cell_loops();
-  const Id rows = box.dims[1] * (krange.second - krange.first);
-  const Id cstride[3] = {1, box.cx(), box.cxy()};
-  const Id pstride[3] = {1, vol.dims[0], vol.nxy};
-  auto L = [&vol](Id p) { return vol.label(p); };
-  const CellCorners corners(vol);
-  const Id cells = box.cells();
-  // Visits the edges of row r whose quads are written: f(i, axis, lo_end_label, hi_end_label).
-  auto visit_row = [&](Id r, auto&& f) {
-    const Id j = r % box.dims[1], k = krange.first + r / box.dims[1];
-    const Id row_first = vol.at(box.lo[0], box.lo[1] + j, box.lo[2] + k);
-    const bool y_ok = j + 1 < box.dims[1], z_ok = k + 1 < box.dims[2];
-    for (Id i = 0; i < box.dims[0]; ++i) {
+class EdgePolygons {
+ public:
+  EdgePolygons(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange)
+      : vol_(vol), box_(box), only_(only), krange_(krange), loops_(cell_loops()), corners_(vol),
+        cstride_{1, box.cx(), box.cxy()}, pstride_{1, vol.dims[0], vol.nxy}, cells_(box.cells()) {}
+
+  // Rows of the box the edges are visited in (y fastest, then z).
+  Id rows() const { return box_.dims[1] * (krange_.second - krange_.first); }
+
+  // Visits the edges of row r whose polygons are written:
+  // f(i, j, k, axis, lo_end_label, hi_end_label), in box coordinates.
+  template <class F>
+  void visit_row(Id r, F&& f) const {
+    const Id j = r % box_.dims[1], k = krange_.first + r / box_.dims[1];
+    const Id row_first = vol_.at(box_.lo[0], box_.lo[1] + j, box_.lo[2] + k);
+    const bool y_ok = j + 1 < box_.dims[1], z_ok = k + 1 < box_.dims[2];
+    for (Id i = 0; i < box_.dims[0]; ++i) {
       const Id p = row_first + i;
-      const LabelIndex a = L(p);
-      const LabelIndex ends[3] = {i + 1 < box.dims[0] ? L(p + 1) : a, y_ok ? L(p + pstride[1]) : a,
-                                  z_ok ? L(p + pstride[2]) : a};
+      const LabelIndex a = label(p);
+      const LabelIndex ends[3] = {i + 1 < box_.dims[0] ? label(p + 1) : a, y_ok ? label(p + pstride_[1]) : a,
+                                  z_ok ? label(p + pstride_[2]) : a};
       for (int axis = 0; axis < 3; ++axis) {
         const LabelIndex b = ends[axis];
         if (a == b) continue;
-        if (only >= 0 && a != only && b != only) continue;
+        if (only_ >= 0 && a != only_ && b != only_) continue;
         f(i, j, k, axis, a, b);
       }
     }
-  };
+  }
+
   // The polygon of one edge: its corner keys counter-clockwise seen from
   // +axis (cells, with face points between some), written to `out` when
   // given; returns the number of corners.
-  auto polygon = [&](Id i, Id j, Id k, int axis, LabelIndex a, K* out) -> int {
+  int polygon(Id i, Id j, Id k, int axis, LabelIndex a, K* out) const {
+    if (only_ >= 0) return label_polygon(i, j, k, axis, a, out);
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const Id cell = i + j * cstride[1] + k * cstride[2];  // the cell whose first corner is p
-    const int st[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    if (only < 0) {
-      if (out)
-        for (int m = 0; m < 4; ++m) out[m] = static_cast<K>(cell - st[m][0] * cstride[u] - st[m][1] * cstride[v]);
-      return 4;
+    const Id cell = i + j * cstride_[1] + k * cstride_[2];  // the cell whose first corner is p
+    if (out)
+      for (int m = 0; m < 4; ++m)
+        out[m] = static_cast<K>(cell - kAround[m][0] * cstride_[u] - kAround[m][1] * cstride_[v]);
+    return 4;
+  }
+
+  // Writes the triangles of the polygon of the edge from label a to label b
+  // (n corners) at triangle t, with their label pair.
+  void write_fan(K* poly, int n, LabelIndex a, LabelIndex b, Id t, Soup<K>& soup) const {
+    // Normal +axis points from a to b: keep the order when a is the
+    // smaller label (network) or the surface's label (per label).
+    if (!(only_ < 0 ? a < b : a == only_)) std::reverse(poly + 1, poly + n);
+    // Fan from the first face point (corners that are face keys), else
+    // the quad's two triangles (C00, C10, C11), (C00, C11, C01).
+    int apex = 0;
+    for (int m = 0; m < n; ++m)
+      if (static_cast<Id>(poly[m]) >= 4 * cells_ && only_ >= 0) {
+        apex = m;
+        break;
+      }
+    K* o = soup.keys.data() + 3 * t;
+    for (int m = 1; m + 1 < n; ++m) {
+      *o++ = poly[apex];
+      *o++ = poly[(apex + m) % n];
+      *o++ = poly[(apex + m + 1) % n];
     }
+    const LabelIndex lo = a < b ? a : b, hi = a < b ? b : a;
+    for (int m = 0; m < n - 2; ++m) soup.pair[static_cast<std::size_t>(t + m)] = (std::uint32_t{lo} << 16) | hi;
+  }
+
+ private:
+  // The four cells around an edge along `axis`, as offsets along the next
+  // two axes (u, v), counter-clockwise seen from +axis.
+  static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+
+  // The face between cells m and m + 1 of an edge: its normal axis d, the
+  // axis w it spans besides the edge's, and its lower corner f (box
+  // coordinates).
+  struct Face {
+    int d, w;
+    Id f[3];
+  };
+
+  LabelIndex label(Id p) const { return vol_.label(p); }
+
+  // The polygon of an edge of label `only`'s surface: the loop keys of the
+  // four cells around it, with a face point after cell m where the face to
+  // cell m + 1 would pinch.
+  int label_polygon(Id i, Id j, Id k, int axis, LabelIndex a, K* out) const {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const Id cell = i + j * cstride_[1] + k * cstride_[2];
     const Id lp[3] = {i, j, k};  // p in box coordinates
-    const Id p = vol.at(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k);
-    const int up = a == only ? 0 : 1;  // which end of the edge carries the label
-    const auto l = static_cast<LabelIndex>(only);
+    const Id p = vol_.at(box_.lo[0] + i, box_.lo[1] + j, box_.lo[2] + k);
+    const auto l = static_cast<LabelIndex>(only_);
     unsigned cube[4];
-    K key[4];
     for (int m = 0; m < 4; ++m) {
-      const Id first = p - st[m][0] * pstride[u] - st[m][1] * pstride[v];
-      cube[m] = corners.case_of(first, l);
-      const int corner0 = (st[m][0] << u) | (st[m][1] << v);
-      key[m] = static_cast<K>(4 * (cell - st[m][0] * cstride[u] - st[m][1] * cstride[v]) +
-                              loops.loop_of[cube[m]][loops.edge_at[corner0][axis]]);
+      const Id first = p - kAround[m][0] * pstride_[u] - kAround[m][1] * pstride_[v];
+      cube[m] = corners_.case_of(first, l);
     }
     int n = 0;
     for (int m = 0; m < 4; ++m) {
-      if (out) out[n] = key[m];
+      const int corner0 = (kAround[m][0] << u) | (kAround[m][1] << v);
+      if (out)
+        out[n] = static_cast<K>(4 * (cell - kAround[m][0] * cstride_[u] - kAround[m][1] * cstride_[v]) +
+                                loops_.loop_of[cube[m]][loops_.edge_at[corner0][axis]]);
       ++n;
-      // The face between cell m and cell m + 1: normal along d, its lower
-      // corner the larger of the two cells' first corners.
-      const int m1 = (m + 1) % 4;
-      const int d = st[m][0] != st[m1][0] ? u : v;
-      const int w = d == u ? v : u;  // the face spans axis and w
-      const int fs[2] = {std::min(st[m][0], st[m1][0]), std::min(st[m][1], st[m1][1])};
-      // Face lower corner in box coordinates: p minus the cells' shared offsets.
-      Id f[3] = {lp[0], lp[1], lp[2]};
-      f[u] -= (d == u ? 0 : fs[0]);
-      f[v] -= (d == v ? 0 : fs[1]);
-      // Inside-ness of the face's corners (axis offset oa, w offset ow).
-      auto inside = [&](int oa, int ow) {
-        Id q[3] = {f[0], f[1], f[2]};
-        q[axis] += oa, q[w] += ow;
-        return L(vol.at(box.lo[0] + q[0], box.lo[1] + q[1], box.lo[2] + q[2])) == l;
-      };
-      const bool c00 = inside(0, 0), c10 = inside(1, 0), c01 = inside(0, 1), c11 = inside(1, 1);
-      if (!(c00 == c11 && c10 == c01 && c00 != c10)) continue;  // not ambiguous
-      // The label's corner of this edge on the face, and the other one.
-      const int ow_here = static_cast<int>(lp[w] - f[w]);
-      const int oa_here = up;
-      const int ow_other = 1 - ow_here;
-      // In each cell, the loop of the other arc's edge along axis (from the
-      // other corner's w-side, axis offset 0) against this edge's loop.
-      bool pinch = true;
-      for (int side : {m, m1}) {
-        // The cell's first corner in box coordinates.
-        Id c[3] = {lp[0], lp[1], lp[2]};
-        c[u] -= st[side][0], c[v] -= st[side][1];
-        // The other arc's edge along axis sits at w offset ow_other on the face.
-        int corner_here = 0, corner_other = 0;
-        for (int ax = 0; ax < 3; ++ax) {
-          const Id here = ax == axis ? 0 : (ax == w ? f[w] + ow_here : f[d]) - c[ax];
-          const Id other = ax == axis ? 0 : (ax == w ? f[w] + ow_other : f[d]) - c[ax];
-          corner_here |= static_cast<int>(here) << ax;
-          corner_other |= static_cast<int>(other) << ax;
-        }
-        const unsigned cs = cube[side];
-        pinch = pinch && loops.loop_of[cs][loops.edge_at[corner_here][axis]] ==
-                             loops.loop_of[cs][loops.edge_at[corner_other][axis]];
-      }
-      if (!pinch) continue;
-      // The arc around the label's corner (oa_here, ow_here) of the face.
-      const Id face_cell = f[0] + f[1] * cstride[1] + f[2] * cstride[2];
-      const int arc = (w < axis ? ow_here : oa_here) ? 1 : 0;  // by the face's first spanning axis
-      if (out) out[n] = static_cast<K>(4 * cells + 2 * (3 * face_cell + d) + arc);
+      const Id face_key = face_point(lp, axis, a == l ? 0 : 1, m, cube);
+      if (face_key < 0) continue;
+      if (out) out[n] = static_cast<K>(face_key);
       ++n;
     }
     return n;
-  };
+  }
+
+  Face face_between(const Id lp[3], int axis, int m) const {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const int m1 = (m + 1) % 4;
+    Face face{};
+    face.d = kAround[m][0] != kAround[m1][0] ? u : v;
+    face.w = face.d == u ? v : u;  // the face spans axis and w
+    const int fs[2] = {std::min(kAround[m][0], kAround[m1][0]), std::min(kAround[m][1], kAround[m1][1])};
+    // Lower corner: p minus the cells' shared offsets.
+    for (int x = 0; x < 3; ++x) face.f[x] = lp[x];
+    face.f[u] -= (face.d == u ? 0 : fs[0]);
+    face.f[v] -= (face.d == v ? 0 : fs[1]);
+    return face;
+  }
+
+  // Whether the label sits on one diagonal of the face (spanning axis and w).
+  bool ambiguous(const Face& face, int axis) const {
+    // Inside-ness of the face's corners (axis offset oa, w offset ow).
+    auto inside = [&](int oa, int ow) {
+      Id q[3] = {face.f[0], face.f[1], face.f[2]};
+      q[axis] += oa, q[face.w] += ow;
+      return label(vol_.at(box_.lo[0] + q[0], box_.lo[1] + q[1], box_.lo[2] + q[2])) == only_;
+    };
+    const bool c00 = inside(0, 0), c10 = inside(1, 0), c01 = inside(0, 1), c11 = inside(1, 1);
+    return c00 == c11 && c10 == c01 && c00 != c10;
+  }
+
+  // The key of the face point after cell m of the edge at lp (`up`: which
+  // end carries the label), or -1 where the face does not pinch.
+  Id face_point(const Id lp[3], int axis, int up, int m, const unsigned cube[4]) const {
+    const Face face = face_between(lp, axis, m);
+    if (!ambiguous(face, axis)) return -1;
+    // The label's corner of this edge on the face, and the other one.
+    const int ow_here = static_cast<int>(lp[face.w] - face.f[face.w]);
+    if (!arcs_join(lp, face, axis, ow_here, m, cube)) return -1;
+    // The arc around the label's corner (up, ow_here) of the face.
+    const Id face_cell = face.f[0] + face.f[1] * cstride_[1] + face.f[2] * cstride_[2];
+    const int arc = (face.w < axis ? ow_here : up) ? 1 : 0;  // by the face's first spanning axis
+    return 4 * cells_ + 2 * (3 * face_cell + face.d) + arc;
+  }
+
+  // Whether, in both cells m and m + 1, the loop of the other arc's edge
+  // along axis (from the other corner's w-side, axis offset 0) is this
+  // edge's loop.
+  bool arcs_join(const Id lp[3], const Face& face, int axis, int ow_here, int m, const unsigned cube[4]) const {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const int ow_other = 1 - ow_here;
+    bool pinch = true;
+    for (int side : {m, (m + 1) % 4}) {
+      // The cell's first corner in box coordinates.
+      Id c[3] = {lp[0], lp[1], lp[2]};
+      c[u] -= kAround[side][0], c[v] -= kAround[side][1];
+      // The other arc's edge along axis sits at w offset ow_other on the face.
+      int corner_here = 0, corner_other = 0;
+      for (int ax = 0; ax < 3; ++ax) {
+        const Id here = ax == axis ? 0 : (ax == face.w ? face.f[face.w] + ow_here : face.f[face.d]) - c[ax];
+        const Id other = ax == axis ? 0 : (ax == face.w ? face.f[face.w] + ow_other : face.f[face.d]) - c[ax];
+        corner_here |= static_cast<int>(here) << ax;
+        corner_other |= static_cast<int>(other) << ax;
+      }
+      const unsigned cs = cube[side];
+      pinch = pinch && loops_.loop_of[cs][loops_.edge_at[corner_here][axis]] ==
+                           loops_.loop_of[cs][loops_.edge_at[corner_other][axis]];
+    }
+    return pinch;
+  }
+
+  const LabelVolume& vol_;
+  const Box& box_;
+  int only_;
+  std::pair<Id, Id> krange_;
+  const CellLoops& loops_;
+  CellCorners corners_;
+  Id cstride_[3], pstride_[3];
+  Id cells_;
+};
+
+// The polygons of every visited edge, counted per row, then written as
+// triangles at each row's offset: grid order whatever the thread count.
+template <class K>
+void generate_quads(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange, Soup<K>& soup) {
+  const EdgePolygons<K> edges(vol, box, only, krange);
+  const Id rows = edges.rows();
   std::vector<Id> row_offsets(static_cast<std::size_t>(rows + 1), 0);
   parallel::for_each_dynamic(rows, [&](Id r) {
     Id count = 0;
-    visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex) {
-      count += polygon(i, j, k, axis, a, nullptr) - 2;
+    edges.visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex) {
+      count += edges.polygon(i, j, k, axis, a, nullptr) - 2;
     });
     row_offsets[r] = count;
   }, 16);
@@ -255,28 +343,10 @@ void generate_quads(const LabelVolume& vol, const Box& box, int only, std::pair<
   soup.pair.resize(static_cast<std::size_t>(triangles));
   parallel::for_each_dynamic(rows, [&](Id r) {
     Id t = row_offsets[r];
-    visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b) {
+    edges.visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b) {
       K poly[8];
-      const int n = polygon(i, j, k, axis, a, poly);
-      // Normal +axis points from a to b: keep the order when a is the
-      // smaller label (network) or the surface's label (per label).
-      if (!(only < 0 ? a < b : a == only)) std::reverse(poly + 1, poly + n);
-      // Fan from the first face point (corners that are face keys), else
-      // the quad's two triangles (C00, C10, C11), (C00, C11, C01).
-      int apex = 0;
-      for (int m = 0; m < n; ++m)
-        if (static_cast<Id>(poly[m]) >= 4 * cells && only >= 0) {
-          apex = m;
-          break;
-        }
-      K* o = soup.keys.data() + 3 * t;
-      for (int m = 1; m + 1 < n; ++m) {
-        *o++ = poly[apex];
-        *o++ = poly[(apex + m) % n];
-        *o++ = poly[(apex + m + 1) % n];
-      }
-      const LabelIndex lo = a < b ? a : b, hi = a < b ? b : a;
-      for (int m = 0; m < n - 2; ++m) soup.pair[static_cast<std::size_t>(t + m)] = (std::uint32_t{lo} << 16) | hi;
+      const int n = edges.polygon(i, j, k, axis, a, poly);
+      edges.write_fan(poly, n, a, b, t, soup);
       t += n - 2;
     });
   }, 16);
