@@ -18,6 +18,7 @@ except ImportError as e:
 from vtk.util import numpy_support as ns  # noqa: E402
 
 from kmtest import points_of, read_polydata, triangles_of  # noqa: E402
+from mesh_checks import assert_closed_manifold  # noqa: E402
 
 D = tempdir()
 NRRD_TYPES = {np.uint8: "uint8", np.int8: "int8", np.uint16: "uint16", np.int16: "int16", np.int32: "int32",
@@ -58,27 +59,6 @@ def mesh_of(path):
 def edges_of(tris):
     e = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
     return np.sort(e, axis=1)
-
-
-def assert_closed_manifold(tris, what):
-    """Every edge in exactly two triangles, used in opposite directions (consistent
-    orientation), and every vertex's link one cycle."""
-    directed = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
-    d = {tuple(x) for x in directed}
-    assert len(d) == len(directed), f"{what}: a directed edge used twice (orientation or non-manifold edge)"
-    for a, b in d:
-        assert (b, a) in d, f"{what}: edge {a}-{b} has no opposite (boundary)"
-    links = {}
-    for a, b, c in tris:
-        for v, e in ((a, (b, c)), (b, (c, a)), (c, (a, b))):
-            links.setdefault(v, []).append(e)
-    for v, es in links.items():
-        nxt = dict(es)
-        assert len(nxt) == len(es), f"{what}: vertex {v} fan is not a disk"
-        start, cur, steps = es[0][0], nxt[es[0][0]], 1
-        while cur != start:
-            cur, steps = nxt[cur], steps + 1
-        assert steps == len(es), f"{what}: vertex {v} has {len(es)} triangles in more than one fan"
 
 
 def euler_characteristic(tris):

@@ -11,6 +11,7 @@
 #include "keymesh/keyreduce/weld.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "thread_count_test.hpp"
 
 using namespace keymesh;
 using keyreduce::Order;
@@ -45,11 +46,7 @@ void expect_both_plans(const std::vector<K>& keys, K range) {
   expect_matches_reference(keys, keyreduce::partition_dense(keys.data(), n, range, Order::Skip));
 }
 
-class KeyReduceThreads : public ::testing::TestWithParam<int> {
- protected:
-  void SetUp() override { parallel::set_thread_count(GetParam()); }
-  void TearDown() override { parallel::set_thread_count(0); }
-};
+class KeyReduceThreads : public keymesh::tests::ThreadCountTest {};
 
 }  // namespace
 

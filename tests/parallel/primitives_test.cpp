@@ -7,18 +7,14 @@
 
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/run_length.hpp"
-#include "keymesh/parallel/threads.hpp"
+#include "thread_count_test.hpp"
 
 namespace kp = keymesh::parallel;
 using keymesh::Id;
 
 namespace {
 
-class PrimitivesThreads : public ::testing::TestWithParam<int> {
- protected:
-  void SetUp() override { kp::set_thread_count(GetParam()); }
-  void TearDown() override { kp::set_thread_count(0); }
-};
+class PrimitivesThreads : public keymesh::tests::ThreadCountTest {};
 
 // Reference run-length encoding, written the obvious serial way.
 template <class K>

@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "keymesh/parallel/threads.hpp"
+#include "thread_count_test.hpp"
 
 namespace kp = keymesh::parallel;
 
@@ -30,11 +30,7 @@ void expect_sorted_like_stable_sort(std::vector<K> keys, int bits) {
   }
 }
 
-class RadixSortThreads : public ::testing::TestWithParam<int> {
- protected:
-  void SetUp() override { kp::set_thread_count(GetParam()); }
-  void TearDown() override { kp::set_thread_count(0); }
-};
+class RadixSortThreads : public keymesh::tests::ThreadCountTest {};
 
 }  // namespace
 
