@@ -209,9 +209,12 @@ void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const 
       }
       PointIndex* out = connectivity + 3 * rc.triangle_first[(k - kb) * (s.ny - 1) + j];
       for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
-        const int corners = 3 * table.triangle_count[cube_case];
-        const auto& edges = table.triangle_edges[cube_case];
-        for (int c = 0; c < corners; ++c) *out++ = edge_ids[edges[c]][i];
+        const std::uint8_t* e = table.triangle_edges[cube_case].data();
+        for (int t = table.triangle_count[cube_case]; t > 0; --t, e += 3, out += 3) {
+          out[0] = edge_ids[e[0]][i];
+          out[1] = edge_ids[e[1]][i];
+          out[2] = edge_ids[e[2]][i];
+        }
       });
       std::swap(lo[0], hi[0]);
       std::swap(lo[1], hi[1]);
