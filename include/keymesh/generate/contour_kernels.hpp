@@ -103,10 +103,12 @@ struct EdgeInterpolator {
   }
 
   KEYMESH_HD void position(const Point& p, float* xyz) const {
-    for (int a = 0; a < 3; ++a) {
-      const double u = static_cast<double>(p.ijk[a] + (a == 2 ? s.k_offset : 0)) + (a == p.axis ? p.t : 0.0);
-      xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u);
-    }
+    // Grid coordinates: the edge's first grid point moved by t along the
+    // edge's axis (the other two stay whole numbers).
+    double u[3] = {static_cast<double>(p.ijk[0]), static_cast<double>(p.ijk[1]),
+                   static_cast<double>(p.ijk[2] + s.k_offset)};
+    u[p.axis] += p.t;
+    for (int a = 0; a < 3; ++a) xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u[a]);
   }
 
   KEYMESH_HD float scalar(const Point& p) const {
