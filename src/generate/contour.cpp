@@ -219,7 +219,7 @@ void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduc
     auto t0 = Clock::now();
     st.triangles_before_coarsening = mesh.num_cells();
     mesh = coarsen(mesh, coarse, coarse_range);
-    if (average) generate::average_normals(mesh);
+    if (average) keymesh::average_normals(mesh);
     st.coarsen += seconds_since(t0);
   }
 }

@@ -29,8 +29,8 @@ Id remove_folds(SurfaceMesh& mesh);
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
                     CoarsenStats* stats = nullptr);
 
-// Point normals live in the mesh layer (mesh/normals.hpp); coarsening
-// renormalises averaged ones and callers re-average after it.
-using ::keymesh::average_normals;
+// Point normals live in the mesh layer (mesh/normals.hpp): coarsening
+// renormalises averaged ones and callers re-average after it with
+// keymesh::average_normals.
 
 }  // namespace keymesh::generate
