@@ -1,8 +1,6 @@
 // keymesh.read / keymesh.write: the library's volume and surface mesh files.
-#include <algorithm>
-#include <cctype>
-
 #include "common.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/volume_io.hpp"
@@ -11,16 +9,14 @@ namespace keymesh::python {
 
 namespace {
 
-// Surface meshes by extension; grids by io::is_grid_file; everything else
-// (a folder included) is left to io::read_volume, whose format table names
-// what it accepts when it does not know the file.
-bool is_mesh_path(std::string path) {
-  std::transform(path.begin(), path.end(), path.begin(), [](unsigned char c) { return std::tolower(c); });
-  for (const char* ext : {".vtp", ".pvtp", ".ply", ".obj", ".stl"}) {
-    const std::string e(ext);
-    if (path.size() >= e.size() && path.compare(path.size() - e.size(), e.size(), e) == 0) return true;
-  }
-  return false;
+// Surface meshes and grids by the format table (io/formats.hpp): a surface
+// format keymesh reads; grids by io::is_grid_file (a .vtk may hold another
+// dataset type). Everything else (a folder included) is left to
+// io::read_volume, which names what the table accepts when it does not
+// know the file.
+bool is_mesh_path(const std::string& path) {
+  const io::Format* format = io::format_by_name(path);
+  return format && io::reader_of<io::SurfaceReader>(*format);
 }
 
 // Returns ("volume", Volume), ("grid", grid parts) or ("mesh", (points,
@@ -89,9 +85,14 @@ void register_io(py::module_& m) {
   m.def("read", &read, py::arg("path"), py::arg("dims") = py::none(), py::arg("dtype") = py::none(),
         py::arg("spacing") = py::none(), py::arg("origin") = py::none(), py::arg("endian") = "little",
         py::arg("header_bytes") = 0, "Reads a volume or a surface mesh file. Use keymesh.read.");
-  m.def("write_mesh", &write_mesh, py::arg("mesh"), py::arg("path"), "Writes a Mesh (.vtp .ply .obj .stl).");
-  m.def("write_grid", &write_grid, py::arg("grid"), py::arg("path"), "Writes a Grid (.vtu .vtk).");
-  m.def("write_volume", &write_volume, py::arg("volume"), py::arg("path"), "Writes a Volume (.vti .nrrd .raw).");
+  // Docstrings from the format table; static: pybind11 keeps the pointer.
+  using io::DataKind;
+  static const std::string write_mesh_doc = "Writes a Mesh (" + io::extensions_of(DataKind::Surface, true) + ").";
+  static const std::string write_grid_doc = "Writes a Grid (" + io::extensions_of(DataKind::Grid, true) + ").";
+  static const std::string write_volume_doc = "Writes a Volume (" + io::extensions_of(DataKind::Volume, true) + ").";
+  m.def("write_mesh", &write_mesh, py::arg("mesh"), py::arg("path"), write_mesh_doc.c_str());
+  m.def("write_grid", &write_grid, py::arg("grid"), py::arg("path"), write_grid_doc.c_str());
+  m.def("write_volume", &write_volume, py::arg("volume"), py::arg("path"), write_volume_doc.c_str());
 }
 
 }  // namespace keymesh::python

@@ -12,6 +12,7 @@
 #include <filesystem>
 
 #include "keymesh/core/work_estimate.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/input_file.hpp"
 #include "keymesh/parallel/threads.hpp"
 
@@ -106,9 +107,8 @@ long long file_size(const std::string& path) {
 }
 
 bool is_mesh_path(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".vtp" || ext == ".pvtp" || ext == ".glb";
+  const io::Format* format = io::format_by_name(path);
+  return format && format->kind == io::DataKind::Surface;
 }
 
 namespace {

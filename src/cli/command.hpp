@@ -84,7 +84,8 @@ class Progress {
 // Size of a file in bytes, 0 when it cannot be read.
 long long file_size(const std::string& path);
 
-// True when the path's extension names a mesh format (.ply .obj .stl .vtp).
+// True when the path's extension names a surface mesh format of the table
+// (io/formats.hpp), read or written.
 bool is_mesh_path(const std::string& path);
 
 // Refuses (exit 2, one line) a command whose input, -o/--output and --report

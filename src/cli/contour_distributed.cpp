@@ -11,7 +11,6 @@
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/plane_source.hpp"
-#include "keymesh/io/vtp.hpp"
 
 namespace keymesh::cli {
 

@@ -1,13 +1,11 @@
-// keymesh convert IN -o OUT: one file format to another of the same kind:
-// unstructured grids (.vtu .vtk), surface meshes (.ply .obj .stl .vtp) or
-// volumes (read: .vti .nrrd .nhdr .nii .nii.gz .den, DICOM and Zarr folders;
-// written: .vti .nrrd .raw).
+// keymesh convert IN -o OUT: one file format to another of the same kind
+// (unstructured grid, surface mesh or volume), as the format table
+// (io/formats.hpp) says.
 #include <cstdio>
-#include <filesystem>
 
 #include "command.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/volume_io.hpp"
 
@@ -27,16 +25,18 @@ const char* kind_name(Kind k) {
   return "an unknown format";
 }
 
-// The kind a file holds, by its name (a .vtk is always read as a grid: the
-// grid reader names any other dataset type it finds).
+// The kind a file holds, by its name in the format table (a folder: the
+// folder formats'), whether or not keymesh reads or writes that format: the
+// reader or writer then names the extensions it accepts. A .vtk is always
+// read as a grid: the grid reader names any other dataset type it finds.
 Kind kind_of(const std::string& path, bool output) {
-  const std::string ext = io::mesh_bytes::lower_extension(path);
-  std::error_code ec;
-  if (!output && std::filesystem::is_directory(path, ec)) return Kind::Volume;  // a DICOM or Zarr folder
-  if (ext == ".vtu" || ext == ".vtk") return Kind::Grid;
-  if (is_mesh_path(path)) return Kind::Surface;
-  if (ext == ".vti" || ext == ".nrrd" || ext == ".raw") return Kind::Volume;
-  if (!output && (ext == ".nhdr" || ext == ".nii" || ext == ".gz" || ext == ".den")) return Kind::Volume;
+  const io::Format* format = output ? io::format_by_name(path) : io::input_format(path);
+  if (!format) return Kind::Unknown;
+  switch (format->kind) {
+    case io::DataKind::Grid: return Kind::Grid;
+    case io::DataKind::Surface: return Kind::Surface;
+    case io::DataKind::Volume: return Kind::Volume;
+  }
   return Kind::Unknown;
 }
 
@@ -46,11 +46,15 @@ struct ConvertCli {
 };
 
 void add_convert_options(CLI::App& cmd, ConvertCli& o) {
+  using io::DataKind;
   cmd.add_option("input", o.input,
-                 "unstructured grid (.vtu .vtk), surface mesh (.ply .obj .stl .vtp) or volume "
-                 "(.vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or Zarr folder)")
+                 "unstructured grid (" + io::extensions_of(DataKind::Grid, false) + "), surface mesh (" +
+                     io::extensions_of(DataKind::Surface, false) + ") or volume (" +
+                     io::extensions_of(DataKind::Volume, false) + ", " + io::folder_formats() + ")")
       ->required();
-  cmd.add_option("-o,--output", o.output, "output file of the same kind (volumes: .vti .nrrd .raw)")->required();
+  cmd.add_option("-o,--output", o.output,
+                 "output file of the same kind (volumes: " + io::extensions_of(DataKind::Volume, true) + ")")
+      ->required();
   add_common_options(cmd, o.common);
 }
 
@@ -102,7 +106,9 @@ int run_convert(const ConvertCli& o) {
 
 Register reg{make_command<ConvertCli>(
     "convert",
-    "rewrite a grid (.vtu .vtk), surface (.ply .obj .stl .vtp; .glb out) or volume (.vti .nrrd .raw) in another format",
+    "rewrite a grid (" + io::extensions_of(io::DataKind::Grid, true) + "), surface (" +
+        io::extensions_of(io::DataKind::Surface, true) + ") or volume (" + io::extensions_of(io::DataKind::Volume, true) +
+        ") in another format",
     add_convert_options, run_convert)};
 
 }  // namespace

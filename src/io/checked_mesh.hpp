@@ -2,8 +2,8 @@
 // The one step every surface-mesh parser (.ply, .obj, .stl) ends with.
 #include <string>
 
-#include "keymesh/io/mesh_bytes.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
+#include "mesh_bytes.hpp"
 
 namespace keymesh::io {
 

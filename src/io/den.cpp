@@ -3,7 +3,7 @@
 // which), map_len (x, y, z) at shorts 25..27, then uint8 samples, x fastest.
 #include <cstring>
 
-#include "keymesh/io/volume_formats.hpp"
+#include "volume_formats.hpp"
 
 namespace keymesh::io {
 

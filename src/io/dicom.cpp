@@ -1,4 +1,4 @@
-#include "keymesh/io/dicom.hpp"
+#include "dicom.hpp"
 
 #include <gdcmImage.h>
 #include <gdcmImageReader.h>
@@ -18,7 +18,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/input_file.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "volume_formats.hpp"
 
 namespace keymesh::io {
 

@@ -1,4 +1,4 @@
-#include "keymesh/io/gltf.hpp"
+#include "mesh_formats.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -11,7 +11,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
+#include "mesh_bytes.hpp"
 
 namespace keymesh::io {
 

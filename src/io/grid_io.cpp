@@ -1,30 +1,37 @@
 #include "keymesh/io/grid_io.hpp"
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/io/legacy_vtk.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
-#include "keymesh/io/vtu.hpp"
+#include "keymesh/io/formats.hpp"
+#include "mesh_formats.hpp"
 
 namespace keymesh::io {
 
+namespace {
+[[noreturn]] void unknown_format(const std::string& path) {
+  throw InputError(path + ": unknown unstructured grid format '" + file_extension(path) + "' (use " +
+                   accepted_grids() + ")");
+}
+}  // namespace
+
 bool is_grid_file(const std::string& path) {
-  const std::string ext = mesh_bytes::lower_extension(path);
-  if (ext == ".vtu") return true;
-  return ext == ".vtk" && legacy_vtk_dataset(path) == "UNSTRUCTURED_GRID";
+  const Format* format = format_by_name(path);
+  if (!format || !reader_of<GridReader>(*format)) return false;
+  // A legacy .vtk may hold another dataset type (POLYDATA, ...).
+  return reader_of<GridReader>(*format) != read_legacy_vtk || legacy_vtk_dataset(path) == "UNSTRUCTURED_GRID";
 }
 
 UnstructuredGrid read_grid(const std::string& path) {
-  const std::string ext = mesh_bytes::lower_extension(path);
-  if (ext == ".vtu") return read_vtu(path);
-  if (ext == ".vtk") return read_legacy_vtk(path);
-  throw InputError(path + ": unknown unstructured grid format '" + ext + "' (use .vtu or .vtk)");
+  const Format* format = format_by_name(path);
+  const GridReader read = format ? reader_of<GridReader>(*format) : nullptr;
+  if (!read) unknown_format(path);
+  return read(path);
 }
 
 void write_grid(const UnstructuredGrid& grid, const std::string& path) {
-  const std::string ext = mesh_bytes::lower_extension(path);
-  if (ext == ".vtu") return write_vtu(grid, path);
-  if (ext == ".vtk") return write_legacy_vtk(grid, path);
-  throw InputError(path + ": unknown unstructured grid format '" + ext + "' (use .vtu or .vtk)");
+  const Format* format = format_by_name(path);
+  const GridWriter write = format ? writer_of<GridWriter>(*format) : nullptr;
+  if (!write) unknown_format(path);
+  write(grid, path);
 }
 
 }  // namespace keymesh::io

@@ -1,4 +1,4 @@
-#include "keymesh/io/gzip_plane_reader.hpp"
+#include "gzip_plane_reader.hpp"
 
 #include <unistd.h>
 #include <zlib.h>

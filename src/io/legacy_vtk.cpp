@@ -1,4 +1,4 @@
-#include "keymesh/io/legacy_vtk.hpp"
+#include "mesh_formats.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -13,7 +13,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/input_file.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
+#include "mesh_bytes.hpp"
 
 namespace keymesh::io {
 

@@ -1,4 +1,4 @@
-#include "keymesh/io/mesh_bytes.hpp"
+#include "mesh_bytes.hpp"
 
 #include "keymesh/io/input_file.hpp"
 
@@ -15,15 +15,6 @@
 namespace keymesh::io::mesh_bytes {
 
 std::string read_whole_file(const std::string& path) { return InputFile(path).read_all(); }
-
-std::string lower_extension(const std::string& path) {
-  const std::size_t slash = path.find_last_of("/\\");
-  const std::size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
 
 double load_as_double(const void* p, ScalarType s, bool big) {
   switch (s) {

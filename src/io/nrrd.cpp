@@ -14,7 +14,7 @@
 
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/input_file.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "volume_formats.hpp"
 
 namespace keymesh::io {
 

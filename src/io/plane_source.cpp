@@ -1,17 +1,14 @@
 #include "keymesh/io/plane_source.hpp"
 
 #include <bit>
-#include <filesystem>
-#include <cctype>
 #include <vector>
 #include <string>
 #include <utility>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/io/dicom.hpp"
-#include "keymesh/io/gzip_plane_reader.hpp"
-#include "keymesh/io/zarr.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "keymesh/io/formats.hpp"
+#include "gzip_plane_reader.hpp"
+#include "volume_formats.hpp"
 
 namespace keymesh::io {
 
@@ -95,36 +92,41 @@ std::unique_ptr<PlaneSource> open_raw_planes(const std::string& path, const RawO
   return std::make_unique<RawPlanes>(path, options);
 }
 
-std::unique_ptr<PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw) {
-  if (raw) return open_raw_planes(path, *raw);
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return is_zarr_folder(path) ? open_zarr(path) : open_dicom_series(path);
-  auto lower_ext = [&](std::size_t n) {
-    if (path.size() < n) return std::string();
-    std::string e = path.substr(path.size() - n);
-    for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return e;
-  };
-  VolumeLayout layout;
-  const bool nifti = lower_ext(4) == ".nii" || lower_ext(7) == ".nii.gz";
-  if (lower_ext(5) == ".nrrd" || lower_ext(5) == ".nhdr") layout = nrrd_layout(path);
-  else if (nifti) layout = nifti_layout(path);
-  else if (lower_ext(4) == ".vti") layout = vti_layout(path);
-  else
-    throw InputError(path + ": cannot be read plane by plane (raw with --dims, .nrrd/.nhdr, .nii/.nii.gz, .vti "
-                     "with raw appended data, a DICOM or Zarr folder can; convert with `keymesh convert " + path +
-                     " out.nrrd`)");
+namespace {
+// The samples a header describes, read by offset, or inflated in order when
+// they are gzip-compressed. `whole_stream`: the gzip stream holds the header
+// too (a .nii.gz) rather than starting at the data offset (a gzip NRRD).
+std::unique_ptr<PlaneSource> open_layout_planes(const std::string& path, const VolumeLayout& layout,
+                                                bool whole_stream) {
   if (layout.compressed == "gzip") {
-    // A .nii.gz is one gzip stream holding the header too; a gzip NRRD's
-    // stream starts at its data offset.
     const auto at = static_cast<std::uint64_t>(layout.raw.header_bytes);
-    return std::make_unique<RawPlanes>(layout.data_path, layout.raw, nifti ? 0 : at, nifti ? at : 0,
+    return std::make_unique<RawPlanes>(layout.data_path, layout.raw, whole_stream ? 0 : at, whole_stream ? at : 0,
                                        layout.scale_slope, layout.scale_inter);
   }
   if (!layout.compressed.empty())
     throw InputError(path + ": " + layout.compressed + " samples cannot be read plane by plane "
                      "(convert it, e.g. `keymesh convert " + path + " out.nrrd`)");
   return std::make_unique<RawPlanes>(layout.data_path, layout.raw, layout.scale_slope, layout.scale_inter);
+}
+}  // namespace
+
+std::unique_ptr<PlaneSource> open_nrrd_planes(const std::string& path) {
+  return open_layout_planes(path, nrrd_layout(path), false);
+}
+std::unique_ptr<PlaneSource> open_nifti_planes(const std::string& path) {
+  return open_layout_planes(path, nifti_layout(path), true);
+}
+std::unique_ptr<PlaneSource> open_vti_planes(const std::string& path) {
+  return open_layout_planes(path, vti_layout(path), false);
+}
+
+std::unique_ptr<PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw) {
+  if (raw) return open_raw_planes(path, *raw);
+  const Format* format = input_format(path);
+  if (!format || format->kind != DataKind::Volume || !format->open_planes)
+    throw InputError(path + ": cannot be read plane by plane (" + accepted_plane_sources() +
+                     " can; convert with `keymesh convert " + path + " out.nrrd`)");
+  return format->open_planes(path);
 }
 
 }  // namespace keymesh::io

@@ -1,4 +1,4 @@
-#include "keymesh/io/stl.hpp"
+#include "mesh_formats.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -7,7 +7,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
+#include "mesh_bytes.hpp"
 #include "keymesh/weld/vertex_weld.hpp"
 
 #include "checked_mesh.hpp"

@@ -1,37 +1,21 @@
 #include "keymesh/io/volume_io.hpp"
 
-#include <algorithm>
-#include <cctype>
-#include <filesystem>
-
-#include "keymesh/io/plane_source.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "keymesh/core/error.hpp"
+#include "keymesh/io/formats.hpp"
+#include "volume_formats.hpp"
 
 namespace keymesh::io {
 
 namespace {
-
-bool ends_with(const std::string& path, const std::string& suffix) {
-  if (path.size() < suffix.size()) return false;
-  std::string tail = path.substr(path.size() - suffix.size());
-  std::transform(tail.begin(), tail.end(), tail.begin(), [](unsigned char c) { return std::tolower(c); });
-  return tail == suffix;
-}
-
-}  // namespace
-
-namespace {
 ImageGrid read_volume_unchecked(const std::string& path, const RawOptions* raw) {
+  // Options describe raw samples whatever the file is called.
   if (raw) return read_raw(path, *raw);
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return read_all_planes(*open_volume_planes(path, nullptr));
-  if (ends_with(path, ".raw"))
-    throw InputError(path + ": a .raw volume needs --dims X Y Z and --type (and --spacing, --endian if not 1 / little)");
-  if (ends_with(path, ".nrrd") || ends_with(path, ".nhdr")) return read_nrrd(path);
-  if (ends_with(path, ".vti")) return read_vti(path);
-  if (ends_with(path, ".nii") || ends_with(path, ".nii.gz")) return read_nifti(path);
-  if (ends_with(path, ".den")) return read_den(path);
-  throw InputError(path + ": unknown volume format (expected .vti, .nrrd, .nhdr, .nii, .nii.gz, .den, a DICOM or Zarr folder, or .raw with --dims)");
+  const Format* f = input_format(path);
+  if (f && f->kind == DataKind::Volume && f->headerless)
+    throw InputError(path + ": a " + std::string(f->extensions[0]) +
+                     " volume needs --dims X Y Z and --type (and --spacing, --endian if not 1 / little)");
+  if (const VolumeReader read = f ? reader_of<VolumeReader>(*f) : nullptr) return read(path);
+  throw InputError(path + ": unknown volume format (expected " + accepted_volumes(false) + ")");
 }
 }  // namespace
 
@@ -42,10 +26,9 @@ ImageGrid read_volume(const std::string& path, const RawOptions* raw) {
 }
 
 void write_volume(const ImageGrid& grid, const std::string& path) {
-  if (ends_with(path, ".vti")) return write_vti(grid, path);
-  if (ends_with(path, ".nrrd")) return write_nrrd(grid, path);
-  if (ends_with(path, ".raw")) return write_raw(grid, path);
-  throw InputError(path + ": cannot write this volume format (expected .vti, .nrrd or .raw)");
+  const Format* f = format_by_name(path);
+  if (const VolumeWriter write = f ? writer_of<VolumeWriter>(*f) : nullptr) return write(grid, path);
+  throw InputError(path + ": cannot write this volume format (expected " + accepted_volumes(true) + ")");
 }
 
 }  // namespace keymesh::io

@@ -10,8 +10,8 @@
 #include <type_traits>
 
 #include "keymesh/io/atomic_file.hpp"
-#include "keymesh/io/volume_formats.hpp"
-#include "keymesh/io/vtk_xml.hpp"
+#include "volume_formats.hpp"
+#include "vtk_xml.hpp"
 
 namespace keymesh::io {
 

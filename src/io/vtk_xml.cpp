@@ -1,4 +1,4 @@
-#include "keymesh/io/vtk_xml.hpp"
+#include "vtk_xml.hpp"
 
 #include <bit>
 #include <limits>

@@ -1,4 +1,4 @@
-#include "keymesh/io/vtp.hpp"
+#include "mesh_formats.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -12,8 +12,9 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
-#include "keymesh/io/vtk_xml.hpp"
+#include "keymesh/io/mesh_io.hpp"
+#include "mesh_bytes.hpp"
+#include "vtk_xml.hpp"
 
 namespace keymesh::io {
 

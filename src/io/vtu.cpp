@@ -1,4 +1,4 @@
-#include "keymesh/io/vtu.hpp"
+#include "mesh_formats.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -14,8 +14,8 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
-#include "keymesh/io/vtk_xml.hpp"
+#include "mesh_bytes.hpp"
+#include "vtk_xml.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::io {

@@ -1,4 +1,4 @@
-#include "keymesh/io/zarr.hpp"
+#include "zarr.hpp"
 
 #include <blosc.h>
 #include <zlib.h>
@@ -15,8 +15,8 @@
 #include <nlohmann/json.hpp>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "mesh_bytes.hpp"
+#include "volume_formats.hpp"
 
 namespace keymesh::io {
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "keymesh/io/mesh_bytes.hpp"
+#include "io/mesh_bytes.hpp"
 #include "keymesh/mesh/image_grid.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
 #include "keymesh/mesh/unstructured_grid.hpp"

@@ -2,7 +2,7 @@
 // (the volume readers take a path).
 #include "fuzz/fuzz_checks.hpp"
 #include "fuzz/fuzz_target.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "io/volume_formats.hpp"
 
 KEYMESH_FUZZ_TARGET(nifti) {
   const bool gzip = data.size() >= 2 && data[0] == '\x1f' && data[1] == '\x8b';

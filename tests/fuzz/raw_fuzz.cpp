@@ -6,7 +6,7 @@
 
 #include "fuzz/fuzz_checks.hpp"
 #include "fuzz/fuzz_target.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "io/volume_formats.hpp"
 
 KEYMESH_FUZZ_TARGET(raw) {
   constexpr std::size_t kOptions = 32;

@@ -3,7 +3,7 @@
 #include "fuzz/fuzz_checks.hpp"
 #include "fuzz/fuzz_target.hpp"
 #include "fuzz/xml_mutator.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "io/volume_formats.hpp"
 
 KEYMESH_FUZZ_TARGET(vti) {
   keymesh::fuzz::expect_valid(keymesh::io::read_vti(keymesh::fuzz::temp_file(data, ".vti")));

@@ -2,6 +2,6 @@
 #include "fuzz/fuzz_checks.hpp"
 #include "fuzz/fuzz_target.hpp"
 #include "fuzz/xml_mutator.hpp"
-#include "keymesh/io/vtu.hpp"
+#include "io/mesh_formats.hpp"
 
 KEYMESH_FUZZ_TARGET(vtu) { keymesh::fuzz::expect_valid(keymesh::io::parse_vtu(data, "fuzz.vtu")); }

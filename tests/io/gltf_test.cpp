@@ -2,7 +2,7 @@
 // loader (Debian libtinygltf-dev, not keymesh code): the positions, normals,
 // scalar attribute and indices it finds must be the mesh's arrays, bit for
 // bit, and the accessor bounds the ones recomputed here.
-#include "keymesh/io/gltf.hpp"
+#include "io/mesh_formats.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -13,9 +13,8 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/io/legacy_vtk.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
-#include "keymesh/io/vtu.hpp"
+#include "io/mesh_formats.hpp"
+#include "io/mesh_bytes.hpp"
 
 using namespace keymesh;
 

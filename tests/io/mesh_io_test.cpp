@@ -13,11 +13,8 @@
 #include <sstream>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/io/mesh_bytes.hpp"
-#include "keymesh/io/obj.hpp"
-#include "keymesh/io/ply.hpp"
-#include "keymesh/io/stl.hpp"
-#include "keymesh/io/vtp.hpp"
+#include "io/mesh_bytes.hpp"
+#include "io/mesh_formats.hpp"
 
 using namespace keymesh;
 namespace fs = std::filesystem;

@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "keymesh/io/plane_source.hpp"
-#include "keymesh/io/volume_formats.hpp"
+#include "io/volume_formats.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::io {

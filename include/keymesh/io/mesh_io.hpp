@@ -12,6 +12,7 @@
 //        VTK and ParaView: ascii, base64, appended raw, zlib or not), and
 //        .pvtp indexes (pieces welded by their GlobalIds; see vtp.hpp).
 #include <string>
+#include <vector>
 
 #include "keymesh/mesh/surface_mesh.hpp"
 
@@ -19,5 +20,16 @@ namespace keymesh::io {
 
 SurfaceMesh read_mesh(const std::string& path);
 void write_mesh(const SurfaceMesh& mesh, const std::string& path);
+
+// A piece of a distributed mesh (`mpirun ... keymesh contour -o X.pvtp`):
+// a .vtp with an Int64 PointData array "GlobalPointIds" marked GlobalIds,
+// its points' ids in the whole mesh.
+void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids);
+
+// A ParaView parallel PolyData index (.pvtp) over piece files written by
+// write_vtp (Source paths relative to the index); `like` gives the point
+// fields every piece has.
+void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
+                bool global_point_ids);
 
 }  // namespace keymesh::io

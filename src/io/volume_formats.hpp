@@ -7,10 +7,12 @@
 // the path and the problem.
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "keymesh/io/volume_io.hpp"
+#include "keymesh/mesh/plane_source.hpp"
 
 namespace keymesh::io {
 
@@ -30,6 +32,13 @@ VolumeLayout nifti_layout(const std::string& path);
 // writes it; ParaView with compression off); otherwise `compressed` says why it cannot be
 // read by offset.
 VolumeLayout vti_layout(const std::string& path);
+// Planes of the volume a layout describes (io/plane_source.cpp): what the
+// format table's open_planes are for NRRD, NIfTI and .vti. InputError
+// naming the file when its samples cannot be read by offset or inflated in
+// order (a zlib .vti, base64 or ascii samples).
+std::unique_ptr<PlaneSource> open_nrrd_planes(const std::string& path);
+std::unique_ptr<PlaneSource> open_nifti_planes(const std::string& path);
+std::unique_ptr<PlaneSource> open_vti_planes(const std::string& path);
 
 ImageGrid read_raw(const std::string& path, const RawOptions& options);
 void write_raw(const ImageGrid& grid, const std::string& path);  // native little-endian samples only

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "keymesh/io/mesh_bytes.hpp"
+#include "mesh_bytes.hpp"
 
 namespace keymesh::io::vtk_xml {
 

@@ -22,9 +22,6 @@ namespace keymesh::io::mesh_bytes {
 // Reads a whole file; throws InputError naming the path when it cannot.
 std::string read_whole_file(const std::string& path);
 
-// Lower-case extension including the dot (".ply"), or "" when there is none.
-std::string lower_extension(const std::string& path);
-
 // ---- endian-aware scalar access ------------------------------------------
 
 template <class T>
