@@ -257,6 +257,212 @@ std::string read_attributes(Reader& r, std::int64_t tuples, std::vector<Field>& 
   return "";
 }
 
+// The file's first lines: magic, title, ASCII|BINARY, then "DATASET
+// UNSTRUCTURED_GRID"; returns a reader at the first section.
+Reader open_grid(std::string_view data, const std::string& path) {
+  std::size_t p = 0;
+  auto line = [&]() {
+    const std::size_t e = data.find('\n', p);
+    std::string_view l = data.substr(p, e == std::string_view::npos ? std::string_view::npos : e - p);
+    p = e == std::string_view::npos ? data.size() : e + 1;
+    if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+    return l;
+  };
+  if (line().rfind("# vtk DataFile", 0) != 0) throw InputError(path + ": not a legacy VTK file (no '# vtk DataFile' line)");
+  line();  // title
+  const std::string mode = upper(line());
+  const bool binary = mode.rfind("BINARY", 0) == 0;
+  if (!binary && mode.rfind("ASCII", 0) != 0)
+    throw InputError(path + ": legacy VTK format is '" + mode.substr(0, 40) + "', not ASCII or BINARY");
+  Reader r(data.substr(p), path, binary);
+  r.line() = 4;
+  if (upper(r.word()) != "DATASET") r.fail("expected DATASET");
+  const std::string dataset = upper(r.word());
+  if (dataset != "UNSTRUCTURED_GRID")
+    r.fail("dataset is " + dataset.substr(0, 40) + ", not UNSTRUCTURED_GRID (keymesh reads unstructured grids from .vtk)");
+  return r;
+}
+
+// The sections of an unstructured grid, in the order the file gives them,
+// read into one grid.
+class GridSections {
+ public:
+  explicit GridSections(Reader& r) : r_(r) {}
+
+  // Reads sections up to the end of the file.
+  void read_all() {
+    std::string next;
+    while (!next.empty() || !r_.at_end()) {
+      const std::string key = next.empty() ? upper(r_.word()) : next;
+      next.clear();
+      if (key == "POINTS") {
+        points();
+      } else if (key == "CELLS") {
+        cells();
+      } else if (key == "CELL_TYPES") {
+        cell_types();
+      } else if (key == "POINT_DATA" || key == "CELL_DATA") {
+        next = data(key);
+      } else if (key == "FIELD") {
+        std::vector<Field> ignored;  // dataset-level field data (time value, ...) is not kept
+        read_field_block(r_, -1, ignored);
+      } else if (key == "METADATA") {
+        r_.skip_metadata();
+      } else {
+        r_.fail("unexpected keyword '" + key.substr(0, 40) + "'");
+      }
+    }
+  }
+
+  UnstructuredGrid finish(const std::string& path);
+
+ private:
+  // Ids are checked against the point count as they are read when POINTS
+  // came first (as every writer puts it); otherwise validate() checks them.
+  std::uint64_t id_limit() const { return npts_ >= 0 ? std::uint64_t(npts_) : std::uint64_t{1} << 62; }
+  std::uint64_t read_id(std::int64_t v, std::int64_t i, const char* what) {
+    if (v < 0 || std::uint64_t(v) >= id_limit())
+      r_.fail(std::string(what) + ": point id " + std::to_string(v) + " at connectivity[" + std::to_string(i) +
+              "] is out of range (" + std::to_string(npts_) + " points)");
+    return std::uint64_t(v);
+  }
+
+  void points() {
+    if (npts_ >= 0) r_.fail("a second POINTS section");
+    npts_ = r_.count("point count");
+    ScalarType s;
+    const std::string_view t = r_.word();
+    if (!legacy_type(t, s)) r_.fail("unknown point type '" + std::string(t.substr(0, 40)) + "'");
+    g_.points = r_.floats(3 * npts_, s, "POINTS");
+  }
+
+  void cells() {
+    if (have_cells_) r_.fail("a second CELLS section");
+    have_cells_ = true;
+    ids_unchecked_ = npts_ < 0;
+    const std::int64_t a = r_.count("cell count"), b = r_.count("CELLS size");
+    const std::size_t save = r_.pos(), save_line = r_.line();
+    if (upper(r_.word()) == "OFFSETS") {
+      offsets_and_connectivity(a, b);
+    } else {
+      r_.pos() = save, r_.line() = save_line;
+      counted_cells(a, b);
+    }
+  }
+
+  // 5.x: "CELLS offsets_count connectivity_count" then OFFSETS and CONNECTIVITY arrays.
+  void offsets_and_connectivity(std::int64_t a, std::int64_t b) {
+    ScalarType s;
+    if (!legacy_type(r_.word(), s)) r_.fail("bad OFFSETS type");
+    ncells_ = a > 0 ? a - 1 : 0;
+    r_.check_count(a, s, "OFFSETS");
+    g_.offsets.resize(std::size_t(a));
+    r_.ints(a, s, "OFFSETS", [&](std::int64_t i, std::int64_t v) {
+      if (v < 0 || v > b) r_.fail("OFFSETS: offset " + std::to_string(v) + " of cell " + std::to_string(i) +
+                                  " is outside the connectivity (" + std::to_string(b) + " ids)");
+      g_.offsets[std::size_t(i)] = std::uint64_t(v);
+    });
+    if (upper(r_.word()) != "CONNECTIVITY") r_.fail("expected CONNECTIVITY after OFFSETS");
+    if (!legacy_type(r_.word(), s)) r_.fail("bad CONNECTIVITY type");
+    r_.check_count(b, s, "CONNECTIVITY");
+    g_.connectivity = IndexArray::for_ids(id_limit(), std::size_t(b));
+    r_.ints(b, s, "CONNECTIVITY", [&](std::int64_t i, std::int64_t v) {
+      g_.connectivity.set(std::size_t(i), read_id(v, i, "CONNECTIVITY"));
+    });
+    if (a == 0) g_.offsets.assign(1, 0);
+  }
+
+  // Classic: "CELLS n size", then per cell its corner count and ids.
+  void counted_cells(std::int64_t a, std::int64_t b) {
+    ncells_ = a;
+    if (b < a) r_.fail("CELLS size " + std::to_string(b) + " is smaller than the cell count " + std::to_string(a));
+    r_.check_count(b, ScalarType::Int32, "CELLS");
+    const std::uint64_t nids = std::uint64_t(b - a);
+    g_.connectivity = IndexArray::for_ids(id_limit(), std::size_t(nids));
+    g_.offsets.assign(std::size_t(a) + 1, 0);
+    std::uint64_t at = 0;    // ids stored so far
+    std::int64_t cell = 0;   // cells started so far
+    std::uint64_t left = 0;  // ids still due for the current cell
+    r_.ints(b, ScalarType::Int32, "CELLS", [&](std::int64_t i, std::int64_t v) {
+      if (left > 0) {
+        g_.connectivity.set(std::size_t(at), read_id(v, std::int64_t(at), "CELLS"));
+        ++at, --left;
+        return;
+      }
+      if (cell >= a || v < 0 || std::uint64_t(v) > nids - at)
+        r_.fail("CELLS list is inconsistent at cell " + std::to_string(cell) + " (entry " + std::to_string(i) +
+                ": " + std::to_string(v) + ")");
+      left = std::uint64_t(v);
+      g_.offsets[std::size_t(++cell)] = at + left;
+    });
+    if (cell != a || left != 0 || at != nids)
+      r_.fail("CELLS size " + std::to_string(b) + " does not match the " + std::to_string(a) + " cells listed");
+  }
+
+  void cell_types() {
+    if (have_types_) r_.fail("a second CELL_TYPES section");
+    have_types_ = true;
+    const std::int64_t n = r_.count("cell type count");
+    r_.check_count(n, ScalarType::Int32, "CELL_TYPES");
+    g_.cell_types.resize(std::size_t(n));
+    r_.ints(n, ScalarType::Int32, "CELL_TYPES", [&](std::int64_t i, std::int64_t v) {
+      if (v < 0 || v > 255) r_.fail("CELL_TYPES: cell " + std::to_string(i) + " has type " + std::to_string(v));
+      g_.cell_types[std::size_t(i)] = static_cast<std::uint8_t>(v);
+    });
+  }
+
+  // A POINT_DATA or CELL_DATA section; returns the keyword that ended it.
+  std::string data(const std::string& key) {
+    const bool points = key == "POINT_DATA";
+    const std::int64_t n = r_.count("tuple count");
+    const std::int64_t expected = points ? npts_ : ncells_;
+    if (expected >= 0 && n != expected)
+      r_.fail(key + " " + std::to_string(n) + " does not match the " + std::to_string(expected) +
+              (points ? " points" : " cells"));
+    return read_attributes(r_, n, points ? g_.point_fields : g_.cell_fields);
+  }
+
+  Reader& r_;
+  UnstructuredGrid g_;
+  std::int64_t npts_ = -1, ncells_ = -1;
+  bool have_cells_ = false, have_types_ = false;
+  bool ids_unchecked_ = false;  // CELLS before POINTS: ids checked by validate() at the end
+};
+
+// One fixed-size type throughout: the grid stores it uniformly.
+void store_uniform_type(UnstructuredGrid& g, std::int64_t ncells) {
+  const int k = cell_type_size(static_cast<CellType>(g.cell_types[0]));
+  bool uniform = k > 0 && g.offsets.size() == std::size_t(ncells) + 1 && g.offsets.front() == 0;
+  for (std::size_t c = 0; uniform && c + 1 < g.offsets.size(); ++c)
+    uniform = g.offsets[c + 1] >= g.offsets[c] && g.offsets[c + 1] - g.offsets[c] == std::uint64_t(k);
+  if (uniform && g.offsets.back() == g.connectivity.size()) {
+    g.uniform_type = static_cast<CellType>(g.cell_types[0]);
+    g.offsets.clear();
+    g.cell_types.clear();
+  }
+}
+
+// The checks of the whole grid, once every section is read.
+UnstructuredGrid GridSections::finish(const std::string& path) {
+  UnstructuredGrid& g = g_;
+  if (npts_ < 0) throw InputError(path + ": legacy VTK file has no POINTS");
+  const std::int64_t ncells = ncells_ < 0 ? 0 : ncells_;
+  if (std::int64_t(g.cell_types.size()) != ncells)
+    throw InputError(path + ": " + std::to_string(g.cell_types.size()) + " CELL_TYPES for " + std::to_string(ncells) +
+                     " cells");
+  if (ncells == 0) {
+    g.offsets.clear();
+    g.cell_types.clear();
+  } else if (std::all_of(g.cell_types.begin(), g.cell_types.end(), [&](std::uint8_t t) { return t == g.cell_types[0]; })) {
+    store_uniform_type(g, ncells);
+  }
+  if (!g.offsets.empty() && std::int64_t(g.offsets.size()) != ncells + 1)
+    throw InputError(path + ": " + std::to_string(g.offsets.size()) + " cell offsets for " + std::to_string(ncells) +
+                     " cells");
+  g.validate(path, ids_unchecked_);
+  return std::move(g);
+}
+
 }  // namespace
 
 std::string legacy_vtk_dataset(const std::string& path) {
@@ -285,157 +491,12 @@ std::string legacy_vtk_dataset(const std::string& path) {
 
 UnstructuredGrid read_legacy_vtk(const std::string& path) { return parse_legacy_vtk(read_whole_file(path), path); }
 
+// The header, every section, then the checks of the whole grid.
 UnstructuredGrid parse_legacy_vtk(std::string_view data, const std::string& path) {
-  // Header: magic line, title line, ASCII|BINARY, DATASET type.
-  std::size_t p = 0;
-  auto line = [&]() {
-    const std::size_t e = data.find('\n', p);
-    std::string_view l = data.substr(p, e == std::string_view::npos ? std::string_view::npos : e - p);
-    p = e == std::string_view::npos ? data.size() : e + 1;
-    if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
-    return l;
-  };
-  if (line().rfind("# vtk DataFile", 0) != 0) throw InputError(path + ": not a legacy VTK file (no '# vtk DataFile' line)");
-  line();  // title
-  const std::string mode = upper(line());
-  const bool binary = mode.rfind("BINARY", 0) == 0;
-  if (!binary && mode.rfind("ASCII", 0) != 0)
-    throw InputError(path + ": legacy VTK format is '" + mode.substr(0, 40) + "', not ASCII or BINARY");
-  Reader r(data.substr(p), path, binary);
-  r.line() = 4;
-  if (upper(r.word()) != "DATASET") r.fail("expected DATASET");
-  const std::string dataset = upper(r.word());
-  if (dataset != "UNSTRUCTURED_GRID")
-    r.fail("dataset is " + dataset.substr(0, 40) + ", not UNSTRUCTURED_GRID (keymesh reads unstructured grids from .vtk)");
-
-  UnstructuredGrid g;
-  std::int64_t npts = -1, ncells = -1;
-  bool have_cells = false, have_types = false;
-  bool ids_unchecked = false;  // CELLS before POINTS: ids checked by validate() at the end
-  // Ids are checked against the point count as they are read when POINTS
-  // came first (as every writer puts it); otherwise validate() checks them.
-  auto id_limit = [&] { return npts >= 0 ? std::uint64_t(npts) : std::uint64_t{1} << 62; };
-  auto read_id = [&](std::int64_t v, std::int64_t i, const char* what) {
-    if (v < 0 || std::uint64_t(v) >= id_limit())
-      r.fail(std::string(what) + ": point id " + std::to_string(v) + " at connectivity[" + std::to_string(i) +
-             "] is out of range (" + std::to_string(npts) + " points)");
-    return std::uint64_t(v);
-  };
-  std::string next;
-  while (!next.empty() || !r.at_end()) {
-    const std::string key = next.empty() ? upper(r.word()) : next;
-    next.clear();
-    if (key == "POINTS") {
-      if (npts >= 0) r.fail("a second POINTS section");
-      npts = r.count("point count");
-      ScalarType s;
-      const std::string_view t = r.word();
-      if (!legacy_type(t, s)) r.fail("unknown point type '" + std::string(t.substr(0, 40)) + "'");
-      g.points = r.floats(3 * npts, s, "POINTS");
-    } else if (key == "CELLS") {
-      if (have_cells) r.fail("a second CELLS section");
-      have_cells = true;
-      ids_unchecked = npts < 0;
-      const std::int64_t a = r.count("cell count"), b = r.count("CELLS size");
-      // 5.x: "CELLS offsets_count connectivity_count" then OFFSETS and CONNECTIVITY arrays.
-      const std::size_t save = r.pos(), save_line = r.line();
-      if (upper(r.word()) == "OFFSETS") {
-        ScalarType s;
-        if (!legacy_type(r.word(), s)) r.fail("bad OFFSETS type");
-        ncells = a > 0 ? a - 1 : 0;
-        r.check_count(a, s, "OFFSETS");
-        g.offsets.resize(std::size_t(a));
-        r.ints(a, s, "OFFSETS", [&](std::int64_t i, std::int64_t v) {
-          if (v < 0 || v > b) r.fail("OFFSETS: offset " + std::to_string(v) + " of cell " + std::to_string(i) +
-                                     " is outside the connectivity (" + std::to_string(b) + " ids)");
-          g.offsets[std::size_t(i)] = std::uint64_t(v);
-        });
-        if (upper(r.word()) != "CONNECTIVITY") r.fail("expected CONNECTIVITY after OFFSETS");
-        if (!legacy_type(r.word(), s)) r.fail("bad CONNECTIVITY type");
-        r.check_count(b, s, "CONNECTIVITY");
-        g.connectivity = IndexArray::for_ids(id_limit(), std::size_t(b));
-        r.ints(b, s, "CONNECTIVITY", [&](std::int64_t i, std::int64_t v) {
-          g.connectivity.set(std::size_t(i), read_id(v, i, "CONNECTIVITY"));
-        });
-        if (a == 0) g.offsets.assign(1, 0);
-      } else {
-        // Classic: "CELLS n size", then per cell its corner count and ids.
-        r.pos() = save, r.line() = save_line;
-        ncells = a;
-        if (b < a) r.fail("CELLS size " + std::to_string(b) + " is smaller than the cell count " + std::to_string(a));
-        r.check_count(b, ScalarType::Int32, "CELLS");
-        const std::uint64_t nids = std::uint64_t(b - a);
-        g.connectivity = IndexArray::for_ids(id_limit(), std::size_t(nids));
-        g.offsets.assign(std::size_t(a) + 1, 0);
-        std::uint64_t at = 0;       // ids stored so far
-        std::int64_t cell = 0;      // cells started so far
-        std::uint64_t left = 0;     // ids still due for the current cell
-        r.ints(b, ScalarType::Int32, "CELLS", [&](std::int64_t i, std::int64_t v) {
-          if (left > 0) {
-            g.connectivity.set(std::size_t(at), read_id(v, std::int64_t(at), "CELLS"));
-            ++at, --left;
-            return;
-          }
-          if (cell >= a || v < 0 || std::uint64_t(v) > nids - at)
-            r.fail("CELLS list is inconsistent at cell " + std::to_string(cell) + " (entry " + std::to_string(i) +
-                   ": " + std::to_string(v) + ")");
-          left = std::uint64_t(v);
-          g.offsets[std::size_t(++cell)] = at + left;
-        });
-        if (cell != a || left != 0 || at != nids)
-          r.fail("CELLS size " + std::to_string(b) + " does not match the " + std::to_string(a) + " cells listed");
-      }
-    } else if (key == "CELL_TYPES") {
-      if (have_types) r.fail("a second CELL_TYPES section");
-      have_types = true;
-      const std::int64_t n = r.count("cell type count");
-      r.check_count(n, ScalarType::Int32, "CELL_TYPES");
-      g.cell_types.resize(std::size_t(n));
-      r.ints(n, ScalarType::Int32, "CELL_TYPES", [&](std::int64_t i, std::int64_t v) {
-        if (v < 0 || v > 255) r.fail("CELL_TYPES: cell " + std::to_string(i) + " has type " + std::to_string(v));
-        g.cell_types[std::size_t(i)] = static_cast<std::uint8_t>(v);
-      });
-    } else if (key == "POINT_DATA" || key == "CELL_DATA") {
-      const std::int64_t n = r.count("tuple count");
-      const std::int64_t expected = key == "POINT_DATA" ? npts : ncells;
-      if (expected >= 0 && n != expected)
-        r.fail(key + " " + std::to_string(n) + " does not match the " + std::to_string(expected) +
-               (key == "POINT_DATA" ? " points" : " cells"));
-      next = read_attributes(r, n, key == "POINT_DATA" ? g.point_fields : g.cell_fields);
-    } else if (key == "FIELD") {
-      std::vector<Field> ignored;  // dataset-level field data (time value, ...) is not kept
-      read_field_block(r, -1, ignored);
-    } else if (key == "METADATA") {
-      r.skip_metadata();
-    } else {
-      r.fail("unexpected keyword '" + key.substr(0, 40) + "'");
-    }
-  }
-  if (npts < 0) throw InputError(path + ": legacy VTK file has no POINTS");
-  if (ncells < 0) ncells = 0;
-  if (std::int64_t(g.cell_types.size()) != ncells)
-    throw InputError(path + ": " + std::to_string(g.cell_types.size()) + " CELL_TYPES for " + std::to_string(ncells) +
-                     " cells");
-  if (ncells == 0) {
-    g.offsets.clear();
-    g.cell_types.clear();
-  } else if (std::all_of(g.cell_types.begin(), g.cell_types.end(), [&](std::uint8_t t) { return t == g.cell_types[0]; })) {
-    // One fixed-size type throughout: store it uniformly.
-    const int k = cell_type_size(static_cast<CellType>(g.cell_types[0]));
-    bool uniform = k > 0 && g.offsets.size() == std::size_t(ncells) + 1 && g.offsets.front() == 0;
-    for (std::size_t c = 0; uniform && c + 1 < g.offsets.size(); ++c)
-      uniform = g.offsets[c + 1] >= g.offsets[c] && g.offsets[c + 1] - g.offsets[c] == std::uint64_t(k);
-    if (uniform && g.offsets.back() == g.connectivity.size()) {
-      g.uniform_type = static_cast<CellType>(g.cell_types[0]);
-      g.offsets.clear();
-      g.cell_types.clear();
-    }
-  }
-  if (!g.offsets.empty() && std::int64_t(g.offsets.size()) != ncells + 1)
-    throw InputError(path + ": " + std::to_string(g.offsets.size()) + " cell offsets for " + std::to_string(ncells) +
-                     " cells");
-  g.validate(path, ids_unchecked);
-  return g;
+  Reader r = open_grid(data, path);
+  GridSections sections(r);
+  sections.read_all();
+  return sections.finish(path);
 }
 
 void write_legacy_vtk(const UnstructuredGrid& g, const std::string& path) {
