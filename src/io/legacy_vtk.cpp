@@ -15,6 +15,8 @@
 #include "keymesh/io/input_file.hpp"
 #include "mesh_bytes.hpp"
 
+#include "type_names.hpp"
+
 namespace keymesh::io {
 
 using namespace mesh_bytes;
@@ -27,26 +29,25 @@ std::string upper(std::string_view s) {
   return u;
 }
 
+// Legacy VTK's type names (upper-cased; the vtktype* names of 5.x files too).
+constexpr TypeName kLegacyTypes[] = {
+    {"FLOAT", ScalarType::Float32},          {"DOUBLE", ScalarType::Float64},
+    {"CHAR", ScalarType::Int8},              {"UNSIGNED_CHAR", ScalarType::UInt8},
+    {"SHORT", ScalarType::Int16},            {"UNSIGNED_SHORT", ScalarType::UInt16},
+    {"INT", ScalarType::Int32},              {"VTKTYPEINT32", ScalarType::Int32},
+    {"UNSIGNED_INT", ScalarType::UInt32},    {"VTKTYPEUINT32", ScalarType::UInt32},
+    {"LONG", ScalarType::Int64},             {"VTKTYPEINT64", ScalarType::Int64},
+    {"VTKIDTYPE", ScalarType::Int64},        {"UNSIGNED_LONG", ScalarType::UInt64},
+    {"VTKTYPEUINT64", ScalarType::UInt64},   {"VTKTYPEINT8", ScalarType::Int8},
+    {"VTKTYPEUINT8", ScalarType::UInt8},     {"VTKTYPEINT16", ScalarType::Int16},
+    {"VTKTYPEUINT16", ScalarType::UInt16},   {"VTKTYPEFLOAT32", ScalarType::Float32},
+    {"VTKTYPEFLOAT64", ScalarType::Float64},
+};
+
 bool legacy_type(std::string_view name, ScalarType& s) {
-  const std::string t = upper(name);
-  if (t == "FLOAT") s = ScalarType::Float32;
-  else if (t == "DOUBLE") s = ScalarType::Float64;
-  else if (t == "CHAR") s = ScalarType::Int8;
-  else if (t == "UNSIGNED_CHAR") s = ScalarType::UInt8;
-  else if (t == "SHORT") s = ScalarType::Int16;
-  else if (t == "UNSIGNED_SHORT") s = ScalarType::UInt16;
-  else if (t == "INT" || t == "VTKTYPEINT32") s = ScalarType::Int32;
-  else if (t == "UNSIGNED_INT" || t == "VTKTYPEUINT32") s = ScalarType::UInt32;
-  else if (t == "LONG" || t == "VTKTYPEINT64" || t == "VTKIDTYPE") s = ScalarType::Int64;
-  else if (t == "UNSIGNED_LONG" || t == "VTKTYPEUINT64") s = ScalarType::UInt64;
-  else if (t == "VTKTYPEINT8") s = ScalarType::Int8;
-  else if (t == "VTKTYPEUINT8") s = ScalarType::UInt8;
-  else if (t == "VTKTYPEINT16") s = ScalarType::Int16;
-  else if (t == "VTKTYPEUINT16") s = ScalarType::UInt16;
-  else if (t == "VTKTYPEFLOAT32") s = ScalarType::Float32;
-  else if (t == "VTKTYPEFLOAT64") s = ScalarType::Float64;
-  else return false;
-  return true;
+  const auto t = type_named(upper(name), kLegacyTypes);
+  if (t) s = *t;
+  return t.has_value();
 }
 
 // A cursor over the file: words and lines of the text parts, and raw

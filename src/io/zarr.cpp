@@ -18,6 +18,8 @@
 #include "mesh_bytes.hpp"
 #include "volume_formats.hpp"
 
+#include "type_names.hpp"
+
 namespace keymesh::io {
 
 namespace {
@@ -177,8 +179,27 @@ class ZarrPlanes : public PlaneSource {
 
   [[noreturn]] void fail(const std::string& what) const { throw InputError(folder_ + ": .zarray: " + what); }
 
+  // .zarray: shape and chunks, then how chunks are named, typed,
+  // compressed and filled.
   void parse_zarray(const json& z) {
     if (!z.is_object() || z.value("zarr_format", 0) != 2) fail("zarr_format is not 2 (only Zarr v2 is read)");
+    parse_shape(z);
+    if (z.value("order", std::string("C")) != "C") fail("order is not C (Fortran-order arrays are not read)");
+    if (z.contains("filters") && !z["filters"].is_null() && !(z["filters"].is_array() && z["filters"].empty()))
+      fail("filters are not supported (" + z["filters"].dump() + ")");
+    parse_separator(z);
+    const ScalarType type = parse_dtype(z);
+    parse_compressor(z);
+    const std::size_t n = shape_.size();
+    head_.dims = {shape_[n - 1], shape_[n - 2], shape_[n - 3]};
+    head_.type = type;
+    detail::checked_byte_count(head_.dims, type, folder_);
+    size_chunks(type);
+    parse_fill_value(z, type);
+  }
+
+  // "shape" and "chunks": positive integers, a volume in the last three axes.
+  void parse_shape(const json& z) {
     if (!z.contains("shape") || !z["shape"].is_array() || !z.contains("chunks") || !z["chunks"].is_array() ||
         z["shape"].size() != z["chunks"].size())
       fail("shape and chunks must be lists of one length");
@@ -194,9 +215,10 @@ class ZarrPlanes : public PlaneSource {
     for (std::size_t a = 0; a + 3 < n; ++a)
       if (shape_[a] != 1) fail("axis " + std::to_string(a) + " has size " + std::to_string(shape_[a]) +
                                " (only the last three axes may be longer than 1)");
-    if (z.value("order", std::string("C")) != "C") fail("order is not C (Fortran-order arrays are not read)");
-    if (z.contains("filters") && !z["filters"].is_null() && !(z["filters"].is_array() && z["filters"].empty()))
-      fail("filters are not supported (" + z["filters"].dump() + ")");
+  }
+
+  // The character between a chunk key's indices.
+  void parse_separator(const json& z) {
     const std::string sep = z.value("dimension_separator", std::string("."));
     if (sep != "." && sep != "/") fail("dimension_separator '" + sep + "'");
     separator_ = sep[0];
@@ -205,34 +227,36 @@ class ZarrPlanes : public PlaneSource {
     // array of fill_value.
     std::error_code ec;
     if (!z.contains("dimension_separator") && fs::is_directory(fs::path(array_) / "0", ec)) separator_ = '/';
+  }
 
+  // "dtype": a byte order ('<', '>' or '|') and one of numpy's type codes.
+  ScalarType parse_dtype(const json& z) {
+    static constexpr TypeName kDtypes[] = {
+        {"u1", ScalarType::UInt8},  {"i1", ScalarType::Int8},    {"u2", ScalarType::UInt16},
+        {"i2", ScalarType::Int16},  {"i4", ScalarType::Int32},   {"f4", ScalarType::Float32},
+        {"f8", ScalarType::Float64},
+    };
     if (!z.contains("dtype") || !z["dtype"].is_string()) fail("dtype is not a simple type string");
-    const std::string dtype = z["dtype"].get<std::string>();
-    const std::string kind = dtype.size() == 3 ? dtype.substr(1) : "";
-    const char order = dtype.empty() ? '?' : dtype[0];
-    ScalarType type;
-    if (kind == "u1") type = ScalarType::UInt8;
-    else if (kind == "i1") type = ScalarType::Int8;
-    else if (kind == "u2") type = ScalarType::UInt16;
-    else if (kind == "i2") type = ScalarType::Int16;
-    else if (kind == "i4") type = ScalarType::Int32;
-    else if (kind == "f4") type = ScalarType::Float32;
-    else if (kind == "f8") type = ScalarType::Float64;
-    else fail("dtype '" + dtype + "' is not supported (u1 i1 u2 i2 i4 f4 f8)");
-    if (order != '<' && order != '>' && order != '|') fail("dtype '" + dtype + "' has no byte order");
-    swap_ = scalar_size(type) > 1 && (order == '>') != (std::endian::native == std::endian::big);
+    dtype_ = z["dtype"].get<std::string>();
+    const auto type = type_named(dtype_.size() == 3 ? std::string_view(dtype_).substr(1) : "", kDtypes);
+    if (!type) fail("dtype '" + dtype_ + "' is not supported (u1 i1 u2 i2 i4 f4 f8)");
+    const char order = dtype_.empty() ? '?' : dtype_[0];
+    if (order != '<' && order != '>' && order != '|') fail("dtype '" + dtype_ + "' has no byte order");
+    swap_ = scalar_size(*type) > 1 && (order == '>') != (std::endian::native == std::endian::big);
+    return *type;
+  }
 
-    if (z.contains("compressor") && !z["compressor"].is_null()) {
-      const json& c = z["compressor"];
-      const std::string id = c.is_object() ? c.value("id", std::string()) : std::string();
-      if (id == "zlib" || id == "gzip") codec_ = Codec::Zlib;
-      else if (id == "blosc") codec_ = Codec::Blosc;
-      else fail("compressor '" + id + "' is not supported (none, zlib, gzip, blosc)");
-    }
+  void parse_compressor(const json& z) {
+    if (!z.contains("compressor") || z["compressor"].is_null()) return;
+    const json& c = z["compressor"];
+    const std::string id = c.is_object() ? c.value("id", std::string()) : std::string();
+    if (id == "zlib" || id == "gzip") codec_ = Codec::Zlib;
+    else if (id == "blosc") codec_ = Codec::Blosc;
+    else fail("compressor '" + id + "' is not supported (none, zlib, gzip, blosc)");
+  }
 
-    head_.dims = {shape_[n - 1], shape_[n - 2], shape_[n - 3]};
-    head_.type = type;
-    detail::checked_byte_count(head_.dims, type, folder_);
+  // A chunk's decoded bytes, refused past kMaxChunkBytes.
+  void size_chunks(ScalarType type) {
     std::uint64_t elements = 1;
     for (Id c : chunks_) {
       if (elements > kMaxChunkBytes / static_cast<std::uint64_t>(c)) elements = kMaxChunkBytes + 1;
@@ -241,34 +265,35 @@ class ZarrPlanes : public PlaneSource {
     chunk_bytes_ = elements * scalar_size(type);
     if (elements > kMaxChunkBytes || chunk_bytes_ > kMaxChunkBytes)
       throw LimitError(folder_ + ": .zarray: chunks past 1 GiB decoded are not supported");
+  }
 
-    // fill_value, stored as the array's type in native byte order.
+  // fill_value, stored as the array's type in native byte order.
+  void parse_fill_value(const json& z, ScalarType type) {
     fill_.assign(scalar_size(type), std::byte{0});
-    if (z.contains("fill_value") && !z["fill_value"].is_null()) {
-      const json& f = z["fill_value"];
-      double v = 0;
-      if (f.is_number()) v = f.get<double>();
-      else if (f == "NaN") v = std::numeric_limits<double>::quiet_NaN();
-      else if (f == "Infinity") v = std::numeric_limits<double>::infinity();
-      else if (f == "-Infinity") v = -std::numeric_limits<double>::infinity();
-      else fail("fill_value " + f.dump() + " is not a number");
-      ImageGrid one;
-      one.dims = {1, 1, 1};
-      one.type = type;
-      one.external = fill_.data();
-      visit_scalars(one, [&](const auto* p) {
-        using T = std::remove_cv_t<std::remove_pointer_t<decltype(p)>>;
-        if constexpr (std::is_integral_v<T>) {
-          if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
-                v <= static_cast<double>(std::numeric_limits<T>::max()) && v == std::floor(v)))
-            fail("fill_value " + f.dump() + " does not fit dtype '" + dtype + "'");
-        }
-        const T t = static_cast<T>(v);
-        std::memcpy(fill_.data(), &t, sizeof t);
-        return 0;
-      });
-      if (swap_) std::reverse(fill_.begin(), fill_.end());  // read_planes swaps every sample back
-    }
+    if (!z.contains("fill_value") || z["fill_value"].is_null()) return;
+    const json& f = z["fill_value"];
+    double v = 0;
+    if (f.is_number()) v = f.get<double>();
+    else if (f == "NaN") v = std::numeric_limits<double>::quiet_NaN();
+    else if (f == "Infinity") v = std::numeric_limits<double>::infinity();
+    else if (f == "-Infinity") v = -std::numeric_limits<double>::infinity();
+    else fail("fill_value " + f.dump() + " is not a number");
+    ImageGrid one;
+    one.dims = {1, 1, 1};
+    one.type = type;
+    one.external = fill_.data();
+    visit_scalars(one, [&](const auto* p) {
+      using T = std::remove_cv_t<std::remove_pointer_t<decltype(p)>>;
+      if constexpr (std::is_integral_v<T>) {
+        if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
+              v <= static_cast<double>(std::numeric_limits<T>::max()) && v == std::floor(v)))
+          fail("fill_value " + f.dump() + " does not fit dtype '" + dtype_ + "'");
+      }
+      const T t = static_cast<T>(v);
+      std::memcpy(fill_.data(), &t, sizeof t);
+      return 0;
+    });
+    if (swap_) std::reverse(fill_.begin(), fill_.end());  // read_planes swaps every sample back
   }
 
   // The chunk (z, y, x) of the last three axes (index 0 on the others),
@@ -321,6 +346,7 @@ class ZarrPlanes : public PlaneSource {
   }
 
   std::string folder_, array_;
+  std::string dtype_;  // as .zarray spells it, for messages
   std::vector<Id> shape_, chunks_;
   char separator_ = '.';
   Codec codec_ = Codec::None;
