@@ -61,6 +61,188 @@ struct Slice {
 
 std::string name_of(const std::string& file) { return std::filesystem::path(file).filename().string(); }
 
+// The slice files of a folder, sorted by name: every file but hidden ones
+// and DICOMDIR (subfolders are passed over).
+std::vector<std::string> list_slice_files(const std::string& folder) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name[0] == '.' || name == "DICOMDIR" || entry.is_directory(ec)) continue;
+    input_size(entry.path().string());  // as every input: a FIFO or a device is refused by name
+    files.push_back(entry.path().string());
+  }
+  if (ec) throw InputError(folder + ": cannot list the folder: " + ec.message());
+  if (files.empty()) throw InputError(folder + ": folder holds no file (expected the DICOM slices of one series)");
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// What the first slice sets and every other slice must match.
+struct SeriesFormat {
+  long rows = 0, columns = 0, bits = 0, is_signed = 0;
+  std::string orientation, spacing;  // as the first file spells them ("" when absent)
+};
+
+// The tags of every file as GDCM's scanner read them, and errors that name
+// the folder and the file.
+class SeriesScan {
+ public:
+  SeriesScan(const std::string& folder, const std::vector<std::string>& files) : folder_(folder) {
+    for (const gdcm::Tag& t : {kSeriesUid, kPosition, kOrientation, kPixelSpacing, kRows, kColumns, kSamples,
+                               kBitsAllocated, kSigned, kFrames, kSlope, kIntercept})
+      scanner_.AddTag(t);
+    if (!scanner_.Scan(files)) throw InputError(folder + ": cannot scan the DICOM files");
+  }
+
+  InputError fail(const std::string& file, const std::string& what) const {
+    return InputError(folder_ + ": " + name_of(file) + ": " + what);
+  }
+  const char* value(const std::string& file, const gdcm::Tag& t) const { return scanner_.GetValue(file.c_str(), t); }
+  // An integer tag; `fallback` when absent (an error when fallback < 0).
+  long integer(const std::string& file, const gdcm::Tag& t, const char* what, long fallback) const {
+    const char* v = value(file, t);
+    if (!v) {
+      if (fallback >= 0) return fallback;
+      throw fail(file, std::string("no ") + what);
+    }
+    auto n = numbers(v, 1);
+    if (!n || (*n)[0] != std::floor((*n)[0])) throw fail(file, std::string("bad ") + what + " '" + v + "'");
+    return static_cast<long>((*n)[0]);
+  }
+
+  // One file's slice header. The first file (`first`) sets `format`; every
+  // other must match it and the first slice `ref`.
+  Slice slice(const std::string& f, bool first, SeriesFormat& format, const Slice* ref, std::size_t files) const {
+    if (!scanner_.IsKey(f.c_str())) throw fail(f, "not a DICOM file (every file of the folder must be a slice)");
+    const long samples = integer(f, kSamples, "SamplesPerPixel", 1);
+    if (samples != 1) throw fail(f, "SamplesPerPixel " + std::to_string(samples) + " (only one-sample grey images)");
+    if (integer(f, kFrames, "NumberOfFrames", 1) != 1)
+      throw fail(f, "a multi-frame image (only folders of single-frame slices are read)");
+    SeriesFormat mine;
+    mine.rows = integer(f, kRows, "Rows", -1);
+    mine.columns = integer(f, kColumns, "Columns", -1);
+    mine.bits = integer(f, kBitsAllocated, "BitsAllocated", -1);
+    mine.is_signed = integer(f, kSigned, "PixelRepresentation", 0);
+    const char* uid = value(f, kSeriesUid);
+    Slice slice{f, uid ? uid : "", {0, 0, 0}, 0, 1, 0};
+    if (first) {
+      const char* orient = value(f, kOrientation);
+      const char* spacing = value(f, kPixelSpacing);
+      mine.orientation = orient ? orient : "";
+      mine.spacing = spacing ? spacing : "";
+      format = mine;
+      if (mine.rows < 1 || mine.columns < 1)
+        throw fail(f, "image of " + std::to_string(mine.rows) + " rows and " + std::to_string(mine.columns) + " columns");
+    } else {
+      check_same_series(f, slice, *ref, mine, format);
+    }
+    read_placement(f, slice, files);
+    return slice;
+  }
+
+ private:
+  // A slice of another series, size, pixel format, orientation or pixel
+  // spacing than the first file (named by `ref`) is refused.
+  void check_same_series(const std::string& f, const Slice& slice, const Slice& ref, const SeriesFormat& mine,
+                         const SeriesFormat& format) const {
+    const std::string first = name_of(ref.file);
+    if (slice.series != ref.series)
+      throw fail(f, "SeriesInstanceUID " + slice.series + " differs from " + first + "'s " + ref.series +
+                        " (a mixed series: keep one series per folder)");
+    if (mine.rows != format.rows || mine.columns != format.columns)
+      throw fail(f, std::to_string(mine.columns) + " x " + std::to_string(mine.rows) + " pixels, " + first + " has " +
+                        std::to_string(format.columns) + " x " + std::to_string(format.rows) + " (a mixed series)");
+    if (mine.bits != format.bits || mine.is_signed != format.is_signed)
+      throw fail(f, "pixel format differs from " + first + "'s (BitsAllocated / PixelRepresentation)");
+    const char* orient = value(f, kOrientation);
+    auto a = numbers(orient, 6), o = numbers(format.orientation.c_str(), 6);
+    bool same = a.has_value() == o.has_value();
+    for (int k = 0; same && a && k < 6; ++k) same = std::abs((*a)[k] - (*o)[k]) <= 1e-4;
+    if (!same)
+      throw fail(f, "ImageOrientationPatient '" + std::string(orient ? orient : "") + "' differs from " + first +
+                        "'s '" + format.orientation + "' (a mixed series)");
+    const char* spacing = value(f, kPixelSpacing);
+    auto p = numbers(spacing, 2), q = numbers(format.spacing.c_str(), 2);
+    same = p.has_value() == q.has_value();
+    for (int k = 0; same && p && k < 2; ++k) same = std::abs((*p)[k] - (*q)[k]) <= 1e-6 * std::abs((*q)[k]);
+    if (!same)
+      throw fail(f, "PixelSpacing '" + std::string(spacing ? spacing : "") + "' differs from " + first + "'s '" +
+                        format.spacing + "' (a mixed series)");
+  }
+
+  // ImagePositionPatient (needed to order more than one slice), RescaleSlope
+  // and RescaleIntercept.
+  void read_placement(const std::string& f, Slice& slice, std::size_t files) const {
+    if (const char* pos = value(f, kPosition)) {
+      auto p = numbers(pos, 3);
+      if (!p) throw fail(f, std::string("bad ImagePositionPatient '") + pos + "'");
+      slice.position = {(*p)[0], (*p)[1], (*p)[2]};
+    } else if (files > 1) {
+      throw fail(f, "no ImagePositionPatient: the slices cannot be ordered");
+    }
+    if (const char* v = value(f, kSlope)) {
+      auto n = numbers(v, 1);
+      if (!n || (*n)[0] == 0) throw fail(f, std::string("bad RescaleSlope '") + v + "'");
+      slice.slope = (*n)[0];
+    }
+    if (const char* v = value(f, kIntercept)) {
+      auto n = numbers(v, 1);
+      if (!n) throw fail(f, std::string("bad RescaleIntercept '") + v + "'");
+      slice.intercept = (*n)[0];
+    }
+  }
+
+  std::string folder_;
+  gdcm::Scanner scanner_;
+};
+
+// The slices' normal: the cross product of the orientation's row and column
+// directions (z when the series has one slice and no orientation).
+std::array<double, 3> slice_normal(const SeriesScan& scan, const std::string& first, const std::string& orientation,
+                                   std::size_t files) {
+  std::array<double, 3> normal{0, 0, 1};
+  if (!orientation.empty()) {
+    auto o = numbers(orientation.c_str(), 6);
+    if (!o) throw scan.fail(first, "bad ImageOrientationPatient '" + orientation + "'");
+    const double* r = o->data();
+    const double* c = o->data() + 3;
+    normal = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0]};
+    const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    if (!(len > 0.5)) throw scan.fail(first, "ImageOrientationPatient '" + orientation + "' has parallel axes");
+    for (double& x : normal) x /= len;
+  } else if (files > 1) {
+    throw scan.fail(first, "no ImageOrientationPatient: the slices cannot be ordered");
+  }
+  return normal;
+}
+
+// Sorts the slices along the normal; returns their step, refusing repeated
+// positions and uneven gaps (a missing slice).
+double order_slices(std::vector<Slice>& slices, const std::array<double, 3>& normal, const std::string& folder) {
+  for (Slice& s : slices)
+    s.along_normal = s.position[0] * normal[0] + s.position[1] * normal[1] + s.position[2] * normal[2];
+  std::stable_sort(slices.begin(), slices.end(),
+                   [](const Slice& a, const Slice& b) { return a.along_normal < b.along_normal; });
+  const std::size_t n = slices.size();
+  if (n <= 1) return 1;
+  const double step = (slices.back().along_normal - slices.front().along_normal) / static_cast<double>(n - 1);
+  // The gap furthest from the mean step names where a slice is missing.
+  std::size_t worst = 1;
+  auto gap = [&](std::size_t k) { return slices[k].along_normal - slices[k - 1].along_normal; };
+  for (std::size_t k = 1; k < n; ++k) {
+    if (gap(k) <= 1e-6 * std::max(1.0, std::abs(step)))
+      throw InputError(folder + ": " + name_of(slices[k - 1].file) + " and " + name_of(slices[k].file) +
+                       " lie at the same position (two series, or a repeated slice)");
+    if (std::abs(gap(k) - step) > std::abs(gap(worst) - step)) worst = k;
+  }
+  if (std::abs(gap(worst) - step) > 1e-3 * step)
+    throw InputError(folder + ": uneven slice spacing: " + name_of(slices[worst - 1].file) + " to " +
+                     name_of(slices[worst].file) + " is " + std::to_string(gap(worst)) +
+                     " mm, the series averages " + std::to_string(step) + " mm (missing slices?)");
+  return step;
+}
+
 class DicomPlanes : public PlaneSource {
  public:
   explicit DicomPlanes(const std::string& folder) : folder_(folder) {
@@ -68,156 +250,31 @@ class DicomPlanes : public PlaneSource {
     gdcm::Trace::WarningOff();
     gdcm::Trace::ErrorOff();
     gdcm::Trace::DebugOff();
-    std::vector<std::string> files;
-    std::error_code ec;
-    for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
-      const std::string name = entry.path().filename().string();
-      if (name.empty() || name[0] == '.' || name == "DICOMDIR" || entry.is_directory(ec)) continue;
-      input_size(entry.path().string());  // as every input: a FIFO or a device is refused by name
-      files.push_back(entry.path().string());
-    }
-    if (ec) throw InputError(folder + ": cannot list the folder: " + ec.message());
-    if (files.empty()) throw InputError(folder + ": folder holds no file (expected the DICOM slices of one series)");
-    std::sort(files.begin(), files.end());
-
-    gdcm::Scanner scanner;
-    for (const gdcm::Tag& t : {kSeriesUid, kPosition, kOrientation, kPixelSpacing, kRows, kColumns, kSamples,
-                               kBitsAllocated, kSigned, kFrames, kSlope, kIntercept})
-      scanner.AddTag(t);
-    if (!scanner.Scan(files)) throw InputError(folder + ": cannot scan the DICOM files");
-    auto fail = [&](const std::string& file, const std::string& what) {
-      return InputError(folder + ": " + name_of(file) + ": " + what);
-    };
-    auto value = [&](const std::string& file, const gdcm::Tag& t) -> const char* {
-      return scanner.GetValue(file.c_str(), t);
-    };
-    auto integer = [&](const std::string& file, const gdcm::Tag& t, const char* what, long fallback) -> long {
-      const char* v = value(file, t);
-      if (!v) {
-        if (fallback >= 0) return fallback;
-        throw fail(file, std::string("no ") + what);
-      }
-      auto n = numbers(v, 1);
-      if (!n || (*n)[0] != std::floor((*n)[0])) throw fail(file, std::string("bad ") + what + " '" + v + "'");
-      return static_cast<long>((*n)[0]);
-    };
-
-    // The first file sets what every other slice must match.
+    const std::vector<std::string> files = list_slice_files(folder);
+    const SeriesScan scan(folder, files);
     const std::string& first = files.front();
-    std::string orientation_text, spacing_text;
-    long rows = 0, columns = 0, bits = 0, is_signed = 0;
-    std::array<double, 3> normal{0, 0, 1};
-    for (const std::string& f : files) {
-      if (!scanner.IsKey(f.c_str())) throw fail(f, "not a DICOM file (every file of the folder must be a slice)");
-      const long samples = integer(f, kSamples, "SamplesPerPixel", 1);
-      if (samples != 1) throw fail(f, "SamplesPerPixel " + std::to_string(samples) + " (only one-sample grey images)");
-      if (integer(f, kFrames, "NumberOfFrames", 1) != 1)
-        throw fail(f, "a multi-frame image (only folders of single-frame slices are read)");
-      const long r = integer(f, kRows, "Rows", -1), c = integer(f, kColumns, "Columns", -1);
-      const long b = integer(f, kBitsAllocated, "BitsAllocated", -1), s = integer(f, kSigned, "PixelRepresentation", 0);
-      const char* uid = value(f, kSeriesUid);
-      const char* orient = value(f, kOrientation);
-      const char* spacing = value(f, kPixelSpacing);
-      Slice slice{f, uid ? uid : "", {0, 0, 0}, 0, 1, 0};
-      if (f == first) {
-        rows = r, columns = c, bits = b, is_signed = s;
-        orientation_text = orient ? orient : "";
-        spacing_text = spacing ? spacing : "";
-        if (r < 1 || c < 1) throw fail(f, "image of " + std::to_string(r) + " rows and " + std::to_string(c) + " columns");
-      } else {
-        const Slice& ref = slices_.front();
-        if (slice.series != ref.series)
-          throw fail(f, "SeriesInstanceUID " + slice.series + " differs from " + name_of(first) + "'s " + ref.series +
-                            " (a mixed series: keep one series per folder)");
-        if (r != rows || c != columns)
-          throw fail(f, std::to_string(c) + " x " + std::to_string(r) + " pixels, " + name_of(first) + " has " +
-                            std::to_string(columns) + " x " + std::to_string(rows) + " (a mixed series)");
-        if (b != bits || s != is_signed)
-          throw fail(f, "pixel format differs from " + name_of(first) + "'s (BitsAllocated / PixelRepresentation)");
-        auto a = numbers(orient, 6), o = numbers(orientation_text.c_str(), 6);
-        bool same = a.has_value() == o.has_value();
-        for (int k = 0; same && a && k < 6; ++k) same = std::abs((*a)[k] - (*o)[k]) <= 1e-4;
-        if (!same)
-          throw fail(f, "ImageOrientationPatient '" + std::string(orient ? orient : "") + "' differs from " +
-                            name_of(first) + "'s '" + orientation_text + "' (a mixed series)");
-        auto p = numbers(spacing, 2), q = numbers(spacing_text.c_str(), 2);
-        same = p.has_value() == q.has_value();
-        for (int k = 0; same && p && k < 2; ++k) same = std::abs((*p)[k] - (*q)[k]) <= 1e-6 * std::abs((*q)[k]);
-        if (!same)
-          throw fail(f, "PixelSpacing '" + std::string(spacing ? spacing : "") + "' differs from " + name_of(first) +
-                            "'s '" + spacing_text + "' (a mixed series)");
-      }
-      if (const char* pos = value(f, kPosition)) {
-        auto p = numbers(pos, 3);
-        if (!p) throw fail(f, std::string("bad ImagePositionPatient '") + pos + "'");
-        slice.position = {(*p)[0], (*p)[1], (*p)[2]};
-      } else if (files.size() > 1) {
-        throw fail(f, "no ImagePositionPatient: the slices cannot be ordered");
-      }
-      if (const char* v = value(f, kSlope)) {
-        auto n = numbers(v, 1);
-        if (!n || (*n)[0] == 0) throw fail(f, std::string("bad RescaleSlope '") + v + "'");
-        slice.slope = (*n)[0];
-      }
-      if (const char* v = value(f, kIntercept)) {
-        auto n = numbers(v, 1);
-        if (!n) throw fail(f, std::string("bad RescaleIntercept '") + v + "'");
-        slice.intercept = (*n)[0];
-      }
-      slices_.push_back(slice);
-    }
-
-    if (!orientation_text.empty()) {
-      auto o = numbers(orientation_text.c_str(), 6);
-      if (!o) throw fail(first, "bad ImageOrientationPatient '" + orientation_text + "'");
-      const double* r = o->data();
-      const double* c = o->data() + 3;
-      normal = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0]};
-      const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
-      if (!(len > 0.5)) throw fail(first, "ImageOrientationPatient '" + orientation_text + "' has parallel axes");
-      for (double& x : normal) x /= len;
-    } else if (files.size() > 1) {
-      throw fail(first, "no ImageOrientationPatient: the slices cannot be ordered");
-    }
-    for (Slice& s : slices_)
-      s.along_normal = s.position[0] * normal[0] + s.position[1] * normal[1] + s.position[2] * normal[2];
-    std::stable_sort(slices_.begin(), slices_.end(),
-                     [](const Slice& a, const Slice& b) { return a.along_normal < b.along_normal; });
-
-    double step = 1;
-    const std::size_t n = slices_.size();
-    if (n > 1) {
-      step = (slices_.back().along_normal - slices_.front().along_normal) / static_cast<double>(n - 1);
-      // The gap furthest from the mean step names where a slice is missing.
-      std::size_t worst = 1;
-      auto gap = [&](std::size_t k) { return slices_[k].along_normal - slices_[k - 1].along_normal; };
-      for (std::size_t k = 1; k < n; ++k) {
-        if (gap(k) <= 1e-6 * std::max(1.0, std::abs(step)))
-          throw InputError(folder + ": " + name_of(slices_[k - 1].file) + " and " + name_of(slices_[k].file) +
-                           " lie at the same position (two series, or a repeated slice)");
-        if (std::abs(gap(k) - step) > std::abs(gap(worst) - step)) worst = k;
-      }
-      if (std::abs(gap(worst) - step) > 1e-3 * step)
-        throw InputError(folder + ": uneven slice spacing: " + name_of(slices_[worst - 1].file) + " to " +
-                         name_of(slices_[worst].file) + " is " + std::to_string(gap(worst)) +
-                         " mm, the series averages " + std::to_string(step) + " mm (missing slices?)");
-    }
+    SeriesFormat format;
+    for (const std::string& f : files)
+      slices_.push_back(scan.slice(f, f == first, format, slices_.empty() ? nullptr : &slices_.front(), files.size()));
+    const double step = order_slices(slices_, slice_normal(scan, first, format.orientation, files.size()), folder);
 
     std::array<double, 2> pixel{1, 1};  // rows apart (y), columns apart (x)
-    if (!spacing_text.empty()) {
-      auto p = numbers(spacing_text.c_str(), 2);
-      if (!p || !((*p)[0] > 0) || !((*p)[1] > 0)) throw fail(first, "bad PixelSpacing '" + spacing_text + "'");
+    if (!format.spacing.empty()) {
+      auto p = numbers(format.spacing.c_str(), 2);
+      if (!p || !((*p)[0] > 0) || !((*p)[1] > 0)) throw scan.fail(first, "bad PixelSpacing '" + format.spacing + "'");
       pixel = {(*p)[0], (*p)[1]};
     }
+    const long bits = format.bits;
+    const bool is_signed = format.is_signed != 0;
     if (bits == 8) stored_ = is_signed ? ScalarType::Int8 : ScalarType::UInt8;
     else if (bits == 16) stored_ = is_signed ? ScalarType::Int16 : ScalarType::UInt16;
     else if (bits == 32 && is_signed) stored_ = ScalarType::Int32;
     else
-      throw fail(first, "BitsAllocated " + std::to_string(bits) + (is_signed ? " signed" : " unsigned") +
-                            " is not supported (8 or 16 bits, or signed 32)");
+      throw scan.fail(first, "BitsAllocated " + std::to_string(bits) + (is_signed ? " signed" : " unsigned") +
+                                 " is not supported (8 or 16 bits, or signed 32)");
     for (const Slice& s : slices_) scaled_ = scaled_ || s.slope != 1 || s.intercept != 0;
 
-    head_.dims = {columns, rows, static_cast<Id>(n)};
+    head_.dims = {format.columns, format.rows, static_cast<Id>(slices_.size())};
     head_.spacing = {pixel[1], pixel[0], step};
     head_.origin = slices_.front().position;
     head_.type = scaled_ ? detail::scaled_type(stored_) : stored_;
