@@ -66,71 +66,72 @@ std::pair<nlohmann::json, nlohmann::json> float_bounds(const std::vector<float>&
   return {jlo, jhi};
 }
 
-}  // namespace
-
-void write_gltf_binary(const SurfaceMesh& mesh, const std::string& path) {
-  mesh_bytes::validate_mesh(mesh, path);
-  // Triangles: cells as they are when all are triangles, fans otherwise.
-  std::vector<PointIndex> fans;
-  const std::vector<PointIndex>* indices = &mesh.connectivity;
-  if (!mesh.all_triangles()) {
-    for (Id c = 0; c < mesh.num_cells(); ++c) {
-      const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
-      for (std::uint64_t k = b + 1; k + 1 < e; ++k)
-        fans.insert(fans.end(), {mesh.connectivity[b], mesh.connectivity[k], mesh.connectivity[k + 1]});
-    }
-    indices = &fans;
+// The triangles' indices: the cells as they are when all are triangles, fans
+// of the polygons otherwise (in `fans`).
+const std::vector<PointIndex>& triangle_indices(const SurfaceMesh& mesh, std::vector<PointIndex>& fans) {
+  if (mesh.all_triangles()) return mesh.connectivity;
+  for (Id c = 0; c < mesh.num_cells(); ++c) {
+    const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
+    for (std::uint64_t k = b + 1; k + 1 < e; ++k)
+      fans.insert(fans.end(), {mesh.connectivity[b], mesh.connectivity[k], mesh.connectivity[k + 1]});
   }
+  return fans;
+}
 
+// The glTF document of one mesh of one primitive, and the arrays of its
+// BIN chunk (pointing into the mesh and `indices`).
+struct GlbContent {
   nlohmann::json doc;
-  doc["asset"] = {{"version", "2.0"}, {"generator", "keymesh"}};
-  doc["scene"] = 0;
-  doc["scenes"] = nlohmann::json::array({{{"nodes", {0}}}});
   std::vector<BinArray> arrays;
-  // Points no triangle uses would make an accessor of a mesh without a
-  // primitive: an empty mesh is one empty node.
-  if (indices->empty() || mesh.num_points() == 0) {
-    doc["nodes"] = nlohmann::json::array({nlohmann::json::object()});
-  } else {
-    doc["nodes"] = nlohmann::json::array({{{"mesh", 0}}});
-    nlohmann::json accessors = nlohmann::json::array(), views = nlohmann::json::array();
-    std::uint64_t offset = 0;
-    auto add_array = [&](const void* data, std::uint64_t bytes, int target) {
-      arrays.push_back(BinArray{data, bytes, offset});
-      views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", target}});
-      offset = padded4(offset + bytes);
-      return static_cast<int>(views.size()) - 1;
-    };
-    const auto count = static_cast<std::uint64_t>(mesh.num_points());
-    auto add_float_attribute = [&](const std::vector<float>& values, int components) {
-      const int view = add_array(values.data(), values.size() * sizeof(float), kArrayBuffer);
-      auto [lo, hi] = float_bounds(values, components);
-      accessors.push_back({{"bufferView", view}, {"componentType", kFloat}, {"count", count},
-                           {"type", accessor_type(components)}, {"min", lo}, {"max", hi}});
-      return static_cast<int>(accessors.size()) - 1;
-    };
-    nlohmann::json attributes;
-    attributes["POSITION"] = add_float_attribute(mesh.points, 3);
-    for (const Field& f : mesh.point_fields) {
-      if (f.components < 1 || f.components > 4) continue;  // glTF has no wider vector accessor
-      const bool normals = f.name == "Normals" && f.components == 3;
-      attributes[normals ? std::string("NORMAL") : attribute_name(f.name)] = add_float_attribute(f.values, f.components);
-    }
-    const int index_view = add_array(indices->data(), indices->size() * sizeof(PointIndex), kElementArrayBuffer);
-    const auto [lo, hi] = std::minmax_element(indices->begin(), indices->end());
-    accessors.push_back({{"bufferView", index_view}, {"componentType", kUnsignedInt}, {"count", indices->size()},
-                         {"type", "SCALAR"}, {"min", {*lo}}, {"max", {*hi}}});
-    doc["meshes"] = nlohmann::json::array(
-        {{{"primitives", nlohmann::json::array({{{"attributes", attributes},
-                                                  {"indices", static_cast<int>(accessors.size()) - 1},
-                                                  {"mode", 4}}})}}});
-    doc["accessors"] = std::move(accessors);
-    doc["bufferViews"] = std::move(views);
-    doc["buffers"] = nlohmann::json::array({{{"byteLength", offset}}});
-  }
+};
 
-  std::string json = doc.dump();
+// The accessors, buffer views and buffer of a mesh's points, point fields
+// (1 to 4 components; Normals as NORMAL) and triangles.
+void describe_mesh(const SurfaceMesh& mesh, const std::vector<PointIndex>& indices, GlbContent& glb) {
+  nlohmann::json& doc = glb.doc;
+  doc["nodes"] = nlohmann::json::array({{{"mesh", 0}}});
+  nlohmann::json accessors = nlohmann::json::array(), views = nlohmann::json::array();
+  std::uint64_t offset = 0;
+  auto add_array = [&](const void* data, std::uint64_t bytes, int target) {
+    glb.arrays.push_back(BinArray{data, bytes, offset});
+    views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", target}});
+    offset = padded4(offset + bytes);
+    return static_cast<int>(views.size()) - 1;
+  };
+  const auto count = static_cast<std::uint64_t>(mesh.num_points());
+  auto add_float_attribute = [&](const std::vector<float>& values, int components) {
+    const int view = add_array(values.data(), values.size() * sizeof(float), kArrayBuffer);
+    auto [lo, hi] = float_bounds(values, components);
+    accessors.push_back({{"bufferView", view}, {"componentType", kFloat}, {"count", count},
+                         {"type", accessor_type(components)}, {"min", lo}, {"max", hi}});
+    return static_cast<int>(accessors.size()) - 1;
+  };
+  nlohmann::json attributes;
+  attributes["POSITION"] = add_float_attribute(mesh.points, 3);
+  for (const Field& f : mesh.point_fields) {
+    if (f.components < 1 || f.components > 4) continue;  // glTF has no wider vector accessor
+    const bool normals = f.name == "Normals" && f.components == 3;
+    attributes[normals ? std::string("NORMAL") : attribute_name(f.name)] = add_float_attribute(f.values, f.components);
+  }
+  const int index_view = add_array(indices.data(), indices.size() * sizeof(PointIndex), kElementArrayBuffer);
+  const auto [lo, hi] = std::minmax_element(indices.begin(), indices.end());
+  accessors.push_back({{"bufferView", index_view}, {"componentType", kUnsignedInt}, {"count", indices.size()},
+                       {"type", "SCALAR"}, {"min", {*lo}}, {"max", {*hi}}});
+  doc["meshes"] = nlohmann::json::array(
+      {{{"primitives", nlohmann::json::array({{{"attributes", attributes},
+                                                {"indices", static_cast<int>(accessors.size()) - 1},
+                                                {"mode", 4}}})}}});
+  doc["accessors"] = std::move(accessors);
+  doc["bufferViews"] = std::move(views);
+  doc["buffers"] = nlohmann::json::array({{{"byteLength", offset}}});
+}
+
+// The .glb container: the 12-byte header, the JSON chunk (padded with
+// spaces), and the BIN chunk when there are arrays (padded with zeros).
+void write_glb(const GlbContent& glb, const std::string& path) {
+  std::string json = glb.doc.dump();
   json.resize(padded4(json.size()), ' ');
+  const auto& arrays = glb.arrays;
   const std::uint64_t bin = arrays.empty() ? 0 : padded4(arrays.back().offset + arrays.back().bytes);
   const std::uint64_t total = 12 + 8 + json.size() + (arrays.empty() ? 0 : 8 + bin);
   if (total > std::numeric_limits<std::uint32_t>::max())
@@ -160,6 +161,23 @@ void write_gltf_binary(const SurfaceMesh& mesh, const std::string& path) {
     file.write(zeros, bin - at);
   }
   file.commit();
+}
+
+}  // namespace
+
+void write_gltf_binary(const SurfaceMesh& mesh, const std::string& path) {
+  mesh_bytes::validate_mesh(mesh, path);
+  std::vector<PointIndex> fans;
+  const std::vector<PointIndex>& indices = triangle_indices(mesh, fans);
+  GlbContent glb;
+  glb.doc["asset"] = {{"version", "2.0"}, {"generator", "keymesh"}};
+  glb.doc["scene"] = 0;
+  glb.doc["scenes"] = nlohmann::json::array({{{"nodes", {0}}}});
+  // Points no triangle uses would make an accessor of a mesh without a
+  // primitive: an empty mesh is one empty node.
+  if (indices.empty() || mesh.num_points() == 0) glb.doc["nodes"] = nlohmann::json::array({nlohmann::json::object()});
+  else describe_mesh(mesh, indices, glb);
+  write_glb(glb, path);
 }
 
 }  // namespace keymesh::io
