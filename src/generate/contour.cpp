@@ -150,6 +150,10 @@ struct PointWriter {
   std::uint64_t total_per_iso = 0;  // keys per isovalue of the whole grid (3 N_total)
   std::uint64_t key_shift = 0;      // 3 nxy * first plane: the slab's first key in the whole grid
 
+  bool positions_only() const {
+    return out.xyz && !out.scalar && !out.gradient_normal && !out.curvature && !out.key && !out.coarse;
+  }
+
   void operator()(Id id, const typename EdgeInterpolator<T>::Point& p, Id iso_index) const {
     if (out.xyz) interp.position(p, out.xyz + 3 * id);
     if (out.scalar) out.scalar[id] = interp.scalar(p);
@@ -287,10 +291,18 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   std::vector<std::uint64_t> coarse;
   const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse, true);
   // Triangles and points in one pass over the rows (st.generate holds both).
-  for (Id iso = 0; iso < n_iso; ++iso)
-    write_rows(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data(), [&](Id id, Id i, Id j, Id k, int axis) {
-      write(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
-    });
+  // Positions alone (the usual call) get a writer of their own, inlined
+  // into the pass: the same position() as PointWriter's, so the same bytes.
+  auto pass = [&](auto&& write_point) {
+    for (Id iso = 0; iso < n_iso; ++iso)
+      write_rows(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data(), [&](Id id, Id i, Id j, Id k, int axis) {
+        write_point(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
+      });
+  };
+  if (write.positions_only())
+    pass([&](Id id, const typename EdgeInterpolator<T>::Point& p, Id) { interp.position(p, write.out.xyz + 3 * id); });
+  else
+    pass(write);
   st.generate += seconds_since(t0);
   finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n), st);
   return mesh;

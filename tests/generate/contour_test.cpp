@@ -358,8 +358,12 @@ TEST(Contour, StructuredPlanEqualsSortPlanOnNoise) {
     g.spacing = {0.5, 1.25, 2.0};
     g.origin = {-3, 1, 7};
     for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average}) {
-      for (bool coarsen : {false, true}) {
+      for (int variant = 0; variant < 3; ++variant) {
+        // Coarsened, and not: with and without scalars (positions alone
+        // take a writer of their own).
+        const bool coarsen = variant == 2;
         ContourOptions opt;
+        opt.scalars = variant != 1;
         opt.isovalues = {0.5, 0.21, 0.77};
         opt.normals = normals;
         opt.curvature = normals == ContourNormals::Gradient;
@@ -368,7 +372,7 @@ TEST(Contour, StructuredPlanEqualsSortPlanOnNoise) {
         opt.weld = ContourWeld::KeyReduceSort;
         const SurfaceMesh sort = generate::contour(g, opt);
         const std::string where = std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
-                                  std::to_string(dims[2]) + " coarsen " + std::to_string(coarsen);
+                                  std::to_string(dims[2]) + " variant " + std::to_string(variant);
         if (!coarsen) {
           EXPECT_EQ(rows.num_points(),
                     straddling_edges(g, 0.5) + straddling_edges(g, 0.21) + straddling_edges(g, 0.77)) << where;
