@@ -3,10 +3,12 @@
 //   contour_bench --size 512 --threads 2 --reps 5
 //                 [--weld keyreduce|keyreduce-sort|vertexweld]
 //                 [--normals none|gradient|average] [--iso V] [--grid voxel|tet5]
-//                 [--file VOLUME] [--iso V1,V2,...] [--coarsen on]
+//                 [--file VOLUME] [--iso V1,V2,...] [--coarsen on] [--scalars on]
 // --file contours a volume file (any format keymesh::io::read_volume reads:
 // .vti .nrrd .nii(.gz) .den) instead of generating the sphere; --iso is then
 // required and "size" reports the largest dimension.
+// --scalars on carries the interpolated scalar (as the Python module and the
+// CLI do by default); off by default, as the peers are run.
 // --grid tet5 contours the scheme-5 tetrahedralization of the field by
 // marching tetrahedra; the tetrahedralization is timed once ("build").
 #include <chrono>
@@ -29,7 +31,7 @@ int main(int argc, char** argv) {
   reexec_with_huge_pages(argc, argv);
   bench::CommonOptions o;
   std::string weld = "keyreduce", normals = "none", grid_kind = "voxel";
-  bool coarsen = false;
+  bool coarsen = false, scalars = false;
   std::vector<double> isos;
   const int status = bench::parse_options(argc, argv, o, [&](const std::string& a, const char* value) {
     if (a == "--weld") weld = value;
@@ -46,6 +48,7 @@ int main(int argc, char** argv) {
     }
     else if (a == "--grid") grid_kind = value;
     else if (a == "--coarsen") coarsen = std::string(value) == "on";
+    else if (a == "--scalars") scalars = std::string(value) == "on";
     else return false;
     return true;
   });
@@ -72,7 +75,7 @@ int main(int argc, char** argv) {
   opt.normals = normals == "average"    ? generate::ContourNormals::Average
                 : normals == "gradient" ? generate::ContourNormals::Gradient
                                         : generate::ContourNormals::None;
-  opt.scalars = false;
+  opt.scalars = scalars;
   opt.coarsen = coarsen;
   std::vector<double> times;
   generate::ContourStats stats;
