@@ -150,8 +150,8 @@ struct PointWriter {
   std::uint64_t total_per_iso = 0;  // keys per isovalue of the whole grid (3 N_total)
   std::uint64_t key_shift = 0;      // 3 nxy * first plane: the slab's first key in the whole grid
 
-  bool positions_only() const {
-    return out.xyz && !out.scalar && !out.gradient_normal && !out.curvature && !out.key && !out.coarse;
+  bool positions_and_scalar_only() const {
+    return out.xyz && !out.gradient_normal && !out.curvature && !out.key && !out.coarse;
   }
 
   void operator()(Id id, const typename EdgeInterpolator<T>::Point& p, Id iso_index) const {
@@ -291,18 +291,24 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   std::vector<std::uint64_t> coarse;
   const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse, true);
   // Triangles and points in one pass over the rows (st.generate holds both).
-  // Positions alone (the usual call) get a writer of their own, inlined
-  // into the pass: the same position() as PointWriter's, so the same bytes.
+  // Positions, with or without the scalar (the usual calls), get a writer
+  // of their own, inlined into the pass: the same position() and scalar()
+  // as PointWriter's, so the same bytes.
   auto pass = [&](auto&& write_point) {
     for (Id iso = 0; iso < n_iso; ++iso)
       write_rows(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data(), [&](Id id, Id i, Id j, Id k, int axis) {
         write_point(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
       });
   };
-  if (write.positions_only())
-    pass([&](Id id, const typename EdgeInterpolator<T>::Point& p, Id) { interp.position(p, write.out.xyz + 3 * id); });
-  else
-    pass(write);
+  auto inlined = [&](auto with_scalar) {
+    pass([&](Id id, const typename EdgeInterpolator<T>::Point& p, Id) {
+      interp.position(p, write.out.xyz + 3 * id);
+      if constexpr (decltype(with_scalar)::value) write.out.scalar[id] = interp.scalar(p);
+    });
+  };
+  if (!write.positions_and_scalar_only()) pass(write);
+  else if (write.out.scalar) inlined(std::true_type{});
+  else inlined(std::false_type{});
   st.generate += seconds_since(t0);
   finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n), st);
   return mesh;
