@@ -30,10 +30,10 @@ def keymesh(binary, *args):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--keymesh", default="build/keymesh")
-    ap.add_argument("--out", default="out")
-    ap.add_argument("--size", type=int, default=256)
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--keymesh", default="build/keymesh", help="the command to run (default: build/keymesh)")
+    ap.add_argument("--out", default="out", help="folder of the outputs (default: out)")
+    ap.add_argument("--size", type=int, default=256, help="points along each axis of the sphere (default: 256)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     out = lambda name: os.path.join(a.out, name)  # noqa: E731
