@@ -5,15 +5,18 @@
 // the generator).
 #include "common.hpp"
 #include "keymesh/generate/labels.hpp"
+#include "keymesh/generate/option_names.hpp"
 #include "keymesh/generate/report_fields.hpp"
 
 namespace keymesh::python {
 
 namespace {
 
+// Python's names, or the command's (generate/option_names.hpp).
 generate::LabelMethod parse_method(const std::string& s) {
-  if (s == "surface_nets" || s == "surfacenets") return generate::LabelMethod::SurfaceNets;
-  if (s == "discrete_marching_cubes" || s == "discrete-mc") return generate::LabelMethod::DiscreteMarchingCubes;
+  if (s == "surface_nets") return generate::LabelMethod::SurfaceNets;
+  if (s == "discrete_marching_cubes") return generate::LabelMethod::DiscreteMarchingCubes;
+  if (const auto method = generate::find_option<generate::LabelMethod>(s)) return *method;
   throw py::value_error("method must be 'surface_nets' or 'discrete_marching_cubes', got '" + s + "'");
 }
 

@@ -41,8 +41,7 @@ LabelsJob job_of(const LabelsCli& o) {
   job.raw_given = o.raw_input.given();
   if (job.raw_given) job.raw = o.raw_input.options();
   generate::LabelOptions& opt = job.options;
-  opt.method = o.method == "discrete-mc" ? generate::LabelMethod::DiscreteMarchingCubes
-                                         : generate::LabelMethod::SurfaceNets;
+  opt.method = generate::parse_option<generate::LabelMethod>(o.method);
   opt.labels.assign(o.labels.begin(), o.labels.end());
   opt.background = o.background;
   opt.per_label = o.per_label;
@@ -128,55 +127,55 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
 
 namespace {
 
-Register reg{Command{
-    "labels", "surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys",
-    [](CLI::App& cmd) -> std::function<int()> {
-      auto o = std::make_shared<LabelsCli>();
-      cmd.add_option("input", o->input,
-                     "integer volume (uint8 int8 uint16 int16 int32): .vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or "
-                     "Zarr folder, or raw with --dims")
-          ->required();
-      cmd.add_option("-o,--output", o->output,
-                     "output mesh: .vtp keeps the cell fields boundary_labels (and label); .ply .obj .stl drop them")
-          ->required();
-      cmd.add_option("--method", o->method,
-                     "surfacenets (a point per cell of mixed labels, a quad per edge between two labels, every "
-                     "interface once; default) or discrete-mc (each label's marching cubes at edge midpoints, "
-                     "as vtkDiscreteFlyingEdges3D)")
-          ->check(CLI::IsMember({"surfacenets", "discrete-mc"}));
-      cmd.add_option("--labels", o->labels, "labels to extract, e.g. 3,17 (default: every label but the background); "
-                                            "the others count as background")
-          ->delimiter(',');
-      cmd.add_option("--background", o->background, "the background label (default 0)");
-      cmd.add_flag("--per-label", o->per_label,
-                   "each label's closed surface with its own points (cell field label), instead of one network");
-      cmd.add_option("--smooth", o->smooth,
-                     "smoothing iterations (default 16; 0 = off): constrained to each point's cell for surface nets, "
-                     "Taubin for discrete-mc")
-          ->check(CLI::NonNegativeNumber);
-      cmd.add_option("--relaxation", o->relaxation, "smoothing relaxation factor in (0, 1] (default 0.5)")
-          ->check(CLI::Range(1e-9, 1.0));
-      cmd.add_flag("--coarsen", o->coarsen,
-                   "after smoothing, merge the points of each 2x2x2 block of cells (surfacenets) or nearest grid "
-                   "point (discrete-mc), averaging positions; faces that collapse are dropped, label pairs kept; "
-                   "every label's surface stays closed, not always 2-manifold");
-      o->raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32");
-      cmd.add_option("--memory-limit", o->memory_limit,
-                     "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
-                     "label indices (e.g. 256M); the surfaces are merged by key, then smoothed and written whole "
-                     "(not streamed: the output mesh); byte-identical to one in-memory run; raw (--dims), "
-                     ".nrrd/.nhdr, .nii (gzip too), DICOM, Zarr; under mpirun -np P each rank streams its own rows")
-          ->check(size_validator());
-      add_common_options(cmd, o->common);
-      return [o]() {
-        if (int refused = require_cpu_backend(o->common, "labels")) return refused;
-        LabelsJob job = job_of(*o);
-        job.threads = apply_threads(o->common);
-        // mpirun -np P keymesh labels VOLUME ...: each rank its rows.
-        if (distributed::size() > 1) return run_distributed_labels(job);
-        return run_labels(job);
-      };
-    }}};
+void add_labels_options(CLI::App& cmd, LabelsCli& o) {
+  cmd.description("surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys");
+  cmd.add_option("input", o.input,
+                 "integer volume (uint8 int8 uint16 int16 int32): .vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or "
+                 "Zarr folder, or raw with --dims")
+      ->required();
+  cmd.add_option("-o,--output", o.output,
+                 "output mesh: .vtp keeps the cell fields boundary_labels (and label); .ply .obj .stl drop them")
+      ->required();
+  cmd.add_option("--method", o.method,
+                 "surfacenets (a point per cell of mixed labels, a quad per edge between two labels, every "
+                 "interface once; default) or discrete-mc (each label's marching cubes at edge midpoints, "
+                 "as vtkDiscreteFlyingEdges3D)")
+      ->check(one_of<generate::LabelMethod>());
+  cmd.add_option("--labels", o.labels, "labels to extract, e.g. 3,17 (default: every label but the background); "
+                                        "the others count as background")
+      ->delimiter(',');
+  cmd.add_option("--background", o.background, "the background label (default 0)");
+  cmd.add_flag("--per-label", o.per_label,
+               "each label's closed surface with its own points (cell field label), instead of one network");
+  cmd.add_option("--smooth", o.smooth,
+                 "smoothing iterations (default 16; 0 = off): constrained to each point's cell for surface nets, "
+                 "Taubin for discrete-mc")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--relaxation", o.relaxation, "smoothing relaxation factor in (0, 1] (default 0.5)")
+      ->check(CLI::Range(1e-9, 1.0));
+  cmd.add_flag("--coarsen", o.coarsen,
+               "after smoothing, merge the points of each 2x2x2 block of cells (surfacenets) or nearest grid "
+               "point (discrete-mc), averaging positions; faces that collapse are dropped, label pairs kept; "
+               "every label's surface stays closed, not always 2-manifold");
+  o.raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32");
+  cmd.add_option("--memory-limit", o.memory_limit,
+                 "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
+                 "label indices (e.g. 256M); the surfaces are merged by key, then smoothed and written whole "
+                 "(not streamed: the output mesh); byte-identical to one in-memory run; raw (--dims), "
+                 ".nrrd/.nhdr, .nii (gzip too), DICOM, Zarr; under mpirun -np P each rank streams its own rows")
+      ->check(size_validator());
+  add_common_options(cmd, o.common);
+}
+
+// One process (run_labels), or under mpirun -np P each rank its rows.
+int run_labels_command(const LabelsCli& o, CommandRun& run) {
+  LabelsJob job = job_of(o);
+  job.threads = run.threads();
+  if (distributed::size() > 1) return run_distributed_labels(job);
+  return run_labels(job);
+}
+
+Register reg{make_cpu_command("labels", "labels", add_labels_options, run_labels_command)};
 
 }  // namespace
 

@@ -12,12 +12,14 @@
 // "weld must be 'keyreduce', 'keyreduce-sort' or 'vertexweld', got 'glue'".
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/labels.hpp"
 #include "keymesh/generate/subdivide.hpp"
 
 namespace keymesh::generate {
@@ -70,6 +72,15 @@ struct OptionNames<SubdivideWeld> {
       {{"keyreduce", SubdivideWeld::KeyReduce}, {"vertexweld", SubdivideWeld::VertexWeld}}};
 };
 
+// The command's names of the label generator's methods (keymesh.contour_labels
+// takes these and its own, surface_nets and discrete_marching_cubes).
+template <>
+struct OptionNames<LabelMethod> {
+  static constexpr std::string_view what = "method";
+  static constexpr std::array<OptionName<LabelMethod>, 2> table{
+      {{"surfacenets", LabelMethod::SurfaceNets}, {"discrete-mc", LabelMethod::DiscreteMarchingCubes}}};
+};
+
 // The names in table order (what CLI::IsMember takes).
 template <class E>
 std::vector<std::string> option_names() {
@@ -85,11 +96,18 @@ std::string_view option_name(E value) {
   return "?";  // unreachable for a value of the enum: every one is in its table
 }
 
+// The value named `text`, if the table has it.
+template <class E>
+std::optional<E> find_option(std::string_view text) {
+  for (const auto& entry : OptionNames<E>::table)
+    if (entry.name == text) return entry.value;
+  return std::nullopt;
+}
+
 // The value named `text`; InputError listing the names otherwise.
 template <class E>
 E parse_option(std::string_view text) {
-  for (const auto& entry : OptionNames<E>::table)
-    if (entry.name == text) return entry.value;
+  if (const std::optional<E> value = find_option<E>(text)) return *value;
   // Appended piece by piece: GCC 12 misreads `"'" + std::string(...)` here (-Wrestrict).
   const auto& table = OptionNames<E>::table;
   std::string message(OptionNames<E>::what);
