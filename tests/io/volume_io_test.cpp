@@ -27,6 +27,7 @@
 #include "keymesh/io/plane_source.hpp"
 #include "io/volume_formats.hpp"
 #include "keymesh/io/volume_io.hpp"
+#include "zlib_bytes.hpp"
 
 namespace keymesh::io {
 namespace {
@@ -62,16 +63,6 @@ std::string gzip_bytes(const std::string& data) {
   EXPECT_EQ(deflate(&z, Z_FINISH), Z_STREAM_END);
   out.resize(z.total_out);
   deflateEnd(&z);
-  return out;
-}
-
-std::string zlib_bytes(const std::string& data) {
-  uLongf n = compressBound(data.size());
-  std::string out(n, '\0');
-  EXPECT_EQ(compress2(reinterpret_cast<Bytef*>(out.data()), &n, reinterpret_cast<const Bytef*>(data.data()),
-                      data.size(), 6),
-            Z_OK);
-  out.resize(n);
   return out;
 }
 
