@@ -14,6 +14,7 @@
 #include "mesh_bytes.hpp"
 
 #include "checked_mesh.hpp"
+#include "type_names.hpp"
 
 namespace keymesh::io {
 
@@ -38,17 +39,17 @@ struct Element {
   std::vector<Property> props;
 };
 
-std::optional<ScalarType> ply_scalar(std::string_view t) {
-  if (t == "char" || t == "int8") return ScalarType::Int8;
-  if (t == "uchar" || t == "uint8") return ScalarType::UInt8;
-  if (t == "short" || t == "int16") return ScalarType::Int16;
-  if (t == "ushort" || t == "uint16") return ScalarType::UInt16;
-  if (t == "int" || t == "int32") return ScalarType::Int32;
-  if (t == "uint" || t == "uint32") return ScalarType::UInt32;
-  if (t == "float" || t == "float32") return ScalarType::Float32;
-  if (t == "double" || t == "float64") return ScalarType::Float64;
-  return std::nullopt;
-}
+// PLY's type names, the original ones and the sized ones of later writers.
+constexpr TypeName kPlyTypes[] = {
+    {"char", ScalarType::Int8},     {"int8", ScalarType::Int8},       {"uchar", ScalarType::UInt8},
+    {"uint8", ScalarType::UInt8},   {"short", ScalarType::Int16},     {"int16", ScalarType::Int16},
+    {"ushort", ScalarType::UInt16}, {"uint16", ScalarType::UInt16},   {"int", ScalarType::Int32},
+    {"int32", ScalarType::Int32},   {"uint", ScalarType::UInt32},     {"uint32", ScalarType::UInt32},
+    {"float", ScalarType::Float32}, {"float32", ScalarType::Float32}, {"double", ScalarType::Float64},
+    {"float64", ScalarType::Float64},
+};
+
+std::optional<ScalarType> ply_scalar(std::string_view t) { return type_named(t, kPlyTypes); }
 
 std::vector<std::string_view> split_words(std::string_view line) {
   std::vector<std::string_view> words;
