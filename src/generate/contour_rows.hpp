@@ -159,28 +159,39 @@ inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke,
 // emit(id, i, j, k, axis) once for every cut edge of grid rows of planes
 // [kb, ke], id its point id (key order). A voxel's 12 edges lie in grid rows
 // (j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1); their ids come from those
-// rows' RowIds. Voxel rows are taken in runs of consecutive j, so rows j + 1
-// of one voxel row are rows j of the next. The points of a grid row are
-// emitted while its ids are filled, by the one task that owns the row: the
-// task of its run in layer k (and the last layer's for plane ke), so no row
-// is read again for its points.
+// rows' RowIds. A task takes a brick of voxel rows, kRun consecutive j by
+// kLayers consecutive k, and keeps the RowIds of two planes of its grid
+// rows: plane k + 1's become plane k's for the next layer, so a grid row's
+// ids are filled once per brick that reads them (twice only on a brick's
+// top plane). The points of a grid row are emitted while its ids are
+// filled, by the one brick that owns the row (its planes but the top one,
+// unless the top is plane ke; its rows but the last, unless that is row
+// ny - 1), so no row is read again for its points.
 template <class Emit>
 void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc,
                 PointIndex* connectivity, Emit&& emit) {
   const auto& table = marching_cubes_table();
-  const Id layers = ke - kb;
-  constexpr Id kRun = 16;  // voxel rows per task
-  const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun;
-  parallel::for_each_dynamic(layers * runs_per_layer, [&](Id task) {
-    const Id k = kb + task / runs_per_layer;
-    const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
-    // Grid row (j, k_) as a voxel row of this task sees it: its ids, and its
-    // points when this task owns it (rows j_begin .. j_end - 1, and the last
-    // row ny - 1, of plane k; of plane ke too in the last layer).
-    auto fill = [&](RowIds& row, Id j, Id k_) {
+  constexpr Id kRun = 16;     // voxel rows (j) per brick
+  constexpr Id kLayers = 8;   // voxel layers (k) per brick
+  const Id runs = (s.ny - 1 + kRun - 1) / kRun;
+  const Id stacks = (ke - kb + kLayers - 1) / kLayers;
+  parallel::for_each_dynamic(runs * stacks, [&](Id task) {
+    const Id k_begin = kb + (task / runs) * kLayers, k_end = std::min(ke, k_begin + kLayers);
+    const Id j_begin = (task % runs) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
+    // Grid rows j_begin .. j_end of two planes, in this thread's scratch.
+    thread_local std::vector<std::uint32_t> scratch;
+    const Id row_ids = 3 * s.nx;
+    if (static_cast<Id>(scratch.size()) < 2 * (kRun + 1) * row_ids)
+      scratch.resize(static_cast<std::size_t>(2 * (kRun + 1) * row_ids));
+    auto ids_of = [&](int plane, Id j) {
+      return RowIds(scratch.data() + (plane * (kRun + 1) + (j - j_begin)) * row_ids, s.nx);
+    };
+    // Fills grid row (j, k_)'s ids, and writes its points when this brick owns it.
+    auto fill = [&](int plane, Id j, Id k_) {
+      RowIds row = ids_of(plane, j);
       const RowCuts cuts(bits, s, j, k_, ke);
       const Id first = rc.point_first[(k_ - kb) * s.ny + j];
-      const bool owned = (k_ == k || k_ == ke) && (j < j_end || j == s.ny - 1);
+      const bool owned = (k_ < k_end || k_ == ke) && (j < j_end || j == s.ny - 1);
       if (!owned) return row.fill(cuts, first, [](std::uint32_t, Id, std::uint32_t, std::uint32_t, std::uint32_t) {});
       row.fill(cuts, first, [&](std::uint32_t id, Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
         if (x) emit(Id{id}, i, j, k_, 0);
@@ -188,36 +199,30 @@ void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const 
         if (z) emit(Id{id + x + y}, i, j, k_, 2);
       });
     };
-    // Rows (j, k), (j, k + 1) of the current voxel row, and the next j's,
-    // in this thread's scratch.
-    thread_local std::vector<std::uint32_t> scratch;
-    if (static_cast<Id>(scratch.size()) < 12 * s.nx) scratch.resize(static_cast<std::size_t>(12 * s.nx));
-    RowIds lo[2] = {RowIds(scratch.data(), s.nx), RowIds(scratch.data() + 3 * s.nx, s.nx)};
-    RowIds hi[2] = {RowIds(scratch.data() + 6 * s.nx, s.nx), RowIds(scratch.data() + 9 * s.nx, s.nx)};
-    fill(lo[0], j_begin, k);
-    fill(lo[1], j_begin, k + 1);
-    for (Id j = j_begin; j < j_end; ++j) {
-      fill(hi[0], j + 1, k);
-      fill(hi[1], j + 1, k + 1);
-      // Cube edge e's id at voxel i is edge_ids[e][i]: its row's array for
-      // its axis, shifted by its x offset.
-      const std::uint32_t* edge_ids[12];
-      for (int e = 0; e < 12; ++e) {
-        const auto& ce = table.edges[e];
-        const RowIds& row = ce.dz ? (ce.dy ? hi[1] : lo[1]) : (ce.dy ? hi[0] : lo[0]);
-        edge_ids[e] = row.ids[ce.axis] + ce.dx;
-      }
-      PointIndex* out = connectivity + 3 * rc.triangle_first[(k - kb) * (s.ny - 1) + j];
-      for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
-        const std::uint8_t* e = table.triangle_edges[cube_case].data();
-        for (int t = table.triangle_count[cube_case]; t > 0; --t, e += 3, out += 3) {
-          out[0] = edge_ids[e[0]][i];
-          out[1] = edge_ids[e[1]][i];
-          out[2] = edge_ids[e[2]][i];
+    int lo = 0;  // the plane of layer k's lower grid rows
+    for (Id j = j_begin; j <= j_end; ++j) fill(lo, j, k_begin);
+    for (Id k = k_begin; k < k_end; ++k) {
+      const int hi = lo ^ 1;
+      for (Id j = j_begin; j <= j_end; ++j) fill(hi, j, k + 1);
+      for (Id j = j_begin; j < j_end; ++j) {
+        // Cube edge e's id at voxel i is edge_ids[e][i]: its row's array for
+        // its axis, shifted by its x offset.
+        const std::uint32_t* edge_ids[12];
+        for (int e = 0; e < 12; ++e) {
+          const auto& ce = table.edges[e];
+          edge_ids[e] = ids_of(ce.dz ? hi : lo, j + ce.dy).ids[ce.axis] + ce.dx;
         }
-      });
-      std::swap(lo[0], hi[0]);
-      std::swap(lo[1], hi[1]);
+        PointIndex* out = connectivity + 3 * rc.triangle_first[(k - kb) * (s.ny - 1) + j];
+        for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
+          const std::uint8_t* e = table.triangle_edges[cube_case].data();
+          for (int t = table.triangle_count[cube_case]; t > 0; --t, e += 3, out += 3) {
+            out[0] = edge_ids[e[0]][i];
+            out[1] = edge_ids[e[1]][i];
+            out[2] = edge_ids[e[2]][i];
+          }
+        });
+      }
+      lo = hi;
     }
   }, 1);
 }
