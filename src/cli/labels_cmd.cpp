@@ -53,38 +53,47 @@ LabelsJob job_of(const LabelsCli& o) {
   return job;
 }
 
+// --memory-limit: the volume streamed in slabs of z-planes. Returns the
+// mesh; `r` gets the keys only this path reports.
+SurfaceMesh labels_streamed(const LabelsJob& job, StageTimer& timer, generate::LabelStats& stats, nlohmann::json& r) {
+  auto source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
+  generate::LabelStreamStats ss;
+  SurfaceMesh mesh = timer.run("labels", [&] {
+    return naming_input(job, [&] {
+      return generate::contour_labels_streamed(*source, job.options, job.memory_limit, &stats, &ss);
+    });
+  });
+  timer.add("read", ss.read);
+  r["dims"] = source->header().dims;
+  r["scalar_type"] = scalar_type_name(source->header().type);
+  r["memory_limit"] = job.memory_limit;
+  r["stream"] = {{"slabs", ss.slabs}, {"rows_per_slab", ss.rows_per_slab}, {"slab_bytes", ss.slab_bytes},
+                 {"read", ss.read}, {"merge", ss.merge}};
+  return mesh;
+}
+
+// The volume read whole.
+SurfaceMesh labels_in_memory(const LabelsJob& job, StageTimer& timer, Progress& progress,
+                             generate::LabelStats& stats, nlohmann::json& r) {
+  progress.say("reading " + job.input);
+  const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
+  const ImageGrid grid = timer.run("read", [&] { return io::read_volume(job.input, raw); });
+  progress.enable_if(grid.num_points() > (1ll << 25));
+  r["dims"] = grid.dims;
+  r["scalar_type"] = scalar_type_name(grid.type);
+  return timer.run("labels", [&] {
+    return naming_input(job, [&] { return generate::contour_labels(grid, job.options, &stats); });
+  });
+}
+
 // One process: the volume in memory, or streamed with --memory-limit.
 int run_labels(const LabelsJob& job) {
   StageTimer timer;
   Progress progress(job.common.quiet, file_size(job.input) > (64ll << 20));
-  const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
   generate::LabelStats stats;
-  SurfaceMesh mesh;
   nlohmann::json r;
-  if (job.memory_limit) {
-    auto source = io::open_volume_planes(job.input, raw);
-    generate::LabelStreamStats ss;
-    mesh = timer.run("labels", [&] {
-      return naming_input(job, [&] {
-        return generate::contour_labels_streamed(*source, job.options, job.memory_limit, &stats, &ss);
-      });
-    });
-    timer.add("read", ss.read);
-    r["dims"] = source->header().dims;
-    r["scalar_type"] = scalar_type_name(source->header().type);
-    r["memory_limit"] = job.memory_limit;
-    r["stream"] = {{"slabs", ss.slabs}, {"rows_per_slab", ss.rows_per_slab}, {"slab_bytes", ss.slab_bytes},
-                   {"read", ss.read}, {"merge", ss.merge}};
-  } else {
-    progress.say("reading " + job.input);
-    const ImageGrid grid = timer.run("read", [&] { return io::read_volume(job.input, raw); });
-    progress.enable_if(grid.num_points() > (1ll << 25));
-    mesh = timer.run("labels", [&] {
-      return naming_input(job, [&] { return generate::contour_labels(grid, job.options, &stats); });
-    });
-    r["dims"] = grid.dims;
-    r["scalar_type"] = scalar_type_name(grid.type);
-  }
+  const SurfaceMesh mesh =
+      job.memory_limit ? labels_streamed(job, timer, stats, r) : labels_in_memory(job, timer, progress, stats, r);
   progress.say("writing " + job.output);
   write_labels_outputs(job, mesh, stats, std::move(r), timer);
   return 0;
