@@ -1,6 +1,7 @@
 // VTK XML ImageData (.vti) as VTK 9 and ParaView write it; the XML and
 // DataArray decoding is shared with .vtp (io/vtk_xml.hpp).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -9,9 +10,9 @@
 #include <sstream>
 #include <type_traits>
 
-#include "keymesh/io/atomic_file.hpp"
 #include "volume_formats.hpp"
 #include "vtk_xml.hpp"
+#include "vtk_xml_writer.hpp"
 
 namespace keymesh::io {
 
@@ -58,44 +59,44 @@ std::string appended_head(const std::string& path, std::uint64_t file_bytes) {
 
 namespace {
 
-// Parses a .vti from `data`: the whole file, or (head_only) just its XML
-// head up to the AppendedData marker, in which case only an uncompressed
-// raw appended array can be read (straight from the file into the grid)
-// and anything else returns nullopt.
-// With `layout`, a raw appended uncompressed array is not read: where its
-// samples lie is filled in instead (vti_layout).
-std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& data, bool head_only,
-                                   std::uint64_t file_bytes, VolumeLayout* layout = nullptr) {
-  const ParsedXml xml = parse_xml(data, path);
-  const Context ctx = file_context(xml, path, "ImageData");
-  const XmlNode* image = xml.root->child("ImageData");
-  if (!image) throw InputError(path + ": VTK file has no <ImageData>");
-  const auto extent = numbers(path, "WholeExtent", image->attr("WholeExtent"), 6);
+// Where the grid lies: WholeExtent's sizes, Origin and Spacing (|spacing|),
+// the origin moved to the extent's lower corner.
+struct VtiGeometry {
+  std::vector<double> extent;
   std::array<Id, 3> dims{};
-  for (int a = 0; a < 3; ++a) {
-    const double d = extent[2 * a + 1] - extent[2 * a] + 1;
-    if (d < 1 || d > 9.0e15 || extent[2 * a] != std::floor(extent[2 * a]) || d != std::floor(d))
-      throw InputError(path + ": bad WholeExtent '" + *image->attr("WholeExtent") + "'");
-    dims[a] = static_cast<Id>(d);
-  }
   std::array<double, 3> origin{0, 0, 0}, spacing{1, 1, 1};
-  if (image->attr("Origin")) {
-    const auto o = numbers(path, "Origin", image->attr("Origin"), 3);
-    origin = {o[0], o[1], o[2]};
+};
+VtiGeometry read_geometry(const std::string& path, const XmlNode& image) {
+  VtiGeometry g;
+  g.extent = numbers(path, "WholeExtent", image.attr("WholeExtent"), 6);
+  for (int a = 0; a < 3; ++a) {
+    const double d = g.extent[2 * a + 1] - g.extent[2 * a] + 1;
+    if (d < 1 || d > 9.0e15 || g.extent[2 * a] != std::floor(g.extent[2 * a]) || d != std::floor(d))
+      throw InputError(path + ": bad WholeExtent '" + *image.attr("WholeExtent") + "'");
+    g.dims[a] = static_cast<Id>(d);
   }
-  if (image->attr("Spacing")) {
-    const auto s = numbers(path, "Spacing", image->attr("Spacing"), 3);
+  if (image.attr("Origin")) {
+    const auto o = numbers(path, "Origin", image.attr("Origin"), 3);
+    g.origin = {o[0], o[1], o[2]};
+  }
+  if (image.attr("Spacing")) {
+    const auto s = numbers(path, "Spacing", image.attr("Spacing"), 3);
     for (int a = 0; a < 3; ++a) {
       if (!(s[a] != 0)) throw InputError(path + ": Spacing must not be zero");
-      spacing[a] = std::abs(s[a]);
+      g.spacing[a] = std::abs(s[a]);
     }
   }
   // Point (i, j, k) of the extent lies at Origin + (i, j, k) * Spacing: the
   // grid's first point is the extent's lower corner.
-  for (int a = 0; a < 3; ++a) origin[a] += extent[2 * a] * spacing[a];
+  for (int a = 0; a < 3; ++a) g.origin[a] += g.extent[2 * a] * g.spacing[a];
   for (int a = 0; a < 3; ++a)
-    if (!std::isfinite(origin[a])) throw InputError(path + ": Origin + WholeExtent * Spacing is not finite");
-  const XmlNode* piece = image->child("Piece");
+    if (!std::isfinite(g.origin[a])) throw InputError(path + ": Origin + WholeExtent * Spacing is not finite");
+  return g;
+}
+
+// The one piece's scalar point array: the active Scalars, else the first.
+const XmlNode& scalar_point_array(const std::string& path, const XmlNode& image, const std::vector<double>& extent) {
+  const XmlNode* piece = image.child("Piece");
   if (!piece) throw InputError(path + ": <ImageData> has no <Piece>");
   if (piece->attr("Extent")) {
     const auto pe = numbers(path, "Piece Extent", piece->attr("Extent"), 6);
@@ -110,74 +111,106 @@ std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& d
   if (!array) throw InputError(path + ": no point data array to contour");
   if (const std::string* nc = array->attr("NumberOfComponents"); nc && *nc != "1")
     throw InputError(path + ": point array has " + *nc + " components (a scalar field is needed)");
-  const std::string* declared = array->attr("type");
+  return *array;
+}
+
+// Where a raw appended array's samples start in the file (after its size
+// header), checked against the bytes the grid needs and the file holds.
+std::uint64_t appended_samples_at(const std::string& path, const XmlNode& array, const Context& ctx,
+                                  std::uint64_t head_bytes, std::uint64_t file_bytes, std::uint64_t need) {
+  std::int64_t offset = 0;
+  const std::string* off = array.attr("offset");
+  if (!off || !mesh_bytes::parse_int64(*off, offset) || offset < 0)
+    throw InputError(path + ": point array has a bad appended offset");
+  const std::uint64_t at = head_bytes + static_cast<std::uint64_t>(offset);
+  const std::size_t hs = ctx.header == ScalarType::UInt64 ? 8 : 4;
+  unsigned char h[8] = {};
+  detail::read_exact(path, at, h, hs, "the point array's size header");
+  const std::uint64_t array_bytes = hs == 8 ? mesh_bytes::load<std::uint64_t>(h, ctx.big_endian)
+                                            : mesh_bytes::load<std::uint32_t>(h, ctx.big_endian);
+  if (array_bytes != need)
+    throw InputError(path + ": point array holds " + std::to_string(array_bytes) + " bytes, WholeExtent needs " +
+                     std::to_string(need));
+  if (at + hs > file_bytes || need > file_bytes - at - hs)
+    throw InputError(path + ": file holds " + std::to_string(file_bytes) + " bytes, the point array needs " +
+                     std::to_string(need) + " at offset " + std::to_string(at + hs));
+  return at + hs;
+}
+
+// A decoded array into the grid: as it is when it holds the declared type;
+// ascii arrays decode as doubles and are converted back to the declared
+// type, refusing values the type cannot hold (and NaN in an integer array).
+void store_decoded(const std::string& path, const Array& a, ScalarType declared_scalar, const std::string& declared,
+                   ImageGrid& grid) {
+  if (a.type == declared_scalar) {
+    std::memcpy(grid.data(), a.bytes.data(), grid.bytes.size());
+    if (a.big) detail::swap_samples(grid);
+    return;
+  }
+  visit_scalars(grid, [&](const auto* samples) {
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
+    T* out = const_cast<T*>(samples);
+    for (Id i = 0; i < grid.num_points(); ++i) {
+      const double v = a.as_double(static_cast<std::size_t>(i));
+      if constexpr (std::is_integral_v<T>) {
+        if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
+              v <= static_cast<double>(std::numeric_limits<T>::max())))
+          throw InputError(path + ": point array value " + std::to_string(v) + " at index " + std::to_string(i) +
+                           " does not fit its type " + declared);
+      }
+      out[i] = static_cast<T>(v);
+    }
+    return 0;
+  });
+}
+
+// Parses a .vti from `data`: the whole file, or (head_only) just its XML
+// head up to the AppendedData marker, in which case only an uncompressed
+// raw appended array can be read (straight from the file into the grid)
+// and anything else returns nullopt.
+// With `layout`, a raw appended uncompressed array is not read: where its
+// samples lie is filled in instead (vti_layout).
+std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& data, bool head_only,
+                                   std::uint64_t file_bytes, VolumeLayout* layout = nullptr) {
+  const ParsedXml xml = parse_xml(data, path);
+  const Context ctx = file_context(xml, path, "ImageData");
+  const XmlNode* image = xml.root->child("ImageData");
+  if (!image) throw InputError(path + ": VTK file has no <ImageData>");
+  const VtiGeometry geometry = read_geometry(path, *image);
+  const XmlNode& array = scalar_point_array(path, *image, geometry.extent);
+  const std::string* declared = array.attr("type");
   const auto declared_scalar = declared ? vtk_scalar(*declared) : std::nullopt;
   if (!declared_scalar) throw InputError(path + ": point array has no supported type");
   const ScalarType type = grid_type(path, *declared_scalar, *declared);
   // Checks dims (and the product's overflow) before anything is allocated;
   // the samples are allocated only once the file is known to hold them.
-  const std::uint64_t need = detail::checked_byte_count(dims, type, path);
+  const std::uint64_t need = detail::checked_byte_count(geometry.dims, type, path);
   ImageGrid grid;
-  grid.origin = origin;
-  grid.spacing = spacing;
-  if (const std::string* name = array->attr("Name")) grid.name = *name;
-  const std::string* format = array->attr("format");
+  grid.origin = geometry.origin;
+  grid.spacing = geometry.spacing;
+  if (const std::string* name = array.attr("Name")) grid.name = *name;
+  const std::string* format = array.attr("format");
   if (head_only && format && *format == "appended" && ctx.compressor.empty() && ctx.appended_encoding &&
       *ctx.appended_encoding == "raw") {
     // Raw appended, uncompressed: [size header][samples] at head + offset.
-    std::int64_t offset = 0;
-    const std::string* off = array->attr("offset");
-    if (!off || !mesh_bytes::parse_int64(*off, offset) || offset < 0)
-      throw InputError(path + ": point array has a bad appended offset");
-    const std::uint64_t at = data.size() + static_cast<std::uint64_t>(offset);
-    const std::size_t hs = ctx.header == ScalarType::UInt64 ? 8 : 4;
-    unsigned char h[8] = {};
-    detail::read_exact(path, at, h, hs, "the point array's size header");
-    const std::uint64_t array_bytes = hs == 8 ? mesh_bytes::load<std::uint64_t>(h, ctx.big_endian)
-                                              : mesh_bytes::load<std::uint32_t>(h, ctx.big_endian);
-    if (array_bytes != need)
-      throw InputError(path + ": point array holds " + std::to_string(array_bytes) + " bytes, WholeExtent needs " +
-                       std::to_string(need));
-    if (at + hs > file_bytes || need > file_bytes - at - hs)
-      throw InputError(path + ": file holds " + std::to_string(file_bytes) + " bytes, the point array needs " +
-                       std::to_string(need) + " at offset " + std::to_string(at + hs));
+    const std::uint64_t at = appended_samples_at(path, array, ctx, data.size(), file_bytes, need);
     if (layout) {
       layout->data_path = path;
-      layout->raw = RawOptions{dims, type, spacing, origin, ctx.big_endian, static_cast<Id>(at + hs)};
+      layout->raw =
+          RawOptions{geometry.dims, type, geometry.spacing, geometry.origin, ctx.big_endian, static_cast<Id>(at)};
       return std::nullopt;
     }
-    detail::allocate_checked(grid, dims, type, path);
-    detail::read_exact(path, at + hs, grid.data(), grid.bytes.size(), "the point array");
+    detail::allocate_checked(grid, geometry.dims, type, path);
+    detail::read_exact(path, at, grid.data(), grid.bytes.size(), "the point array");
     if (ctx.big_endian) detail::swap_samples(grid);
     return grid;
   }
   if (head_only) return std::nullopt;  // appended but compressed or base64: needs the whole file
   // Decoding checks every size against the bytes present, so the grid is
   // allocated only for data the file really holds.
-  const Array a = decode_array(*array, ctx, "point array", static_cast<std::int64_t>(need / scalar_size(type)));
-  detail::allocate_checked(grid, dims, type, path);
-  if (a.type == *declared_scalar) {
-    std::memcpy(grid.data(), a.bytes.data(), grid.bytes.size());
-    if (a.big) detail::swap_samples(grid);
-  } else {
-    // ascii arrays decode as doubles: convert back to the declared type,
-    // refusing values the type cannot hold (and NaN in an integer array).
-    visit_scalars(grid, [&](const auto* samples) {
-      using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
-      T* out = const_cast<T*>(samples);
-      for (Id i = 0; i < grid.num_points(); ++i) {
-        const double v = a.as_double(static_cast<std::size_t>(i));
-        if constexpr (std::is_integral_v<T>) {
-          if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
-                v <= static_cast<double>(std::numeric_limits<T>::max())))
-            throw InputError(path + ": point array value " + std::to_string(v) + " at index " + std::to_string(i) +
-                             " does not fit its type " + *declared);
-        }
-        out[i] = static_cast<T>(v);
-      }
-      return 0;
-    });
-  }
+  const Array a = decode_array(array, ctx, "point array", static_cast<std::int64_t>(need / scalar_size(type)));
+  detail::allocate_checked(grid, geometry.dims, type, path);
+  store_decoded(path, a, *declared_scalar, *declared, grid);
   return grid;
 }
 
@@ -203,30 +236,19 @@ VolumeLayout vti_layout(const std::string& path) {
 }
 
 void write_vti(const ImageGrid& grid, const std::string& path) {
-  const char* type = vtk_type_name(grid.type);
-  const std::string name = xml_escape(grid.name);
   char extent[256], geometry[512];
   std::snprintf(extent, sizeof extent, "0 %lld 0 %lld 0 %lld", static_cast<long long>(grid.dims[0] - 1),
                 static_cast<long long>(grid.dims[1] - 1), static_cast<long long>(grid.dims[2] - 1));
   std::snprintf(geometry, sizeof geometry, "Origin=\"%.17g %.17g %.17g\" Spacing=\"%.17g %.17g %.17g\"", grid.origin[0],
                 grid.origin[1], grid.origin[2], grid.spacing[0], grid.spacing[1], grid.spacing[2]);
-  std::string head;
-  head += "<?xml version=\"1.0\"?>\n";
-  head += "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  vtk_xml::AppendedArrays arrays;
+  std::string head = vtk_xml::file_header("ImageData");
   head += std::string("  <ImageData WholeExtent=\"") + extent + "\" " + geometry + ">\n";
   head += std::string("    <Piece Extent=\"") + extent + "\">\n";
-  head += "      <PointData Scalars=\"" + name + "\">\n";
-  head += std::string("        <DataArray type=\"") + type + "\" Name=\"" + name +
-          "\" NumberOfComponents=\"1\" format=\"appended\" offset=\"0\"/>\n";
+  head += "      <PointData Scalars=\"" + xml_escape(grid.name) + "\">\n";
+  head += arrays.bytes(grid.type, grid.name, 1, grid.data(), grid.bytes.size());
   head += "      </PointData>\n      <CellData/>\n    </Piece>\n  </ImageData>\n";
-  head += "  <AppendedData encoding=\"raw\">\n   _";
-  AtomicFile f(path);
-  f.write(head);
-  const std::uint64_t bytes = grid.bytes.size();
-  f.write(&bytes, sizeof bytes);
-  f.write(grid.data(), grid.bytes.size());
-  f.write(std::string_view("\n  </AppendedData>\n</VTKFile>\n"));
-  f.commit();
+  arrays.write(path, head);
 }
 
 }  // namespace keymesh::io

@@ -94,104 +94,152 @@ bool is_name_char(char c) {
   return !is_space(c) && c != '=' && c != '>' && c != '/' && c != '<' && c != '"' && c != '\'';
 }
 
-ParsedXml parse_xml(std::string_view doc, const std::string& path) {
-  ParsedXml result;
-  std::vector<XmlNode*> stack;
-  std::size_t pos = 0;
-  auto fail = [&](const std::string& what) -> InputError {
-    return InputError(path + ": malformed XML at byte " + std::to_string(pos) + ": " + what);
-  };
-  while (pos < doc.size()) {
-    const std::size_t lt = doc.find('<', pos);
-    const std::size_t text_end = lt == std::string_view::npos ? doc.size() : lt;
-    if (!stack.empty() && text_end > pos) stack.back()->text.append(doc.substr(pos, text_end - pos));
-    if (lt == std::string_view::npos) break;
-    pos = lt;
-    if (doc.substr(pos, 4) == "<!--") {
-      const std::size_t e = doc.find("-->", pos + 4);
+namespace {
+
+// parse_xml's state: the document, where it is, the elements still open and
+// what has been built.
+class XmlScanner {
+ public:
+  XmlScanner(std::string_view doc, const std::string& path) : doc_(doc), path_(path) {}
+
+  ParsedXml run() {
+    while (pos_ < doc_.size()) {
+      const std::size_t lt = doc_.find('<', pos_);
+      const std::size_t text_end = lt == std::string_view::npos ? doc_.size() : lt;
+      if (!stack_.empty() && text_end > pos_) stack_.back()->text.append(doc_.substr(pos_, text_end - pos_));
+      if (lt == std::string_view::npos) break;
+      pos_ = lt;
+      if (skip_comment_or_declaration()) continue;
+      if (doc_.substr(pos_, 2) == "</") {
+        end_tag();
+        continue;
+      }
+      if (start_tag()) return std::move(result_);  // the appended data follows
+    }
+    if (!result_.root) throw InputError(path_ + ": not an XML file (no root element)");
+    if (!stack_.empty()) throw InputError(path_ + ": truncated XML (<" + stack_.back()->name + "> not closed)");
+    return std::move(result_);
+  }
+
+ private:
+  InputError fail(const std::string& what) const {
+    return InputError(path_ + ": malformed XML at byte " + std::to_string(pos_) + ": " + what);
+  }
+  void skip_space() {
+    while (pos_ < doc_.size() && is_space(doc_[pos_])) ++pos_;
+  }
+  std::string_view name_at() {
+    const std::size_t start = pos_;
+    while (pos_ < doc_.size() && is_name_char(doc_[pos_])) ++pos_;
+    return doc_.substr(start, pos_ - start);
+  }
+
+  // <!-- ... -->, <? ... ?> and <! ... >: skipped; false when pos_ starts none.
+  bool skip_comment_or_declaration() {
+    if (doc_.substr(pos_, 4) == "<!--") {
+      const std::size_t e = doc_.find("-->", pos_ + 4);
       if (e == std::string_view::npos) throw fail("unterminated comment");
-      pos = e + 3;
-      continue;
+      pos_ = e + 3;
+      return true;
     }
-    if (doc.substr(pos, 2) == "<?" || doc.substr(pos, 2) == "<!") {
-      const std::size_t e = doc.find('>', pos);
+    if (doc_.substr(pos_, 2) == "<?" || doc_.substr(pos_, 2) == "<!") {
+      const std::size_t e = doc_.find('>', pos_);
       if (e == std::string_view::npos) throw fail("unterminated declaration");
-      pos = e + 1;
-      continue;
+      pos_ = e + 1;
+      return true;
     }
-    if (doc.substr(pos, 2) == "</") {
-      const std::size_t e = doc.find('>', pos);
-      if (e == std::string_view::npos) throw fail("unterminated end tag");
-      std::string_view name = doc.substr(pos + 2, e - pos - 2);
-      while (!name.empty() && is_space(name.back())) name.remove_suffix(1);
-      if (stack.empty() || stack.back()->name != name)
-        throw fail("end tag </" + std::string(name.substr(0, 40)) + "> does not match");
-      stack.pop_back();
-      pos = e + 1;
-      continue;
-    }
-    // Start tag.
-    ++pos;
-    const std::size_t name_start = pos;
-    while (pos < doc.size() && is_name_char(doc[pos])) ++pos;
-    auto node = std::make_unique<XmlNode>();
-    node->name = std::string(doc.substr(name_start, pos - name_start));
-    if (node->name.empty()) throw fail("empty tag name");
-    bool self_closing = false;
+    return false;
+  }
+
+  // </name>: closes the innermost open element, which must be `name`.
+  void end_tag() {
+    const std::size_t e = doc_.find('>', pos_);
+    if (e == std::string_view::npos) throw fail("unterminated end tag");
+    std::string_view name = doc_.substr(pos_ + 2, e - pos_ - 2);
+    while (!name.empty() && is_space(name.back())) name.remove_suffix(1);
+    if (stack_.empty() || stack_.back()->name != name)
+      throw fail("end tag </" + std::string(name.substr(0, 40)) + "> does not match");
+    stack_.pop_back();
+    pos_ = e + 1;
+  }
+
+  // key="value" (or 'value') into node.attrs, unescaped.
+  void read_attribute(XmlNode& node) {
+    const std::string key(name_at());
+    if (key.empty()) throw fail("bad attribute in <" + node.name + ">");
+    skip_space();
+    if (pos_ >= doc_.size() || doc_[pos_] != '=') throw fail("attribute '" + key + "' without value");
+    ++pos_;
+    skip_space();
+    if (pos_ >= doc_.size() || (doc_[pos_] != '"' && doc_[pos_] != '\''))
+      throw fail("unquoted attribute '" + key + "'");
+    const char quote = doc_[pos_++];
+    const std::size_t ve = doc_.find(quote, pos_);
+    if (ve == std::string_view::npos) throw fail("unterminated attribute '" + key + "'");
+    node.attrs.emplace_back(key, xml_unescape(doc_.substr(pos_, ve - pos_), path_));
+    pos_ = ve + 1;
+  }
+
+  // The attributes up to '>' or '/>'; true for a self-closing tag.
+  bool read_attributes(XmlNode& node) {
     for (;;) {
-      while (pos < doc.size() && is_space(doc[pos])) ++pos;
-      if (pos >= doc.size()) throw fail("unterminated tag <" + node->name + ">");
-      if (doc[pos] == '>') {
-        ++pos;
-        break;
+      skip_space();
+      if (pos_ >= doc_.size()) throw fail("unterminated tag <" + node.name + ">");
+      if (doc_[pos_] == '>') {
+        ++pos_;
+        return false;
       }
-      if (doc[pos] == '/') {
-        if (pos + 1 >= doc.size() || doc[pos + 1] != '>') throw fail("stray '/' in tag");
-        self_closing = true;
-        pos += 2;
-        break;
+      if (doc_[pos_] == '/') {
+        if (pos_ + 1 >= doc_.size() || doc_[pos_ + 1] != '>') throw fail("stray '/' in tag");
+        pos_ += 2;
+        return true;
       }
-      const std::size_t ks = pos;
-      while (pos < doc.size() && is_name_char(doc[pos])) ++pos;
-      const std::string key(doc.substr(ks, pos - ks));
-      if (key.empty()) throw fail("bad attribute in <" + node->name + ">");
-      while (pos < doc.size() && is_space(doc[pos])) ++pos;
-      if (pos >= doc.size() || doc[pos] != '=') throw fail("attribute '" + key + "' without value");
-      ++pos;
-      while (pos < doc.size() && is_space(doc[pos])) ++pos;
-      if (pos >= doc.size() || (doc[pos] != '"' && doc[pos] != '\'')) throw fail("unquoted attribute '" + key + "'");
-      const char quote = doc[pos++];
-      const std::size_t ve = doc.find(quote, pos);
-      if (ve == std::string_view::npos) throw fail("unterminated attribute '" + key + "'");
-      node->attrs.emplace_back(key, xml_unescape(doc.substr(pos, ve - pos), path));
-      pos = ve + 1;
-    }
-    XmlNode* raw = node.get();
-    if (stack.empty()) {
-      if (result.root) throw fail("more than one root element");
-      result.root = std::move(node);
-    } else {
-      stack.back()->children.push_back(std::move(node));
-    }
-    if (raw->name == "AppendedData" && !self_closing) {
-      // Everything after the '_' marker is data: stop parsing here.
-      const std::string* enc = raw->attr("encoding");
-      result.appended_encoding = enc ? *enc : std::string("raw");
-      while (pos < doc.size() && is_space(doc[pos])) ++pos;
-      if (pos >= doc.size() || doc[pos] != '_') throw fail("<AppendedData> without '_' marker");
-      result.appended = doc.substr(pos + 1);
-      return result;
-    }
-    if (!self_closing) {
-      if (stack.size() >= kMaxXmlDepth)
-        throw fail("elements nested deeper than " + std::to_string(kMaxXmlDepth) + " levels");
-      stack.push_back(raw);
+      read_attribute(node);
     }
   }
-  if (!result.root) throw InputError(path + ": not an XML file (no root element)");
-  if (!stack.empty()) throw InputError(path + ": truncated XML (<" + stack.back()->name + "> not closed)");
-  return result;
-}
+
+  // A start tag at pos_: the element joins its parent (or is the root) and,
+  // unless self-closing, is open until its end tag. True for <AppendedData>:
+  // everything after its '_' marker is data, cut off unparsed.
+  bool start_tag() {
+    ++pos_;
+    auto node = std::make_unique<XmlNode>();
+    node->name = std::string(name_at());
+    if (node->name.empty()) throw fail("empty tag name");
+    const bool self_closing = read_attributes(*node);
+    XmlNode* raw = node.get();
+    if (stack_.empty()) {
+      if (result_.root) throw fail("more than one root element");
+      result_.root = std::move(node);
+    } else {
+      stack_.back()->children.push_back(std::move(node));
+    }
+    if (raw->name == "AppendedData" && !self_closing) {
+      const std::string* enc = raw->attr("encoding");
+      result_.appended_encoding = enc ? *enc : std::string("raw");
+      skip_space();
+      if (pos_ >= doc_.size() || doc_[pos_] != '_') throw fail("<AppendedData> without '_' marker");
+      result_.appended = doc_.substr(pos_ + 1);
+      return true;
+    }
+    if (!self_closing) {
+      if (stack_.size() >= kMaxXmlDepth)
+        throw fail("elements nested deeper than " + std::to_string(kMaxXmlDepth) + " levels");
+      stack_.push_back(raw);
+    }
+    return false;
+  }
+
+  std::string_view doc_;
+  const std::string& path_;
+  std::size_t pos_ = 0;
+  std::vector<XmlNode*> stack_;
+  ParsedXml result_;
+};
+
+}  // namespace
+
+ParsedXml parse_xml(std::string_view doc, const std::string& path) { return XmlScanner(doc, path).run(); }
 
 // ---- DataArray decoding ---------------------------------------------------
 

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/io/atomic_file.hpp"
 #include "mesh_bytes.hpp"
 #include "vtk_xml.hpp"
+#include "vtk_xml_writer.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::io {
@@ -219,27 +219,112 @@ void with_storage(IndexArray& a, F&& f) {
 
 UnstructuredGrid read_vtu(const std::string& path) { return parse_vtu(read_whole_file(path), path); }
 
-UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
-  ParsedXml xml = parse_xml(data, path);
-  const Context ctx = file_context(xml, path, "UnstructuredGrid");
-  const XmlNode* ug = xml.root->child("UnstructuredGrid");
-  if (!ug) throw InputError(path + ": VTK file has no <UnstructuredGrid>");
+namespace {
+
+// The <Piece>s and the points they declare in all (bounded before any
+// allocation depends on it).
+std::vector<const XmlNode*> list_pieces(const XmlNode& ug, const std::string& path, std::int64_t& total_points) {
   std::vector<const XmlNode*> pieces;
-  std::int64_t total_points = 0;
-  for (const auto& p : ug->children)
+  total_points = 0;
+  for (const auto& p : ug.children)
     if (p->name == "Piece") {
       pieces.push_back(p.get());
       total_points += count_attr(*p, "NumberOfPoints", path);
       if (total_points > (std::int64_t{1} << 48)) throw InputError(path + ": the pieces declare too many points");
     }
   if (pieces.empty()) throw InputError(path + ": <UnstructuredGrid> has no <Piece>");
+  return pieces;
+}
 
+// The cells of every piece read so far: end offsets (from 0) and VTK types.
+struct CellLists {
+  std::vector<std::uint64_t> offsets{0};
+  std::vector<std::uint8_t> types;
+};
+
+// A piece's offsets, shifted by the ids of the pieces before it (id_base),
+// non-decreasing.
+void append_offsets(const Values& o, std::uint64_t id_base, const std::string& path, const std::string& where,
+                    std::vector<std::uint64_t>& offsets) {
+  const std::size_t at = offsets.size();
+  offsets.resize(at + o.count());
+  const std::size_t bad = convert_ints(o, std::uint64_t{1} << 62, id_base, offsets.data() + at);
+  if (bad < o.count())
+    throw InputError(path + ": cell offset " + value_text(o, bad) + " of cell " + std::to_string(bad) + where +
+                     " is not a valid offset");
+  for (std::size_t k = at; k < offsets.size(); ++k)
+    if (offsets[k] < offsets[k - 1])
+      throw InputError(path + ": cell offsets" + where + " decrease at cell " + std::to_string(k - at));
+}
+
+void append_types(const Values& t, const std::string& path, const std::string& where,
+                  std::vector<std::uint8_t>& types) {
+  const std::size_t at = types.size();
+  types.resize(at + t.count());
+  if (const std::size_t bad = convert_ints(t, 256, 0, types.data() + at); bad < t.count())
+    throw InputError(path + ": cell " + std::to_string(bad) + where + " has cell type " + value_text(t, bad));
+}
+
+// A piece's <Cells>: offsets, types, then its connectivity (ids in range of
+// the piece's npts points, offset by base) straight into g.connectivity.
+void read_piece_cells(const XmlNode& piece, const Context& ctx, const std::string& where, std::int64_t ncells,
+                      std::int64_t npts, std::uint64_t base, UnstructuredGrid& g, CellLists& lists) {
+  const std::string& path = ctx.path;
+  const XmlNode* cells = piece.child("Cells");
+  const XmlNode* conn = named_array(cells, "connectivity");
+  const XmlNode* offs = named_array(cells, "offsets");
+  const XmlNode* typ = named_array(cells, "types");
+  if (!conn || !offs || !typ)
+    throw InputError(path + ": <Cells>" + where + " lacks its connectivity, offsets or types array");
+  const std::uint64_t id_base = g.connectivity.size();
+  append_offsets(get_array(*offs, ctx, "Cells offsets array" + where, ncells), id_base, path, where, lists.offsets);
+  append_types(get_array(*typ, ctx, "Cells types array" + where, ncells), path, where, lists.types);
+  const Values c = get_array(*conn, ctx, "Cells connectivity array" + where, -1);
+  if (lists.offsets.back() - id_base != c.count())
+    throw InputError(path + ": cell offsets" + where + " end at " + std::to_string(lists.offsets.back() - id_base) +
+                     " but the connectivity holds " + std::to_string(c.count()) + " ids");
+  with_storage(g.connectivity, [&](auto& ids) {
+    ids.resize(ids.size() + c.count());
+    const std::size_t bad = convert_ints(c, static_cast<std::uint64_t>(npts), base, ids.data() + id_base);
+    if (bad < c.count())
+      throw InputError(path + ": cell connectivity" + where + " refers to point " + value_text(c, bad) +
+                       " at connectivity[" + std::to_string(bad) + "], out of range (" + std::to_string(npts) +
+                       " points)");
+  });
+}
+
+// One fixed-size type throughout: stored uniformly (no offsets or types).
+void adopt_cell_lists(CellLists& lists, UnstructuredGrid& g) {
+  const std::vector<std::uint8_t>& types = lists.types;
+  const bool one_type = !types.empty() && std::all_of(types.begin(), types.end(), [&](std::uint8_t t) {
+    return t == types.front();
+  });
+  const int k = one_type ? cell_type_size(static_cast<CellType>(types.front())) : 0;
+  bool uniform = one_type && k > 0;
+  for (std::size_t c = 0; uniform && c + 1 < lists.offsets.size(); ++c)
+    uniform = lists.offsets[c + 1] - lists.offsets[c] == std::uint64_t(k);
+  if (uniform) {
+    g.uniform_type = static_cast<CellType>(types.front());
+  } else if (!types.empty()) {
+    g.offsets = std::move(lists.offsets);
+    g.cell_types = std::move(lists.types);
+  }
+}
+
+}  // namespace
+
+UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
+  ParsedXml xml = parse_xml(data, path);
+  const Context ctx = file_context(xml, path, "UnstructuredGrid");
+  const XmlNode* ug = xml.root->child("UnstructuredGrid");
+  if (!ug) throw InputError(path + ": VTK file has no <UnstructuredGrid>");
+  std::int64_t total_points = 0;
+  const std::vector<const XmlNode*> pieces = list_pieces(*ug, path, total_points);
   // Ids go straight into an IndexArray of the width the total point count
   // needs: one copy from the decoded bytes, none through 64-bit temporaries.
   UnstructuredGrid g;
   g.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(total_points), 0);
-  std::vector<std::uint64_t> offsets{0};
-  std::vector<std::uint8_t> types;
+  CellLists lists;
   bool point_fields_started = false, cell_fields_started = false;
   for (std::size_t pi = 0; pi < pieces.size(); ++pi) {
     const XmlNode& piece = *pieces[pi];
@@ -253,184 +338,66 @@ UnstructuredGrid parse_vtu(std::string_view data, const std::string& path) {
       if (!arr) throw InputError(path + ": piece with " + std::to_string(npts) + " points has no <Points> array");
       append_floats(get_array(*arr, ctx, "Points array" + where, 3 * npts), g.points);
     }
-    if (ncells > 0) {
-      const XmlNode* cells = piece.child("Cells");
-      const XmlNode* conn = named_array(cells, "connectivity");
-      const XmlNode* offs = named_array(cells, "offsets");
-      const XmlNode* typ = named_array(cells, "types");
-      if (!conn || !offs || !typ)
-        throw InputError(path + ": <Cells>" + where + " lacks its connectivity, offsets or types array");
-      const std::uint64_t id_base = g.connectivity.size();
-      {
-        const Values o = get_array(*offs, ctx, "Cells offsets array" + where, ncells);
-        const std::size_t at = offsets.size();
-        offsets.resize(at + o.count());
-        const std::size_t bad = convert_ints(o, std::uint64_t{1} << 62, id_base, offsets.data() + at);
-        if (bad < o.count())
-          throw InputError(path + ": cell offset " + value_text(o, bad) + " of cell " + std::to_string(bad) + where +
-                           " is not a valid offset");
-        for (std::size_t k = at; k < offsets.size(); ++k)
-          if (offsets[k] < offsets[k - 1])
-            throw InputError(path + ": cell offsets" + where + " decrease at cell " + std::to_string(k - at));
-      }
-      {
-        const Values t = get_array(*typ, ctx, "Cells types array" + where, ncells);
-        const std::size_t at = types.size();
-        types.resize(at + t.count());
-        const std::size_t bad = convert_ints(t, 256, 0, types.data() + at);
-        if (bad < t.count())
-          throw InputError(path + ": cell " + std::to_string(bad) + where + " has cell type " + value_text(t, bad));
-      }
-      const Values c = get_array(*conn, ctx, "Cells connectivity array" + where, -1);
-      if (offsets.back() - id_base != c.count())
-        throw InputError(path + ": cell offsets" + where + " end at " + std::to_string(offsets.back() - id_base) +
-                         " but the connectivity holds " + std::to_string(c.count()) + " ids");
-      with_storage(g.connectivity, [&](auto& ids) {
-        ids.resize(ids.size() + c.count());
-        const std::size_t bad = convert_ints(c, static_cast<std::uint64_t>(npts), base, ids.data() + id_base);
-        if (bad < c.count())
-          throw InputError(path + ": cell connectivity" + where + " refers to point " + value_text(c, bad) +
-                           " at connectivity[" + std::to_string(bad) + "], out of range (" + std::to_string(npts) +
-                           " points)");
-      });
-    }
+    if (ncells > 0) read_piece_cells(piece, ctx, where, ncells, npts, base, g, lists);
     merge_fields(g.point_fields, point_fields_started, read_fields(piece.child("PointData"), ctx, npts, "PointData"),
                  npts);
     merge_fields(g.cell_fields, cell_fields_started, read_fields(piece.child("CellData"), ctx, ncells, "CellData"),
                  ncells);
   }
-  // One fixed-size type throughout: store it uniformly (no offsets or types).
-  const bool one_type = !types.empty() && std::all_of(types.begin(), types.end(), [&](std::uint8_t t) {
-    return t == types.front();
-  });
-  const int k = one_type ? cell_type_size(static_cast<CellType>(types.front())) : 0;
-  bool uniform = one_type && k > 0;
-  for (std::size_t c = 0; uniform && c + 1 < offsets.size(); ++c) uniform = offsets[c + 1] - offsets[c] == std::uint64_t(k);
-  if (uniform) {
-    g.uniform_type = static_cast<CellType>(types.front());
-  } else if (!types.empty()) {
-    g.offsets = std::move(offsets);
-    g.cell_types = std::move(types);
-  }
+  adopt_cell_lists(lists, g);
   g.validate(path, /*check_ids=*/false);  // every id was checked as it was read
   return g;
 }
 
+namespace {
+
+// A <PointData> or <CellData> section and its fields' arrays.
+std::string data_section(vtk_xml::AppendedArrays& arrays, const char* tag, const std::vector<Field>& fields) {
+  std::string x = std::string("      <") + tag + vtk_xml::field_attributes(fields) + ">\n";
+  for (const Field& f : fields) x += arrays.floats(f.name, f.components, f.values);
+  return x + "      </" + tag + ">\n";
+}
+
+// The <Cells> section: connectivity and offsets as Int32 whenever every value
+// fits (whatever the in-memory width), Int64 beyond; a UInt8 type per cell.
+std::string cells_section(vtk_xml::AppendedArrays& arrays, const UnstructuredGrid& g) {
+  constexpr std::uint64_t int32_max = std::uint64_t(std::numeric_limits<std::int32_t>::max());
+  const Id cells = g.num_cells();
+  const ScalarType id_type = std::uint64_t(g.num_points()) > int32_max + 1 ? ScalarType::Int64 : ScalarType::Int32;
+  const ScalarType offset_type = g.connectivity.size() > int32_max ? ScalarType::Int64 : ScalarType::Int32;
+  std::string x = "      <Cells>\n";
+  x += g.connectivity.visit([&](auto ids) {
+    using T = typename decltype(ids)::value_type;
+    // Ids already as wide as the file's are written as they are.
+    if (sizeof(T) == scalar_size(id_type))
+      return arrays.bytes(id_type, "connectivity", 0, ids.data(), sizeof(T) * ids.size());
+    return arrays.integers(id_type, "connectivity", ids.size(), [ids](std::uint64_t i) { return ids[i]; });
+  });
+  x += arrays.integers(offset_type, "offsets", std::uint64_t(cells),
+                       [&g](std::uint64_t c) { return g.cell_end(static_cast<Id>(c)); });
+  if (!g.cell_types.empty())
+    x += arrays.bytes(ScalarType::UInt8, "types", 0, g.cell_types.data(), g.cell_types.size());
+  else
+    x += arrays.integers(ScalarType::UInt8, "types", std::uint64_t(cells), [&g](std::uint64_t) {
+      return static_cast<std::uint8_t>(g.uniform_type);
+    });
+  return x + "      </Cells>\n";
+}
+
+}  // namespace
+
 void write_vtu(const UnstructuredGrid& g, const std::string& path) {
   g.validate(path);
-  const Id n = g.num_points();
-  const Id cells = g.num_cells();
-  constexpr std::uint64_t int32_max = std::uint64_t(std::numeric_limits<std::int32_t>::max());
-  // Int32 whenever every id fits (whatever the in-memory width), Int64 beyond.
-  const bool wide_ids = std::uint64_t(n) > int32_max + 1;
-  const std::uint64_t id_bytes = wide_ids ? 8 : 4;
-  const bool wide_offsets = g.connectivity.size() > int32_max;
-  const std::uint64_t offset_bytes = wide_offsets ? 8 : 4;
-  auto first_scalar = [](const std::vector<Field>& fields) -> const Field* {
-    for (const Field& f : fields)
-      if (f.components == 1) return &f;
-    return nullptr;
-  };
-  std::uint64_t offset = 0;
-  auto block = [&](std::uint64_t bytes) {
-    const std::uint64_t at = offset;
-    offset += 8 + bytes;
-    return std::to_string(at);
-  };
-  auto data_section = [&](const char* tag, const std::vector<Field>& fields) {
-    std::string x = std::string("      <") + tag;
-    if (const Field* s = first_scalar(fields)) x += " Scalars=\"" + xml_escape(s->name) + "\"";
-    for (const Field& f : fields)
-      if (f.name == "Normals" && f.components == 3) x += " Normals=\"Normals\"";
-    x += ">\n";
-    for (const Field& f : fields)
-      x += "        <DataArray type=\"Float32\" Name=\"" + xml_escape(f.name) + "\" NumberOfComponents=\"" +
-           std::to_string(f.components) + "\" format=\"appended\" offset=\"" + block(4 * f.values.size()) + "\"/>\n";
-    return x + "      </" + tag + ">\n";
-  };
-  std::string x = "<?xml version=\"1.0\"?>\n";
-  x += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
-  x += "  <UnstructuredGrid>\n";
-  x += "    <Piece NumberOfPoints=\"" + std::to_string(n) + "\" NumberOfCells=\"" + std::to_string(cells) + "\">\n";
-  x += data_section("PointData", g.point_fields);
-  x += data_section("CellData", g.cell_fields);
-  x += "      <Points>\n";
-  x += "        <DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"" +
-       block(4 * g.points.size()) + "\"/>\n";
-  x += "      </Points>\n";
-  x += "      <Cells>\n";
-  x += std::string("        <DataArray type=\"") + (wide_ids ? "Int64" : "Int32") +
-       "\" Name=\"connectivity\" format=\"appended\" offset=\"" + block(id_bytes * g.connectivity.size()) + "\"/>\n";
-  x += std::string("        <DataArray type=\"") + (wide_offsets ? "Int64" : "Int32") +
-       "\" Name=\"offsets\" format=\"appended\" offset=\"" + block(offset_bytes * std::uint64_t(cells)) + "\"/>\n";
-  x += "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"" + block(std::uint64_t(cells)) +
-       "\"/>\n";
-  x += "      </Cells>\n";
-  x += "    </Piece>\n";
-  x += "  </UnstructuredGrid>\n";
-  x += "  <AppendedData encoding=\"raw\">\n   _";
-
-  AtomicFile file(path);
-  file.write(x);
-  // Arrays already in the file's layout go out as they are; the others are
-  // converted through a 1 MiB buffer, never one string of the whole array.
-  std::string buf;
-  auto flush = [&](bool force) {
-    if (force || buf.size() >= (1 << 20)) {
-      file.write(buf);
-      buf.clear();
-    }
-  };
-  constexpr bool little = std::endian::native == std::endian::little;
-  auto size_header = [&](std::uint64_t bytes) {
-    append_le(buf, bytes);
-    flush(true);
-  };
-  auto write_floats = [&](const std::vector<float>& v) {
-    size_header(4 * v.size());
-    if constexpr (little) {
-      file.write(v.data(), 4 * v.size());
-    } else {
-      for (float f : v) {
-        append_le(buf, f);
-        flush(false);
-      }
-    }
-  };
-  for (const Field& f : g.point_fields) write_floats(f.values);
-  for (const Field& f : g.cell_fields) write_floats(f.values);
-  write_floats(g.points);
-  size_header(id_bytes * g.connectivity.size());
-  g.connectivity.visit([&](auto ids) {
-    using T = typename decltype(ids)::value_type;
-    if (little && sizeof(T) == id_bytes) {
-      file.write(ids.data(), sizeof(T) * ids.size());
-      return;
-    }
-    for (const T id : ids) {
-      if (wide_ids) append_le(buf, static_cast<std::int64_t>(id));
-      else append_le(buf, static_cast<std::int32_t>(id));
-      flush(false);
-    }
-  });
-  size_header(offset_bytes * std::uint64_t(cells));
-  for (Id c = 0; c < cells; ++c) {
-    if (wide_offsets) append_le(buf, static_cast<std::int64_t>(g.cell_end(c)));
-    else append_le(buf, static_cast<std::int32_t>(g.cell_end(c)));
-    flush(false);
-  }
-  size_header(std::uint64_t(cells));
-  if (!g.cell_types.empty()) {
-    file.write(g.cell_types.data(), g.cell_types.size());
-  } else {
-    for (Id c = 0; c < cells; ++c) {
-      buf.push_back(static_cast<char>(g.uniform_type));
-      flush(false);
-    }
-  }
-  buf += "\n  </AppendedData>\n</VTKFile>\n";
-  flush(true);
-  file.commit();
+  vtk_xml::AppendedArrays arrays;
+  std::string x = vtk_xml::file_header("UnstructuredGrid") + "  <UnstructuredGrid>\n";
+  x += "    <Piece NumberOfPoints=\"" + std::to_string(g.num_points()) + "\" NumberOfCells=\"" +
+       std::to_string(g.num_cells()) + "\">\n";
+  x += data_section(arrays, "PointData", g.point_fields);
+  x += data_section(arrays, "CellData", g.cell_fields);
+  x += "      <Points>\n" + arrays.floats("Points", 3, g.points) + "      </Points>\n";
+  x += cells_section(arrays, g);
+  x += "    </Piece>\n  </UnstructuredGrid>\n";
+  arrays.write(path, x);
 }
 
 }  // namespace keymesh::io
