@@ -16,7 +16,7 @@ namespace {
 // know the file.
 bool is_mesh_path(const std::string& path) {
   const io::Format* format = io::format_by_name(path);
-  return format && io::reader_of<io::SurfaceReader>(*format);
+  return format && io::function_of<io::SurfaceReader>(*format);
 }
 
 // Returns ("volume", Volume), ("grid", grid parts) or ("mesh", (points,

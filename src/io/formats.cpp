@@ -4,6 +4,7 @@
 #include <cctype>
 #include <filesystem>
 
+#include "keymesh/core/error.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/plane_source.hpp"
 #include "dicom.hpp"
@@ -159,6 +160,20 @@ std::string accepted_volumes(bool written) {
   const auto headerless = [](const Format& f) { return has(f, K::Volume, false) && f.headerless; };
   for (const std::string& e : extensions_where(headerless)) out.append(", or ").append(e).append(kHeaderlessNeeds);
   return out;
+}
+
+void refuse_format(const std::string& path, DataKind kind, bool written) {
+  switch (kind) {
+    case K::Surface:
+      throw InputError(path + ": unknown mesh file extension '" + file_extension(path) + "' (accepted: " +
+                       accepted_surfaces() + ")");
+    case K::Grid:
+      throw InputError(path + ": unknown unstructured grid format '" + file_extension(path) + "' (use " +
+                       accepted_grids() + ")");
+    case K::Volume: break;
+  }
+  if (written) throw InputError(path + ": cannot write this volume format (expected " + accepted_volumes(true) + ")");
+  throw InputError(path + ": unknown volume format (expected " + accepted_volumes(false) + ")");
 }
 
 std::string accepted_plane_sources() {

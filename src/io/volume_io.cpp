@@ -14,8 +14,8 @@ ImageGrid read_volume_unchecked(const std::string& path, const RawOptions* raw) 
   if (f && f->kind == DataKind::Volume && f->headerless)
     throw InputError(path + ": a " + std::string(f->extensions[0]) +
                      " volume needs --dims X Y Z and --type (and --spacing, --endian if not 1 / little)");
-  if (const VolumeReader read = f ? reader_of<VolumeReader>(*f) : nullptr) return read(path);
-  throw InputError(path + ": unknown volume format (expected " + accepted_volumes(false) + ")");
+  if (const VolumeReader read = f ? function_of<VolumeReader>(*f) : nullptr) return read(path);
+  refuse_format(path, DataKind::Volume, false);
 }
 }  // namespace
 
@@ -25,10 +25,6 @@ ImageGrid read_volume(const std::string& path, const RawOptions* raw) {
   return grid;
 }
 
-void write_volume(const ImageGrid& grid, const std::string& path) {
-  const Format* f = format_by_name(path);
-  if (const VolumeWriter write = f ? writer_of<VolumeWriter>(*f) : nullptr) return write(grid, path);
-  throw InputError(path + ": cannot write this volume format (expected " + accepted_volumes(true) + ")");
-}
+void write_volume(const ImageGrid& grid, const std::string& path) { function_for<VolumeWriter>(path)(grid, path); }
 
 }  // namespace keymesh::io

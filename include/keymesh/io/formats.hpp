@@ -13,6 +13,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -63,16 +64,21 @@ struct Format {
   bool is_folder() const { return holds != nullptr; }
 };
 
-// The format's reader (writer) of type Fn, e.g. reader_of<SurfaceReader>:
-// null when the format holds another kind or keymesh does not read it.
+namespace detail {
+template <class Fn, class Variant>
+struct IsAlternative;
+template <class Fn, class... Ts>
+struct IsAlternative<Fn, std::variant<Ts...>> : std::bool_constant<(std::is_same_v<Fn, Ts> || ...)> {};
+}  // namespace detail
+
+// The format's function of type Fn (a reader type or a writer type, e.g.
+// function_of<SurfaceReader>): null when the format holds another kind or
+// keymesh does not read (write) it.
 template <class Fn>
-Fn reader_of(const Format& format) {
-  const Fn* fn = std::get_if<Fn>(&format.read);
-  return fn ? *fn : nullptr;
-}
-template <class Fn>
-Fn writer_of(const Format& format) {
-  const Fn* fn = std::get_if<Fn>(&format.write);
+Fn function_of(const Format& format) {
+  const Fn* fn = nullptr;
+  if constexpr (detail::IsAlternative<Fn, decltype(format.read)>::value) fn = std::get_if<Fn>(&format.read);
+  else fn = std::get_if<Fn>(&format.write);
   return fn ? *fn : nullptr;
 }
 
@@ -90,6 +96,27 @@ const Format* format_by_name(const std::string& path);
 // The format of an input: a folder's (DICOM series, Zarr) when the path is
 // a directory, else format_by_name.
 const Format* input_format(const std::string& path);
+
+// Throws the InputError saying that `path` names no format of `kind` keymesh
+// reads (writes), listing the extensions the table accepts:
+// "<path>: unknown mesh file extension '.x' (accepted: ...)",
+// "<path>: unknown unstructured grid format '.x' (use ...)",
+// "<path>: unknown volume format (expected ...)",
+// "<path>: cannot write this volume format (expected ...)".
+[[noreturn]] void refuse_format(const std::string& path, DataKind kind, bool written);
+
+// The function of type Fn (a reader or writer type) the table gives a file
+// name (format_by_name); refuse_format when it has none.
+template <class Fn>
+Fn function_for(const std::string& path) {
+  const Format* format = format_by_name(path);
+  if (const Fn fn = format ? function_of<Fn>(*format) : nullptr) return fn;
+  constexpr bool written = !detail::IsAlternative<Fn, decltype(Format::read)>::value;
+  constexpr DataKind kind = std::is_same_v<Fn, SurfaceReader> || std::is_same_v<Fn, SurfaceWriter> ? DataKind::Surface
+                            : std::is_same_v<Fn, GridReader> || std::is_same_v<Fn, GridWriter>     ? DataKind::Grid
+                                                                                                  : DataKind::Volume;
+  refuse_format(path, kind, written);
+}
 
 // The extensions of the formats of one kind keymesh reads (or writes), in
 // table order, separated by `separator`: for help strings, ".ply .obj .stl
