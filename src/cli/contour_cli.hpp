@@ -39,6 +39,12 @@ generate::ContourOptions contour_options(const ContourCli& o);
 nlohmann::json contour_report(const ContourCli& o, long long points, long long cells, int threads,
                               const StageTimer& timer);
 
+// --coarsen: what the collapse did to the topology (triangles_before,
+// triangles_after, nonmanifold_edges, nonmanifold_vertices, boundary_edges),
+// timed as "check"; non-manifold parts are said on stderr unless quiet.
+nlohmann::json coarsening_report(const ContourCli& o, const SurfaceMesh& mesh, Id triangles_before,
+                                 StageTimer& timer);
+
 // Output OUT.pvtp: one OUT_<rank>.vtp piece per rank (points with their
 // global ids) and the index; any other extension (or --gather): the whole
 // mesh gathered on rank 0, byte-identical to the single-process file.

@@ -45,6 +45,21 @@ nlohmann::json contour_report(const ContourCli& o, long long points, long long c
   return r;
 }
 
+nlohmann::json coarsening_report(const ContourCli& o, const SurfaceMesh& mesh, Id triangles_before,
+                                 StageTimer& timer) {
+  const auto topo = timer.run("check", [&] { return analyze::check_topology(mesh); });
+  nlohmann::json r;
+  r["triangles_before"] = triangles_before;
+  r["triangles_after"] = mesh.num_cells();
+  r["nonmanifold_edges"] = topo.nonmanifold_edges;
+  r["nonmanifold_vertices"] = topo.nonmanifold_vertices;
+  r["boundary_edges"] = topo.boundary_edges;
+  if (!o.common.quiet && (topo.nonmanifold_edges || topo.nonmanifold_vertices))
+    std::fprintf(stderr, "keymesh: coarsening left %lld non-manifold edges and %lld non-manifold vertices\n",
+                 (long long)topo.nonmanifold_edges, (long long)topo.nonmanifold_vertices);
+  return r;
+}
+
 namespace {
 
 // What a single-process path made: the mesh, the contour's statistics and
@@ -143,16 +158,7 @@ ContourResult run_voxels(const ContourCli& o, const generate::ContourOptions& op
 // --coarsen: what the collapse did to the topology (outside the contour's
 // time), in the report and, when it left non-manifold parts, on stderr.
 void report_coarsening(const ContourCli& o, ContourResult& result, StageTimer& timer) {
-  const auto topo = timer.run("check", [&] { return analyze::check_topology(result.mesh); });
-  nlohmann::json& r = result.facts;
-  r["triangles_before"] = result.stats.triangles_before_coarsening;
-  r["triangles_after"] = result.mesh.num_cells();
-  r["nonmanifold_edges"] = topo.nonmanifold_edges;
-  r["nonmanifold_vertices"] = topo.nonmanifold_vertices;
-  r["boundary_edges"] = topo.boundary_edges;
-  if (!o.common.quiet && (topo.nonmanifold_edges || topo.nonmanifold_vertices))
-    std::fprintf(stderr, "keymesh: coarsening left %lld non-manifold edges and %lld non-manifold vertices\n",
-                 (long long)topo.nonmanifold_edges, (long long)topo.nonmanifold_vertices);
+  result.facts.update(coarsening_report(o, result.mesh, result.stats.triangles_before_coarsening, timer));
 }
 
 // MiB of the mesh written: positions, connectivity, offsets, point fields.
@@ -273,7 +279,7 @@ void add_contour_options(CLI::App& cmd, ContourCli& o) {
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
                  "the output is byte-identical (averaged normals: within float rounding); raw (--dims), "
-                 ".nrrd/.nhdr or .nii with uncompressed samples; no --coarsen")
+                 ".nrrd/.nhdr or .nii with uncompressed samples")
       ->check(size_validator());
   cmd.add_flag("--gather", o.gather,
                "under mpirun: gather the whole mesh on rank 0 into one file (the default unless OUT is .pvtp, "

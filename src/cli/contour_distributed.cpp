@@ -86,14 +86,18 @@ bool write_pieces(distributed::ContourPiece& piece, const std::string& output) {
   return ok;
 }
 
-// The whole mesh gathered on rank 0, which writes it. True when it was written.
-bool write_gathered(distributed::ContourPiece& piece, const std::string& output, StageTimer& timer) {
+// The whole mesh gathered on rank 0 (coarsened there with --coarsen), which
+// writes it. True when it was written. `coarsening` receives rank 0's
+// coarsening report keys.
+bool write_gathered(const ContourCli& o, distributed::ContourPiece& piece, StageTimer& timer,
+                    nlohmann::json& coarsening) {
   const SurfaceMesh whole = timer.run("gather", [&] { return distributed::gather(piece); });
   bool ok = true;
   if (distributed::rank() == 0) {
     try {
+      if (o.coarsen) coarsening = coarsening_report(o, whole, piece.triangles_before_coarsening, timer);
       const auto t0 = std::chrono::steady_clock::now();
-      timer.run("write", [&] { io::write_mesh(whole, output); });
+      timer.run("write", [&] { io::write_mesh(whole, o.output); });
       piece.stats.output += seconds_since(t0);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "keymesh: %s\n", e.what());
@@ -104,14 +108,22 @@ bool write_gathered(distributed::ContourPiece& piece, const std::string& output,
 }
 
 // Rank 0's summary line and report, from every rank's statistics.
+// With --coarsen, `coarsening` holds its keys and the counts written are
+// the coarse mesh's.
 void report_distributed(const ContourCli& o, const PlaneSource& source, double total_points,
-                        const std::vector<distributed::RankStats>& all, int threads, const StageTimer& timer) {
+                        const std::vector<distributed::RankStats>& all, int threads, const StageTimer& timer,
+                        const nlohmann::json& coarsening, double coarse_points) {
   const int ranks = distributed::size();
   double triangles = 0, bytes = 0, max_tris = 0;
   for (const auto& s : all) {
     triangles += s.triangles;
     bytes += s.bytes_sent;
     max_tris = std::max(max_tris, s.triangles);
+  }
+  const double rank_triangles = triangles;
+  if (o.coarsen) {
+    total_points = coarse_points;
+    triangles = coarsening["triangles_after"].get<double>();
   }
   if (!o.common.quiet)
     std::fprintf(stderr, "keymesh: %lld points, %lld triangles on %d ranks -> %s\n",
@@ -128,8 +140,12 @@ void report_distributed(const ContourCli& o, const PlaneSource& source, double t
   r["distributed"] = {{"ranks", ranks},
                       {"output", ends_with(o.output, ".pvtp") ? "pieces" : "gathered"},
                       {"bytes_exchanged", bytes},
-                      {"triangle_imbalance", triangles > 0 ? max_tris * ranks / triangles : 1.0},
+                      {"triangle_imbalance", rank_triangles > 0 ? max_tris * ranks / rank_triangles : 1.0},
                       {"per_rank", per_rank}};
+  if (o.coarsen) {
+    r.update(coarsening);
+    r["coarsen"] = true;
+  }
   r["peak_rss_mib"] = peak_rss_mib();
   write_report(o.common.report_path, r);
 }
@@ -144,18 +160,27 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
                    o.output.c_str());
     return 2;
   }
+  if (pieces && o.coarsen) {
+    if (distributed::rank() == 0)
+      std::fprintf(stderr, "keymesh contour: --coarsen averages the points the ranks share, on rank 0: write one file "
+                           "(.vtp .ply ...), not the pieces of %s\n",
+                   o.output.c_str());
+    return 2;
+  }
   StageTimer timer;
   const std::unique_ptr<PlaneSource> source = open_slab_source(o, options);
   if (!source) return 1;
   distributed::ContourPiece piece =
       timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance); });
   const double total_points = static_cast<double>(piece.numbering.total);
+  nlohmann::json coarsening;
   const bool written = pieces ? timer.run("write", [&] { return write_pieces(piece, o.output); })
-                              : write_gathered(piece, o.output, timer);
+                              : write_gathered(o, piece, timer, coarsening);
   if (!written) return 1;
   const std::vector<distributed::RankStats> all = distributed::gather_stats(piece.stats);
   if (distributed::rank() != 0) return 0;
-  report_distributed(o, *source, total_points, all, threads, timer);
+  report_distributed(o, *source, total_points, all, threads, timer, coarsening,
+                     static_cast<double>(piece.coarse_points));
   return 0;
 }
 

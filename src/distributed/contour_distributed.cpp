@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/mesh/normals.hpp"
 
@@ -71,7 +72,6 @@ void gather_segments(const std::vector<T>& local, int per, MPI_Datatype type, co
 }  // namespace
 
 void require_distributable(const ImageGrid& head, const generate::ContourOptions& options, int ranks) {
-  if (options.coarsen) throw InputError("distributed contour: --coarsen runs on one process so far");
   if (options.weld == generate::ContourWeld::VertexWeld)
     throw InputError("distributed contour: --weld vertexweld compares coordinates; across ranks only keys weld");
   if (options.backend != generate::Backend::Cpu) throw InputError("distributed contour: --backend cpu only so far");
@@ -238,9 +238,17 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   opt.total_planes = nz;
   opt.ghost_below = below;
   opt.ghost_above = above;
-  const bool average = options.normals == generate::ContourNormals::Average;
-  if (average) opt.normals = generate::ContourNormals::None;  // averaged below, across ranks
-  piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys);
+  // Coarsening averages a grid point's crossings, which two ranks may share:
+  // the fine pieces are gathered with their nearest grid points and rank 0
+  // coarsens the whole (gather()); averaged normals then come from the
+  // coarse mesh there.
+  piece.coarsen = options.coarsen;
+  piece.average_after_coarsening = options.coarsen && options.normals == generate::ContourNormals::Average;
+  piece.coarse_range = static_cast<std::uint64_t>(nxy * nz) * options.isovalues.size();
+  opt.coarsen = false;
+  const bool average = options.normals == generate::ContourNormals::Average && !options.coarsen;
+  if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
+  piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
   slab.bytes = {};
   // Averaged normals, KEY-REDUCE's merge over this rank's triangles first.
   std::vector<Vec3f> normal_sums;
@@ -269,11 +277,13 @@ SurfaceMesh gather(ContourPiece& piece) {
   // Owned points (positions and fields) in local order: key order, segment after segment.
   const Id n = m.num_points();
   std::vector<float> xyz;
+  std::vector<std::uint64_t> nearest;
   std::vector<std::vector<float>> fields(m.point_fields.size());
   xyz.reserve(static_cast<std::size_t>(3 * piece.stats.points_owned));
   for (Id p = 0; p < n; ++p)
     if (g.owned[p]) {
       xyz.insert(xyz.end(), m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3);
+      if (piece.coarsen) nearest.push_back(piece.nearest[static_cast<std::size_t>(p)]);
       for (std::size_t f = 0; f < fields.size(); ++f) {
         const Field& fd = m.point_fields[f];
         fields[f].insert(fields[f].end(), fd.values.begin() + fd.components * p, fd.values.begin() + fd.components * (p + 1));
@@ -303,6 +313,18 @@ SurfaceMesh gather(ContourPiece& piece) {
   }
   static_assert(sizeof(PointIndex) == 4, "the gather sends point ids as MPI_UINT32_T");
   gather_segments(conn, 3, MPI_UINT32_T, tri_counts, S, out.connectivity);
+  if (piece.coarsen) {
+    // The fine mesh of one process, and its points' coarse keys: coarsened
+    // as one process coarsens it.
+    std::vector<std::uint64_t> all_nearest;
+    gather_segments(nearest, 1, MPI_UINT64_T, g.counts, S, all_nearest);
+    if (r == 0) {
+      piece.triangles_before_coarsening = out.num_cells();
+      out = generate::coarsen(out, all_nearest, piece.coarse_range);
+      if (piece.average_after_coarsening) average_normals(out);
+      piece.coarse_points = out.num_points();
+    }
+  }
   piece.stats.output += seconds_since(t0);
   return out;
 }

@@ -1,6 +1,7 @@
 #include "keymesh/generate/coarsen.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 
@@ -8,45 +9,107 @@
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 
 namespace keymesh::generate {
 
+namespace {
+
+// A triangle as its point set: the smallest id first, the other two in
+// increasing order, and its orientation (+1 when rotating the smallest id to
+// the front leaves the other two increasing).
+struct TriangleSet {
+  std::uint32_t lo, mid, hi;
+  std::int8_t sign;
+};
+
+TriangleSet triangle_set(const PointIndex* C, Id t) {
+  const std::uint32_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
+  // Rotating the smallest id to the front keeps the orientation; the order
+  // of the other two then tells it.
+  const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
+  const std::uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
+  return TriangleSet{a, std::min(b, c), std::max(b, c), static_cast<std::int8_t>(b < c ? 1 : -1)};
+}
+
+// The triangles that may share their point set with another: those whose
+// set hashes to a bucket two or more triangles hash to. Every triangle of a
+// set of two or more is one (equal sets, equal buckets); a few others are
+// too (collisions), which the exact comparison then tells apart. Two bits a
+// bucket, set with atomic ORs: the result does not depend on the threads.
+std::vector<std::uint32_t> fold_candidates(const PointIndex* C, Id t_count) {
+  int bits = 10;
+  while (bits < 40 && (Id{1} << bits) < 16 * t_count) ++bits;
+  const std::uint64_t mask = (std::uint64_t{1} << bits) - 1;
+  std::vector<std::uint64_t> seen(static_cast<std::size_t>((mask >> 6) + 1), 0), twice(seen.size(), 0);
+  auto bucket = [&](Id t) {
+    const TriangleSet s = triangle_set(C, t);
+    std::uint64_t h = (static_cast<std::uint64_t>(s.lo) * 0x9E3779B97F4A7C15ull) ^
+                      (static_cast<std::uint64_t>(s.mid) * 0xC2B2AE3D27D4EB4Full) ^
+                      (static_cast<std::uint64_t>(s.hi) * 0x165667B19E3779F9ull);
+    h ^= h >> 29;
+    return (h * 0xD6E8FEB86659FD93ull >> 7) & mask;
+  };
+  parallel::for_each(t_count, [&](Id t) {
+    const std::uint64_t b = bucket(t), bit = std::uint64_t{1} << (b & 63);
+    const std::uint64_t before = std::atomic_ref<std::uint64_t>(seen[b >> 6]).fetch_or(bit, std::memory_order_relaxed);
+    if (before & bit) std::atomic_ref<std::uint64_t>(twice[b >> 6]).fetch_or(bit, std::memory_order_relaxed);
+  });
+  // The candidates in increasing triangle index, counted per block first.
+  const Id blocks = (t_count + 4095) / 4096;
+  std::vector<Id> first(static_cast<std::size_t>(blocks + 1), 0);
+  auto is_candidate = [&](Id t) {
+    const std::uint64_t b = bucket(t);
+    return (twice[b >> 6] >> (b & 63)) & 1;
+  };
+  parallel::for_each(blocks, [&](Id blk) {
+    Id n = 0;
+    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t) n += is_candidate(t);
+    first[blk] = n;
+  });
+  const Id total = parallel::exclusive_scan(first.data(), first.data(), blocks + 1);
+  std::vector<std::uint32_t> out(static_cast<std::size_t>(total));
+  parallel::for_each(blocks, [&](Id blk) {
+    Id at = first[blk];
+    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t)
+      if (is_candidate(t)) out[at++] = static_cast<std::uint32_t>(t);
+  });
+  return out;
+}
+
+}  // namespace
+
 // Collapses fold surfaces over themselves: two triangles on the same three
 // points facing opposite ways (a zero-volume fold) cancel, and repeated
-// triangles facing the same way are kept once. Triangles are grouped by their
-// smallest point id (KEY-REDUCE, dense plan: a counting sort over the
-// points), and each group's few triangles are compared with one another;
-// of every set of equal triangles the first of the winning orientation is
-// kept when the orientations do not cancel. Returns how many were removed.
+// triangles facing the same way are kept once. Only the candidates of
+// fold_candidates can be in such a set; they are grouped by their smallest
+// point id (KEY-REDUCE, dense plan: a counting sort over the points), and
+// each group's few triangles are compared with one another; of every set of
+// equal triangles the first of the winning orientation is kept when the
+// orientations do not cancel. Returns how many were removed.
 Id remove_folds(SurfaceMesh& mesh) {
   const Id t_count = mesh.num_cells();
   if (t_count == 0) return 0;
   const PointIndex* C = mesh.connectivity.data();
-  struct Tri {
-    std::uint32_t lo, mid, hi;
-    std::int8_t sign;
-  };
-  std::vector<Tri> tri(static_cast<std::size_t>(t_count));
-  std::vector<std::uint32_t> lo(static_cast<std::size_t>(t_count));
-  parallel::for_each(t_count, [&](Id t) {
-    const std::uint32_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
-    // Rotating the smallest id to the front keeps the orientation; the order
-    // of the other two then tells it.
-    const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
-    const std::uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
-    tri[t] = Tri{a, std::min(b, c), std::max(b, c), static_cast<std::int8_t>(b < c ? 1 : -1)};
-    lo[t] = a;
+  const std::vector<std::uint32_t> cand = fold_candidates(C, t_count);
+  const Id n = static_cast<Id>(cand.size());
+  if (n == 0) return 0;
+  std::vector<TriangleSet> tri(static_cast<std::size_t>(n));
+  std::vector<std::uint32_t> lo(static_cast<std::size_t>(n));
+  parallel::for_each(n, [&](Id c) {
+    tri[c] = triangle_set(C, cand[c]);
+    lo[c] = tri[c].lo;
   });
-  const auto g = keyreduce::partition_dense(lo.data(), t_count, static_cast<std::uint32_t>(mesh.num_points()),
-                                            keyreduce::Order::Build);
-  std::vector<Id> keep(static_cast<std::size_t>(t_count + 1), 1);
-  keep[t_count] = 0;
+  const auto g = keyreduce::partition_sort(lo.data(), n, parallel::bits_needed<std::uint32_t>(
+                                                             static_cast<std::uint32_t>(mesh.num_points() - 1)),
+                                           keyreduce::Order::Build);
+  std::vector<std::uint8_t> drop(static_cast<std::size_t>(n), 0);  // by candidate
   std::vector<std::uint8_t> folded_any(static_cast<std::size_t>(g.num_groups()), 0);
   parallel::for_each(g.num_groups(), [&](Id grp) {
     const Id b = g.offsets[grp], e = g.offsets[grp + 1];
     for (Id i = b; i < e; ++i) {
-      const Tri& ti = tri[g.order[i]];
+      const TriangleSet& ti = tri[g.order[i]];
       bool first = true;
       for (Id j = b; j < i && first; ++j)
         first = !(tri[g.order[j]].mid == ti.mid && tri[g.order[j]].hi == ti.hi);
@@ -58,23 +121,26 @@ Id remove_folds(SurfaceMesh& mesh) {
       folded_any[grp] = 1;
       bool kept = false;
       for (Id j = i; j < e; ++j) {
-        const Tri& tj = tri[g.order[j]];
+        const TriangleSet& tj = tri[g.order[j]];
         if (tj.mid != ti.mid || tj.hi != ti.hi) continue;
         const bool winner = net != 0 && !kept && (tj.sign > 0) == (net > 0);
-        keep[g.order[j]] = winner ? 1 : 0;
+        drop[g.order[j]] = winner ? 0 : 1;
         kept = kept || winner;
       }
     }
   });
   if (std::find(folded_any.begin(), folded_any.end(), 1) == folded_any.end()) return 0;
-  const Id kept = parallel::exclusive_scan(keep.data(), keep.data(), t_count + 1);
-  std::vector<PointIndex> conn(static_cast<std::size_t>(3 * kept));
-  parallel::for_each(t_count, [&](Id t) {
-    if (keep[t + 1] != keep[t])
-      for (int k = 0; k < 3; ++k) conn[3 * keep[t] + k] = C[3 * t + k];
-  });
-  mesh.connectivity = std::move(conn);
-  return t_count - kept;
+  // Pack the kept triangles in place, in order (each moves to a lower index).
+  Id at = 0, c = 0;
+  PointIndex* W = mesh.connectivity.data();
+  for (Id t = 0; t < t_count; ++t) {
+    if (c < n && cand[c] == t && drop[c++]) continue;
+    if (at != t)
+      for (int k = 0; k < 3; ++k) W[3 * at + k] = W[3 * t + k];
+    ++at;
+  }
+  mesh.connectivity.resize(static_cast<std::size_t>(3 * at));
+  return t_count - at;
 }
 
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
@@ -82,7 +148,13 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
   if (!mesh.all_triangles()) throw InputError("coarsen: the mesh has polygons; only triangles are coarsened");
   const Id n = mesh.num_points();
   if (static_cast<Id>(keys.size()) != n) throw InputError("coarsen: one key per point is needed");
-  const auto groups = keyreduce::partition_dense(keys.data(), n, key_range, keyreduce::Order::Build);
+  // The dense plan's table spans the key range (every grid point of the
+  // volume, for a contour); past a few keys per point the sort plan (same
+  // groups, same order) touches far less memory.
+  const auto groups = key_range <= static_cast<std::uint64_t>(4 * n + 1024)
+                          ? keyreduce::partition_dense(keys.data(), n, key_range, keyreduce::Order::Build)
+                          : keyreduce::partition_sort(keys.data(), n, parallel::bits_needed<std::uint64_t>(key_range - 1),
+                                                      keyreduce::Order::Build);
   const Id m = groups.num_groups();
   SurfaceMesh out;
   // Positions and every field: the mean over the group, in pair order.

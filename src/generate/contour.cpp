@@ -21,6 +21,7 @@
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/keyreduce/weld.hpp"
+#include "contour_coarse_rows.hpp"
 #include "contour_rows.hpp"
 #include "voxel_bits.hpp"
 
@@ -149,6 +150,8 @@ struct PointWriter {
   PointArrays out;
   std::uint64_t total_per_iso = 0;  // keys per isovalue of the whole grid (3 N_total)
   std::uint64_t key_shift = 0;      // 3 nxy * first plane: the slab's first key in the whole grid
+  std::uint64_t points_per_iso = 0; // coarse keys per isovalue of the whole grid (N_total)
+  std::uint64_t point_shift = 0;    // nxy * first plane: the slab's first grid point in the whole grid
 
   bool positions_and_scalar_only() const {
     return out.xyz && !out.gradient_normal && !out.curvature && !out.key && !out.coarse;
@@ -163,7 +166,8 @@ struct PointWriter {
       out.key[id] = static_cast<std::uint64_t>(iso_index) * total_per_iso + 3 * static_cast<std::uint64_t>(p.p0) +
                     static_cast<std::uint64_t>(p.axis) + key_shift;
     if (out.coarse)
-      out.coarse[id] = static_cast<std::uint64_t>(iso_index * s.n + p.p0 + (p.t >= 0.5 ? s.stride[p.axis] : 0));
+      out.coarse[id] = static_cast<std::uint64_t>(iso_index) * points_per_iso + point_shift +
+                       static_cast<std::uint64_t>(p.p0 + (p.t >= 0.5 ? s.stride[p.axis] : 0));
   }
 };
 
@@ -171,8 +175,8 @@ struct PointWriter {
 template <class T>
 PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
                               const GridShape& s, const ContourOptions& opt, std::vector<std::uint64_t>* point_keys,
-                              std::vector<std::uint64_t>& coarse, bool write_xyz) {
-  PointWriter<T> w{interp, s, {}, 0, 0};
+                              std::vector<std::uint64_t>* nearest_keys, bool write_xyz) {
+  PointWriter<T> w{interp, s, {}, 0, 0, 0, 0};
   // Output arrays at their final size, with huge pages asked for before
   // they are first touched (a host process such as Python has none by default).
   auto field = [&](const std::string& name, int components) {
@@ -188,26 +192,29 @@ PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& gri
   if (opt.scalars) w.out.scalar = field(grid.name, 1);
   if (opt.normals == ContourNormals::Gradient) w.out.gradient_normal = field("Normals", 3);
   if (opt.curvature) w.out.curvature = field("mean_curvature", 1);
+  // Global keys: the slab's edges and points renumbered as those of the whole grid.
+  w.points_per_iso = static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(opt.total_planes ? opt.total_planes : s.nz);
+  w.point_shift = static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(s.k_offset);
+  w.total_per_iso = 3 * w.points_per_iso;
+  w.key_shift = 3 * w.point_shift;
   if (point_keys) {
-    // Global keys: the slab's edges renumbered as edges of the whole grid.
     point_keys->resize(static_cast<std::size_t>(points));
     w.out.key = point_keys->data();
-    w.total_per_iso = 3ull * static_cast<std::uint64_t>(s.nxy) *
-                      static_cast<std::uint64_t>(opt.total_planes ? opt.total_planes : s.nz);
-    w.key_shift = 3ull * static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(s.k_offset);
   }
-  if (opt.coarsen) {
-    coarse.resize(static_cast<std::size_t>(points));
-    w.out.coarse = coarse.data();
+  if (nearest_keys) {
+    nearest_keys->resize(static_cast<std::size_t>(points));
+    w.out.coarse = nearest_keys->data();
   }
   return w;
 }
 
 // Averaged normals (when asked for) and coarsening, after the points and
-// triangles are written.
+// triangles are written. `coarse` (the soup plans: each point's nearest grid
+// point) coarsens the mesh here; the structured plan coarsened in its pass
+// and passes null.
 template <class K>
 void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduce::Groups<K>* vertex_weld_groups,
-                    const std::vector<Id>& blocks, const std::vector<std::uint64_t>& coarse, std::uint64_t coarse_range,
+                    const std::vector<Id>& blocks, const std::vector<std::uint64_t>* coarse, std::uint64_t coarse_range,
                     ContourStats& st) {
   const bool average = opt.normals == ContourNormals::Average;
   if (average && !opt.coarsen) {
@@ -218,21 +225,112 @@ void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduc
     mesh.point_fields.push_back(std::move(f));
     st.fields += seconds_since(t0);
   }
-  if (opt.coarsen) {
-    progress::report("coarsen", 0.9);
-    auto t0 = Clock::now();
+  if (!opt.coarsen) return;
+  progress::report("coarsen", 0.9);
+  auto t0 = Clock::now();
+  if (coarse) {
     st.triangles_before_coarsening = mesh.num_cells();
-    mesh = coarsen(mesh, coarse, coarse_range);
-    if (average) keymesh::average_normals(mesh);
-    st.coarsen += seconds_since(t0);
+    mesh = coarsen(mesh, *coarse, coarse_range);
   }
+  if (average) keymesh::average_normals(mesh);
+  st.coarsen += seconds_since(t0);
+}
+
+// Coarsening in the structured plan's pass (contour_coarse_rows.hpp): for
+// every isovalue, rank the coarse points, write each as the mean of its
+// crossings (the fine point values, as PointWriter makes them, summed in
+// double in key order, as coarsen() sums a group), then the triangles with
+// coarse ids; folds removed at the end as coarsen() does. The triangles
+// are written into `mesh.connectivity`, sized for the fine triangles, and
+// cut to the coarse count.
+template <class T>
+void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const std::vector<RowCounts>& rows,
+                  Id fine_triangles, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
+                  const GridShape& s, const ContourOptions& opt, ContourStats& st) {
+  const Id n_iso = static_cast<Id>(opt.isovalues.size());
+  // Every isovalue's coarse points ranked first, so that the point arrays
+  // are allocated at their final size. Scratch kept by the calling thread,
+  // like the inside bits.
+  thread_local std::vector<CoarseBits> coarse;
+  coarse.resize(static_cast<std::size_t>(n_iso));
+  struct Release {
+    ~Release() {
+      std::size_t bytes = 0;
+      for (const auto& c : coarse) bytes += c.far.capacity() * sizeof(std::uint64_t) * 2;
+      if (bytes > kKeepScratch) coarse = {};
+    }
+  } release;
+  Id coarse_points = 0, coarse_triangles = 0;
+  auto t0 = Clock::now();
+  for (Id iso = 0; iso < n_iso; ++iso) {
+    const double isovalue = opt.isovalues[iso];
+    rank_coarse_points(bits[iso], s, coarse_points, [&](Id i, Id j, Id k, int axis) {
+      const Id p0 = i + j * s.nx + k * s.nxy;
+      const double v0 = static_cast<double>(interp.samples[p0]);
+      const double v1 = static_cast<double>(interp.samples[p0 + s.stride[axis]]);
+      const double t = (isovalue - v0) / (v1 - v0);
+      return !std::isfinite(t) || t >= 0.5;  // EdgeInterpolator::at's t, clamped, >= 0.5
+    }, coarse[iso]);
+    coarse_points += coarse[iso].count;
+  }
+  st.weld += seconds_since(t0);
+  std::vector<std::uint64_t>* no_keys = nullptr;
+  const PointWriter<T> out = prepare_points(mesh, coarse_points, grid, interp, s, opt, no_keys, no_keys, true);
+  // A crossing's values, in this order: position, scalar, gradient normal, curvature.
+  struct Crossing {
+    float v[8];
+  };
+  int values = 3;
+  const int at_scalar = values;
+  values += out.out.scalar ? 1 : 0;
+  const int at_normal = values;
+  values += out.out.gradient_normal ? 3 : 0;
+  const int at_curvature = values;
+  values += out.out.curvature ? 1 : 0;
+  for (Id iso = 0; iso < n_iso; ++iso) {
+    const CoarseBits& cb = coarse[iso];
+    t0 = Clock::now();
+    for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, const CoarseCrossing* x, int n) {
+      double sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+      for (int c = 0; c < n; ++c) {
+        Crossing fine;
+        PointWriter<T> w = out;
+        w.out = PointArrays{fine.v, out.out.scalar ? fine.v + at_scalar : nullptr,
+                            out.out.gradient_normal ? fine.v + at_normal : nullptr,
+                            out.out.curvature ? fine.v + at_curvature : nullptr, nullptr, nullptr};
+        w(0, interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso), iso);
+        for (int v = 0; v < values; ++v) sum[v] += fine.v[v];
+      }
+      float mean[8];
+      for (int v = 0; v < values; ++v) mean[v] = static_cast<float>(sum[v] / static_cast<double>(n));
+      for (int a = 0; a < 3; ++a) out.out.xyz[3 * id + a] = mean[a];
+      if (out.out.scalar) out.out.scalar[id] = mean[at_scalar];
+      if (out.out.gradient_normal) {
+        float* v = mean + at_normal;
+        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
+        for (int a = 0; a < 3; ++a) out.out.gradient_normal[3 * id + a] = v[a];
+      }
+      if (out.out.curvature) out.out.curvature[id] = mean[at_curvature];
+    });
+    st.fields += seconds_since(t0);
+    t0 = Clock::now();
+    coarse_triangles += write_coarse_triangles(bits[iso], s, rows[iso], cb, rows[iso].triangle_first.front(),
+                                               mesh.connectivity.data() + 3 * coarse_triangles);
+    st.generate += seconds_since(t0);
+  }
+  t0 = Clock::now();
+  mesh.connectivity.resize(static_cast<std::size_t>(3 * coarse_triangles));
+  st.triangles_before_coarsening = fine_triangles;
+  remove_folds(mesh);
+  st.coarsen += seconds_since(t0);
 }
 
 // The structured plan (contour_rows.hpp): classify every isovalue, count and
 // scan rows, then write points and triangles at their final ids. No soup.
 template <class T>
 SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
-                         std::vector<std::uint64_t>* point_keys) {
+                         std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys) {
   GridShape s = shape_of(grid);
   s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
@@ -287,9 +385,14 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   progress::report("triangles", 0.4);
   auto t0 = Clock::now();
   parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
+  if (opt.coarsen) {
+    st.generate += seconds_since(t0);
+    coarsen_rows(mesh, bits, rows, triangles, grid, interp, s, opt, st);
+    finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, nullptr, 0, st);
+    return mesh;
+  }
   progress::report("points", 0.5);
-  std::vector<std::uint64_t> coarse;
-  const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse, true);
+  const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true);
   // Triangles and points in one pass over the rows (st.generate holds both).
   // Positions, with or without the scalar (the usual calls), get a writer
   // of their own, inlined into the pass: the same position() and scalar()
@@ -310,7 +413,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   else if (write.out.scalar) inlined(std::true_type{});
   else inlined(std::false_type{});
   st.generate += seconds_since(t0);
-  finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n), st);
+  finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, nullptr, 0, st);
   return mesh;
 }
 
@@ -318,7 +421,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
 // grouped by KEY-REDUCE's sort plan, or by coordinates (VERTEX-WELD).
 template <class K, class T>
 SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
-                         std::vector<std::uint64_t>* point_keys) {
+                         std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys) {
   GridShape s = shape_of(grid);
   s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
@@ -372,8 +475,9 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
   const Id points = groups.num_groups();
   const K* point_key = groups.unique_keys.data();
   std::vector<std::uint64_t> coarse;
+  if (opt.coarsen) nearest_keys = &coarse;
   const bool welded_by_position = !mesh.points.empty() || points == 0;
-  const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, coarse,
+  const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys,
                                               !welded_by_position);
   parallel::for_each(points, [&](Id p) {
     const std::uint64_t key = point_key[p];
@@ -382,8 +486,8 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
   });
   st.fields += seconds_since(t0);
   const bool vertex_weld = opt.weld == ContourWeld::VertexWeld;
-  finish_contour<K>(mesh, opt, vertex_weld ? &groups : nullptr, blocks, coarse, static_cast<std::uint64_t>(n_iso * s.n),
-                    st);
+  finish_contour<K>(mesh, opt, vertex_weld ? &groups : nullptr, blocks, &coarse,
+                    static_cast<std::uint64_t>(n_iso) * write.points_per_iso, st);
   return mesh;
 }
 
@@ -403,7 +507,7 @@ void check_contour_input(const ImageGrid& grid, const ContourOptions& options) {
 }
 
 SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
-                    std::vector<std::uint64_t>* point_keys) {
+                    std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys) {
   check_contour_input(grid, options);
   // The GPU is reached through keymesh/backend/contour.hpp (the layer above generate and cuda).
   if (options.backend != Backend::Cpu)
@@ -415,8 +519,9 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
                      std::to_string(options.ghost_above) + " above) need a slab of at least two other planes");
   if ((options.ghost_below || options.ghost_above) && options.coarsen)
     throw InputError("contour: coarsening a slab with ghost planes is not supported");
-  if (point_keys && options.coarsen)
-    throw InputError("contour: coarsened points have no edge keys (streamed contouring does not coarsen yet)");
+  if ((point_keys || nearest_keys) && options.coarsen)
+    throw InputError("contour: coarsened points have no edge keys (a slab's fine points and their nearest grid "
+                     "points are merged, then coarsened, by the caller)");
   if (options.total_planes && (options.first_plane < 0 || options.first_plane + grid.dims[2] > options.total_planes))
     throw InputError("contour: slab planes [" + std::to_string(options.first_plane) + ", " +
                      std::to_string(options.first_plane + grid.dims[2]) + ") lie outside the grid's " +
@@ -427,10 +532,10 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * options.isovalues.size();
   return visit_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
-    if (options.weld == ContourWeld::KeyReduce) return contour_rows<T>(grid, samples, options, st, point_keys);
+    if (options.weld == ContourWeld::KeyReduce) return contour_rows<T>(grid, samples, options, st, point_keys, nearest_keys);
     if (key_range <= std::numeric_limits<std::uint32_t>::max())
-      return contour_soup<std::uint32_t, T>(grid, samples, options, st, point_keys);
-    return contour_soup<std::uint64_t, T>(grid, samples, options, st, point_keys);
+      return contour_soup<std::uint32_t, T>(grid, samples, options, st, point_keys, nearest_keys);
+    return contour_soup<std::uint64_t, T>(grid, samples, options, st, point_keys, nearest_keys);
   });
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/mesh/normals.hpp"
@@ -21,7 +22,6 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 // What the streamed contour cannot do (yet), refused by name.
 void check_streamable(const ImageGrid& head, const ContourOptions& options) {
-  if (options.coarsen) throw InputError("contour --memory-limit: coarsening is not streamed yet");
   if (options.backend != Backend::Cpu) throw InputError("contour --memory-limit: streaming runs on the CPU backend");
   if (options.weld == ContourWeld::VertexWeld)
     throw InputError("contour --memory-limit: VERTEX-WELD has no keys to merge slabs by; use --weld keyreduce");
@@ -56,17 +56,21 @@ Id planes_per_slab(const ImageGrid& head, std::size_t memory_limit, bool ghosts)
 struct SlabPoints {
   std::uint64_t per_iso;
   bool average;
+  bool coarsen;
   std::vector<std::uint64_t> keys;
+  std::vector<std::uint64_t> nearest;  // with coarsen: each point's nearest grid point (coarse key)
   std::vector<float> points;
   std::vector<Field> fields;  // every point field of the slabs, concatenated
   std::vector<std::vector<std::uint32_t>> corners;  // per isovalue
   std::vector<Vec3f> normal_sums;
 
-  void append(const SurfaceMesh& m, const std::vector<std::uint64_t>& slab_keys) {
+  void append(const SurfaceMesh& m, const std::vector<std::uint64_t>& slab_keys,
+              const std::vector<std::uint64_t>& slab_nearest) {
     const std::uint64_t base = keys.size();
     if (base + slab_keys.size() > std::numeric_limits<std::uint32_t>::max())
       throw LimitError("contour --memory-limit: more than 2^32 - 1 points before merging");
     keys.insert(keys.end(), slab_keys.begin(), slab_keys.end());
+    nearest.insert(nearest.end(), slab_nearest.begin(), slab_nearest.end());
     points.insert(points.end(), m.points.begin(), m.points.end());
     if (fields.empty())
       for (const Field& f : m.point_fields) fields.push_back(Field{f.name, f.components, {}});
@@ -84,8 +88,9 @@ struct SlabPoints {
 
   // KEY-REDUCE over the slabs' points: a shared plane's points appear
   // twice, with equal bits; the first of each group stands for it, and the
-  // index map takes every slab point to its merged point.
-  SurfaceMesh merge() const {
+  // index map takes every slab point to its merged point. With coarsen,
+  // `merged_nearest` receives the merged points' coarse keys.
+  SurfaceMesh merge(std::vector<std::uint64_t>& merged_nearest) const {
     const Id n = static_cast<Id>(keys.size());
     const auto g = keyreduce::partition_sort(keys.data(), n,
                                              parallel::bits_needed<std::uint64_t>(per_iso * corners.size() - 1),
@@ -96,8 +101,10 @@ struct SlabPoints {
     for (const Field& f : fields)
       mesh.point_fields.push_back(Field{f.name, f.components, std::vector<float>(static_cast<std::size_t>(unique * f.components))});
     std::vector<Vec3f> normals(average ? static_cast<std::size_t>(unique) : 0);
+    merged_nearest.resize(coarsen ? static_cast<std::size_t>(unique) : 0);
     parallel::for_each(unique, [&](Id p) {
       const Id first = g.order[g.offsets[p]];
+      if (coarsen) merged_nearest[p] = nearest[first];
       if (average) {
         // The merge across slabs, in slab order, then the transform.
         Vec3f merged{0, 0, 0};
@@ -144,8 +151,12 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   ss.planes_per_slab = planes;
   ss.slab_bytes = static_cast<std::size_t>(std::min(planes + (ghosts ? 2 : 0), nz)) *
                   static_cast<std::size_t>(nx * ny) * scalar_size(head.type);
-  const bool average = options.normals == ContourNormals::Average;
-  SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, {}, {}, {}, {}, {}};
+  // Coarsening averages a grid point's crossings, which two slabs may
+  // share: the slabs' fine points are merged by edge key first, then the
+  // whole is coarsened by nearest grid point, as one contour does; averaged
+  // normals then come from the coarse mesh.
+  const bool average = options.normals == ContourNormals::Average && !options.coarsen;
+  SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, options.coarsen, {}, {}, {}, {}, {}, {}};
   all.corners.resize(options.isovalues.size());
   ContourStats total;
   ImageGrid slab;
@@ -154,7 +165,8 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   slab.name = head.name;
   ContourOptions opt = options;
   opt.total_planes = nz;
-  if (average) opt.normals = ContourNormals::None;  // summed per slab, merged across slabs
+  opt.coarsen = false;
+  if (options.normals == ContourNormals::Average) opt.normals = ContourNormals::None;  // summed per slab, merged across slabs
   for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
     const Id count = std::min(planes, nz - k0);
     const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
@@ -166,18 +178,26 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
     opt.first_plane = k0 - below;
     opt.ghost_below = below;
     opt.ghost_above = above;
-    std::vector<std::uint64_t> slab_keys;
+    std::vector<std::uint64_t> slab_keys, slab_nearest;
     ContourStats st;
-    const SurfaceMesh m = contour(slab, opt, &st, &slab_keys);
+    const SurfaceMesh m = contour(slab, opt, &st, &slab_keys, options.coarsen ? &slab_nearest : nullptr);
     add_stats(total, st);
     ss.contour += seconds_since(t0);
-    all.append(m, slab_keys);
+    all.append(m, slab_keys, slab_nearest);
     ++ss.slabs;
   }
   slab.bytes = {};
-  const auto t0 = Clock::now();
-  SurfaceMesh mesh = all.merge();
+  auto t0 = Clock::now();
+  std::vector<std::uint64_t> nearest;
+  SurfaceMesh mesh = all.merge(nearest);
   ss.merge = seconds_since(t0);
+  if (options.coarsen) {
+    t0 = Clock::now();
+    total.triangles_before_coarsening = mesh.num_cells();
+    mesh = coarsen(mesh, nearest, static_cast<std::uint64_t>(nx * ny * nz) * options.isovalues.size());
+    if (options.normals == ContourNormals::Average) average_normals(mesh);
+    total.coarsen = seconds_since(t0);
+  }
   if (stats) *stats = total;
   if (stream_stats) *stream_stats = ss;
   return mesh;

@@ -271,7 +271,7 @@ def refusals():
     assert "plane by plane" in p.stderr and p.stderr.count("plane by plane") == 1, p.stderr
     p = mpirun(2, "subdivide", REF, "-o", out, expect=2)
     assert "not distributed" in p.stderr and p.stderr.count("not distributed") == 1, p.stderr
-    p = mpirun(2, "contour", SPHERE, *DIMS, "--iso", 20.5, "--coarsen", "-o", out, expect=1)
+    p = mpirun(2, "contour", SPHERE, *DIMS, "--iso", 20.5, "--coarsen", "-o", os.path.join(D, "c.pvtp"), expect=2)
     assert "--coarsen" in p.stderr, p.stderr
     p = mpirun(2, "contour", SPHERE, *DIMS, "--iso", 20.5, "--gather", "-o", os.path.join(D, "x.pvtp"), expect=2)
     tiny = os.path.join(D, "tiny.raw")
@@ -297,6 +297,6 @@ check("gradient normals and curvature with ghost planes: byte-identical at -np 2
       derivatives_with_ghost_planes)
 check(".nrrd (big-endian), scaled .nii and .nii.gz, a Zarr folder read by slab: byte-identical at -np 2 and 3",
       nrrd_and_nifti_read_by_slab)
-check("refused by name: .vti input, other commands, coarsening, --gather with .pvtp, too many ranks, "
+check("refused by name: .vti input, other commands, coarsening into pieces, --gather with .pvtp, too many ranks, "
       "unwritable pieces", refusals)
 finish()

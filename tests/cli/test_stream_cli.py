@@ -97,7 +97,7 @@ def refusals():
     assert "fewer than two" in p.stderr
     run("contour", RAW, *DIMS, "-o", os.path.join(D, "x.ply"), "--iso", 9, "--memory-limit", "lots", expect=2)
     run("contour", RAW, *DIMS, "-o", os.path.join(D, "x.ply"), "--iso", 9, "--memory-limit", "1M",
-        "--coarsen", expect=1)
+        "--weld", "vertexweld", expect=1)
     assert not os.path.exists(os.path.join(D, "x.ply"))
 
 

@@ -5,6 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <random>
 #include <set>
 
 #include "keymesh/analyze/quality.hpp"
@@ -95,6 +99,88 @@ TEST(Coarsen, MergesByKeyAndDropsCollapsedTriangles) {
   EXPECT_EQ(c.connectivity, (std::vector<PointIndex>{0, 1, 2}));
   EXPECT_FLOAT_EQ(c.points[3], 2.f);          // mean of x = 1 and x = 3
   EXPECT_FLOAT_EQ(c.point_fields[0].values[1], 4.f);  // mean of 2 and 6
+}
+
+
+// remove_folds against a reference written from its rule alone: triangles
+// over the same three points form a set; a set of one stays; otherwise the
+// orientations are summed (+1 / -1) and, if the sum is not zero, the first
+// triangle of the winning orientation stays and the rest go; a zero sum
+// drops the whole set. Random triangles over few points make many sets.
+TEST(Coarsen, RemoveFoldsFollowsItsRule) {
+  std::mt19937 rng(5);
+  for (int round = 0; round < 20; ++round) {
+    SurfaceMesh m;
+    const std::uint32_t points = 4 + rng() % 12;
+    m.points.assign(3 * points, 0.f);
+    const int triangles = 1 + static_cast<int>(rng() % 400);
+    for (int t = 0; t < triangles; ++t) {
+      std::uint32_t a = rng() % points, b = rng() % points, c = rng() % points;
+      while (b == a) b = rng() % points;
+      while (c == a || c == b) c = rng() % points;
+      m.connectivity.insert(m.connectivity.end(), {a, b, c});
+    }
+    // Reference.
+    std::map<std::array<std::uint32_t, 3>, std::vector<int>> sets;
+    auto sign = [&](int t) {
+      const PointIndex* v = &m.connectivity[3 * t];
+      // Even permutations of the sorted triple keep the orientation.
+      std::array<std::uint32_t, 3> s{v[0], v[1], v[2]};
+      int swaps = 0;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j + 1 < 3 - i; ++j)
+          if (s[j] > s[j + 1]) std::swap(s[j], s[j + 1]), ++swaps;
+      return std::make_pair(s, swaps % 2 == 0 ? 1 : -1);
+    };
+    for (int t = 0; t < triangles; ++t) sets[sign(t).first].push_back(t);
+    std::vector<bool> keep(triangles, true);
+    for (const auto& [key, members] : sets) {
+      if (members.size() < 2) continue;
+      int net = 0;
+      for (int t : members) net += sign(t).second;
+      bool kept = false;
+      for (int t : members) {
+        const bool winner = net != 0 && !kept && (sign(t).second > 0) == (net > 0);
+        keep[t] = winner;
+        kept = kept || winner;
+      }
+    }
+    std::vector<PointIndex> expected;
+    for (int t = 0; t < triangles; ++t)
+      if (keep[t]) expected.insert(expected.end(), m.connectivity.begin() + 3 * t, m.connectivity.begin() + 3 * t + 3);
+    const Id removed = generate::remove_folds(m);
+    EXPECT_EQ(m.connectivity, expected) << "round " << round;
+    EXPECT_EQ(removed, triangles - static_cast<Id>(expected.size() / 3));
+  }
+}
+
+// Coarsening in the contour's pass (the structured plan) equals coarsen()
+// over the fine mesh (the sort plan's path) with NaN samples, which put
+// their crossings midway (nearest the far end).
+TEST(Coarsen, InThePassEqualsAfterTheContourWithNaNs) {
+  ImageGrid g;
+  g.allocate({33, 20, 17}, ScalarType::Float32);
+  std::mt19937 rng(8);
+  auto* v = reinterpret_cast<float*>(g.data());
+  for (Id p = 0; p < g.num_points(); ++p)
+    v[p] = rng() % 13 == 0 ? std::numeric_limits<float>::quiet_NaN() : std::uniform_real_distribution<float>(0, 1)(rng);
+  for (int threads : {1, 2}) {
+    parallel::set_thread_count(threads);
+    generate::ContourOptions o;
+    o.isovalues = {0.5, 0.2};
+    o.coarsen = true;
+    o.normals = generate::ContourNormals::Gradient;
+    const SurfaceMesh rows = generate::contour(g, o);
+    o.weld = generate::ContourWeld::KeyReduceSort;
+    const SurfaceMesh sort = generate::contour(g, o);
+    EXPECT_EQ(rows.points, sort.points);
+    EXPECT_EQ(rows.connectivity, sort.connectivity);
+    ASSERT_EQ(rows.point_fields.size(), sort.point_fields.size());
+    for (std::size_t f = 0; f < rows.point_fields.size(); ++f)
+      EXPECT_EQ(std::memcmp(rows.point_fields[f].values.data(), sort.point_fields[f].values.data(),
+                            rows.point_fields[f].values.size() * sizeof(float)), 0);
+  }
+  parallel::set_thread_count(0);
 }
 
 }  // namespace

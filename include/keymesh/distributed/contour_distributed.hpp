@@ -33,6 +33,14 @@ struct ContourPiece {
   GlobalNumbering numbering;    // global id of each local point
   std::vector<std::uint64_t> keys;
   RankStats stats;
+  // Coarsening: the pieces are fine; each local point's nearest grid point
+  // (its coarse key) goes with it to rank 0, which coarsens the whole.
+  bool coarsen = false;
+  bool average_after_coarsening = false;  // averaged normals, from the coarse mesh
+  std::uint64_t coarse_range = 0;         // isovalues x grid points
+  std::vector<std::uint64_t> nearest;
+  Id triangles_before_coarsening = 0;     // rank 0, after gather()
+  Id coarse_points = 0;                   // rank 0, after gather()
 };
 
 // Throws InputError naming what a distributed contour of this volume with
@@ -42,8 +50,9 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 
 // Collective: every rank calls it with its own source of the same volume.
 // Supports scalars, several isovalues, --weld keyreduce, --normals gradient
-// and --curvature (ghost planes) and --normals average (partial sums merged
-// at the owner); coarsening, VERTEX-WELD and the GPU are refused by name.
+// and --curvature (ghost planes), --normals average (partial sums merged at
+// the owner) and coarsening (done by gather() on rank 0: a piece per rank is
+// refused by the command); VERTEX-WELD and the GPU are refused by name.
 // With `balance`, the slab boundaries move so that every rank gets about the
 // same work (triangles per layer counted on the equal split first, then
 // shared); without, every rank gets the same number of voxel layers. The
@@ -51,8 +60,9 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance);
 
 // Collective: rank 0 returns the whole mesh (points in global id order,
-// triangles isovalue by isovalue in rank order: the single-process file),
-// the others an empty one. Adds the gather's time to piece.stats.output.
+// triangles isovalue by isovalue in rank order: the single-process file;
+// with piece.coarsen, that mesh coarsened as one process coarsens it), the
+// others an empty one. Adds the gather's time to piece.stats.output.
 SurfaceMesh gather(ContourPiece& piece);
 
 // Collective: every rank's stats, on rank 0 (empty elsewhere).

@@ -109,8 +109,13 @@ void check_contour_input(const ImageGrid& grid, const ContourOptions& options);
 // would exceed 2^32 - 1 points or triangle corners.
 // point_keys, when given, receives every output point's key: its grid edge,
 // 3 * point id + axis + iso_index * 3N (N the points of the whole grid).
+// nearest_keys, when given, receives every output point's coarse key: the
+// grid point of the whole grid nearest to it on its edge, + iso_index * N.
+// A caller that merges slabs by point_keys coarsens the merged mesh with
+// these (coarsen()); options.coarsen must then be off (InputError).
 SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats = nullptr,
-                    std::vector<std::uint64_t>* point_keys = nullptr);
+                    std::vector<std::uint64_t>* point_keys = nullptr,
+                    std::vector<std::uint64_t>* nearest_keys = nullptr);
 
 // Voxel grids: the triangles marching cubes makes in each voxel layer
 // (layer k between planes k and k + 1), summed over the isovalues, from the

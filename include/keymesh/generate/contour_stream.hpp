@@ -14,7 +14,11 @@
 // Averaged normals: each slab's partial sums per point, added across slabs
 // by the merge and normalised once; equal to the in-memory run within float
 // rounding (not bit for bit: the summation order differs).
-// Refused by name for now: coarsening, the GPU.
+// Coarsening: the slabs' fine points (with their nearest grid points, the
+// coarse keys) are merged first, then the whole mesh is coarsened as one
+// contour coarsens it: byte-identical, averaged normals included (computed
+// from the coarse mesh). The fine mesh is held before coarsening.
+// Refused by name for now: the GPU.
 #include <cstddef>
 #include <memory>
 

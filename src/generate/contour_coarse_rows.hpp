@@ -1,0 +1,245 @@
+#pragma once
+// Coarsening in the contour's own pass (paper, Section 6.1): the structured
+// plan of contour_rows.hpp with the coarse key in place of the edge key.
+//
+// A crossing's coarse key is the grid point nearest to it on its edge (the
+// edge's first point when t < 0.5, its second otherwise). Coarsening merges
+// the crossings that share one: one coarse point per key, the mean of its
+// crossings' positions and fields, triangles rewritten with coarse ids and
+// dropped when two of their corners merged. KEY-REDUCE's dense plan over the
+// coarse keys numbers the coarse points by key rank; here, as for the edge
+// keys, the rank comes from bits and counts instead of a table over the
+// grid's points:
+//   1. far     every grid row marks its cut edges whose crossing is nearer
+//              the far end (t >= 0.5), one bit per edge and axis;
+//   2. rank    a grid point is a coarse point when a cut edge's crossing is
+//              nearest to it: its own edges' near ends, the far ends of the
+//              x edge before it and of the y and z edges arriving from the
+//              rows below (word operations on the far and cut bits); rows
+//              count them, prefix sums give every 64-point word its first id;
+//   3. points  every coarse point sums its at most six crossings in the
+//              order of their edge keys (the order a KEY-REDUCE over the
+//              fine points would merge them in) and writes the mean;
+//   4. triangles  written once with coarse ids, those with a repeated id
+//              dropped, each voxel row's survivors packed.
+// The fine points are never written. The bytes are those of coarsen() over
+// the fine mesh (generate/coarsen.hpp): a test holds them equal.
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "contour_rows.hpp"
+#include "keymesh/core/types.hpp"
+#include "keymesh/generate/marching_cubes_table.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/scan.hpp"
+#include "voxel_bits.hpp"
+
+namespace keymesh::generate {
+
+// One isovalue's far bits, coarse-point bits and ranks, grid rows of planes
+// [0, nz) in the layout of InsideBits (words_per_row words a row).
+struct CoarseBits {
+  Id words_per_row = 0;
+  std::vector<std::uint64_t> far;     // (row * 3 + axis) * words_per_row + q
+  std::vector<std::uint64_t> points;  // row * words_per_row + q: coarse points
+  std::vector<std::uint32_t> first;   // row * words_per_row + q: id of the word's first coarse point
+  Id count = 0;                       // coarse points of this isovalue
+
+  const std::uint64_t* far_row(Id r, int axis) const { return far.data() + (r * 3 + axis) * words_per_row; }
+
+  // The far bits a grid row (j, k) = r reads: its own three axes', the y
+  // edges of row (j - 1, k) and the z edges of row (j, k - 1) (null at the
+  // grid's border), whose far ends are this row's points.
+  struct Around {
+    const std::uint64_t *x, *y, *z, *y_below, *z_below;
+  };
+  Around around(Id r, Id j, Id k, Id ny) const {
+    return {far_row(r, 0), far_row(r, 1), far_row(r, 2), j > 0 ? far_row(r - 1, 1) : nullptr,
+            k > 0 ? far_row(r - ny, 2) : nullptr};
+  }
+
+  // Coarse id of grid point i of row r (a coarse point).
+  std::uint32_t id(Id r, Id i) const {
+    const Id w = r * words_per_row + (i >> 6);
+    const std::uint64_t below = (std::uint64_t{1} << (i & 63)) - 1;
+    return first[w] + static_cast<std::uint32_t>(std::popcount(points[w] & below));
+  }
+};
+
+// Steps 1 and 2 for one isovalue: far bits (far(i, j, k, axis) says whether
+// the crossing on that cut edge has t >= 0.5), coarse points and their ids,
+// starting at `first_id`.
+template <class Far>
+void rank_coarse_points(const InsideBits& bits, const GridShape& s, Id first_id, Far&& far, CoarseBits& cb) {
+  const Id wpr = bits.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
+  cb.words_per_row = wpr;
+  cb.far.assign(static_cast<std::size_t>(3 * wpr * rows), 0);
+  cb.points.assign(static_cast<std::size_t>(wpr * rows), 0);
+  cb.first.assign(static_cast<std::size_t>(wpr * rows), 0);
+  parallel::for_each_dynamic(rows, [&](Id r) {
+    const Id j = r % s.ny, k = r / s.ny;
+    std::uint64_t* f[3] = {cb.far.data() + (3 * r) * wpr, cb.far.data() + (3 * r + 1) * wpr,
+                           cb.far.data() + (3 * r + 2) * wpr};
+    RowCuts(bits, s, j, k, last_plane).for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+      const std::uint32_t cut[3] = {x, y, z};
+      for (int a = 0; a < 3; ++a)
+        if (cut[a] && far(i, j, k, a)) f[a][i >> 6] |= std::uint64_t{1} << (i & 63);
+    });
+  }, 8);
+  std::vector<Id> row_first(static_cast<std::size_t>(rows + 1), 0);
+  parallel::for_each_dynamic(rows, [&](Id r) {
+    const Id j = r % s.ny, k = r / s.ny;
+    const RowCuts cuts(bits, s, j, k, last_plane);
+    const auto [fx, fy, fz, fy_below, fz_below] = cb.around(r, j, k, s.ny);
+    std::uint64_t* out = cb.points.data() + r * wpr;
+    std::uint32_t* first = cb.first.data() + r * wpr;
+    std::uint64_t carry = 0;  // far x edge of the previous word's last point
+    std::uint32_t count = 0;
+    for (Id q = 0; q < cuts.data_words; ++q) {
+      const RowCuts::Words w = cuts.word(q);
+      // Far bits are a subset of the cut bits: cut ^ far are the near ends.
+      std::uint64_t c = (w.x ^ fx[q]) | (w.y ^ fy[q]) | (w.z ^ fz[q]) | (fx[q] << 1) | carry;
+      carry = fx[q] >> 63;
+      if (fy_below) c |= fy_below[q];
+      if (fz_below) c |= fz_below[q];
+      out[q] = c;
+      first[q] = count;
+      count += static_cast<std::uint32_t>(std::popcount(c));
+    }
+    row_first[r] = count;
+  }, 8);
+  cb.count = parallel::exclusive_scan(row_first.data(), row_first.data(), rows + 1);
+  parallel::for_each(rows, [&](Id r) {
+    const auto base = static_cast<std::uint32_t>(first_id + row_first[r]);
+    for (Id q = 0; q < wpr; ++q) cb.first[r * wpr + q] += base;
+  });
+}
+
+// A crossing merged into a coarse point: its edge, by first grid point and axis.
+struct CoarseCrossing {
+  Id i, j, k;
+  int axis;
+};
+
+// Step 3: calls f(id, crossings, n) for every coarse point of the isovalue,
+// its n (1 to 6) crossings in the order of their edge keys.
+template <class F>
+void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
+  const Id wpr = cb.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
+  parallel::for_each_dynamic(rows, [&](Id r) {
+    const Id j = r % s.ny, k = r / s.ny;
+    const RowCuts cuts(bits, s, j, k, last_plane);
+    const auto [fx, fy, fz, fy_below, fz_below] = cb.around(r, j, k, s.ny);
+    for (Id q = 0; q < cuts.data_words; ++q) {
+      std::uint64_t c = cb.points[r * wpr + q];
+      if (!c) continue;
+      const RowCuts::Words w = cuts.word(q);
+      const std::uint64_t fx_before = (fx[q] << 1) | (q > 0 ? fx[q - 1] >> 63 : 0);
+      std::uint32_t id = cb.first[r * wpr + q];
+      while (c) {
+        const int b = std::countr_zero(c);
+        c &= c - 1;
+        const Id i = 64 * q + b;
+        CoarseCrossing x[6];
+        int n = 0;
+        // Edge keys 3 p + axis grow with p = i + j nx + k nxy: the z edge
+        // from the plane below, the y edge from the row below, the x edge
+        // from the point before, then this point's x, y, z edges.
+        if (fz_below && ((fz_below[q] >> b) & 1)) x[n++] = {i, j, k - 1, 2};
+        if (fy_below && ((fy_below[q] >> b) & 1)) x[n++] = {i, j - 1, k, 1};
+        if ((fx_before >> b) & 1) x[n++] = {i - 1, j, k, 0};
+        if (((w.x ^ fx[q]) >> b) & 1) x[n++] = {i, j, k, 0};
+        if (((w.y ^ fy[q]) >> b) & 1) x[n++] = {i, j, k, 1};
+        if (((w.z ^ fz[q]) >> b) & 1) x[n++] = {i, j, k, 2};
+        f(id++, x, n);
+      }
+    }
+  }, 8);
+}
+
+// The coarse ids of one grid row's cut edges, by axis and i (like RowIds):
+// the id of the edge's near end.
+struct CoarseRowIds {
+  std::uint32_t* ids[3];
+
+  CoarseRowIds(std::uint32_t* scratch, Id nx) : ids{scratch, scratch + nx, scratch + 2 * nx} {}
+
+  void fill(const RowCuts& cuts, const CoarseBits& cb, const GridShape& s, Id j, Id k) {
+    const Id r = k * s.ny + j;
+    const std::uint64_t* f[3] = {cb.far_row(r, 0), cb.far_row(r, 1), cb.far_row(r, 2)};
+    const Id far_row[3] = {r, r + 1, r + s.ny};  // where each axis's far end lies
+    cuts.for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+      const std::uint32_t cut[3] = {x, y, z};
+      for (int a = 0; a < 3; ++a) {
+        if (!cut[a]) continue;
+        const bool is_far = (f[a][i >> 6] >> (i & 63)) & 1;
+        ids[a][i] = is_far ? cb.id(far_row[a], a == 0 ? i + 1 : i) : cb.id(r, i);
+      }
+    });
+  }
+};
+
+// Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
+// ids, those with two equal corners dropped, appended at `out` (room for the
+// fine triangles at their fine offsets rc.triangle_first, shifted by
+// `fine_base`), packed. Returns the triangles kept.
+inline Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const CoarseBits& cb,
+                                 Id fine_base, PointIndex* out) {
+  const auto& table = marching_cubes_table();
+  const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
+  std::vector<Id> kept(static_cast<std::size_t>(voxel_rows), 0);
+  constexpr Id kRun = 16;  // voxel rows per task
+  const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun;
+  parallel::for_each_dynamic(layers * runs_per_layer, [&](Id task) {
+    const Id k = task / runs_per_layer;
+    const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
+    thread_local std::vector<std::uint32_t> scratch;
+    if (static_cast<Id>(scratch.size()) < 12 * s.nx) scratch.resize(static_cast<std::size_t>(12 * s.nx));
+    CoarseRowIds lo[2] = {CoarseRowIds(scratch.data(), s.nx), CoarseRowIds(scratch.data() + 3 * s.nx, s.nx)};
+    CoarseRowIds hi[2] = {CoarseRowIds(scratch.data() + 6 * s.nx, s.nx), CoarseRowIds(scratch.data() + 9 * s.nx, s.nx)};
+    const Id last_plane = s.nz - 1;
+    lo[0].fill(RowCuts(bits, s, j_begin, k, last_plane), cb, s, j_begin, k);
+    lo[1].fill(RowCuts(bits, s, j_begin, k + 1, last_plane), cb, s, j_begin, k + 1);
+    for (Id j = j_begin; j < j_end; ++j) {
+      hi[0].fill(RowCuts(bits, s, j + 1, k, last_plane), cb, s, j + 1, k);
+      hi[1].fill(RowCuts(bits, s, j + 1, k + 1, last_plane), cb, s, j + 1, k + 1);
+      const std::uint32_t* edge_ids[12];
+      for (int e = 0; e < 12; ++e) {
+        const auto& ce = table.edges[e];
+        const CoarseRowIds& row = ce.dz ? (ce.dy ? hi[1] : lo[1]) : (ce.dy ? hi[0] : lo[0]);
+        edge_ids[e] = row.ids[ce.axis] + ce.dx;
+      }
+      const Id vr = k * (s.ny - 1) + j;
+      PointIndex* const begin = out + 3 * (rc.triangle_first[vr] - fine_base);
+      PointIndex* o = begin;
+      for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
+        const int triangles = table.triangle_count[cube_case];
+        const auto& edges = table.triangle_edges[cube_case];
+        for (int t = 0; t < triangles; ++t) {
+          const std::uint32_t a = edge_ids[edges[3 * t]][i], b = edge_ids[edges[3 * t + 1]][i],
+                              c = edge_ids[edges[3 * t + 2]][i];
+          o[0] = a, o[1] = b, o[2] = c;
+          o += (a != b && b != c && a != c) ? 3 : 0;
+        }
+      });
+      kept[vr] = (o - begin) / 3;
+      std::swap(lo[0], hi[0]);
+      std::swap(lo[1], hi[1]);
+    }
+  }, 1);
+  // Pack the voxel rows' survivors, in order: each moves to a lower address
+  // than its own, past those already moved.
+  Id at = 0;
+  for (Id vr = 0; vr < voxel_rows; ++vr) {
+    if (kept[vr]) {
+      const Id from = rc.triangle_first[vr] - fine_base;
+      if (from != at) std::memmove(out + 3 * at, out + 3 * from, static_cast<std::size_t>(3 * kept[vr]) * sizeof(PointIndex));
+    }
+    at += kept[vr];
+  }
+  return at;
+}
+
+}  // namespace keymesh::generate
