@@ -1,7 +1,6 @@
 #include "keymesh/generate/coarsen.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <string>
 
@@ -24,7 +23,7 @@ struct TriangleSet {
   std::int8_t sign;
 };
 
-TriangleSet triangle_set(const PointIndex* C, Id t) {
+inline TriangleSet triangle_set(const PointIndex* C, Id t) {
   const std::uint32_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
   // Rotating the smallest id to the front keeps the orientation; the order
   // of the other two then tells it.
@@ -33,66 +32,75 @@ TriangleSet triangle_set(const PointIndex* C, Id t) {
   return TriangleSet{a, std::min(b, c), std::max(b, c), static_cast<std::int8_t>(b < c ? 1 : -1)};
 }
 
-// The triangles that may share their point set with another: those whose
-// set hashes to a bucket two or more triangles hash to. Every triangle of a
-// set of two or more is one (equal sets, equal buckets); a few others are
-// too (collisions), which the exact comparison then tells apart. Two bits a
-// bucket, set with atomic ORs: the result does not depend on the threads.
-std::vector<std::uint32_t> fold_candidates(const PointIndex* C, Id t_count) {
-  int bits = 10;
-  while (bits < 40 && (Id{1} << bits) < 16 * t_count) ++bits;
-  const std::uint64_t mask = (std::uint64_t{1} << bits) - 1;
-  std::vector<std::uint64_t> seen(static_cast<std::size_t>((mask >> 6) + 1), 0), twice(seen.size(), 0);
-  auto bucket = [&](Id t) {
-    const TriangleSet s = triangle_set(C, t);
-    std::uint64_t h = (static_cast<std::uint64_t>(s.lo) * 0x9E3779B97F4A7C15ull) ^
-                      (static_cast<std::uint64_t>(s.mid) * 0xC2B2AE3D27D4EB4Full) ^
-                      (static_cast<std::uint64_t>(s.hi) * 0x165667B19E3779F9ull);
-    h ^= h >> 29;
-    return (h * 0xD6E8FEB86659FD93ull >> 7) & mask;
-  };
-  parallel::for_each(t_count, [&](Id t) {
-    const std::uint64_t b = bucket(t), bit = std::uint64_t{1} << (b & 63);
-    const std::uint64_t before = std::atomic_ref<std::uint64_t>(seen[b >> 6]).fetch_or(bit, std::memory_order_relaxed);
-    if (before & bit) std::atomic_ref<std::uint64_t>(twice[b >> 6]).fetch_or(bit, std::memory_order_relaxed);
-  });
-  // The candidates in increasing triangle index, counted per block first.
-  const Id blocks = (t_count + 4095) / 4096;
-  std::vector<Id> first(static_cast<std::size_t>(blocks + 1), 0);
-  auto is_candidate = [&](Id t) {
-    const std::uint64_t b = bucket(t);
-    return (twice[b >> 6] >> (b & 63)) & 1;
-  };
-  parallel::for_each(blocks, [&](Id blk) {
-    Id n = 0;
-    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t) n += is_candidate(t);
-    first[blk] = n;
-  });
-  const Id total = parallel::exclusive_scan(first.data(), first.data(), blocks + 1);
-  std::vector<std::uint32_t> out(static_cast<std::size_t>(total));
-  parallel::for_each(blocks, [&](Id blk) {
-    Id at = first[blk];
-    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t)
-      if (is_candidate(t)) out[at++] = static_cast<std::uint32_t>(t);
-  });
+// The triangles that share their point set with another, in increasing
+// index. `ranges` (first triangle of each range, then the end) are such that
+// equal triangles lie in the same range or in adjacent ones: each range's
+// triangles are compared with those of a window (it and its two
+// neighbours) holding the same smallest point id, small enough to stay in
+// cache (a contour's ranges are its voxel layers; one range is the whole
+// mesh). The result is a set: the same at any thread count.
+std::vector<std::uint32_t> fold_candidates(const PointIndex* C, const std::vector<Id>& given) {
+  // Adjacent ranges merged into ranges of a few thousand triangles: fewer
+  // neighbours hashed twice, the property kept.
+  std::vector<Id> ranges{given.front()};
+  for (std::size_t r = 1; r < given.size(); ++r)
+    if (given[r] - ranges.back() >= 8192 || r + 1 == given.size()) ranges.push_back(given[r]);
+  const Id n_ranges = static_cast<Id>(ranges.size()) - 1;
+  std::vector<std::vector<std::uint32_t>> found(static_cast<std::size_t>(n_ranges));
+  parallel::for_each_dynamic(n_ranges, [&](Id r) {
+    const Id own_begin = ranges[r], own_end = ranges[r + 1];
+    if (own_begin == own_end) return;
+    const Id begin = ranges[r > 0 ? r - 1 : 0], end = ranges[r + 1 < n_ranges ? r + 2 : n_ranges];
+    // The window's triangles grouped by smallest point id (a counting sort
+    // over the ids it spans: point ids follow the triangles' order, so the
+    // span is about the window's points and the passes run nearly in order).
+    thread_local std::vector<TriangleSet> sets;
+    thread_local std::vector<std::uint32_t> first, order;
+    sets.resize(static_cast<std::size_t>(end - begin));
+    std::uint32_t lo_min = ~0u, lo_max = 0;
+    for (Id t = begin; t < end; ++t) {
+      const TriangleSet& e = sets[t - begin] = triangle_set(C, t);
+      lo_min = std::min(lo_min, e.lo), lo_max = std::max(lo_max, e.lo);
+    }
+    first.assign(static_cast<std::size_t>(lo_max - lo_min) + 2, 0);
+    for (Id t = begin; t < end; ++t) ++first[sets[t - begin].lo - lo_min + 1];
+    for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
+    order.resize(static_cast<std::size_t>(end - begin));
+    {
+      thread_local std::vector<std::uint32_t> at;
+      at.assign(first.begin(), first.end() - 1);
+      for (Id t = begin; t < end; ++t) order[at[sets[t - begin].lo - lo_min]++] = static_cast<std::uint32_t>(t - begin);
+    }
+    for (Id t = own_begin; t < own_end; ++t) {
+      const TriangleSet& e = sets[t - begin];
+      const std::uint32_t b = first[e.lo - lo_min], f = first[e.lo - lo_min + 1];
+      bool shared = false;
+      for (std::uint32_t i = b; i < f && !shared; ++i) {
+        const TriangleSet& o = sets[order[i]];
+        shared = order[i] != static_cast<std::uint32_t>(t - begin) && o.mid == e.mid && o.hi == e.hi;
+      }
+      if (shared) found[r].push_back(static_cast<std::uint32_t>(t));
+    }
+  }, 1);
+  std::vector<std::uint32_t> out;
+  for (const auto& f : found) out.insert(out.end(), f.begin(), f.end());
   return out;
 }
 
 }  // namespace
 
-// Collapses fold surfaces over themselves: two triangles on the same three
-// points facing opposite ways (a zero-volume fold) cancel, and repeated
-// triangles facing the same way are kept once. Only the candidates of
-// fold_candidates can be in such a set; they are grouped by their smallest
-// point id (KEY-REDUCE, dense plan: a counting sort over the points), and
+Id remove_folds(SurfaceMesh& mesh) { return remove_folds(mesh, {0, mesh.num_cells()}); }
+
+// Only the triangles of fold_candidates can be in a set of equal triangles;
+// they are grouped by their smallest point id (KEY-REDUCE, sort plan), and
 // each group's few triangles are compared with one another; of every set of
 // equal triangles the first of the winning orientation is kept when the
-// orientations do not cancel. Returns how many were removed.
-Id remove_folds(SurfaceMesh& mesh) {
+// orientations do not cancel.
+Id remove_folds(SurfaceMesh& mesh, const std::vector<Id>& ranges) {
   const Id t_count = mesh.num_cells();
   if (t_count == 0) return 0;
   const PointIndex* C = mesh.connectivity.data();
-  const std::vector<std::uint32_t> cand = fold_candidates(C, t_count);
+  const std::vector<std::uint32_t> cand = fold_candidates(C, ranges);
   const Id n = static_cast<Id>(cand.size());
   if (n == 0) return 0;
   std::vector<TriangleSet> tri(static_cast<std::size_t>(n));

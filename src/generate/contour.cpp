@@ -287,6 +287,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   values += out.out.gradient_normal ? 3 : 0;
   const int at_curvature = values;
   values += out.out.curvature ? 1 : 0;
+  std::vector<Id> layers;  // every isovalue's voxel layers: where remove_folds looks for equal triangles
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
     t0 = Clock::now();
@@ -316,13 +317,15 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     st.fields += seconds_since(t0);
     t0 = Clock::now();
     coarse_triangles += write_coarse_triangles(bits[iso], s, rows[iso], cb, rows[iso].triangle_first.front(),
-                                               mesh.connectivity.data() + 3 * coarse_triangles);
+                                               mesh.connectivity.data() + 3 * coarse_triangles, coarse_triangles,
+                                               layers);
     st.generate += seconds_since(t0);
   }
   t0 = Clock::now();
   mesh.connectivity.resize(static_cast<std::size_t>(3 * coarse_triangles));
   st.triangles_before_coarsening = fine_triangles;
-  remove_folds(mesh);
+  layers.push_back(coarse_triangles);
+  remove_folds(mesh, layers);
   st.coarsen += seconds_since(t0);
 }
 

@@ -184,9 +184,11 @@ struct CoarseRowIds {
 // Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
 // ids, those with two equal corners dropped, appended at `out` (room for the
 // fine triangles at their fine offsets rc.triangle_first, shifted by
-// `fine_base`), packed. Returns the triangles kept.
+// `fine_base`), packed. Returns the triangles kept; appends to `layer_first` the
+// index of each voxel layer's first triangle, counted from `first_triangle`
+// (the ranges remove_folds checks).
 inline Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const CoarseBits& cb,
-                                 Id fine_base, PointIndex* out) {
+                                 Id fine_base, PointIndex* out, Id first_triangle, std::vector<Id>& layer_first) {
   const auto& table = marching_cubes_table();
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   std::vector<Id> kept(static_cast<std::size_t>(voxel_rows), 0);
@@ -233,6 +235,7 @@ inline Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, con
   // than its own, past those already moved.
   Id at = 0;
   for (Id vr = 0; vr < voxel_rows; ++vr) {
+    if (vr % (s.ny - 1) == 0) layer_first.push_back(first_triangle + at);
     if (kept[vr]) {
       const Id from = rc.triangle_first[vr] - fine_base;
       if (from != at) std::memmove(out + 3 * at, out + 3 * from, static_cast<std::size_t>(3 * kept[vr]) * sizeof(PointIndex));
