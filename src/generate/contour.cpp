@@ -236,6 +236,49 @@ void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduc
   st.coarsen += seconds_since(t0);
 }
 
+// A coarse point's values: the mean of its crossings' values, each made by
+// PointWriter as the fine point would be (position, scalar, gradient
+// normal, curvature), summed in double in the order given, as coarsen()
+// averages a group; gradient normals renormalised, as coarsen() does.
+template <class T>
+struct CoarsePointWriter {
+  PointWriter<T> out;  // the mesh's arrays, at coarse ids
+  int at_scalar = 3, at_normal = 3, at_curvature = 3, values = 3;
+
+  explicit CoarsePointWriter(const PointWriter<T>& arrays) : out(arrays) {
+    values = at_scalar + (out.out.scalar ? 1 : 0);
+    at_normal = values;
+    values += out.out.gradient_normal ? 3 : 0;
+    at_curvature = values;
+    values += out.out.curvature ? 1 : 0;
+  }
+
+  void operator()(std::uint32_t id, const CoarseCrossing* x, int n, Id iso) const {
+    const GridShape& s = out.s;
+    double sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (int c = 0; c < n; ++c) {
+      float fine[8];
+      PointWriter<T> w = out;
+      w.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
+                          out.out.gradient_normal ? fine + at_normal : nullptr,
+                          out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
+      w(0, out.interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso), iso);
+      for (int v = 0; v < values; ++v) sum[v] += fine[v];
+    }
+    float mean[8];
+    for (int v = 0; v < values; ++v) mean[v] = static_cast<float>(sum[v] / static_cast<double>(n));
+    for (int a = 0; a < 3; ++a) out.out.xyz[3 * id + a] = mean[a];
+    if (out.out.scalar) out.out.scalar[id] = mean[at_scalar];
+    if (out.out.gradient_normal) {
+      float* v = mean + at_normal;
+      const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+      if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
+      for (int a = 0; a < 3; ++a) out.out.gradient_normal[3 * id + a] = v[a];
+    }
+    if (out.out.curvature) out.out.curvature[id] = mean[at_curvature];
+  }
+};
+
 // Coarsening in the structured plan's pass (contour_coarse_rows.hpp): for
 // every isovalue, rank the coarse points, write each as the mean of its
 // crossings (the fine point values, as PointWriter makes them, summed in
@@ -275,45 +318,13 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   }
   st.weld += seconds_since(t0);
   std::vector<std::uint64_t>* no_keys = nullptr;
-  const PointWriter<T> out = prepare_points(mesh, coarse_points, grid, interp, s, opt, no_keys, no_keys, true);
-  // A crossing's values, in this order: position, scalar, gradient normal, curvature.
-  struct Crossing {
-    float v[8];
-  };
-  int values = 3;
-  const int at_scalar = values;
-  values += out.out.scalar ? 1 : 0;
-  const int at_normal = values;
-  values += out.out.gradient_normal ? 3 : 0;
-  const int at_curvature = values;
-  values += out.out.curvature ? 1 : 0;
+  const CoarsePointWriter<T> write{prepare_points(mesh, coarse_points, grid, interp, s, opt, no_keys, no_keys, true)};
   std::vector<Id> layers;  // every isovalue's voxel layers: where remove_folds looks for equal triangles
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
     t0 = Clock::now();
-    for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, const CoarseCrossing* x, int n) {
-      double sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-      for (int c = 0; c < n; ++c) {
-        Crossing fine;
-        PointWriter<T> w = out;
-        w.out = PointArrays{fine.v, out.out.scalar ? fine.v + at_scalar : nullptr,
-                            out.out.gradient_normal ? fine.v + at_normal : nullptr,
-                            out.out.curvature ? fine.v + at_curvature : nullptr, nullptr, nullptr};
-        w(0, interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso), iso);
-        for (int v = 0; v < values; ++v) sum[v] += fine.v[v];
-      }
-      float mean[8];
-      for (int v = 0; v < values; ++v) mean[v] = static_cast<float>(sum[v] / static_cast<double>(n));
-      for (int a = 0; a < 3; ++a) out.out.xyz[3 * id + a] = mean[a];
-      if (out.out.scalar) out.out.scalar[id] = mean[at_scalar];
-      if (out.out.gradient_normal) {
-        float* v = mean + at_normal;
-        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
-        for (int a = 0; a < 3; ++a) out.out.gradient_normal[3 * id + a] = v[a];
-      }
-      if (out.out.curvature) out.out.curvature[id] = mean[at_curvature];
-    });
+    for_each_coarse_point(bits[iso], s, cb,
+                          [&](std::uint32_t id, const CoarseCrossing* x, int n) { write(id, x, n, iso); });
     st.fields += seconds_since(t0);
     t0 = Clock::now();
     coarse_triangles += write_coarse_triangles(bits[iso], s, rows[iso], cb, rows[iso].triangle_first.front(),
@@ -327,6 +338,23 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   layers.push_back(coarse_triangles);
   remove_folds(mesh, layers);
   st.coarsen += seconds_since(t0);
+}
+
+// The structured plan's output, refused by name before it is allocated:
+// past --max-memory (floats per point: position, scalar, normals, curvature;
+// 3 ids per triangle; the fine counts bound a coarsened output) or past
+// 32-bit corner ids.
+void check_output_size(const ContourOptions& opt, Id points, Id triangles) {
+  if (opt.max_output_bytes) {
+    const std::uint64_t per_point = 4 * (3 + (opt.scalars ? 1 : 0) + (opt.normals != ContourNormals::None ? 3 : 0) +
+                                         (opt.curvature ? 1 : 0));
+    const auto p = static_cast<std::uint64_t>(points), t = static_cast<std::uint64_t>(triangles);
+    check_work({p, t, saturating_add(saturating_mul(p, per_point), saturating_mul(t, 12))}, opt.max_output_bytes,
+               "contour");
+  }
+  if (3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("contour: " + std::to_string(triangles) +
+                     " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
 }
 
 // The structured plan (contour_rows.hpp): classify every isovalue, count and
@@ -372,17 +400,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   }
   blocks.push_back(3 * triangles);
   st.soup_points = 3 * triangles;
-  if (opt.max_output_bytes) {
-    // Floats per point: position, scalar, normals, curvature; 3 ids per triangle.
-    const std::uint64_t per_point = 4 * (3 + (opt.scalars ? 1 : 0) + (opt.normals != ContourNormals::None ? 3 : 0) +
-                                         (opt.curvature ? 1 : 0));
-    const auto p = static_cast<std::uint64_t>(points), t = static_cast<std::uint64_t>(triangles);
-    check_work({p, t, saturating_add(saturating_mul(p, per_point), saturating_mul(t, 12))}, opt.max_output_bytes,
-               "contour");
-  }
-  if (3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
-    throw LimitError("contour: " + std::to_string(triangles) +
-                     " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
+  check_output_size(opt, points, triangles);
 
   SurfaceMesh mesh;
   progress::report("triangles", 0.4);
