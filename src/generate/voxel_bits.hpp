@@ -16,6 +16,7 @@
 #include "keymesh/core/types.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 
 namespace keymesh::generate {
 
@@ -70,19 +71,25 @@ std::uint64_t inside_word(const T* v, T thr) {
   return w;
 }
 
+// Writes every word of `bits` (samples, padding), so storage kept from an
+// earlier call is reused as it is: no zero-fill, no fresh pages. Storage
+// that has to grow gets huge pages and a parallel first touch.
 template <class T>
 void classify(const T* samples, const GridShape& s, const InsideTest<T>& test, InsideBits& bits) {
   bits.words_per_row = (s.nx + 63) / 64 + 1;
-  bits.words.assign(static_cast<std::size_t>(bits.words_per_row * s.ny * s.nz), 0);
+  parallel::resize_fresh(bits.words, static_cast<std::size_t>(bits.words_per_row * s.ny * s.nz));
   const Id rows = s.ny * s.nz;
   const Id full = s.nx / 64, rest = s.nx % 64;
   const Id wpr = bits.words_per_row;
+  const std::uint64_t rest_mask = (std::uint64_t{1} << rest) - 1;
   parallel::for_each(rows, [&](Id r) {
     const T* in = samples + r * s.nx;
     std::uint64_t* out = bits.words.data() + r * wpr;
-    if (test.none) return;
-    if (test.all) {
-      for (Id i = 0; i < s.nx; ++i) out[i >> 6] |= std::uint64_t{1} << (i & 63);
+    out[wpr - 1] = 0;  // the padding word: "bit i + 1" of the last sample
+    if (test.none || test.all) {
+      const std::uint64_t word = test.all ? ~std::uint64_t{0} : 0;
+      for (Id q = 0; q < full; ++q) out[q] = word;
+      if (rest) out[full] = word & rest_mask;
       return;
     }
     const T thr = test.threshold;
@@ -92,7 +99,7 @@ void classify(const T* samples, const GridShape& s, const InsideTest<T>& test, I
       // cleared (no sample there).
       T tail[64] = {};
       std::memcpy(tail, in + 64 * full, static_cast<std::size_t>(rest) * sizeof(T));
-      out[full] = inside_word(tail, thr) & ((std::uint64_t{1} << rest) - 1);
+      out[full] = inside_word(tail, thr) & rest_mask;
     }
   }, 64);
 }
