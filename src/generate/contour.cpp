@@ -283,9 +283,7 @@ struct CoarsePointWriter {
 // every isovalue, rank the coarse points, write each as the mean of its
 // crossings (the fine point values, as PointWriter makes them, summed in
 // double in key order, as coarsen() sums a group), then the triangles with
-// coarse ids; folds removed at the end as coarsen() does. The triangles
-// are written into `mesh.connectivity`, sized for the fine triangles, and
-// cut to the coarse count.
+// coarse ids; folds removed at the end as coarsen() does.
 template <class T>
 void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const std::vector<RowCounts>& rows,
                   Id fine_triangles, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
@@ -294,13 +292,16 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   // Every isovalue's coarse points ranked first, so that the point arrays
   // are allocated at their final size. Scratch kept by the calling thread,
   // like the inside bits.
+  // `slots`: one isovalue's fine triangles' room, where each voxel row's
+  // coarse triangles are written before they are packed.
   thread_local std::vector<CoarseBits> coarse;
+  thread_local std::vector<PointIndex> slots;
   coarse.resize(static_cast<std::size_t>(n_iso));
   struct Release {
     ~Release() {
-      std::size_t bytes = 0;
+      std::size_t bytes = slots.capacity() * sizeof(PointIndex);
       for (const auto& c : coarse) bytes += c.far.capacity() * sizeof(std::uint64_t) * 2;
-      if (bytes > kKeepScratch) coarse = {};
+      if (bytes > kKeepScratch) coarse = {}, slots = {};
     }
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
@@ -327,13 +328,19 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
                           [&](std::uint32_t id, const CoarseCrossing* x, int n) { write(id, x, n, iso); });
     st.fields += seconds_since(t0);
     t0 = Clock::now();
-    coarse_triangles += write_coarse_triangles(bits[iso], s, rows[iso], cb, rows[iso].triangle_first.front(),
-                                               mesh.connectivity.data() + 3 * coarse_triangles, coarse_triangles,
-                                               layers);
+    const RowCounts& rc = rows[iso];
+    const Id fine = rc.triangle_first.back() - rc.triangle_first.front();
+    if (static_cast<Id>(slots.size()) < 3 * fine) parallel::resize_fresh(slots, static_cast<std::size_t>(3 * fine));
+    coarse_triangles += write_coarse_triangles(
+        bits[iso], s, rc, cb, rc.triangle_first.front(), slots.data(),
+        [&](Id kept) {
+          parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * (coarse_triangles + kept)));
+          return mesh.connectivity.data() + 3 * coarse_triangles;
+        },
+        coarse_triangles, layers);
     st.generate += seconds_since(t0);
   }
   t0 = Clock::now();
-  mesh.connectivity.resize(static_cast<std::size_t>(3 * coarse_triangles));
   st.triangles_before_coarsening = fine_triangles;
   layers.push_back(coarse_triangles);
   remove_folds(mesh, layers);
@@ -404,14 +411,13 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
 
   SurfaceMesh mesh;
   progress::report("triangles", 0.4);
-  auto t0 = Clock::now();
-  parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
   if (opt.coarsen) {
-    st.generate += seconds_since(t0);
     coarsen_rows(mesh, bits, rows, triangles, grid, interp, s, opt, st);
     finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, nullptr, 0, st);
     return mesh;
   }
+  auto t0 = Clock::now();
+  parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
   progress::report("points", 0.5);
   const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true);
   // Triangles and points in one pass over the rows (st.generate holds both).

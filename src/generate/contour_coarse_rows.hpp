@@ -24,6 +24,7 @@
 //              dropped, each voxel row's survivors packed.
 // The fine points are never written. The bytes are those of coarsen() over
 // the fine mesh (generate/coarsen.hpp): a test holds them equal.
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -182,13 +183,16 @@ struct CoarseRowIds {
 };
 
 // Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
-// ids, those with two equal corners dropped, appended at `out` (room for the
-// fine triangles at their fine offsets rc.triangle_first, shifted by
-// `fine_base`), packed. Returns the triangles kept; appends to `layer_first` the
+// ids, those with two equal corners dropped, written into `slots` (room for
+// the fine triangles at their fine offsets rc.triangle_first, shifted by
+// `fine_base`), each voxel row's survivors at the start of its slots, and
+// then packed in parallel into `out` (sized by the caller, at least the
+// triangles kept). Returns the triangles kept; appends to `layer_first` the
 // index of each voxel layer's first triangle, counted from `first_triangle`
-// (the ranges remove_folds checks).
-inline Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const CoarseBits& cb,
-                                 Id fine_base, PointIndex* out, Id first_triangle, std::vector<Id>& layer_first) {
+// (the ranges remove_folds checks). `out` is resized by `grow(kept)`.
+template <class Grow>
+Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const CoarseBits& cb,
+                          Id fine_base, PointIndex* slots, Grow&& grow, Id first_triangle, std::vector<Id>& layer_first) {
   const auto& table = marching_cubes_table();
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   std::vector<Id> kept(static_cast<std::size_t>(voxel_rows), 0);
@@ -214,7 +218,7 @@ inline Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, con
         edge_ids[e] = row.ids[ce.axis] + ce.dx;
       }
       const Id vr = k * (s.ny - 1) + j;
-      PointIndex* const begin = out + 3 * (rc.triangle_first[vr] - fine_base);
+      PointIndex* const begin = slots + 3 * (rc.triangle_first[vr] - fine_base);
       PointIndex* o = begin;
       for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
         const int triangles = table.triangle_count[cube_case];
@@ -231,18 +235,19 @@ inline Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, con
       std::swap(lo[1], hi[1]);
     }
   }, 1);
-  // Pack the voxel rows' survivors, in order: each moves to a lower address
-  // than its own, past those already moved.
-  Id at = 0;
-  for (Id vr = 0; vr < voxel_rows; ++vr) {
-    if (vr % (s.ny - 1) == 0) layer_first.push_back(first_triangle + at);
-    if (kept[vr]) {
-      const Id from = rc.triangle_first[vr] - fine_base;
-      if (from != at) std::memmove(out + 3 * at, out + 3 * from, static_cast<std::size_t>(3 * kept[vr]) * sizeof(PointIndex));
-    }
-    at += kept[vr];
-  }
-  return at;
+  // Pack the voxel rows' survivors: each row's first index by a prefix sum,
+  // then the rows copied in parallel.
+  std::vector<Id> first(static_cast<std::size_t>(voxel_rows + 1));
+  std::copy(kept.begin(), kept.end(), first.begin());
+  const Id total = parallel::exclusive_scan(first.data(), first.data(), voxel_rows + 1);
+  for (Id k = 0; k < layers; ++k) layer_first.push_back(first_triangle + first[k * (s.ny - 1)]);
+  PointIndex* out = grow(total);
+  parallel::for_each(voxel_rows, [&](Id vr) {
+    if (kept[vr])
+      std::memcpy(out + 3 * first[vr], slots + 3 * (rc.triangle_first[vr] - fine_base),
+                  static_cast<std::size_t>(3 * kept[vr]) * sizeof(PointIndex));
+  });
+  return total;
 }
 
 }  // namespace keymesh::generate
