@@ -34,11 +34,11 @@ inline TriangleSet triangle_set(const PointIndex* C, Id t) {
 
 // The triangles that share their point set with another, in increasing
 // index. `ranges` (first triangle of each range, then the end) are such that
-// equal triangles lie in the same range or in adjacent ones: each range's
-// triangles are compared with those of a window (it and its two
-// neighbours) holding the same smallest point id, small enough to stay in
-// cache (a contour's ranges are its voxel layers; one range is the whole
-// mesh). The result is a set: the same at any thread count.
+// equal triangles lie in the same range or in adjacent ones: the triangles
+// of each window of two adjacent ranges are compared with those holding the
+// same smallest point id, small enough to stay in cache (a contour's ranges
+// are its voxel layers; one range is the whole mesh). The result is a set:
+// the same at any thread count.
 std::vector<std::uint32_t> fold_candidates(const PointIndex* C, const std::vector<Id>& given) {
   // Adjacent ranges merged into ranges of a few thousand triangles: fewer
   // neighbours hashed twice, the property kept.
@@ -46,44 +46,59 @@ std::vector<std::uint32_t> fold_candidates(const PointIndex* C, const std::vecto
   for (std::size_t r = 1; r < given.size(); ++r)
     if (given[r] - ranges.back() >= 8192 || r + 1 == given.size()) ranges.push_back(given[r]);
   const Id n_ranges = static_cast<Id>(ranges.size()) - 1;
-  std::vector<std::vector<std::uint32_t>> found(static_cast<std::size_t>(n_ranges));
-  parallel::for_each_dynamic(n_ranges, [&](Id r) {
-    const Id own_begin = ranges[r], own_end = ranges[r + 1];
-    if (own_begin == own_end) return;
-    const Id begin = ranges[r > 0 ? r - 1 : 0], end = ranges[r + 1 < n_ranges ? r + 2 : n_ranges];
-    // The window's triangles grouped by smallest point id (a counting sort
-    // over the ids it spans: point ids follow the triangles' order, so the
-    // span is about the window's points and the passes run nearly in order).
-    thread_local std::vector<TriangleSet> sets;
-    thread_local std::vector<std::uint32_t> first, order;
-    sets.resize(static_cast<std::size_t>(end - begin));
-    std::uint32_t lo_min = ~0u, lo_max = 0;
-    for (Id t = begin; t < end; ++t) {
-      const TriangleSet& e = sets[t - begin] = triangle_set(C, t);
-      lo_min = std::min(lo_min, e.lo), lo_max = std::max(lo_max, e.lo);
-    }
-    first.assign(static_cast<std::size_t>(lo_max - lo_min) + 2, 0);
-    for (Id t = begin; t < end; ++t) ++first[sets[t - begin].lo - lo_min + 1];
-    for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
-    order.resize(static_cast<std::size_t>(end - begin));
-    {
-      thread_local std::vector<std::uint32_t> at;
+  const Id t_count = ranges.back() - ranges.front();
+  std::vector<std::uint8_t> shared(static_cast<std::size_t>(t_count), 0);
+  // Window w holds ranges w and w + 1 (the last one range alone): every
+  // pair of equal triangles lies in one window. Even windows, then odd ones,
+  // so that windows running at once share no range.
+  const Id windows = std::max<Id>(1, n_ranges - 1);
+  for (Id parity = 0; parity < 2; ++parity) {
+    parallel::for_each_dynamic((windows + 1 - parity) / 2, [&](Id half) {
+      const Id w = 2 * half + parity;
+      const Id begin = ranges[w], end = ranges[std::min(w + 2, n_ranges)];
+      if (begin == end) return;
+      // The window's triangles grouped by smallest point id (a counting sort
+      // over the ids it spans: point ids follow the triangles' order, so the
+      // span is about the window's points and the passes run nearly in order).
+      thread_local std::vector<TriangleSet> sets;
+      thread_local std::vector<std::uint32_t> first, order, at;
+      sets.resize(static_cast<std::size_t>(end - begin));
+      std::uint32_t lo_min = ~0u, lo_max = 0;
+      for (Id t = begin; t < end; ++t) {
+        const TriangleSet& e = sets[t - begin] = triangle_set(C, t);
+        lo_min = std::min(lo_min, e.lo), lo_max = std::max(lo_max, e.lo);
+      }
+      first.assign(static_cast<std::size_t>(lo_max - lo_min) + 2, 0);
+      for (Id t = begin; t < end; ++t) ++first[sets[t - begin].lo - lo_min + 1];
+      for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
+      order.resize(static_cast<std::size_t>(end - begin));
       at.assign(first.begin(), first.end() - 1);
       for (Id t = begin; t < end; ++t) order[at[sets[t - begin].lo - lo_min]++] = static_cast<std::uint32_t>(t - begin);
-    }
-    for (Id t = own_begin; t < own_end; ++t) {
-      const TriangleSet& e = sets[t - begin];
-      const std::uint32_t b = first[e.lo - lo_min], f = first[e.lo - lo_min + 1];
-      bool shared = false;
-      for (std::uint32_t i = b; i < f && !shared; ++i) {
-        const TriangleSet& o = sets[order[i]];
-        shared = order[i] != static_cast<std::uint32_t>(t - begin) && o.mid == e.mid && o.hi == e.hi;
-      }
-      if (shared) found[r].push_back(static_cast<std::uint32_t>(t));
-    }
-  }, 1);
-  std::vector<std::uint32_t> out;
-  for (const auto& f : found) out.insert(out.end(), f.begin(), f.end());
+      // Within a group (one smallest id), triangles with equal other ids.
+      for (std::size_t g = 0; g + 1 < first.size(); ++g)
+        for (std::uint32_t i = first[g]; i < first[g + 1]; ++i)
+          for (std::uint32_t j = i + 1; j < first[g + 1]; ++j) {
+            const TriangleSet &x = sets[order[i]], &y = sets[order[j]];
+            if (x.mid == y.mid && x.hi == y.hi)
+              shared[begin - ranges.front() + order[i]] = shared[begin - ranges.front() + order[j]] = 1;
+          }
+    }, 1);
+  }
+  // The flagged triangles, in increasing index (counted per block first).
+  const Id blocks = (t_count + 4095) / 4096;
+  std::vector<Id> block_first(static_cast<std::size_t>(blocks + 1), 0);
+  parallel::for_each(blocks, [&](Id blk) {
+    Id n = 0;
+    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t) n += shared[t];
+    block_first[blk] = n;
+  });
+  const Id total = parallel::exclusive_scan(block_first.data(), block_first.data(), blocks + 1);
+  std::vector<std::uint32_t> out(static_cast<std::size_t>(total));
+  parallel::for_each(blocks, [&](Id blk) {
+    Id at = block_first[blk];
+    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t)
+      if (shared[t]) out[at++] = static_cast<std::uint32_t>(ranges.front() + t);
+  });
   return out;
 }
 
