@@ -256,13 +256,22 @@ struct CoarsePointWriter {
   void operator()(std::uint32_t id, const CoarseCrossing* x, int n, Id iso) const {
     const GridShape& s = out.s;
     double sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    const bool derivatives = out.out.gradient_normal || out.out.curvature;
     for (int c = 0; c < n; ++c) {
       float fine[8];
-      PointWriter<T> w = out;
-      w.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
-                          out.out.gradient_normal ? fine + at_normal : nullptr,
-                          out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
-      w(0, out.interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso), iso);
+      const auto p = out.interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso);
+      if (derivatives) {
+        PointWriter<T> w = out;
+        w.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
+                            out.out.gradient_normal ? fine + at_normal : nullptr,
+                            out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
+        w(0, p, iso);
+      } else {
+        // Positions and the scalar (the usual call): PointWriter's own
+        // position() and scalar(), without its per-field checks.
+        out.interp.position(p, fine);
+        if (out.out.scalar) fine[at_scalar] = out.interp.scalar(p);
+      }
       for (int v = 0; v < values; ++v) sum[v] += fine[v];
     }
     float mean[8];
@@ -300,15 +309,15 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   struct Release {
     ~Release() {
       std::size_t bytes = slots.capacity() * sizeof(PointIndex);
-      for (const auto& c : coarse) bytes += c.far.capacity() * sizeof(std::uint64_t) * 2;
-      if (bytes > kKeepScratch) coarse = {}, slots = {};
+      for (const auto& c : coarse) bytes += c.far.size * sizeof(std::uint64_t) * 2;
+      if (bytes > kKeepScratch) std::vector<CoarseBits>().swap(coarse), slots = {};
     }
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
   auto t0 = Clock::now();
   for (Id iso = 0; iso < n_iso; ++iso) {
     const double isovalue = opt.isovalues[iso];
-    rank_coarse_points(bits[iso], s, coarse_points, [&](Id i, Id j, Id k, int axis) {
+    rank_coarse_points(bits[iso], s, rows[iso], coarse_points, [&](Id i, Id j, Id k, int axis) {
       const Id p0 = i + j * s.nx + k * s.nxy;
       const double v0 = static_cast<double>(interp.samples[p0]);
       const double v1 = static_cast<double>(interp.samples[p0 + s.stride[axis]]);

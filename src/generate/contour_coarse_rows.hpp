@@ -28,6 +28,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include "contour_rows.hpp"
@@ -41,56 +42,86 @@ namespace keymesh::generate {
 
 // One isovalue's far bits, coarse-point bits and ranks, grid rows of planes
 // [0, nz) in the layout of InsideBits (words_per_row words a row).
+// Words are left uninitialised when sized (a sparse surface's grid has few
+// rows with cut edges: only those rows' words, and their neighbours', are
+// written, and only they are read).
+template <class T>
+struct RawWords {
+  std::unique_ptr<T[]> words;
+  std::size_t size = 0;
+  void reserve(std::size_t n) {
+    if (n > size) words.reset(new T[n]), size = n;
+  }
+  T* data() { return words.get(); }
+  const T* data() const { return words.get(); }
+};
+
 struct CoarseBits {
   Id words_per_row = 0;
-  std::vector<std::uint64_t> far;     // (row * 3 + axis) * words_per_row + q
-  std::vector<std::uint64_t> points;  // row * words_per_row + q: coarse points
-  std::vector<std::uint32_t> first;   // row * words_per_row + q: id of the word's first coarse point
-  Id count = 0;                       // coarse points of this isovalue
+  RawWords<std::uint64_t> far;     // (row * 3 + axis) * words_per_row + q; rows with cut edges only
+  RawWords<std::uint64_t> points;  // row * words_per_row + q: coarse points; live rows only
+  RawWords<std::uint32_t> first;   // row * words_per_row + q: id of the word's first coarse point; live rows only
+  std::vector<std::uint8_t> cut;   // per row: has cut edges (its far words are written)
+  std::vector<std::uint8_t> live;  // per row: may hold coarse points (its own cuts, or the rows below it have some)
+  std::vector<std::uint64_t> zeros;  // a row of zero words: the far bits of a row without cut edges
+  Id count = 0;                    // coarse points of this isovalue
 
-  const std::uint64_t* far_row(Id r, int axis) const { return far.data() + (r * 3 + axis) * words_per_row; }
+  const std::uint64_t* far_row(Id r, int axis) const {
+    return cut[r] ? far.data() + (r * 3 + axis) * words_per_row : zeros.data();
+  }
 
   // The far bits a grid row (j, k) = r reads: its own three axes', the y
   // edges of row (j - 1, k) and the z edges of row (j, k - 1) (null at the
-  // grid's border), whose far ends are this row's points.
+  // grid's border or without cut edges), whose far ends are this row's points.
   struct Around {
     const std::uint64_t *x, *y, *z, *y_below, *z_below;
   };
   Around around(Id r, Id j, Id k, Id ny) const {
-    return {far_row(r, 0), far_row(r, 1), far_row(r, 2), j > 0 ? far_row(r - 1, 1) : nullptr,
-            k > 0 ? far_row(r - ny, 2) : nullptr};
+    return {far_row(r, 0), far_row(r, 1), far_row(r, 2), j > 0 && cut[r - 1] ? far_row(r - 1, 1) : nullptr,
+            k > 0 && cut[r - ny] ? far_row(r - ny, 2) : nullptr};
   }
 
   // Coarse id of grid point i of row r (a coarse point).
   std::uint32_t id(Id r, Id i) const {
     const Id w = r * words_per_row + (i >> 6);
     const std::uint64_t below = (std::uint64_t{1} << (i & 63)) - 1;
-    return first[w] + static_cast<std::uint32_t>(std::popcount(points[w] & below));
+    return first.data()[w] + static_cast<std::uint32_t>(std::popcount(points.data()[w] & below));
   }
 };
 
 // Steps 1 and 2 for one isovalue: far bits (far(i, j, k, axis) says whether
 // the crossing on that cut edge has t >= 0.5), coarse points and their ids,
-// starting at `first_id`.
+// starting at `first_id`. `rc` (the rows' counts) says which rows have cut
+// edges: only those and the rows above them are visited.
 template <class Far>
-void rank_coarse_points(const InsideBits& bits, const GridShape& s, Id first_id, Far&& far, CoarseBits& cb) {
+void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCounts& rc, Id first_id, Far&& far,
+                        CoarseBits& cb) {
   const Id wpr = bits.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
   cb.words_per_row = wpr;
-  cb.far.assign(static_cast<std::size_t>(3 * wpr * rows), 0);
-  cb.points.assign(static_cast<std::size_t>(wpr * rows), 0);
-  cb.first.assign(static_cast<std::size_t>(wpr * rows), 0);
+  cb.far.reserve(static_cast<std::size_t>(3 * wpr * rows));
+  cb.points.reserve(static_cast<std::size_t>(wpr * rows));
+  cb.first.reserve(static_cast<std::size_t>(wpr * rows));
+  cb.zeros.assign(static_cast<std::size_t>(wpr), 0);
+  cb.cut.resize(static_cast<std::size_t>(rows));
+  cb.live.resize(static_cast<std::size_t>(rows));
+  parallel::for_each(rows, [&](Id r) { cb.cut[r] = rc.point_first[r + 1] != rc.point_first[r]; });
+  parallel::for_each(rows, [&](Id r) {
+    cb.live[r] = cb.cut[r] || (r % s.ny > 0 && cb.cut[r - 1]) || (r >= s.ny && cb.cut[r - s.ny]);
+  });
   parallel::for_each_dynamic(rows, [&](Id r) {
+    if (!cb.cut[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
-    std::uint64_t* f[3] = {cb.far.data() + (3 * r) * wpr, cb.far.data() + (3 * r + 1) * wpr,
-                           cb.far.data() + (3 * r + 2) * wpr};
+    std::uint64_t* f = cb.far.data() + 3 * r * wpr;
+    std::fill(f, f + 3 * wpr, std::uint64_t{0});
     RowCuts(bits, s, j, k, last_plane).for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
       const std::uint32_t cut[3] = {x, y, z};
       for (int a = 0; a < 3; ++a)
-        if (cut[a] && far(i, j, k, a)) f[a][i >> 6] |= std::uint64_t{1} << (i & 63);
+        if (cut[a] && far(i, j, k, a)) f[a * wpr + (i >> 6)] |= std::uint64_t{1} << (i & 63);
     });
   }, 8);
   std::vector<Id> row_first(static_cast<std::size_t>(rows + 1), 0);
   parallel::for_each_dynamic(rows, [&](Id r) {
+    if (!cb.live[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
     const RowCuts cuts(bits, s, j, k, last_plane);
     const auto [fx, fy, fz, fy_below, fz_below] = cb.around(r, j, k, s.ny);
@@ -98,7 +129,7 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, Id first_id,
     std::uint32_t* first = cb.first.data() + r * wpr;
     std::uint64_t carry = 0;  // far x edge of the previous word's last point
     std::uint32_t count = 0;
-    for (Id q = 0; q < cuts.data_words; ++q) {
+    for (Id q = 0; q < wpr; ++q) {
       const RowCuts::Words w = cuts.word(q);
       // Far bits are a subset of the cut bits: cut ^ far are the near ends.
       std::uint64_t c = (w.x ^ fx[q]) | (w.y ^ fy[q]) | (w.z ^ fz[q]) | (fx[q] << 1) | carry;
@@ -113,8 +144,9 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, Id first_id,
   }, 8);
   cb.count = parallel::exclusive_scan(row_first.data(), row_first.data(), rows + 1);
   parallel::for_each(rows, [&](Id r) {
+    if (!cb.live[r]) return;
     const auto base = static_cast<std::uint32_t>(first_id + row_first[r]);
-    for (Id q = 0; q < wpr; ++q) cb.first[r * wpr + q] += base;
+    for (Id q = 0; q < wpr; ++q) cb.first.data()[r * wpr + q] += base;
   });
 }
 
@@ -130,15 +162,16 @@ template <class F>
 void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
   const Id wpr = cb.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
   parallel::for_each_dynamic(rows, [&](Id r) {
+    if (!cb.live[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
     const RowCuts cuts(bits, s, j, k, last_plane);
     const auto [fx, fy, fz, fy_below, fz_below] = cb.around(r, j, k, s.ny);
     for (Id q = 0; q < cuts.data_words; ++q) {
-      std::uint64_t c = cb.points[r * wpr + q];
+      std::uint64_t c = cb.points.data()[r * wpr + q];
       if (!c) continue;
       const RowCuts::Words w = cuts.word(q);
       const std::uint64_t fx_before = (fx[q] << 1) | (q > 0 ? fx[q - 1] >> 63 : 0);
-      std::uint32_t id = cb.first[r * wpr + q];
+      std::uint32_t id = cb.first.data()[r * wpr + q];
       while (c) {
         const int b = std::countr_zero(c);
         c &= c - 1;
