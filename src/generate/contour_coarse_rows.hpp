@@ -89,6 +89,21 @@ struct CoarseBits {
   }
 };
 
+// Calls f(r) for every grid row r = k * ny + j, in parallel, by bricks of
+// 16 rows by 8 planes (k outer, j inner within a brick): the rows a row
+// reads around it (j - 1, k - 1, k + 1) were just read, so their samples
+// and bits are still in cache. Which thread takes a row changes nothing.
+template <class F>
+void for_each_row_in_bricks(const GridShape& s, F&& f) {
+  constexpr Id kRows = 16, kPlanes = 8;
+  const Id j_bricks = (s.ny + kRows - 1) / kRows, k_bricks = (s.nz + kPlanes - 1) / kPlanes;
+  parallel::for_each_dynamic(j_bricks * k_bricks, [&](Id b) {
+    const Id j0 = (b % j_bricks) * kRows, k0 = (b / j_bricks) * kPlanes;
+    for (Id k = k0; k < std::min(s.nz, k0 + kPlanes); ++k)
+      for (Id j = j0; j < std::min(s.ny, j0 + kRows); ++j) f(k * s.ny + j);
+  }, 1);
+}
+
 // Steps 1 and 2 for one isovalue: far bits (far(i, j, k, axis) says whether
 // the crossing on that cut edge has t >= 0.5), coarse points and their ids,
 // starting at `first_id`. `rc` (the rows' counts) says which rows have cut
@@ -108,7 +123,7 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
   parallel::for_each(rows, [&](Id r) {
     cb.live[r] = cb.cut[r] || (r % s.ny > 0 && cb.cut[r - 1]) || (r >= s.ny && cb.cut[r - s.ny]);
   });
-  parallel::for_each_dynamic(rows, [&](Id r) {
+  for_each_row_in_bricks(s, [&](Id r) {
     if (!cb.cut[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
     std::uint64_t* f = cb.far.data() + 3 * r * wpr;
@@ -118,9 +133,9 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
       for (int a = 0; a < 3; ++a)
         if (cut[a] && far(i, j, k, a)) f[a * wpr + (i >> 6)] |= std::uint64_t{1} << (i & 63);
     });
-  }, 8);
+  });
   std::vector<Id> row_first(static_cast<std::size_t>(rows + 1), 0);
-  parallel::for_each_dynamic(rows, [&](Id r) {
+  for_each_row_in_bricks(s, [&](Id r) {
     if (!cb.live[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
     const RowCuts cuts(bits, s, j, k, last_plane);
@@ -141,7 +156,7 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
       count += static_cast<std::uint32_t>(std::popcount(c));
     }
     row_first[r] = count;
-  }, 8);
+  });
   cb.count = parallel::exclusive_scan(row_first.data(), row_first.data(), rows + 1);
   parallel::for_each(rows, [&](Id r) {
     if (!cb.live[r]) return;
@@ -160,8 +175,8 @@ struct CoarseCrossing {
 // its n (1 to 6) crossings in the order of their edge keys.
 template <class F>
 void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
-  const Id wpr = cb.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
-  parallel::for_each_dynamic(rows, [&](Id r) {
+  const Id wpr = cb.words_per_row, last_plane = s.nz - 1;
+  for_each_row_in_bricks(s, [&](Id r) {
     if (!cb.live[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
     const RowCuts cuts(bits, s, j, k, last_plane);
@@ -190,7 +205,7 @@ void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const Coa
         f(id++, x, n);
       }
     }
-  }, 8);
+  });
 }
 
 // The coarse ids of one grid row's cut edges, by axis and i (like RowIds):
