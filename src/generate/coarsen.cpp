@@ -41,7 +41,7 @@ inline TriangleSet triangle_set(const PointIndex* C, Id t) {
 // the same at any thread count.
 std::vector<std::uint32_t> fold_candidates(const PointIndex* C, const std::vector<Id>& given) {
   // Adjacent ranges merged into ranges of a few thousand triangles: fewer
-  // neighbours hashed twice, the property kept.
+  // windows, each range still grouped twice, the property kept.
   std::vector<Id> ranges{given.front()};
   for (std::size_t r = 1; r < given.size(); ++r)
     if (given[r] - ranges.back() >= 8192 || r + 1 == given.size()) ranges.push_back(given[r]);
