@@ -32,102 +32,26 @@ inline TriangleSet triangle_set(const PointIndex* C, Id t) {
   return TriangleSet{a, std::min(b, c), std::max(b, c), static_cast<std::int8_t>(b < c ? 1 : -1)};
 }
 
-// The triangles that share their point set with another, in increasing
-// index. `ranges` (first triangle of each range, then the end) are such that
-// equal triangles lie in the same range or in adjacent ones: the triangles
-// of each window of two adjacent ranges are compared with those holding the
-// same smallest point id, small enough to stay in cache (a contour's ranges
-// are its voxel layers; one range is the whole mesh). The result is a set:
-// the same at any thread count.
-std::vector<std::uint32_t> fold_candidates(const PointIndex* C, const std::vector<Id>& given) {
-  // Adjacent ranges merged into ranges of a few thousand triangles: fewer
-  // windows, each range still grouped twice, the property kept.
-  std::vector<Id> ranges{given.front()};
-  for (std::size_t r = 1; r < given.size(); ++r)
-    if (given[r] - ranges.back() >= 8192 || r + 1 == given.size()) ranges.push_back(given[r]);
-  const Id n_ranges = static_cast<Id>(ranges.size()) - 1;
-  const Id t_count = ranges.back() - ranges.front();
-  std::vector<std::uint8_t> shared(static_cast<std::size_t>(t_count), 0);
-  // Window w holds ranges w and w + 1 (the last one range alone): every
-  // pair of equal triangles lies in one window. Even windows, then odd ones,
-  // so that windows running at once share no range.
-  const Id windows = std::max<Id>(1, n_ranges - 1);
-  for (Id parity = 0; parity < 2; ++parity) {
-    parallel::for_each_dynamic((windows + 1 - parity) / 2, [&](Id half) {
-      const Id w = 2 * half + parity;
-      const Id begin = ranges[w], end = ranges[std::min(w + 2, n_ranges)];
-      if (begin == end) return;
-      // The window's triangles grouped by smallest point id (a counting sort
-      // over the ids it spans: point ids follow the triangles' order, so the
-      // span is about the window's points and the passes run nearly in order).
-      thread_local std::vector<TriangleSet> sets;
-      thread_local std::vector<std::uint32_t> first, order, at;
-      sets.resize(static_cast<std::size_t>(end - begin));
-      std::uint32_t lo_min = ~0u, lo_max = 0;
-      for (Id t = begin; t < end; ++t) {
-        const TriangleSet& e = sets[t - begin] = triangle_set(C, t);
-        lo_min = std::min(lo_min, e.lo), lo_max = std::max(lo_max, e.lo);
-      }
-      first.assign(static_cast<std::size_t>(lo_max - lo_min) + 2, 0);
-      for (Id t = begin; t < end; ++t) ++first[sets[t - begin].lo - lo_min + 1];
-      for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
-      order.resize(static_cast<std::size_t>(end - begin));
-      at.assign(first.begin(), first.end() - 1);
-      for (Id t = begin; t < end; ++t) order[at[sets[t - begin].lo - lo_min]++] = static_cast<std::uint32_t>(t - begin);
-      // Within a group (one smallest id), triangles with equal other ids.
-      for (std::size_t g = 0; g + 1 < first.size(); ++g)
-        for (std::uint32_t i = first[g]; i < first[g + 1]; ++i)
-          for (std::uint32_t j = i + 1; j < first[g + 1]; ++j) {
-            const TriangleSet &x = sets[order[i]], &y = sets[order[j]];
-            if (x.mid == y.mid && x.hi == y.hi)
-              shared[begin - ranges.front() + order[i]] = shared[begin - ranges.front() + order[j]] = 1;
-          }
-    }, 1);
-  }
-  // The flagged triangles, in increasing index (counted per block first).
-  const Id blocks = (t_count + 4095) / 4096;
-  std::vector<Id> block_first(static_cast<std::size_t>(blocks + 1), 0);
-  parallel::for_each(blocks, [&](Id blk) {
-    Id n = 0;
-    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t) n += shared[t];
-    block_first[blk] = n;
-  });
-  const Id total = parallel::exclusive_scan(block_first.data(), block_first.data(), blocks + 1);
-  std::vector<std::uint32_t> out(static_cast<std::size_t>(total));
-  parallel::for_each(blocks, [&](Id blk) {
-    Id at = block_first[blk];
-    for (Id t = 4096 * blk; t < std::min(t_count, 4096 * (blk + 1)); ++t)
-      if (shared[t]) out[at++] = static_cast<std::uint32_t>(ranges.front() + t);
-  });
-  return out;
-}
-
 }  // namespace
 
-Id remove_folds(SurfaceMesh& mesh) { return remove_folds(mesh, {0, mesh.num_cells()}); }
-
-// Only the triangles of fold_candidates can be in a set of equal triangles;
-// they are grouped by their smallest point id (KEY-REDUCE, sort plan), and
-// each group's few triangles are compared with one another; of every set of
+// Triangles grouped by their smallest point id (KEY-REDUCE, sort plan), and
+// each group's few triangles compared with one another; of every set of
 // equal triangles the first of the winning orientation is kept when the
 // orientations do not cancel.
-Id remove_folds(SurfaceMesh& mesh, const std::vector<Id>& ranges) {
-  const Id t_count = mesh.num_cells();
-  if (t_count == 0) return 0;
-  const PointIndex* C = mesh.connectivity.data();
-  const std::vector<std::uint32_t> cand = fold_candidates(C, ranges);
-  const Id n = static_cast<Id>(cand.size());
+Id remove_folds(SurfaceMesh& mesh) {
+  const Id n = mesh.num_cells();
   if (n == 0) return 0;
+  const PointIndex* C = mesh.connectivity.data();
   std::vector<TriangleSet> tri(static_cast<std::size_t>(n));
   std::vector<std::uint32_t> lo(static_cast<std::size_t>(n));
-  parallel::for_each(n, [&](Id c) {
-    tri[c] = triangle_set(C, cand[c]);
-    lo[c] = tri[c].lo;
+  parallel::for_each(n, [&](Id t) {
+    tri[t] = triangle_set(C, t);
+    lo[t] = tri[t].lo;
   });
   const auto g = keyreduce::partition_sort(lo.data(), n, parallel::bits_needed<std::uint32_t>(
                                                              static_cast<std::uint32_t>(mesh.num_points() - 1)),
                                            keyreduce::Order::Build);
-  std::vector<std::uint8_t> drop(static_cast<std::size_t>(n), 0);  // by candidate
+  std::vector<std::uint8_t> drop(static_cast<std::size_t>(n), 0);  // by triangle
   std::vector<std::uint8_t> folded_any(static_cast<std::size_t>(g.num_groups()), 0);
   parallel::for_each(g.num_groups(), [&](Id grp) {
     const Id b = g.offsets[grp], e = g.offsets[grp + 1];
@@ -154,16 +78,16 @@ Id remove_folds(SurfaceMesh& mesh, const std::vector<Id>& ranges) {
   });
   if (std::find(folded_any.begin(), folded_any.end(), 1) == folded_any.end()) return 0;
   // Pack the kept triangles in place, in order (each moves to a lower index).
-  Id at = 0, c = 0;
+  Id at = 0;
   PointIndex* W = mesh.connectivity.data();
-  for (Id t = 0; t < t_count; ++t) {
-    if (c < n && cand[c] == t && drop[c++]) continue;
+  for (Id t = 0; t < n; ++t) {
+    if (drop[t]) continue;
     if (at != t)
       for (int k = 0; k < 3; ++k) W[3 * at + k] = W[3 * t + k];
     ++at;
   }
   mesh.connectivity.resize(static_cast<std::size_t>(3 * at));
-  return t_count - at;
+  return n - at;
 }
 
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,

@@ -292,7 +292,7 @@ struct CoarsePointWriter {
 // every isovalue, rank the coarse points, write each as the mean of its
 // crossings (the fine point values, as PointWriter makes them, summed in
 // double in key order, as coarsen() sums a group), then the triangles with
-// coarse ids; folds removed at the end as coarsen() does.
+// coarse ids, folds removed in that pass by remove_folds' rule.
 template <class T>
 void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const std::vector<RowCounts>& rows,
                   Id fine_triangles, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
@@ -303,14 +303,17 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   // like the inside bits.
   // `slots`: one isovalue's fine triangles' room, where each voxel row's
   // coarse triangles are written before they are packed.
+  // `triangle_scratch`: the face triangles of write_coarse_triangles.
   thread_local std::vector<CoarseBits> coarse;
   thread_local std::vector<PointIndex> slots;
+  thread_local CoarseTriangleScratch triangle_scratch;
   coarse.resize(static_cast<std::size_t>(n_iso));
   struct Release {
     ~Release() {
       std::size_t bytes = slots.capacity() * sizeof(PointIndex);
       for (const auto& c : coarse) bytes += c.far.size * sizeof(std::uint64_t) * 2;
-      if (bytes > kKeepScratch) std::vector<CoarseBits>().swap(coarse), slots = {};
+      for (const auto& f : triangle_scratch.faces) bytes += f.capacity() * sizeof(FaceTriangle);
+      if (bytes > kKeepScratch) std::vector<CoarseBits>().swap(coarse), slots = {}, triangle_scratch = {};
     }
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
@@ -329,7 +332,6 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   st.weld += seconds_since(t0);
   std::vector<std::uint64_t>* no_keys = nullptr;
   const CoarsePointWriter<T> write{prepare_points(mesh, coarse_points, grid, interp, s, opt, no_keys, no_keys, true)};
-  std::vector<Id> layers;  // every isovalue's voxel layers: where remove_folds looks for equal triangles
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
     t0 = Clock::now();
@@ -346,14 +348,10 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
           parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * (coarse_triangles + kept)));
           return mesh.connectivity.data() + 3 * coarse_triangles;
         },
-        coarse_triangles, layers);
+        triangle_scratch);
     st.generate += seconds_since(t0);
   }
-  t0 = Clock::now();
   st.triangles_before_coarsening = fine_triangles;
-  layers.push_back(coarse_triangles);
-  remove_folds(mesh, layers);
-  st.coarsen += seconds_since(t0);
 }
 
 // The structured plan's output, refused by name before it is allocated:

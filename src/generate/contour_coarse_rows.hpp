@@ -31,6 +31,8 @@
 #include <memory>
 #include <vector>
 
+#include "coarse_cases.hpp"
+#include "coarse_folds.hpp"
 #include "contour_rows.hpp"
 #include "keymesh/core/types.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
@@ -208,92 +210,121 @@ void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const Coa
   });
 }
 
-// The coarse ids of one grid row's cut edges, by axis and i (like RowIds):
-// the id of the edge's near end.
-struct CoarseRowIds {
-  std::uint32_t* ids[3];
-
-  CoarseRowIds(std::uint32_t* scratch, Id nx) : ids{scratch, scratch + nx, scratch + 2 * nx} {}
-
-  void fill(const RowCuts& cuts, const CoarseBits& cb, const GridShape& s, Id j, Id k) {
-    const Id r = k * s.ny + j;
-    const std::uint64_t* f[3] = {cb.far_row(r, 0), cb.far_row(r, 1), cb.far_row(r, 2)};
-    const Id far_row[3] = {r, r + 1, r + s.ny};  // where each axis's far end lies
-    cuts.for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-      const std::uint32_t cut[3] = {x, y, z};
-      for (int a = 0; a < 3; ++a) {
-        if (!cut[a]) continue;
-        const bool is_far = (f[a][i >> 6] >> (i & 63)) & 1;
-        ids[a][i] = is_far ? cb.id(far_row[a], a == 0 ? i + 1 : i) : cb.id(r, i);
-      }
-    });
-  }
+// Scratch of write_coarse_triangles, kept by its caller across isovalues
+// and calls: each task's face triangles, and each voxel row's range of them.
+struct CoarseTriangleScratch {
+  std::vector<std::vector<FaceTriangle>> faces;  // by task
+  std::vector<std::uint32_t> face_first;         // by voxel row: first in its task's list, then...
+  std::vector<std::uint32_t> face_end;           // ...one past its last
+  std::vector<Id> kept;                          // by voxel row: triangles kept
 };
 
 // Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
-// ids, those with two equal corners dropped, written into `slots` (room for
-// the fine triangles at their fine offsets rc.triangle_first, shifted by
-// `fine_base`), each voxel row's survivors at the start of its slots, and
-// then packed in parallel into `out` (sized by the caller, at least the
-// triangles kept). Returns the triangles kept; appends to `layer_first` the
-// index of each voxel layer's first triangle, counted from `first_triangle`
-// (the ranges remove_folds checks). `out` is resized by `grow(kept)`.
+// ids, written into `slots` (room for the fine triangles at their fine
+// offsets rc.triangle_first, shifted by `fine_base`), each voxel row's
+// triangles at the start of its slots: those with two equal corners dropped,
+// folds (coarse_folds.hpp) decided within each voxel, then across the faces
+// between voxels, then each row's survivors packed in parallel into `out`
+// (given by `grow(kept)`, room for the triangles kept). Returns the
+// triangles kept.
 template <class Grow>
 Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const CoarseBits& cb,
-                          Id fine_base, PointIndex* slots, Grow&& grow, Id first_triangle, std::vector<Id>& layer_first) {
-  const auto& table = marching_cubes_table();
+                          Id fine_base, PointIndex* slots, Grow&& grow, CoarseTriangleScratch& sc) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
-  std::vector<Id> kept(static_cast<std::size_t>(voxel_rows), 0);
   constexpr Id kRun = 16;  // voxel rows per task
-  const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun;
-  parallel::for_each_dynamic(layers * runs_per_layer, [&](Id task) {
+  const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun, tasks = layers * runs_per_layer;
+  if (static_cast<Id>(sc.faces.size()) < tasks) sc.faces.resize(static_cast<std::size_t>(tasks));
+  sc.face_first.resize(static_cast<std::size_t>(voxel_rows));
+  sc.face_end.resize(static_cast<std::size_t>(voxel_rows));
+  sc.kept.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
+  const CoarseVoxelTable& voxels = coarse_voxel_table();
+  auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
+  parallel::for_each_dynamic(tasks, [&](Id task) {
     const Id k = task / runs_per_layer;
     const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
-    thread_local std::vector<std::uint32_t> scratch;
-    if (static_cast<Id>(scratch.size()) < 12 * s.nx) scratch.resize(static_cast<std::size_t>(12 * s.nx));
-    CoarseRowIds lo[2] = {CoarseRowIds(scratch.data(), s.nx), CoarseRowIds(scratch.data() + 3 * s.nx, s.nx)};
-    CoarseRowIds hi[2] = {CoarseRowIds(scratch.data() + 6 * s.nx, s.nx), CoarseRowIds(scratch.data() + 9 * s.nx, s.nx)};
-    const Id last_plane = s.nz - 1;
-    lo[0].fill(RowCuts(bits, s, j_begin, k, last_plane), cb, s, j_begin, k);
-    lo[1].fill(RowCuts(bits, s, j_begin, k + 1, last_plane), cb, s, j_begin, k + 1);
+    std::vector<FaceTriangle>& faces = sc.faces[task];
+    faces.clear();
     for (Id j = j_begin; j < j_end; ++j) {
-      hi[0].fill(RowCuts(bits, s, j + 1, k, last_plane), cb, s, j + 1, k);
-      hi[1].fill(RowCuts(bits, s, j + 1, k + 1, last_plane), cb, s, j + 1, k + 1);
-      const std::uint32_t* edge_ids[12];
-      for (int e = 0; e < 12; ++e) {
-        const auto& ce = table.edges[e];
-        const CoarseRowIds& row = ce.dz ? (ce.dy ? hi[1] : lo[1]) : (ce.dy ? hi[0] : lo[0]);
-        edge_ids[e] = row.ids[ce.axis] + ce.dx;
-      }
+      // The grid rows of the voxel row's corners, by corner bits y | z << 1.
+      const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
+      // Far bits of the twelve cube edges, in MarchingCubesTable's order
+      // (coarse_cases.hpp, kCubeEdgeLayout): x edges of the four rows at i,
+      // y edges of rows (j, k), (j, k + 1) and z edges of rows (j, k),
+      // (j + 1, k) at i and i + 1.
+      const std::uint64_t* fx[4] = {cb.far_row(r[0], 0), cb.far_row(r[1], 0), cb.far_row(r[2], 0), cb.far_row(r[3], 0)};
+      const std::uint64_t* fy[2] = {cb.far_row(r[0], 1), cb.far_row(r[2], 1)};
+      const std::uint64_t* fz[2] = {cb.far_row(r[0], 2), cb.far_row(r[1], 2)};
       const Id vr = k * (s.ny - 1) + j;
-      PointIndex* const begin = slots + 3 * (rc.triangle_first[vr] - fine_base);
+      PointIndex* const begin = slots_of(vr);
       PointIndex* o = begin;
+      sc.face_first[vr] = static_cast<std::uint32_t>(faces.size());
       for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
-        const int triangles = table.triangle_count[cube_case];
-        const auto& edges = table.triangle_edges[cube_case];
-        for (int t = 0; t < triangles; ++t) {
-          const std::uint32_t a = edge_ids[edges[3 * t]][i], b = edge_ids[edges[3 * t + 1]][i],
-                              c = edge_ids[edges[3 * t + 2]][i];
-          o[0] = a, o[1] = b, o[2] = c;
-          o += (a != b && b != c && a != c) ? 3 : 0;
+        const Id q = i >> 6;
+        const int b = static_cast<int>(i & 63);
+        auto one = [&](const std::uint64_t* w) { return static_cast<unsigned>((w[q] >> b) & 1u); };
+        auto two = [&](const std::uint64_t* w) {  // bits i and i + 1
+          return static_cast<unsigned>(b < 63 ? (w[q] >> b) & 3u : (w[q] >> 63) | ((w[q + 1] & 1u) << 1));
+        };
+        const unsigned y0 = two(fy[0]), y1 = two(fy[1]), z0 = two(fz[0]), z1 = two(fz[1]);
+        const unsigned far = one(fx[0]) | (y0 & 1u) << 1 | (z0 & 1u) << 2 | (y0 >> 1) << 3 | (z0 >> 1) << 4 |
+                             one(fx[1]) << 5 | (z1 & 1u) << 6 | (z1 >> 1) << 7 | one(fx[2]) << 8 | (y1 & 1u) << 9 |
+                             (y1 >> 1) << 10 | one(fx[3]) << 11;
+        const CoarseVoxel& v = voxels.at(cube_case, far);
+        auto id = [&](unsigned corner) { return cb.id(r[corner >> 1], i + (corner & 1u)); };
+        for (int t = 0; t < v.count; ++t) {
+          const unsigned c = v.triangles[t];
+          o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
+          if (v.face[t])
+            faces.push_back({static_cast<std::uint32_t>((o - begin) / 3), static_cast<std::uint32_t>(i),
+                             static_cast<std::uint8_t>(v.face[t] & 0x7fu)});
+          o += 3;
         }
       });
-      kept[vr] = (o - begin) / 3;
-      std::swap(lo[0], hi[0]);
-      std::swap(lo[1], hi[1]);
+      sc.face_end[vr] = static_cast<std::uint32_t>(faces.size());
+      sc.kept[vr] = (o - begin) / 3;
     }
   }, 1);
-  // Pack the voxel rows' survivors: each row's first index by a prefix sum,
-  // then the rows copied in parallel.
-  std::vector<Id> first(static_cast<std::size_t>(voxel_rows + 1));
-  std::copy(kept.begin(), kept.end(), first.begin());
+  // Folds across faces: each row decides the faces it owns.
+  auto faces_of = [&](Id vr) {
+    const Id j = vr % (s.ny - 1), k = vr / (s.ny - 1);
+    return sc.faces[k * runs_per_layer + j / kRun].data() + sc.face_first[vr];
+  };
+  auto face_count = [&](Id vr) { return static_cast<std::size_t>(sc.face_end[vr] - sc.face_first[vr]); };
+  parallel::for_each_dynamic(voxel_rows, [&](Id vr) {
+    const Id j = vr % (s.ny - 1), k = vr / (s.ny - 1);
+    const Id ny_row = j + 1 < s.ny - 1 ? vr + 1 : -1, nz_row = k + 1 < layers ? vr + (s.ny - 1) : -1;
+    const std::size_t n_own = face_count(vr), n_y = ny_row >= 0 ? face_count(ny_row) : 0,
+                      n_z = nz_row >= 0 ? face_count(nz_row) : 0;
+    if (n_own + n_y + n_z < 2) return;
+    thread_local std::vector<FoldEntry> entries;
+    fold_across_faces(faces_of(vr), n_own, slots_of(vr), j == 0, k == 0, n_y ? faces_of(ny_row) : nullptr, n_y,
+                      n_y ? slots_of(ny_row) : nullptr, n_z ? faces_of(nz_row) : nullptr, n_z,
+                      n_z ? slots_of(nz_row) : nullptr, entries);
+  }, 64);
+  // Each row's survivors counted, first index by a prefix sum, then the rows
+  // copied in parallel.
+  std::vector<Id>& first = sc.kept;
+  std::vector<std::uint8_t> folded(static_cast<std::size_t>(voxel_rows));
+  parallel::for_each(voxel_rows, [&](Id vr) {
+    const FaceTriangle* f = faces_of(vr);
+    const PointIndex* row = slots_of(vr);
+    Id dropped = 0;
+    for (std::size_t e = 0; e < face_count(vr); ++e) dropped += row[3 * std::size_t{f[e].tri}] == kDroppedTriangle;
+    first[vr] -= dropped;
+    folded[vr] = dropped > 0;
+  });
   const Id total = parallel::exclusive_scan(first.data(), first.data(), voxel_rows + 1);
-  for (Id k = 0; k < layers; ++k) layer_first.push_back(first_triangle + first[k * (s.ny - 1)]);
   PointIndex* out = grow(total);
   parallel::for_each(voxel_rows, [&](Id vr) {
-    if (kept[vr])
-      std::memcpy(out + 3 * first[vr], slots + 3 * (rc.triangle_first[vr] - fine_base),
-                  static_cast<std::size_t>(3 * kept[vr]) * sizeof(PointIndex));
+    const PointIndex* row = slots_of(vr);
+    PointIndex* o = out + 3 * first[vr];
+    PointIndex* const end = out + 3 * first[vr + 1];
+    if (!folded[vr]) {
+      std::memcpy(o, row, static_cast<std::size_t>(end - o) * sizeof(PointIndex));
+      return;
+    }
+    for (; o < end; row += 3)
+      if (row[0] != kDroppedTriangle) o[0] = row[0], o[1] = row[1], o[2] = row[2], o += 3;
   });
   return total;
 }

@@ -183,4 +183,49 @@ TEST(Coarsen, InThePassEqualsAfterTheContourWithNaNs) {
   parallel::set_thread_count(0);
 }
 
+// The pass decides folds voxel by voxel and face by face (coarse_folds.hpp,
+// the tabulated voxels of coarse_cases.hpp); coarsen() compares the whole
+// mesh's triangles (remove_folds). On coarse random volumes, where many
+// triangles fold within voxels and across faces, and on a smooth one, both
+// give the same bytes at 1 and 2 threads, and the folds were there to find.
+TEST(Coarsen, FoldsDecidedInThePassEqualTheWholeMeshRule) {
+  struct Case {
+    std::array<Id, 3> dims;
+    int levels;  // sample values 0..levels-1 (random), 0 for a smooth field
+    std::vector<double> isovalues;
+  };
+  const Case cases[] = {{{23, 17, 13}, 4, {1.5}}, {{16, 31, 9}, 3, {0.5, 1.5}}, {{40, 40, 40}, 0, {0.37, 0.5}}};
+  for (const Case& c : cases) {
+    ImageGrid g;
+    g.allocate(c.dims, ScalarType::Float32);
+    auto* v = reinterpret_cast<float*>(g.data());
+    std::mt19937 rng(static_cast<unsigned>(c.dims[0]));
+    for (Id p = 0; p < g.num_points(); ++p) {
+      const Id i = p % c.dims[0], j = p / c.dims[0] % c.dims[1], k = p / (c.dims[0] * c.dims[1]);
+      v[p] = c.levels ? static_cast<float>(rng() % static_cast<unsigned>(c.levels))
+                      : static_cast<float>(0.5 + 0.3 * std::sin(0.4 * i) * std::cos(0.3 * j) + 0.2 * std::sin(0.5 * k));
+    }
+    generate::ContourOptions o;
+    o.isovalues = c.isovalues;
+    // The fine mesh and its nearest-point keys, coarsened after: the folds it finds.
+    std::vector<std::uint64_t> nearest;
+    const SurfaceMesh fine = generate::contour(g, o, nullptr, nullptr, &nearest);
+    generate::CoarsenStats cs;
+    const SurfaceMesh after = generate::coarsen(
+        fine, nearest, static_cast<std::uint64_t>(g.num_points()) * c.isovalues.size(), &cs);
+    if (c.levels) {
+      EXPECT_GT(cs.folded, 0) << c.dims[0];
+    }
+    o.coarsen = true;
+    for (int threads : {1, 2}) {
+      parallel::set_thread_count(threads);
+      const SurfaceMesh in_pass = generate::contour(g, o);
+      EXPECT_EQ(in_pass.connectivity, after.connectivity) << c.dims[0] << " threads " << threads;
+      EXPECT_EQ(in_pass.points, after.points) << c.dims[0] << " threads " << threads;
+      EXPECT_EQ(duplicate_triangles(in_pass), 0);
+    }
+  }
+  parallel::set_thread_count(0);
+}
+
 }  // namespace

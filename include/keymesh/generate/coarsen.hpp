@@ -24,12 +24,8 @@ struct CoarsenStats {
 // Removes triangles over the same three points: pairs facing opposite ways
 // cancel, repeats facing one way are kept once. Returns the number removed.
 Id remove_folds(SurfaceMesh& mesh);
-// The same, told where equal triangles can be: `ranges` (the first triangle
-// of each range, then the number of triangles) such that two triangles on
-// the same points lie in one range or in two adjacent ones (a contour's
-// voxel layers: a coarse triangle's points are corners of its cell, which it
-// shares only with the cell across a face). Cache-sized work per range.
-Id remove_folds(SurfaceMesh& mesh, const std::vector<Id>& ranges);
+// (The structured contour applies the same rule in its own triangle pass,
+// src/generate/coarse_folds.hpp, without comparing triangles.)
 
 // `keys[p]` is point p's coarse key, every key < key_range (dense plan).
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,

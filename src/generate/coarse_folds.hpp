@@ -1,0 +1,179 @@
+#pragma once
+// Folds of the coarsened contour, found where they can be: remove_folds'
+// rule (generate/coarsen.hpp: of every set of triangles over the same three
+// points, none is kept when their orientations cancel, else the first of the
+// winning orientation) applied inside the contour's triangle pass, without
+// comparing the mesh's triangles with one another.
+//
+// A coarse triangle's points are corners of its voxel (each crossing moved
+// to the nearer end of its edge). Three corners of a voxel that do not lie on
+// one face of it belong to no other voxel: such a triangle can only equal
+// triangles of its own voxel, and is decided there. Three corners on a face
+// are shared with the voxel across that face only: such a "face triangle"
+// can equal triangles of either voxel on that face, and is decided once both
+// voxels' face triangles are known, by the grid row that owns the face.
+// Corners are numbered x | y << 1 | z << 2 (the cube case's bit order).
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+#include "keymesh/core/types.hpp"
+
+namespace keymesh::generate {
+
+// Orientation of a triangle over three distinct labels: true when it is a
+// rotation of the labels in increasing order. Two triangles over the same
+// three points compare alike under any labelling of the points.
+inline bool increasing_rotation(unsigned a, unsigned b, unsigned c) {
+  return (a < b) + (b < c) + (c < a) == 2;
+}
+
+// What the fold rule needs of one coarse triangle, from its three corners.
+struct CornerTriangle {
+  bool on_face = false;
+  bool positive = false;   // orientation (in the face's corner labels for a face triangle)
+  std::uint8_t points = 0; // not on a face: its corners as a set of bits
+  std::uint8_t code = 0;   // on a face: axis | side << 2 | the face's missing corner << 3 | positive << 5
+
+  CornerTriangle() = default;
+  CornerTriangle(unsigned a, unsigned b, unsigned c) {
+    const unsigned ones = a & b & c, zeros = ~(a | b | c) & 7u, fixed = ones | zeros;
+    if (!fixed) {
+      positive = increasing_rotation(a, b, c);
+      points = static_cast<std::uint8_t>((1u << a) | (1u << b) | (1u << c));
+      return;
+    }
+    // Three distinct corners share at most one coordinate: one face.
+    on_face = true;
+    const unsigned axis = static_cast<unsigned>(std::countr_zero(fixed)), side = (ones >> axis) & 1u;
+    // The corner within the face: its two other coordinate bits, the same
+    // labels seen from the voxels on both sides.
+    auto in_face = [axis](unsigned q) { return (q & ((1u << axis) - 1u)) | ((q >> (axis + 1)) << axis); };
+    const unsigned fa = in_face(a), fb = in_face(b), fc = in_face(c);
+    positive = increasing_rotation(fa, fb, fc);
+    code = static_cast<std::uint8_t>(axis | side << 2 | (6u - fa - fb - fc) << 3 | unsigned{positive} << 5);
+  }
+};
+
+// Applies the rule to a set of equal triangles, in mesh order: calls
+// drop(m) for every member m but the one kept. `positive(m)` is member m's
+// orientation.
+template <class Positive, class Drop>
+void resolve_equal_triangles(int n, Positive&& positive, Drop&& drop) {
+  int net = 0;
+  for (int m = 0; m < n; ++m) net += positive(m) ? 1 : -1;
+  bool kept = false;
+  for (int m = 0; m < n; ++m) {
+    const bool winner = net != 0 && !kept && positive(m) == (net > 0);
+    kept = kept || winner;
+    if (!winner) drop(m);
+  }
+}
+
+// One voxel's coarse triangles (at most five, written at `tri`, with their
+// corner facts): the triangles not on a face that share their points with
+// another of the voxel are decided here, and the voxel's triangles packed.
+// Returns the number kept.
+inline int fold_within_voxel(std::uint32_t* tri, const CornerTriangle* facts, int n, int* kept_index) {
+  bool drop[5] = {false, false, false, false, false};
+  bool any = false;
+  for (int a = 0; a < n; ++a) {
+    if (facts[a].on_face || drop[a]) continue;
+    int members[5], m = 0;
+    members[m++] = a;
+    for (int b = a + 1; b < n; ++b)
+      if (!facts[b].on_face && facts[b].points == facts[a].points) members[m++] = b;
+    if (m == 1) continue;
+    // Members before `a` with the same points would have taken `a` in: none.
+    bool done = false;
+    for (int b = 0; b < a && !done; ++b) done = !facts[b].on_face && facts[b].points == facts[a].points;
+    if (done) continue;
+    any = true;
+    resolve_equal_triangles(m, [&](int x) { return facts[members[x]].positive; },
+                            [&](int x) { drop[members[x]] = true; });
+  }
+  if (!any) {
+    for (int a = 0; a < n; ++a) kept_index[a] = a;
+    return n;
+  }
+  int out = 0;
+  for (int a = 0; a < n; ++a) {
+    if (drop[a]) continue;
+    for (int c = 0; c < 3; ++c) tri[3 * out + c] = tri[3 * a + c];
+    kept_index[out++] = a;
+  }
+  return out;
+}
+
+// A face triangle, recorded for the row that decides its face.
+struct FaceTriangle {
+  std::uint32_t tri;  // index among its voxel row's triangles
+  std::uint32_t i;    // its voxel along the row
+  std::uint8_t code;  // CornerTriangle::code
+};
+
+// The mark of a dropped triangle in the rows' slots (no coarse id is this
+// large: ids are below the number of triangle corners, < 2^32 - 1).
+constexpr std::uint32_t kDroppedTriangle = ~std::uint32_t{0};
+
+// Decides the faces that voxel row (j, k) owns: the x faces between its
+// voxels, its +y and +z faces (shared with rows (j + 1, k) and (j, k + 1),
+// whose -y and -z face triangles are passed as `next_y` and `next_z`, empty
+// when there is no such row), and its -y and -z faces when they lie on the
+// grid's border (j == 0, k == 0). Marks the dropped triangles of all three
+// rows kDroppedTriangle in their slots (`own_slots`, `next_y_slots`,
+// `next_z_slots`: each row's triangles, 3 ids apiece). Every face is owned by
+// one row, so rows decided at once touch different triangles.
+struct FoldEntry {
+  std::uint64_t key;      // the face and its three points
+  std::uint32_t row, tri; // mesh order: row 0 (this one) before 1 (the next), then tri
+  bool positive;
+  std::uint32_t* slot;
+};
+
+inline void fold_across_faces(const FaceTriangle* own, std::size_t n_own, std::uint32_t* own_slots, bool j_first,
+                              bool k_first, const FaceTriangle* next_y, std::size_t n_next_y,
+                              std::uint32_t* next_y_slots, const FaceTriangle* next_z, std::size_t n_next_z,
+                              std::uint32_t* next_z_slots, std::vector<FoldEntry>& entries) {
+  entries.clear();
+  // key: ((face position along the row * 3 + axis) * 2 + upper) * 4 + missing corner
+  auto key = [](std::uint64_t position, unsigned axis, unsigned upper, unsigned code) {
+    return ((position * 3 + axis) * 2 + upper) * 4 + ((code >> 3) & 3u);
+  };
+  for (std::size_t e = 0; e < n_own; ++e) {
+    const FaceTriangle& f = own[e];
+    const unsigned axis = f.code & 3u, side = (f.code >> 2) & 1u;
+    const bool positive = (f.code >> 5) & 1u;
+    std::uint64_t k = 0;
+    if (axis == 0) k = key(std::uint64_t{f.i} + side, 0, 0, f.code);
+    else if (side == 1) k = key(f.i, axis, 1, f.code);
+    else if (axis == 1 ? j_first : k_first) k = key(f.i, axis, 0, f.code);
+    else continue;  // owned by the row below
+    entries.push_back({k, 0, f.tri, positive, own_slots + 3 * std::size_t{f.tri}});
+  }
+  auto add_next = [&](const FaceTriangle* next, std::size_t n, std::uint32_t* slots, unsigned axis) {
+    for (std::size_t e = 0; e < n; ++e) {
+      const FaceTriangle& f = next[e];
+      if ((f.code & 3u) != axis || ((f.code >> 2) & 1u) != 0) continue;
+      entries.push_back({key(f.i, axis, 1, f.code), 1, f.tri, ((f.code >> 5) & 1u) != 0,
+                         slots + 3 * std::size_t{f.tri}});
+    }
+  };
+  add_next(next_y, n_next_y, next_y_slots, 1);
+  add_next(next_z, n_next_z, next_z_slots, 2);
+  if (entries.size() < 2) return;
+  std::sort(entries.begin(), entries.end(), [](const FoldEntry& a, const FoldEntry& b) {
+    return a.key != b.key ? a.key < b.key : a.row != b.row ? a.row < b.row : a.tri < b.tri;
+  });
+  for (std::size_t b = 0; b < entries.size();) {
+    std::size_t e = b + 1;
+    while (e < entries.size() && entries[e].key == entries[b].key) ++e;
+    if (e - b > 1)
+      resolve_equal_triangles(static_cast<int>(e - b), [&](int m) { return entries[b + m].positive; },
+                              [&](int m) { entries[b + m].slot[0] = kDroppedTriangle; });
+    b = e;
+  }
+}
+
+}  // namespace keymesh::generate
