@@ -236,6 +236,14 @@ void finish_contour(SurfaceMesh& mesh, const ContourOptions& opt, const keyreduc
   st.coarsen += seconds_since(t0);
 }
 
+// A float as a float: GCC 12 (-O3, vectorised) may add the double a float
+// was rounded from instead of the float itself, which changes the sum's
+// last bits; coarsen() sums the stored floats, and so must the pass.
+inline float as_stored(float v) {
+  asm("" : "+x"(v));
+  return v;
+}
+
 // A coarse point's values: the mean of its crossings' values, each made by
 // PointWriter as the fine point would be (position, scalar, gradient
 // normal, curvature), summed in double in the order given, as coarsen()
@@ -251,6 +259,25 @@ struct CoarsePointWriter {
     values += out.out.gradient_normal ? 3 : 0;
     at_curvature = values;
     values += out.out.curvature ? 1 : 0;
+  }
+
+  // Positions, with or without the scalar (the usual calls): the same sums
+  // as operator()'s, kept in registers.
+  template <bool Scalar>
+  void positions(std::uint32_t id, const CoarseCrossing* x, int n, Id iso) const {
+    const GridShape& s = out.s;
+    double sx = 0, sy = 0, sz = 0, sv = 0;
+    for (int c = 0; c < n; ++c) {
+      const auto p = out.interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso);
+      float xyz[3];
+      out.interp.position(p, xyz);
+      sx += as_stored(xyz[0]), sy += as_stored(xyz[1]), sz += as_stored(xyz[2]);
+      if constexpr (Scalar) sv += as_stored(out.interp.scalar(p));
+    }
+    const double count = static_cast<double>(n);
+    float* o = out.out.xyz + 3 * std::size_t{id};
+    o[0] = static_cast<float>(sx / count), o[1] = static_cast<float>(sy / count), o[2] = static_cast<float>(sz / count);
+    if constexpr (Scalar) out.out.scalar[id] = static_cast<float>(sv / count);
   }
 
   void operator()(std::uint32_t id, const CoarseCrossing* x, int n, Id iso) const {
@@ -312,7 +339,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     ~Release() {
       std::size_t bytes = slots.capacity() * sizeof(PointIndex);
       for (const auto& c : coarse) bytes += c.far.size * sizeof(std::uint64_t) * 2;
-      for (const auto& f : triangle_scratch.faces) bytes += f.capacity() * sizeof(FaceTriangle);
+      bytes += triangle_scratch.faces.size * sizeof(FaceTriangle);
       if (bytes > kKeepScratch) std::vector<CoarseBits>().swap(coarse), slots = {}, triangle_scratch = {};
     }
   } release;
@@ -335,8 +362,17 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
     t0 = Clock::now();
-    for_each_coarse_point(bits[iso], s, cb,
-                          [&](std::uint32_t id, const CoarseCrossing* x, int n) { write(id, x, n, iso); });
+    if (!write.out.positions_and_scalar_only())
+      for_each_coarse_point(bits[iso], s, cb,
+                            [&](std::uint32_t id, const CoarseCrossing* x, int n) { write(id, x, n, iso); });
+    else if (write.out.out.scalar)
+      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, const CoarseCrossing* x, int n) {
+        write.template positions<true>(id, x, n, iso);
+      });
+    else
+      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, const CoarseCrossing* x, int n) {
+        write.template positions<false>(id, x, n, iso);
+      });
     st.fields += seconds_since(t0);
     t0 = Clock::now();
     const RowCounts& rc = rows[iso];

@@ -213,10 +213,9 @@ void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const Coa
 // Scratch of write_coarse_triangles, kept by its caller across isovalues
 // and calls: each task's face triangles, and each voxel row's range of them.
 struct CoarseTriangleScratch {
-  std::vector<std::vector<FaceTriangle>> faces;  // by task
-  std::vector<std::uint32_t> face_first;         // by voxel row: first in its task's list, then...
-  std::vector<std::uint32_t> face_end;           // ...one past its last
-  std::vector<Id> kept;                          // by voxel row: triangles kept
+  RawWords<FaceTriangle> faces;        // a voxel row's at its fine triangles' offset (as its slots)
+  std::vector<std::uint32_t> face_count;  // by voxel row
+  std::vector<Id> kept;                // by voxel row: triangles kept
 };
 
 // Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
@@ -233,17 +232,14 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   constexpr Id kRun = 16;  // voxel rows per task
   const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun, tasks = layers * runs_per_layer;
-  if (static_cast<Id>(sc.faces.size()) < tasks) sc.faces.resize(static_cast<std::size_t>(tasks));
-  sc.face_first.resize(static_cast<std::size_t>(voxel_rows));
-  sc.face_end.resize(static_cast<std::size_t>(voxel_rows));
+  sc.faces.reserve(static_cast<std::size_t>(rc.triangle_first.back() - fine_base));
+  sc.face_count.resize(static_cast<std::size_t>(voxel_rows));
   sc.kept.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
   const CoarseVoxelTable& voxels = coarse_voxel_table();
   auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
   parallel::for_each_dynamic(tasks, [&](Id task) {
     const Id k = task / runs_per_layer;
     const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
-    std::vector<FaceTriangle>& faces = sc.faces[task];
-    faces.clear();
     for (Id j = j_begin; j < j_end; ++j) {
       // The grid rows of the voxel row's corners, by corner bits y | z << 1.
       const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
@@ -254,10 +250,16 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
       const std::uint64_t* fx[4] = {cb.far_row(r[0], 0), cb.far_row(r[1], 0), cb.far_row(r[2], 0), cb.far_row(r[3], 0)};
       const std::uint64_t* fy[2] = {cb.far_row(r[0], 1), cb.far_row(r[2], 1)};
       const std::uint64_t* fz[2] = {cb.far_row(r[0], 2), cb.far_row(r[1], 2)};
+      // The four rows' coarse-point bits and first ids (CoarseBits::id).
+      const std::uint64_t* points[4];
+      const std::uint32_t* first_id[4];
+      for (int c = 0; c < 4; ++c)
+        points[c] = cb.points.data() + r[c] * cb.words_per_row, first_id[c] = cb.first.data() + r[c] * cb.words_per_row;
       const Id vr = k * (s.ny - 1) + j;
       PointIndex* const begin = slots_of(vr);
       PointIndex* o = begin;
-      sc.face_first[vr] = static_cast<std::uint32_t>(faces.size());
+      FaceTriangle* const faces = sc.faces.data() + (rc.triangle_first[vr] - fine_base);
+      FaceTriangle* f = faces;
       for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
         const Id q = i >> 6;
         const int b = static_cast<int>(i & 63);
@@ -270,26 +272,29 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
                              one(fx[1]) << 5 | (z1 & 1u) << 6 | (z1 >> 1) << 7 | one(fx[2]) << 8 | (y1 & 1u) << 9 |
                              (y1 >> 1) << 10 | one(fx[3]) << 11;
         const CoarseVoxel& v = voxels.at(cube_case, far);
-        auto id = [&](unsigned corner) { return cb.id(r[corner >> 1], i + (corner & 1u)); };
+        // Corner c's coarse id: grid point i + (c & 1) of row r[c >> 1].
+        auto id = [&](unsigned c) {
+          const Id ii = i + (c & 1u), w = ii >> 6;
+          const std::uint64_t below = (std::uint64_t{1} << (ii & 63)) - 1;
+          return first_id[c >> 1][w] + static_cast<std::uint32_t>(std::popcount(points[c >> 1][w] & below));
+        };
         for (int t = 0; t < v.count; ++t) {
           const unsigned c = v.triangles[t];
           o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
-          if (v.face[t])
-            faces.push_back({static_cast<std::uint32_t>((o - begin) / 3), static_cast<std::uint32_t>(i),
-                             static_cast<std::uint8_t>(v.face[t] & 0x7fu)});
+          // Written always, kept when a face triangle (no branch).
+          *f = {static_cast<std::uint32_t>((o - begin) / 3), static_cast<std::uint32_t>(i),
+                static_cast<std::uint8_t>(v.face[t] & 0x7fu)};
+          f += v.face[t] >> 7;
           o += 3;
         }
       });
-      sc.face_end[vr] = static_cast<std::uint32_t>(faces.size());
+      sc.face_count[vr] = static_cast<std::uint32_t>(f - faces);
       sc.kept[vr] = (o - begin) / 3;
     }
   }, 1);
   // Folds across faces: each row decides the faces it owns.
-  auto faces_of = [&](Id vr) {
-    const Id j = vr % (s.ny - 1), k = vr / (s.ny - 1);
-    return sc.faces[k * runs_per_layer + j / kRun].data() + sc.face_first[vr];
-  };
-  auto face_count = [&](Id vr) { return static_cast<std::size_t>(sc.face_end[vr] - sc.face_first[vr]); };
+  auto faces_of = [&](Id vr) { return sc.faces.data() + (rc.triangle_first[vr] - fine_base); };
+  auto face_count = [&](Id vr) { return static_cast<std::size_t>(sc.face_count[vr]); };
   parallel::for_each_dynamic(voxel_rows, [&](Id vr) {
     const Id j = vr % (s.ny - 1), k = vr / (s.ny - 1);
     const Id ny_row = j + 1 < s.ny - 1 ? vr + 1 : -1, nz_row = k + 1 < layers ? vr + (s.ny - 1) : -1;
