@@ -44,15 +44,17 @@ CoarseVoxelTable build() {
       }
       int kept_index[5];
       const int kept = fold_within_voxel(tri, facts, n, kept_index);
-      CoarseVoxel v{};
-      v.count = static_cast<std::uint8_t>(kept);
-      for (int k = 0; k < kept; ++k) {
-        v.triangles[k] = static_cast<std::uint16_t>(tri[3 * k] | tri[3 * k + 1] << 3 | tri[3 * k + 2] << 6);
-        const CornerTriangle& f = facts[kept_index[k]];
-        v.face[k] = f.on_face ? static_cast<std::uint8_t>(f.code | 0x80u) : 0;
-      }
+      CoarseVoxel v = static_cast<CoarseVoxel>(kept) << kCoarseCountShift;
+      for (int k = 0; k < kept; ++k)
+        v |= static_cast<CoarseVoxel>(tri[3 * k] | tri[3 * k + 1] << 3 | tri[3 * k + 2] << 6) << (9 * k);
       t.entries.push_back(v);
     }
+  }
+  for (unsigned c = 0; c < 512; ++c) {
+    const unsigned a = c & 7u, b = (c >> 3) & 7u, d = c >> 6;
+    if (a == b || b == d || a == d) continue;
+    const CornerTriangle f(a, b, d);
+    t.face_code[c] = f.on_face ? static_cast<std::uint8_t>(f.code | 0x80u) : 0;
   }
   return t;
 }

@@ -163,15 +163,38 @@ inline void fold_across_faces(const FaceTriangle* own, std::size_t n_own, std::u
   add_next(next_y, n_next_y, next_y_slots, 1);
   add_next(next_z, n_next_z, next_z_slots, 2);
   if (entries.size() < 2) return;
+  // Most face triangles share their face with no other: the keys that occur
+  // more than once are found with a small hash set, and only their entries
+  // sorted and decided.
+  std::size_t size = 16;
+  while (size < 2 * entries.size()) size *= 2;
+  thread_local std::vector<std::uint64_t> slots;  // key + 1, 0 when empty; top bit: seen twice
+  slots.assign(size, 0);
+  constexpr std::uint64_t kTwice = std::uint64_t{1} << 63;
+  auto find = [&](std::uint64_t k) -> std::uint64_t& {
+    std::size_t h = static_cast<std::size_t>((k * 0x9E3779B97F4A7C15ull) >> 40) & (size - 1);
+    while (slots[h] && (slots[h] & ~kTwice) != k + 1) h = (h + 1) & (size - 1);
+    return slots[h];
+  };
+  bool any = false;
+  for (const FoldEntry& e : entries) {
+    std::uint64_t& slot = find(e.key);
+    if (slot) slot |= kTwice, any = true;
+    else slot = e.key + 1;
+  }
+  if (!any) return;
+  std::size_t n = 0;
+  for (const FoldEntry& e : entries)
+    if (find(e.key) & kTwice) entries[n++] = e;
+  entries.resize(n);
   std::sort(entries.begin(), entries.end(), [](const FoldEntry& a, const FoldEntry& b) {
     return a.key != b.key ? a.key < b.key : a.row != b.row ? a.row < b.row : a.tri < b.tri;
   });
   for (std::size_t b = 0; b < entries.size();) {
     std::size_t e = b + 1;
     while (e < entries.size() && entries[e].key == entries[b].key) ++e;
-    if (e - b > 1)
-      resolve_equal_triangles(static_cast<int>(e - b), [&](int m) { return entries[b + m].positive; },
-                              [&](int m) { entries[b + m].slot[0] = kDroppedTriangle; });
+    resolve_equal_triangles(static_cast<int>(e - b), [&](int m) { return entries[b + m].positive; },
+                            [&](int m) { entries[b + m].slot[0] = kDroppedTriangle; });
     b = e;
   }
 }

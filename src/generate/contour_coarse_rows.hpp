@@ -271,20 +271,22 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
         const unsigned far = one(fx[0]) | (y0 & 1u) << 1 | (z0 & 1u) << 2 | (y0 >> 1) << 3 | (z0 >> 1) << 4 |
                              one(fx[1]) << 5 | (z1 & 1u) << 6 | (z1 >> 1) << 7 | one(fx[2]) << 8 | (y1 & 1u) << 9 |
                              (y1 >> 1) << 10 | one(fx[3]) << 11;
-        const CoarseVoxel& v = voxels.at(cube_case, far);
+        const CoarseVoxel v = voxels.at(cube_case, far);
         // Corner c's coarse id: grid point i + (c & 1) of row r[c >> 1].
         auto id = [&](unsigned c) {
           const Id ii = i + (c & 1u), w = ii >> 6;
           const std::uint64_t below = (std::uint64_t{1} << (ii & 63)) - 1;
           return first_id[c >> 1][w] + static_cast<std::uint32_t>(std::popcount(points[c >> 1][w] & below));
         };
-        for (int t = 0; t < v.count; ++t) {
-          const unsigned c = v.triangles[t];
+        const int count = static_cast<int>(v >> kCoarseCountShift);
+        for (int t = 0; t < count; ++t) {
+          const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
           o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
           // Written always, kept when a face triangle (no branch).
+          const unsigned code = voxels.face_code[c];
           *f = {static_cast<std::uint32_t>((o - begin) / 3), static_cast<std::uint32_t>(i),
-                static_cast<std::uint8_t>(v.face[t] & 0x7fu)};
-          f += v.face[t] >> 7;
+                static_cast<std::uint8_t>(code & 0x7fu)};
+          f += code >> 7;
           o += 3;
         }
       });
