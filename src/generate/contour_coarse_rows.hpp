@@ -240,9 +240,30 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
   parallel::for_each_dynamic(tasks, [&](Id task) {
     const Id k = task / runs_per_layer;
     const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
+    // Coarse ids by grid point of the rows (j, k), (j, k + 1) ("lo") and
+    // (j + 1, k), (j + 1, k + 1) ("hi"), by corner bits z: each row filled
+    // once as hi, then used again as lo by the next voxel row.
+    thread_local std::vector<std::uint32_t> id_scratch;
+    if (static_cast<Id>(id_scratch.size()) < 4 * s.nx) id_scratch.resize(static_cast<std::size_t>(4 * s.nx));
+    std::uint32_t* lo[2] = {id_scratch.data(), id_scratch.data() + s.nx};
+    std::uint32_t* hi[2] = {id_scratch.data() + 2 * s.nx, id_scratch.data() + 3 * s.nx};
+    auto fill = [&](std::uint32_t* ids, Id row) {
+      if (!cb.live[row]) return;  // no coarse point: no corner of a triangle
+      const std::uint64_t* points = cb.points.data() + row * cb.words_per_row;
+      const std::uint32_t* first = cb.first.data() + row * cb.words_per_row;
+      for (Id q = 0; q < cb.words_per_row; ++q) {
+        std::uint32_t id = first[q];
+        for (std::uint64_t w = points[q]; w; w &= w - 1) ids[64 * q + std::countr_zero(w)] = id++;
+      }
+    };
+    fill(lo[0], k * s.ny + j_begin);
+    fill(lo[1], (k + 1) * s.ny + j_begin);
     for (Id j = j_begin; j < j_end; ++j) {
+      fill(hi[0], k * s.ny + j + 1);
+      fill(hi[1], (k + 1) * s.ny + j + 1);
       // The grid rows of the voxel row's corners, by corner bits y | z << 1.
       const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
+      const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
       // Far bits of the twelve cube edges, in MarchingCubesTable's order
       // (coarse_cases.hpp, kCubeEdgeLayout): x edges of the four rows at i,
       // y edges of rows (j, k), (j, k + 1) and z edges of rows (j, k),
@@ -250,11 +271,6 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
       const std::uint64_t* fx[4] = {cb.far_row(r[0], 0), cb.far_row(r[1], 0), cb.far_row(r[2], 0), cb.far_row(r[3], 0)};
       const std::uint64_t* fy[2] = {cb.far_row(r[0], 1), cb.far_row(r[2], 1)};
       const std::uint64_t* fz[2] = {cb.far_row(r[0], 2), cb.far_row(r[1], 2)};
-      // The four rows' coarse-point bits and first ids (CoarseBits::id).
-      const std::uint64_t* points[4];
-      const std::uint32_t* first_id[4];
-      for (int c = 0; c < 4; ++c)
-        points[c] = cb.points.data() + r[c] * cb.words_per_row, first_id[c] = cb.first.data() + r[c] * cb.words_per_row;
       const Id vr = k * (s.ny - 1) + j;
       PointIndex* const begin = slots_of(vr);
       PointIndex* o = begin;
@@ -273,11 +289,7 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
                              (y1 >> 1) << 10 | one(fx[3]) << 11;
         const CoarseVoxel v = voxels.at(cube_case, far);
         // Corner c's coarse id: grid point i + (c & 1) of row r[c >> 1].
-        auto id = [&](unsigned c) {
-          const Id ii = i + (c & 1u), w = ii >> 6;
-          const std::uint64_t below = (std::uint64_t{1} << (ii & 63)) - 1;
-          return first_id[c >> 1][w] + static_cast<std::uint32_t>(std::popcount(points[c >> 1][w] & below));
-        };
+        auto id = [&](unsigned c) { return row_ids[c >> 1][i + (c & 1u)]; };
         const int count = static_cast<int>(v >> kCoarseCountShift);
         for (int t = 0; t < count; ++t) {
           const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
@@ -292,6 +304,8 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
       });
       sc.face_count[vr] = static_cast<std::uint32_t>(f - faces);
       sc.kept[vr] = (o - begin) / 3;
+      std::swap(lo[0], hi[0]);
+      std::swap(lo[1], hi[1]);
     }
   }, 1);
   // Folds across faces: each row decides the faces it owns.
