@@ -10,12 +10,14 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/mesh/cell_tables.hpp"
 #include "keymesh/mesh/keys.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/keyreduce/weld.hpp"
 
@@ -100,14 +102,16 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
     }
     xyz[0] = float(p.x), xyz[1] = float(p.y), xyz[2] = float(p.z);
   };
-  const EdgeGroups g = group_edges(keys, ek.key_bits(), weld, [&](std::uint64_t k, float* xyz) { edge_point(k, xyz, nullptr); });
-  keys = {};
+  EdgeGroups g = group_edges(keys, ek.key_bits(), weld, [&](std::uint64_t k, float* xyz) { edge_point(k, xyz, nullptr); });
+  free_storage(keys);
   const Id E = static_cast<Id>(g.edge_key.size());
   check_points(V + E, "the surface");
 
+  // Output arrays at their final size, written in place; each scratch array
+  // is released once its last pass is done (the edge keys before the
+  // triangles are allocated).
   SurfaceMesh out;
-  out.points.resize(static_cast<std::size_t>(3 * (V + E)));
-  std::copy(m.points.begin(), m.points.end(), out.points.begin());
+  extend_points(m.points, V + E, out.points);
   out.point_fields = extend_point_fields(m.point_fields, V + E);
   parallel::for_each(E, [&](Id e) {
     const std::uint64_t key = g.edge_key[e];
@@ -129,7 +133,8 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
         if (&m.point_fields[i] == normals) nrm = &out.point_fields[i].values[3 * (V + e)];
     edge_point(key, &out.points[3 * (V + e)], nrm);
   });
-  out.connectivity.resize(static_cast<std::size_t>(12 * F));
+  free_storage(g.edge_key);
+  parallel::resize_fresh(out.connectivity, static_cast<std::size_t>(12 * F));
   parallel::for_each(F, [&](Id t) {
     const PointIndex a = C[3 * t], b = C[3 * t + 1], c = C[3 * t + 2];
     const auto ab = static_cast<PointIndex>(V + g.index_map[3 * t]);
@@ -154,21 +159,21 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
     const auto [a, b] = ek.decode(key);
     for (int c = 0; c < 3; ++c) xyz[c] = 0.5f * (m.points[3 * a + c] + m.points[3 * b + c]);
   };
-  const EdgeGroups g = group_edges(keys, ek.key_bits(), weld, midpoint);
-  keys = {};
+  EdgeGroups g = group_edges(keys, ek.key_bits(), weld, midpoint);
+  free_storage(keys);
   const Id E = static_cast<Id>(g.edge_key.size());
   check_points(V + E, "the grid");
 
   UnstructuredGrid out;
   out.uniform_type = CellType::Tetra;
-  out.points.resize(static_cast<std::size_t>(3 * (V + E)));
-  std::copy(m.points.begin(), m.points.end(), out.points.begin());
+  extend_points(m.points, V + E, out.points);
   out.point_fields = extend_point_fields(m.point_fields, V + E);
   parallel::for_each(E, [&](Id e) {
     const auto [a, b] = ek.decode(g.edge_key[e]);
     midpoint(g.edge_key[e], &out.points[3 * (V + e)]);
     for (std::size_t i = 0; i < m.point_fields.size(); ++i) midpoint_tuple(m.point_fields[i], out.point_fields[i], V + e, a, b);
   });
+  free_storage(g.edge_key);
   out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(V + E), static_cast<std::size_t>(32 * T));
   const float* P = out.points.data();
   parallel::for_each(T, [&](Id t) {
@@ -219,14 +224,21 @@ SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) 
         throw InputError("subdivide: cell " + std::to_string(c) + " has " +
                          std::to_string(mesh.cell_end(c) - mesh.cell_begin(c)) + " points; only triangles are subdivided");
   }
-  SurfaceMesh cur = mesh;
-  if (!cur.all_triangles()) cur.offsets.clear();
-  for (const Field& f : cur.point_fields)
-    if (f.values.size() != static_cast<std::size_t>(cur.num_points() * f.components))
+  for (const Field& f : mesh.point_fields)
+    if (f.values.size() != static_cast<std::size_t>(mesh.num_points() * f.components))
       throw InputError("subdivide: point field '" + f.name + "' does not have one tuple per point");
-  for (PointIndex id : cur.connectivity)
-    if (Id{id} >= cur.num_points()) throw InputError("subdivide: a triangle refers to point " + std::to_string(id) + " out of range");
-  for (int l = 0; l < options.levels; ++l) {
+  for (PointIndex id : mesh.connectivity)
+    if (Id{id} >= mesh.num_points()) throw InputError("subdivide: a triangle refers to point " + std::to_string(id) + " out of range");
+  if (options.levels == 0) {
+    SurfaceMesh out = mesh;
+    out.offsets.clear();
+    return out;
+  }
+  // The first level reads the input in place (its cells are triangles, so
+  // offsets, if any, are 3 c); no copy of it is held beside the output.
+  report_level(0, options.levels);
+  SurfaceMesh cur = subdivide_once(mesh, options.scheme, options.weld);
+  for (int l = 1; l < options.levels; ++l) {
     report_level(l, options.levels);
     cur = subdivide_once(cur, options.scheme, options.weld);
   }
@@ -239,11 +251,18 @@ UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions&
     throw InputError("subdivide: tetrahedra are subdivided with the linear scheme only");
   if (!tets.all_cells_are(CellType::Tetra)) throw InputError("subdivide: the grid has cells other than tetrahedra");
   tets.validate("subdivide input");
-  UnstructuredGrid cur = tets;
-  cur.offsets.clear();
-  cur.cell_types.clear();
-  cur.uniform_type = CellType::Tetra;
-  for (int l = 0; l < options.levels; ++l) {
+  if (options.levels == 0) {
+    UnstructuredGrid out = tets;
+    out.offsets.clear();
+    out.cell_types.clear();
+    out.uniform_type = CellType::Tetra;
+    return out;
+  }
+  // The first level reads the input in place (validated tets: 4 corners
+  // per cell whatever the offsets say), as the surface's does.
+  report_level(0, options.levels);
+  UnstructuredGrid cur = subdivide_tets_once(tets, options.weld);
+  for (int l = 1; l < options.levels; ++l) {
     report_level(l, options.levels);
     cur = subdivide_tets_once(cur, options.weld);
   }

@@ -3,21 +3,40 @@
 #include <algorithm>
 
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 
 namespace keymesh {
+
+namespace {
+
+// to[0 .. from.size()) = from, the threads copying one range each.
+void copy_prefix(const std::vector<float>& from, std::vector<float>& to) {
+  const Id n = static_cast<Id>(from.size());
+  parallel::for_each_chunk(n, parallel::chunk_count(n, Id{1} << 16),
+                           [&](Id b, Id e, int) { std::copy(from.data() + b, from.data() + e, to.data() + b); });
+}
+
+}  // namespace
 
 std::vector<Field> new_point_fields(const std::vector<Field>& like, Id points) {
   std::vector<Field> out;
   out.reserve(like.size());
-  for (const Field& f : like)
-    out.push_back({f.name, f.components, std::vector<float>(static_cast<std::size_t>(points * f.components))});
+  for (const Field& f : like) {
+    out.push_back({f.name, f.components, {}});
+    parallel::resize_fresh(out.back().values, static_cast<std::size_t>(points * f.components));
+  }
   return out;
 }
 
 std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total) {
   std::vector<Field> out = new_point_fields(in, total);
-  for (std::size_t i = 0; i < in.size(); ++i) std::copy(in[i].values.begin(), in[i].values.end(), out[i].values.begin());
+  for (std::size_t i = 0; i < in.size(); ++i) copy_prefix(in[i].values, out[i].values);
   return out;
+}
+
+void extend_points(const std::vector<float>& in, Id total, std::vector<float>& out) {
+  parallel::resize_fresh(out, static_cast<std::size_t>(3 * total));
+  copy_prefix(in, out);
 }
 
 

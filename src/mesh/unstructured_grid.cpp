@@ -5,8 +5,17 @@
 #include <string>
 
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 
 namespace keymesh {
+
+IndexArray IndexArray::for_ids(std::uint64_t max_id_exclusive, std::size_t n) {
+  IndexArray a;
+  a.wide_ = max_id_exclusive > std::uint64_t(UINT32_MAX) + 1;
+  if (a.wide_) parallel::resize_fresh(a.v64_, n);
+  else parallel::resize_fresh(a.v32_, n);
+  return a;
+}
 
 int cell_type_size(CellType t) {
   switch (t) {

@@ -11,6 +11,9 @@
 
 namespace keymesh {
 
+// Output arrays come at their final size (parallel::resize_fresh: huge pages
+// asked for, first touch shared by the threads) and are written in place.
+
 // Zeroed point fields for `points` new points, named and shaped like `like`.
 std::vector<Field> new_point_fields(const std::vector<Field>& like, Id points);
 
@@ -18,6 +21,10 @@ std::vector<Field> new_point_fields(const std::vector<Field>& like, Id points);
 // its first ones: each input field's tuples, then room (zeros) for the new
 // points up to `total` points.
 std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total);
+
+// The same for the coordinates (3 per point): `out` sized for `total`
+// points, the input's first.
+void extend_points(const std::vector<float>& in, Id total, std::vector<float>& out);
 
 // out[i]'s tuple at `point` = the mean, summed in double, of in[i]'s tuples
 // at ids[0 .. n) (a face or cell centre).

@@ -41,13 +41,8 @@ class IndexArray {
  public:
   IndexArray() = default;
   // An array of n zeros wide enough to hold ids < max_id_exclusive.
-  static IndexArray for_ids(std::uint64_t max_id_exclusive, std::size_t n) {
-    IndexArray a;
-    a.wide_ = max_id_exclusive > std::uint64_t(UINT32_MAX) + 1;
-    if (a.wide_) a.v64_.resize(n);
-    else a.v32_.resize(n);
-    return a;
-  }
+  // (An output array: huge pages asked for, first touch shared by the threads.)
+  static IndexArray for_ids(std::uint64_t max_id_exclusive, std::size_t n);
   bool wide() const { return wide_; }
   std::size_t size() const { return wide_ ? v64_.size() : v32_.size(); }
   bool empty() const { return size() == 0; }
