@@ -12,11 +12,14 @@ The rows of issue 17, built here from Debian packages (nothing downloaded):
   sphere512 the paper's Spherical Distance field 512^3 float32, iso 255.001
 
 Both tools see the same array (x fastest in memory) at the same thread count
-(vtkSMPTools.Initialize(T), keymesh threads=T), normals and scalars off, and
-every call returns fresh output arrays, as a user's call does. Medians of
---reps calls, after one warm-up call each. Run twice by bench/run.py: with
-GLIBC_TUNABLES=glibc.malloc.hugetlb=1 (huge pages for both) and without
-(the default malloc of a Python process). Peak memory is the process's
+(vtkSMPTools.Initialize(T), keymesh threads=T) and compute the same arrays:
+positions and triangles only (keymesh normals="none", scalars=False;
+vtkFlyingEdges3D, which computes normals and scalars by default,
+ComputeNormalsOff() and ComputeScalarsOff()), or, with --scalars, both also
+the interpolated scalar. Every call returns fresh output arrays, as a user's
+call does. Medians of --reps calls, after one warm-up call each. Run twice by
+bench/run.py: with GLIBC_TUNABLES=glibc.malloc.hugetlb=1 (huge pages for
+both) and without (the default malloc of a Python process). Peak memory is the process's
 high-water mark after each tool's calls, from getrusage, minus the inputs.
 """
 import argparse
@@ -127,6 +130,8 @@ def main():
     ap.add_argument("--tools", default="keymesh,vtkFlyingEdges3D")
     ap.add_argument("--single-isos", action="store_true",
                     help="also time each isovalue of multi-isovalue cases alone (the sum is reported)")
+    ap.add_argument("--scalars", action="store_true",
+                    help="both tools also carry the interpolated scalar (keymesh's default, and VTK's)")
     ap.add_argument("--json", help="append one JSON line per measurement to this file")
     ap.add_argument("--dump", help="also write each case's volume to DIR/CASE.nrrd (for bench/contour_bench)")
     a = ap.parse_args()
@@ -144,7 +149,7 @@ def main():
 
         def record(tool, times, points, cells, extra=None):
             r = {"bench": "dense", "case": name, "label": label, "tool": tool, "threads": a.threads,
-                 "huge_pages": huge, "isovalues": isos, "points": int(points), "cells": int(cells),
+                 "huge_pages": huge, "scalars": a.scalars, "isovalues": isos, "points": int(points), "cells": int(cells),
                  "median": statistics.median(times), "min": min(times), "max": max(times), "reps": len(times),
                  "peak_rss_mib": peer_common.peak_rss_mib(), "input_mib": v.nbytes / 2**20}
             r.update(extra or {})
@@ -161,7 +166,10 @@ def main():
                 write_nrrd(dump, v)
         if "keymesh" in tools:
             grid = v.T  # shape (nx, ny, nz), Fortran order: keymesh's axis 0 = x, read in place
-            times, m = timed(lambda: keymesh.contour(grid, isos, normals="none", threads=a.threads), a.reps)
+            def km(iso):
+                return keymesh.contour(grid, iso, normals="none", scalars=a.scalars, threads=a.threads)
+
+            times, m = timed(lambda: km(isos), a.reps)
             extra = {"stages": dict(keymesh.last_contour_info), "dump": dump,
                      "output_mib": (m.points.nbytes + m.cells.nbytes +
                                     sum(v.nbytes for v in m.point_data.values())) / 2**20}
@@ -169,8 +177,7 @@ def main():
             del m
             if a.single_isos and len(isos) > 1:
                 extra["sum_single"] = sum(
-                    statistics.median(timed(lambda: keymesh.contour(grid, iso, normals="none", threads=a.threads),
-                                            a.reps)[0]) for iso in isos)
+                    statistics.median(timed(lambda: km(iso), a.reps)[0]) for iso in isos)
             record("keymesh", times, n_points, n_cells, extra)
         if "vtkFlyingEdges3D" in tools:
             img = vtk.vtkImageData()
@@ -180,7 +187,7 @@ def main():
             img.GetPointData().SetScalars(arr)
 
             def fe():
-                f = peer_common.contour_filter(vtk.vtkFlyingEdges3D, img, isos)
+                f = peer_common.contour_filter(vtk.vtkFlyingEdges3D, img, isos, scalars=a.scalars)
                 f.Update()
                 return f.GetOutput()
 
@@ -189,7 +196,7 @@ def main():
             del poly
         if len(rows) == 2:
             print(f"# {name}: vtkFlyingEdges3D / keymesh = {rows[1]['median'] / rows[0]['median']:.2f}"
-                  f" (huge pages {huge}, {a.threads} threads)", flush=True)
+                  f" (huge pages {huge}, scalars {a.scalars}, {a.threads} threads)", flush=True)
 
 
 if __name__ == "__main__":

@@ -656,8 +656,9 @@ class Report:
                              f"{km['input_mib']:.0f} + {km['output_mib']:.0f}" if "output_mib" in km else "",
                              f"{cpp['peak_rss_mib']:.0f}" if cpp else "", km.get("loadavg", "")])
         return ["## Real and dense volumes (issue 17)", "",
-                "`bench/dense.py`: `keymesh.contour` (Python module, fresh output arrays, normals off) and "
-                "vtkFlyingEdges3D (normals, gradients and scalars off) in one process on the same array, "
+                "`bench/dense.py`: `keymesh.contour` (Python module, fresh output arrays, `normals=\"none\"`, "
+                "`scalars=False`) and vtkFlyingEdges3D (normals, gradients and scalars off) in one process on the "
+                "same array: positions and triangles only, in both; "
                 f"{rows[0]['threads']} threads, medians after a warm-up; with huge pages "
                 "(`glibc.malloc.hugetlb=1` for the whole process) and without (a Python process's default "
                 "malloc; keymesh still asks `madvise` for its output arrays). C++ harness: `bench/contour_bench` "

@@ -140,7 +140,7 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0),
             normals: Optional[str] = "average", weld: str = "keyreduce",
             coarsen: bool = False, curvature: bool = False, threads: int = 0,
-            progress: Optional[Any] = None) -> Mesh:
+            progress: Optional[Any] = None, scalars: bool = True) -> Mesh:
     """Isosurface of a 3-D volume: marching cubes, points welded by edge keys.
 
     Args:
@@ -180,11 +180,18 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             "points", then "normals" or "coarsen") and at the end; Ctrl-C
             during the call raises KeyboardInterrupt at the next stage
             boundary, and a callback that raises abandons the call.
+        scalars: carry the interpolated input value as a point field
+            (default): point_data["scalars"], or a Volume's name. On one
+            isovalue it is that isovalue up to rounding; scalars=False
+            leaves it out (one float less to write per point), as
+            vtkFlyingEdges3D's ComputeScalarsOff() does (VTK computes it by
+            default).
 
     Returns:
         Mesh with points (n, 3) float32, cells (m, 3) uint32 and point_data
-        {"scalars": (n,) float32, "Normals": (n, 3) float32 unless
-        normals="none"}. The arrays are the library's buffers (no copy).
+        {"scalars": (n,) float32 unless scalars=False, "Normals": (n, 3)
+        float32 unless normals="none"}. The arrays are the library's
+        buffers (no copy).
 
     Raises:
         TypeError: unsupported dtype or argument type.
@@ -206,7 +213,7 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         if origin is not None and tuple(map(float, origin)) == (0.0, 0.0, 0.0):
             origin = None
     parts, info = _ext.contour(volume, _isovalues(iso), spacing, origin, normals, weld, bool(coarsen),
-                               bool(curvature), _threads(threads), progress)
+                               bool(curvature), _threads(threads), progress, bool(scalars))
     last_contour_info.clear()
     last_contour_info.update(info)
     return _mesh(parts)

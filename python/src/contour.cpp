@@ -72,7 +72,7 @@ py::dict contour_info(const generate::ContourStats& stats, double contour_s, dou
 
 py::tuple contour(const py::object& volume, const std::vector<double>& isovalues, const py::object& spacing,
                   const py::object& origin, const std::string& normals, const std::string& weld, bool coarsen,
-                  bool curvature, int threads, const py::object& callback) {
+                  bool curvature, int threads, const py::object& callback, bool scalars) {
   check_threads(threads);
   const PythonProgress progress(callback);
   if (isovalues.empty()) throw py::value_error("iso: give at least one isovalue");
@@ -84,6 +84,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   opt.weld = generate::parse_option<generate::ContourWeld>(weld);
   opt.coarsen = coarsen;
   opt.curvature = curvature;
+  opt.scalars = scalars;
   ArrayVolume view;  // keeps a numpy array's samples alive while the GIL is released
   const ImageGrid& grid = contour_grid(volume, spacing, origin, view);
   SurfaceMesh mesh;
@@ -109,7 +110,7 @@ void register_contour(py::module_& m) {
   m.def("contour", &contour, py::arg("volume"), py::arg("isovalues"), py::arg("spacing") = py::none(),
         py::arg("origin") = py::none(), py::arg("normals") = "average", py::arg("weld") = "keyreduce",
         py::arg("coarsen") = false, py::arg("curvature") = false, py::arg("threads") = 0,
-        py::arg("progress") = py::none(),
+        py::arg("progress") = py::none(), py::arg("scalars") = true,
         "Marching cubes welded by KEY-REDUCE; returns ((points, cells, offsets, point_data), timings). "
         "Use keymesh.contour, which wraps this in a Mesh.");
 }

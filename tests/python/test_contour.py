@@ -129,3 +129,34 @@ def test_coarsen_and_curvature():
     assert keymesh.check(coarse)["duplicate_points"] == 0
     curved = keymesh.contour(f, ISO, curvature=True)
     assert curved.point_data["mean_curvature"].shape == (len(curved.points),)
+
+
+def test_scalars_switch():
+    """scalars=True (the default, as before the switch) carries the
+    interpolated value, which on the surface is the isovalue of the point's
+    own surface; scalars=False leaves only that field out: the same points,
+    triangles and other fields, byte for byte, with every weld plan and with
+    coarsening."""
+    f = sphere_field().astype(np.float32)
+    isos = [ISO, ISO + 3.25]
+    default = keymesh.contour(f, isos, normals="gradient")
+    assert set(default.point_data) == {"scalars", "Normals"}
+    # Each point's scalar is one of the isovalues, and the point lies on it.
+    s = default.point_data["scalars"].astype(np.float64)
+    nearest = np.array(isos)[np.abs(s[:, None] - np.array(isos)[None, :]).argmin(axis=1)]
+    assert np.abs(s - nearest).max() < 1e-4
+    r = np.linalg.norm(default.points - np.array([20.3, 17.9, 22.6]), axis=1)
+    assert np.abs(r - nearest).max() < 0.05
+    assert np.array_equal(keymesh.contour(f, isos, normals="gradient", scalars=True).point_data["scalars"],
+                          default.point_data["scalars"])
+    for weld in ("keyreduce", "keyreduce-sort", "vertexweld"):
+        for coarsen in (False, True):
+            on = keymesh.contour(f, isos, normals="gradient", weld=weld, coarsen=coarsen)
+            off = keymesh.contour(f, isos, normals="gradient", weld=weld, coarsen=coarsen, scalars=False)
+            assert set(off.point_data) == {"Normals"}, (weld, coarsen)
+            assert np.array_equal(off.points, on.points) and np.array_equal(off.cells, on.cells), (weld, coarsen)
+            assert np.array_equal(off.point_data["Normals"], on.point_data["Normals"]), (weld, coarsen)
+    # A Volume's field is named after it; scalars=False drops it too.
+    vol = keymesh.Volume(f, name="distance")
+    assert set(keymesh.contour(vol, ISO, normals="none").point_data) == {"distance"}
+    assert keymesh.contour(vol, ISO, normals="none", scalars=False).point_data == {}
