@@ -430,7 +430,9 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
     ~Release() {
       std::size_t bytes = 0;
       for (const auto& b : bits) bytes += b.words.capacity() * sizeof(std::uint64_t);
-      if (bytes > kKeepScratch) bits = {}, rows = {};
+      for (const auto& r : rows)
+        for (const auto& c : r.brick_cases) bytes += c.capacity;
+      if (bytes > kKeepScratch) std::vector<InsideBits>().swap(bits), std::vector<RowCounts>().swap(rows);
     }
   } release;
   std::vector<Id> blocks;  // slab blocks of the triangles, for averaging

@@ -20,11 +20,13 @@
 //             the row before it, read off the row's cut bits with popcounts.
 // The ids, hence the points, the triangles and every byte of the output, are
 // those of the dense and sort plans (key order); a test holds them equal.
-// Memory: the inside bits (one bit per sample) and two offsets per row, then
-// the output arrays at their final size, each written once.
+// Memory: the inside bits (one bit per sample), two offsets per row and a
+// byte per cut voxel (its cube case, kept from the count pass for the write
+// pass), then the output arrays at their final size, each written once.
 #include <algorithm>
 #include <bit>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "keymesh/core/types.hpp"
@@ -122,10 +124,53 @@ struct RowIds {
   }
 };
 
+// The voxel rows (j, k), k in [kb, ke), cut into bricks of kRun consecutive
+// j by kLayers consecutive k: the unit of work of both the count pass and
+// the write pass, so that the write pass finds a brick's cut voxels where
+// the count pass left them. Fixed by the grid alone (not by the threads).
+struct VoxelBricks {
+  static constexpr Id kRun = 16;    // voxel rows (j) per brick
+  static constexpr Id kLayers = 8;  // voxel layers (k) per brick
+  Id kb = 0, ke = 0, ny = 0, runs = 0, stacks = 0;
+
+  VoxelBricks(const GridShape& s, Id kb_, Id ke_)
+      : kb(kb_), ke(ke_), ny(s.ny), runs((s.ny - 1 + kRun - 1) / kRun), stacks((ke_ - kb_ + kLayers - 1) / kLayers) {}
+  Id count() const { return runs * stacks; }
+  Id k_begin(Id b) const { return kb + (b / runs) * kLayers; }
+  Id k_end(Id b) const { return std::min(ke, k_begin(b) + kLayers); }
+  Id j_begin(Id b) const { return (b % runs) * kRun; }
+  Id j_end(Id b) const { return std::min(ny - 1, j_begin(b) + kRun); }
+};
+
+// One brick's cut voxels' cube cases, a byte each, in the brick's row
+// order (k, then j; i increasing) as the count pass finds them, so that the
+// write pass, walking the same voxels, reads their cases instead of
+// computing them again. Storage sized by a bound before it is written (no
+// check per voxel, no fill: the bound is loose, and only the bytes written
+// are touched) and kept for later calls.
+struct BrickCases {
+  std::unique_ptr<std::uint8_t[]> cases;
+  std::size_t capacity = 0;
+
+  // The most cut voxels a voxel row of nx samples has when its four grid
+  // rows have `cut_edges` cut edges in all: each of its cut voxels has one
+  // of them, and an edge is shared by two voxels of the row at most.
+  static Id most_per_row(Id nx, Id cut_edges) { return std::min(nx - 1, 2 * cut_edges); }
+
+  std::uint8_t* room_for(Id n) {
+    if (static_cast<std::size_t>(n) > capacity) {
+      capacity = static_cast<std::size_t>(n);
+      cases.reset(new std::uint8_t[capacity]);
+    }
+    return cases.get();
+  }
+};
+
 // Point and triangle counts of one isovalue's rows, and their prefix sums.
 struct RowCounts {
   std::vector<Id> point_first;     // grid rows (j, k), k in [kb, ke]: first point id; one more at the end
   std::vector<Id> triangle_first;  // voxel rows (j, k), j < ny - 1, k in [kb, ke): first triangle
+  std::vector<BrickCases> brick_cases;  // every brick's, as the count pass found them
 };
 
 // Counts rows of planes [kb, ke] (voxel layers [kb, ke)) and scans them, ids
@@ -138,14 +183,32 @@ inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke,
   rc.point_first.assign(static_cast<std::size_t>(grid_rows + 1), 0);
   rc.triangle_first.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
   parallel::for_each_dynamic(grid_rows, [&](Id r) {
-    const Id j = r % s.ny, k = kb + r / s.ny;
-    rc.point_first[r] = RowCuts(bits, s, j, k, ke).count();
-    if (j + 1 < s.ny && k < ke) {
-      Id t = 0;
-      for_each_cut_voxel(bits, s, j, k, [&](Id, unsigned cube_case) { t += table.triangle_count[cube_case]; });
-      rc.triangle_first[(k - kb) * (s.ny - 1) + j] = t;
-    }
+    rc.point_first[r] = RowCuts(bits, s, r % s.ny, kb + r / s.ny, ke).count();
   }, 8);
+  // Triangles per voxel row, brick by brick; each brick's cut voxels kept
+  // (its vector's storage too, for the next isovalue or call).
+  const VoxelBricks bricks(s, kb, ke);
+  rc.brick_cases.resize(static_cast<std::size_t>(bricks.count()));
+  parallel::for_each_dynamic(bricks.count(), [&](Id b) {
+    // Room for the brick's cases, from its grid rows' cut edges (counts
+    // still: the scan comes after).
+    auto cut_edges = [&](Id j, Id k) { return rc.point_first[(k - kb) * s.ny + j]; };
+    Id room = 0;
+    for (Id k = bricks.k_begin(b); k < bricks.k_end(b); ++k)
+      for (Id j = bricks.j_begin(b); j < bricks.j_end(b); ++j)
+        room += BrickCases::most_per_row(
+            s.nx, cut_edges(j, k) + cut_edges(j + 1, k) + cut_edges(j, k + 1) + cut_edges(j + 1, k + 1));
+    std::uint8_t* cases = rc.brick_cases[b].room_for(room);
+    for (Id k = bricks.k_begin(b); k < bricks.k_end(b); ++k)
+      for (Id j = bricks.j_begin(b); j < bricks.j_end(b); ++j) {
+        Id t = 0;
+        for_each_cut_voxel(bits, s, j, k, [&](Id, unsigned cube_case) {
+          t += table.triangle_count[cube_case];
+          *cases++ = static_cast<std::uint8_t>(cube_case);
+        });
+        rc.triangle_first[(k - kb) * (s.ny - 1) + j] = t;
+      }
+  }, 1);
   parallel::exclusive_scan(rc.point_first.data(), rc.point_first.data(), grid_rows + 1);
   parallel::exclusive_scan(rc.triangle_first.data(), rc.triangle_first.data(), voxel_rows + 1);
   if (first_point || first_triangle) {  // a later isovalue: ids follow the earlier ones'
@@ -171,13 +234,14 @@ template <class Emit>
 void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc,
                 PointIndex* connectivity, Emit&& emit) {
   const auto& table = marching_cubes_table();
-  constexpr Id kRun = 16;     // voxel rows (j) per brick
-  constexpr Id kLayers = 8;   // voxel layers (k) per brick
-  const Id runs = (s.ny - 1 + kRun - 1) / kRun;
-  const Id stacks = (ke - kb + kLayers - 1) / kLayers;
-  parallel::for_each_dynamic(runs * stacks, [&](Id task) {
-    const Id k_begin = kb + (task / runs) * kLayers, k_end = std::min(ke, k_begin + kLayers);
-    const Id j_begin = (task % runs) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
+  const VoxelBricks bricks(s, kb, ke);
+  constexpr Id kRun = VoxelBricks::kRun;
+  parallel::for_each_dynamic(bricks.count(), [&](Id task) {
+    const Id k_begin = bricks.k_begin(task), k_end = bricks.k_end(task);
+    const Id j_begin = bricks.j_begin(task), j_end = bricks.j_end(task);
+    // The cases of the brick's cut voxels, in the order it visits them.
+    const std::uint8_t* cases = rc.brick_cases[task].cases.get();
+    auto stored_case = [&](int, const CornerWords&) { return unsigned{*cases++}; };
     // Grid rows j_begin .. j_end of two planes, in this thread's scratch.
     thread_local std::vector<std::uint32_t> scratch;
     const Id row_ids = 3 * s.nx;
@@ -213,7 +277,7 @@ void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const 
           edge_ids[e] = ids_of(ce.dz ? hi : lo, j + ce.dy).ids[ce.axis] + ce.dx;
         }
         PointIndex* out = connectivity + 3 * rc.triangle_first[(k - kb) * (s.ny - 1) + j];
-        for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
+        for_each_cut_voxel(bits, s, j, k, stored_case, [&](Id i, unsigned cube_case) {
           const std::uint8_t* e = table.triangle_edges[cube_case].data();
           for (int t = table.triangle_count[cube_case]; t > 0; --t, e += 3, out += 3) {
             out[0] = edge_ids[e[0]][i];

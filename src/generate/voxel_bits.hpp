@@ -105,10 +105,16 @@ void classify(const T* samples, const GridShape& s, const InsideTest<T>& test, I
 }
 
 // Visits every voxel of voxel row (j, k) whose corners are not all on one
-// side, in increasing i, calling f(i, cube_case). Whole 64-voxel words with
-// no sign change are skipped with a few bit operations.
-template <class F>
-void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, F&& f) {
+// side, in increasing i, calling f(i, case_of(bit, corners)), `corners` the
+// row words of its four corner rows (a, b, c, d: rows (j, k), (j + 1, k),
+// (j, k + 1), (j + 1, k + 1)) and those shifted to corner i + 1 (a1 ..
+// d1), `bit` its bit in them. Whole 64-voxel words with no sign change are
+// skipped with a few bit operations.
+struct CornerWords {
+  std::uint64_t a, b, c, d, a1, b1, c1, d1;
+};
+template <class CaseOf, class F>
+void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, CaseOf&& case_of, F&& f) {
   const std::uint64_t* r00 = bits.row(j, k, s.ny);
   const std::uint64_t* r10 = bits.row(j + 1, k, s.ny);
   const std::uint64_t* r01 = bits.row(j, k + 1, s.ny);
@@ -116,30 +122,40 @@ void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, 
   const Id voxels = s.nx - 1;
   const Id words = (voxels + 63) / 64;
   for (Id q = 0; q < words; ++q) {
-    const std::uint64_t a = r00[q], b = r10[q], c = r01[q], d = r11[q];
+    CornerWords w;
+    w.a = r00[q], w.b = r10[q], w.c = r01[q], w.d = r11[q];
     // Bits of corner i + 1: shift the next word in.
-    const std::uint64_t a1 = (a >> 1) | (r00[q + 1] << 63);
-    const std::uint64_t b1 = (b >> 1) | (r10[q + 1] << 63);
-    const std::uint64_t c1 = (c >> 1) | (r01[q + 1] << 63);
-    const std::uint64_t d1 = (d >> 1) | (r11[q + 1] << 63);
-    std::uint64_t active = (a ^ b) | (a ^ c) | (a ^ d) | (a ^ a1) | (a ^ b1) | (a ^ c1) | (a ^ d1);
+    w.a1 = (w.a >> 1) | (r00[q + 1] << 63);
+    w.b1 = (w.b >> 1) | (r10[q + 1] << 63);
+    w.c1 = (w.c >> 1) | (r01[q + 1] << 63);
+    w.d1 = (w.d >> 1) | (r11[q + 1] << 63);
+    const std::uint64_t a = w.a;
+    std::uint64_t active = (a ^ w.b) | (a ^ w.c) | (a ^ w.d) | (a ^ w.a1) | (a ^ w.b1) | (a ^ w.c1) | (a ^ w.d1);
     const Id left = voxels - 64 * q;
     if (left < 64) active &= (std::uint64_t{1} << left) - 1;
     while (active) {
       const int bit = std::countr_zero(active);
       active &= active - 1;
-      // Corners i and i + 1 of a row are bits `bit` and `bit + 1` of its
-      // word, two bits in case order, read with one shift; only bit 63 takes
-      // corner i + 1 from the next word.
-      const unsigned cube_case =
-          bit < 63 ? static_cast<unsigned>(((a >> bit) & 3) | (((b >> bit) & 3) << 2) | (((c >> bit) & 3) << 4) |
-                                           (((d >> bit) & 3) << 6))
-                   : static_cast<unsigned>((a >> 63) | ((a1 >> 63) << 1) | ((b >> 63) << 2) | ((b1 >> 63) << 3) |
-                                           ((c >> 63) << 4) | ((c1 >> 63) << 5) | ((d >> 63) << 6) |
-                                           ((d1 >> 63) << 7));
-      f(64 * q + bit, cube_case);
+      f(64 * q + bit, case_of(bit, w));
     }
   }
+}
+
+// The cube case of the voxel at `bit` of corner words w: corners i and i + 1
+// of a row are bits `bit` and `bit + 1` of its word, two bits in case order,
+// read with one shift; only bit 63 takes corner i + 1 from the next word.
+inline unsigned cube_case_at(int bit, const CornerWords& w) {
+  return bit < 63 ? static_cast<unsigned>(((w.a >> bit) & 3) | (((w.b >> bit) & 3) << 2) | (((w.c >> bit) & 3) << 4) |
+                                          (((w.d >> bit) & 3) << 6))
+                  : static_cast<unsigned>((w.a >> 63) | ((w.a1 >> 63) << 1) | ((w.b >> 63) << 2) |
+                                          ((w.b1 >> 63) << 3) | ((w.c >> 63) << 4) | ((w.c1 >> 63) << 5) |
+                                          ((w.d >> 63) << 6) | ((w.d1 >> 63) << 7));
+}
+
+// for_each_cut_voxel with each voxel's cube case computed from the bits.
+template <class F>
+void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, F&& f) {
+  for_each_cut_voxel(bits, s, j, k, [](int bit, const CornerWords& w) { return cube_case_at(bit, w); }, f);
 }
 
 }  // namespace keymesh::generate
