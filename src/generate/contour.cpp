@@ -378,14 +378,14 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     const RowCounts& rc = rows[iso];
     const Id fine = rc.triangle_first.back() - rc.triangle_first.front();
     if (static_cast<Id>(slots.size()) < 3 * fine) parallel::resize_fresh(slots, static_cast<std::size_t>(3 * fine));
-    coarse_triangles += write_coarse_triangles(
-        bits[iso], s, rc, cb, rc.triangle_first.front(), slots.data(),
-        [&](Id kept) {
-          parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * (coarse_triangles + kept)));
-          return mesh.connectivity.data() + 3 * coarse_triangles;
-        },
-        triangle_scratch);
+    write_coarse_triangles(bits[iso], s, rc, cb, rc.triangle_first.front(), slots.data(), triangle_scratch);
     st.generate += seconds_since(t0);
+    t0 = Clock::now();
+    coarse_triangles += fold_and_pack(s, rc, rc.triangle_first.front(), slots.data(), triangle_scratch, [&](Id kept) {
+      parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * (coarse_triangles + kept)));
+      return mesh.connectivity.data() + 3 * coarse_triangles;
+    });
+    st.coarsen += seconds_since(t0);
   }
   st.triangles_before_coarsening = fine_triangles;
 }

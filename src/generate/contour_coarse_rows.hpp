@@ -129,12 +129,21 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
     if (!cb.cut[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
     std::uint64_t* f = cb.far.data() + 3 * r * wpr;
-    std::fill(f, f + 3 * wpr, std::uint64_t{0});
-    RowCuts(bits, s, j, k, last_plane).for_each_position([&](Id i, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-      const std::uint32_t cut[3] = {x, y, z};
-      for (int a = 0; a < 3; ++a)
-        if (cut[a] && far(i, j, k, a)) f[a * wpr + (i >> 6)] |= std::uint64_t{1} << (i & 63);
-    });
+    const RowCuts cuts(bits, s, j, k, last_plane);
+    // A word's far bits gathered in registers, one axis at a time, without
+    // a branch on the outcome (a coin toss on a real surface).
+    for (Id q = 0; q < wpr; ++q) {
+      const RowCuts::Words w = cuts.word(q);
+      const std::uint64_t cut[3] = {w.x, w.y, w.z};
+      for (int a = 0; a < 3; ++a) {
+        std::uint64_t out = 0;
+        for (std::uint64_t m = cut[a]; m; m &= m - 1) {
+          const int b = std::countr_zero(m);
+          out |= static_cast<std::uint64_t>(far(64 * q + b, j, k, a)) << b;
+        }
+        f[a * wpr + q] = out;
+      }
+    }
   });
   std::vector<Id> row_first(static_cast<std::size_t>(rows + 1), 0);
   for_each_row_in_bricks(s, [&](Id r) {
@@ -198,17 +207,49 @@ void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const Coa
         // Edge keys 3 p + axis grow with p = i + j nx + k nxy: the z edge
         // from the plane below, the y edge from the row below, the x edge
         // from the point before, then this point's x, y, z edges.
-        if (fz_below && ((fz_below[q] >> b) & 1)) x[n++] = {i, j, k - 1, 2};
-        if (fy_below && ((fy_below[q] >> b) & 1)) x[n++] = {i, j - 1, k, 1};
-        if ((fx_before >> b) & 1) x[n++] = {i - 1, j, k, 0};
-        if (((w.x ^ fx[q]) >> b) & 1) x[n++] = {i, j, k, 0};
-        if (((w.y ^ fy[q]) >> b) & 1) x[n++] = {i, j, k, 1};
-        if (((w.z ^ fz[q]) >> b) & 1) x[n++] = {i, j, k, 2};
+        // Each written, then kept by its bit (no branch on a coin toss).
+        x[n] = {i, j, k - 1, 2};
+        n += fz_below ? static_cast<int>((fz_below[q] >> b) & 1) : 0;
+        x[n] = {i, j - 1, k, 1};
+        n += fy_below ? static_cast<int>((fy_below[q] >> b) & 1) : 0;
+        x[n] = {i - 1, j, k, 0};
+        n += static_cast<int>((fx_before >> b) & 1);
+        x[n] = {i, j, k, 0};
+        n += static_cast<int>(((w.x ^ fx[q]) >> b) & 1);
+        x[n] = {i, j, k, 1};
+        n += static_cast<int>(((w.y ^ fy[q]) >> b) & 1);
+        x[n] = {i, j, k, 2};
+        n += static_cast<int>(((w.z ^ fz[q]) >> b) & 1);
         f(id++, x, n);
       }
     }
   });
 }
+
+// The far bits of voxel i's twelve cube edges, in MarchingCubesTable's
+// order (coarse_cases.hpp, kCubeEdgeLayout), for the voxel row whose corner
+// rows are r[y | z << 1]: x edges of the four rows at i, y edges of rows
+// r[0], r[2] and z edges of rows r[0], r[1] at i and i + 1.
+struct VoxelFarBits {
+  const std::uint64_t *fx[4], *fy[2], *fz[2];
+
+  VoxelFarBits(const CoarseBits& cb, const Id r[4])
+      : fx{cb.far_row(r[0], 0), cb.far_row(r[1], 0), cb.far_row(r[2], 0), cb.far_row(r[3], 0)},
+        fy{cb.far_row(r[0], 1), cb.far_row(r[2], 1)},
+        fz{cb.far_row(r[0], 2), cb.far_row(r[1], 2)} {}
+
+  [[gnu::always_inline]] unsigned operator()(Id i) const {
+    const Id q = i >> 6;
+    const int b = static_cast<int>(i & 63);
+    auto one = [&](const std::uint64_t* w) { return static_cast<unsigned>((w[q] >> b) & 1u); };
+    auto two = [&](const std::uint64_t* w) {  // bits i and i + 1
+      return static_cast<unsigned>(b < 63 ? (w[q] >> b) & 3u : (w[q] >> 63) | ((w[q + 1] & 1u) << 1));
+    };
+    const unsigned y0 = two(fy[0]), y1 = two(fy[1]), z0 = two(fz[0]), z1 = two(fz[1]);
+    return one(fx[0]) | (y0 & 1u) << 1 | (z0 & 1u) << 2 | (y0 >> 1) << 3 | (z0 >> 1) << 4 | one(fx[1]) << 5 |
+           (z1 & 1u) << 6 | (z1 >> 1) << 7 | one(fx[2]) << 8 | (y1 & 1u) << 9 | (y1 >> 1) << 10 | one(fx[3]) << 11;
+  }
+};
 
 // Scratch of write_coarse_triangles, kept by its caller across isovalues
 // and calls: each task's face triangles, and each voxel row's range of them.
@@ -221,14 +262,11 @@ struct CoarseTriangleScratch {
 // Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
 // ids, written into `slots` (room for the fine triangles at their fine
 // offsets rc.triangle_first, shifted by `fine_base`), each voxel row's
-// triangles at the start of its slots: those with two equal corners dropped,
-// folds (coarse_folds.hpp) decided within each voxel, then across the faces
-// between voxels, then each row's survivors packed in parallel into `out`
-// (given by `grow(kept)`, room for the triangles kept). Returns the
-// triangles kept.
-template <class Grow>
-Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const CoarseBits& cb,
-                          Id fine_base, PointIndex* slots, Grow&& grow, CoarseTriangleScratch& sc) {
+// triangles at the start of its slots: those with two equal corners dropped
+// and the folds within each voxel decided (coarse_cases.hpp); the face
+// triangles recorded in `sc` for fold_and_pack.
+inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc,
+                                   const CoarseBits& cb, Id fine_base, PointIndex* slots, CoarseTriangleScratch& sc) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   constexpr Id kRun = 16;  // voxel rows per task
   const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun, tasks = layers * runs_per_layer;
@@ -264,30 +302,15 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
       // The grid rows of the voxel row's corners, by corner bits y | z << 1.
       const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
       const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
-      // Far bits of the twelve cube edges, in MarchingCubesTable's order
-      // (coarse_cases.hpp, kCubeEdgeLayout): x edges of the four rows at i,
-      // y edges of rows (j, k), (j, k + 1) and z edges of rows (j, k),
-      // (j + 1, k) at i and i + 1.
-      const std::uint64_t* fx[4] = {cb.far_row(r[0], 0), cb.far_row(r[1], 0), cb.far_row(r[2], 0), cb.far_row(r[3], 0)};
-      const std::uint64_t* fy[2] = {cb.far_row(r[0], 1), cb.far_row(r[2], 1)};
-      const std::uint64_t* fz[2] = {cb.far_row(r[0], 2), cb.far_row(r[1], 2)};
+      const VoxelFarBits far_bits(cb, r);
       const Id vr = k * (s.ny - 1) + j;
       PointIndex* const begin = slots_of(vr);
       PointIndex* o = begin;
       FaceTriangle* const faces = sc.faces.data() + (rc.triangle_first[vr] - fine_base);
       FaceTriangle* f = faces;
+      std::uint32_t written = 0;  // triangles of the row so far
       for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
-        const Id q = i >> 6;
-        const int b = static_cast<int>(i & 63);
-        auto one = [&](const std::uint64_t* w) { return static_cast<unsigned>((w[q] >> b) & 1u); };
-        auto two = [&](const std::uint64_t* w) {  // bits i and i + 1
-          return static_cast<unsigned>(b < 63 ? (w[q] >> b) & 3u : (w[q] >> 63) | ((w[q + 1] & 1u) << 1));
-        };
-        const unsigned y0 = two(fy[0]), y1 = two(fy[1]), z0 = two(fz[0]), z1 = two(fz[1]);
-        const unsigned far = one(fx[0]) | (y0 & 1u) << 1 | (z0 & 1u) << 2 | (y0 >> 1) << 3 | (z0 >> 1) << 4 |
-                             one(fx[1]) << 5 | (z1 & 1u) << 6 | (z1 >> 1) << 7 | one(fx[2]) << 8 | (y1 & 1u) << 9 |
-                             (y1 >> 1) << 10 | one(fx[3]) << 11;
-        const CoarseVoxel v = voxels.at(cube_case, far);
+        const CoarseVoxel v = voxels.at(cube_case, far_bits(i));
         // Corner c's coarse id: grid point i + (c & 1) of row r[c >> 1].
         auto id = [&](unsigned c) { return row_ids[c >> 1][i + (c & 1u)]; };
         const int count = static_cast<int>(v >> kCoarseCountShift);
@@ -296,19 +319,29 @@ Id write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowC
           o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
           // Written always, kept when a face triangle (no branch).
           const unsigned code = voxels.face_code[c];
-          *f = {static_cast<std::uint32_t>((o - begin) / 3), static_cast<std::uint32_t>(i),
-                static_cast<std::uint8_t>(code & 0x7fu)};
+          *f = {written, static_cast<std::uint32_t>(i), static_cast<std::uint8_t>(code & 0x7fu)};
           f += code >> 7;
           o += 3;
+          ++written;
         }
       });
       sc.face_count[vr] = static_cast<std::uint32_t>(f - faces);
-      sc.kept[vr] = (o - begin) / 3;
+      sc.kept[vr] = written;
       std::swap(lo[0], hi[0]);
       std::swap(lo[1], hi[1]);
     }
   }, 1);
-  // Folds across faces: each row decides the faces it owns.
+}
+
+// Step 5: the folds across the faces between voxels decided (each row the
+// faces it owns, coarse_folds.hpp), then each voxel row's survivors packed in
+// parallel into `out` (given by `grow(kept)`, room for the triangles kept).
+// Returns the triangles kept.
+template <class Grow>
+Id fold_and_pack(const GridShape& s, const RowCounts& rc, Id fine_base, PointIndex* slots, CoarseTriangleScratch& sc,
+                 Grow&& grow) {
+  const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
+  auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
   auto faces_of = [&](Id vr) { return sc.faces.data() + (rc.triangle_first[vr] - fine_base); };
   auto face_count = [&](Id vr) { return static_cast<std::size_t>(sc.face_count[vr]); };
   parallel::for_each_dynamic(voxel_rows, [&](Id vr) {
