@@ -211,7 +211,7 @@ py::tuple incidence(const py::handle& mesh_obj, int threads) {
   run_released(threads, [&] {
     pc = analyze::point_cells(mesh);
     cells.resize(pc.corners.size());
-    for (std::size_t i = 0; i < cells.size(); ++i) cells[i] = pc.cell_of_corner[pc.corners[i]];
+    for (std::size_t i = 0; i < cells.size(); ++i) cells[i] = pc.cell_of(pc.corners[i]);
     neighbours = analyze::cell_neighbours(mesh);
   });
   const auto n_off = static_cast<py::ssize_t>(pc.offsets.size());

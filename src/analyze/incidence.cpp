@@ -35,7 +35,7 @@ void check_ids(const SurfaceMesh& m) {
 PointCells point_cells(const SurfaceMesh& m) {
   check_ids(m);
   PointCells pc;
-  pc.cell_of_corner = cells_of_corners(m);
+  if (!m.all_triangles()) pc.cell_of_corner = cells_of_corners(m);
   const Id n = static_cast<Id>(m.connectivity.size());
   // Groups keyed by point id; points no cell uses get empty groups, so the
   // dense plan's groups (present keys only) are spread over all points.
