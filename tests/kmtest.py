@@ -50,6 +50,16 @@ def finish():
     sys.exit(0 if _results["failed"] == 0 else 1)
 
 
+def box_filtered_noise(shape, seed):
+    """Uniform noise in [0, 1) of `shape` (z, y, x), box-filtered along each
+    axis (periodic): blobs a few voxels wide, which coarsening pinches."""
+    import numpy as np
+    v = np.random.default_rng(seed).random(shape, dtype=np.float32)
+    for axis in range(3):
+        v = (np.roll(v, 1, axis) + v + np.roll(v, -1, axis)) / 3
+    return v.astype(np.float32)
+
+
 def tempdir():
     return tempfile.mkdtemp(prefix="keymesh-test-")
 

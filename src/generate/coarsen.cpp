@@ -6,6 +6,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
+#include "keymesh/generate/split_nonmanifold.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -143,7 +144,8 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
     for (int k = 0; k < 3; ++k) out.connectivity[3 * keep[t] + k] = map[C[3 * t + k]];
   });
   const Id folded = remove_folds(out);
-  if (stats) *stats = CoarsenStats{n, m, t_in, t_out - folded, folded};
+  split_nonmanifold(out);
+  if (stats) *stats = CoarsenStats{n, out.num_points(), t_in, t_out - folded, folded};
   return out;
 }
 

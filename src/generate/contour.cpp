@@ -12,6 +12,7 @@
 #include "keymesh/core/progress.hpp"
 #include "keymesh/core/work_estimate.hpp"
 #include "keymesh/generate/coarsen.hpp"
+#include "keymesh/generate/split_nonmanifold.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -388,6 +389,9 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     st.coarsen += seconds_since(t0);
   }
   st.triangles_before_coarsening = fine_triangles;
+  t0 = Clock::now();
+  split_nonmanifold(mesh);
+  st.coarsen += seconds_since(t0);
 }
 
 // The structured plan's output, refused by name before it is allocated:

@@ -13,19 +13,13 @@ import os
 import shutil
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, mpirun, report, run, tempdir  # noqa: E402
+from kmtest import box_filtered_noise, check, finish, mpirun, report, run, tempdir  # noqa: E402
 
 D = tempdir()
 NX, NY, NZ = 41, 37, 29
 NOISE = os.path.join(D, "noise.raw")
-rng = np.random.default_rng(17)
-v = rng.random((NZ, NY, NX), dtype=np.float32)
-for axis in range(3):  # a box filter three times: blobs a few voxels wide
-    v = (np.roll(v, 1, axis) + v + np.roll(v, -1, axis)) / 3
-v.astype(np.float32).tofile(NOISE)
+box_filtered_noise((NZ, NY, NX), 17).tofile(NOISE)
 DIMS = ["--dims", NX, NY, NZ]
 PLANE = NX * NY * 4
 BRAIN = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"

@@ -1,0 +1,47 @@
+#pragma once
+// Non-manifold points and edges of a coarsened surface, undone from its
+// topology alone (the triangles' point ids; no coordinate is compared).
+//
+// Coarsening (coarsen.hpp) merges every crossing into the grid point nearest
+// it. Where two sheets of the fine surface pass within a voxel of one grid
+// point, both sheets' crossings merge into that point: two cones meet at it
+// (a point with two fans), or two sheets share a coarse edge (an edge with
+// four triangles, two leaving and two arriving). The rule:
+//  - every edge's triangles are paired, one leaving each end with one
+//    arriving at it (an oriented surface crosses an edge once each way); the
+//    i-th triangle running from the smaller point id to the larger (in
+//    triangle order) with the i-th running back, rotated when that pairing
+//    would join the same two fans twice (below);
+//  - around each point the corners linked through paired edges form its
+//    fans; a point with more than one fan becomes one point per fan: the fan
+//    holding the point's first corner keeps the id, the others get new ids
+//    after the last point (by point id, then by first corner), carrying a
+//    copy of the point's position and fields.
+// A copy sits where the point sits: both sheets passed nearest that grid
+// point, and the mean of their crossings is all the coarse mesh knows.
+// check reports these as duplicate points.
+// An edge whose pairs would join the same two fans at both ends (after the
+// split still two edges on one pair of points) gets the next rotation of
+// its pairing, in sweeps over those edges in key order until none changes
+// (at most four): each rotation pairs a leaving triangle with another
+// arriving one, which splits both ends along the edge.
+// Guaranteed: every edge with as many triangles leaving as arriving at each
+// end is manifold afterwards unless no rotation separates its pairs (counted
+// in edges_left); every point has one fan. Edges crossed more often one way
+// than the other (an open surface's border, or a fold's one-way repeats)
+// keep their unpaired triangles as boundary. Triangles, their order and the
+// points' order are kept; deterministic, the same at any thread count.
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh::generate {
+
+struct NonmanifoldSplit {
+  Id points_added = 0;  // the copies appended
+  Id edges_left = 0;    // edges whose pairs no rotation separates
+};
+
+// Triangles only (InputError otherwise); a triangle that repeats a point id
+// keeps its corners there in one fan.
+NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh);
+
+}  // namespace keymesh::generate
