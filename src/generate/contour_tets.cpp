@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
@@ -20,6 +21,7 @@
 #include "keymesh/keyreduce/weld.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/weld/vertex_weld.hpp"
@@ -235,7 +237,10 @@ std::vector<std::uint64_t> tet_soups(const UnstructuredGrid& tets, const Contour
                                      ContourStats& st) {
   std::vector<std::uint64_t> soup;
   // Left uninitialised (every entry is written before it is read), so
-  // the pages are first touched by the parallel passes, not by a serial memset.
+  // the pages are first touched by the parallel passes, not by a serial
+  // memset; freed before the weld. (Kept across calls instead, as the voxel
+  // contour keeps its bits, they cost their bytes in every later stage's
+  // peak for no measurable gain: measured, ops_bench --op tetcontour.)
   std::unique_ptr<std::uint8_t[]> inside(new std::uint8_t[static_cast<std::size_t>(tets.num_points())]);
   std::unique_ptr<std::uint8_t[]> cases(new std::uint8_t[static_cast<std::size_t>(tets.num_cells())]);
   tets.connectivity.visit([&](auto conn) {
@@ -255,7 +260,8 @@ void interpolate_fields(const UnstructuredGrid& tets, const Field& field, const 
   for (const Field& f : tets.point_fields) {
     if (&f == &field && !opt.scalars) continue;
     const int k = f.components;
-    Field g{f.name, k, std::vector<float>(static_cast<std::size_t>(points) * static_cast<std::size_t>(k))};
+    Field g{f.name, k, {}};
+    parallel::resize_fresh(g.values, static_cast<std::size_t>(points) * static_cast<std::size_t>(k));
     parallel::for_each(points, [&](Id p) {
       const EdgePoint e = ep.locate(point_key[p]);
       for (int c = 0; c < k; ++c) {
@@ -316,27 +322,32 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
   spec.plan = by_position ? keyreduce::WeldPlan::ByPosition : keyreduce::WeldPlan::Sort;
   spec.key_bits = ep.ek.key_bits() + iso_bits;
   spec.order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
-  const keyreduce::Groups<std::uint64_t> groups =
+  keyreduce::Groups<std::uint64_t> groups =
       keyreduce::weld(soup.data(), corners, spec, [&](Id c, float* xyz) { ep.position(soup[c], xyz); },
                       {by_position ? &mesh.points : nullptr, nullptr});
-  mesh.connectivity = groups.index_map;
-  soup = {};
+  // The index map is the connectivity (no copy); the soup is freed before
+  // the points are allocated.
+  mesh.connectivity = std::move(groups.index_map);
+  free_storage(soup);
   st.weld += seconds_since(t0);
 
   // Reduce: positions, fields, normals.
   t0 = Clock::now();
   const Id points = groups.num_groups();
   if (mesh.points.empty()) {
-    mesh.points.resize(static_cast<std::size_t>(3 * points));
+    parallel::resize_fresh(mesh.points, static_cast<std::size_t>(3 * points));
     parallel::for_each(points, [&](Id p) { ep.position(groups.unique_keys[p], &mesh.points[3 * p]); });
   }
   interpolate_fields(tets, field, opt, ep, groups, mesh);
   if (average && !opt.coarsen) {
-    // The weld's groups are the corners grouped by point (mesh/normals.hpp).
-    std::vector<Vec3f> normals(static_cast<std::size_t>(points));
-    sum_face_normals(groups, face_normals(mesh).data(), normals.data());
-    normalize(normals.data(), points);
-    mesh.point_fields.push_back(normals_field(normals));
+    // The weld's groups are the corners grouped by point (mesh/normals.hpp),
+    // summed into the field itself.
+    Field normals{"Normals", 3, {}};
+    parallel::resize_fresh(normals.values, static_cast<std::size_t>(3 * points));
+    auto* sums = reinterpret_cast<Vec3f*>(normals.values.data());
+    sum_face_normals(groups, face_normals(mesh).data(), sums);
+    normalize(sums, points);
+    mesh.point_fields.push_back(std::move(normals));
   }
   st.fields += seconds_since(t0);
   if (opt.coarsen) {
