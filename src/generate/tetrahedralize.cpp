@@ -11,6 +11,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 
 namespace keymesh::generate {
 
@@ -84,7 +85,7 @@ UnstructuredGrid grid_points(const ImageGrid& grid) {
   const Id points = checked_mul(checked_mul(nx, ny, "point count"), nz, "point count");
   checked_mul(points, 3 * Id(sizeof(float)), "point coordinates");
   UnstructuredGrid out;
-  out.points.resize(static_cast<std::size_t>(3 * points));
+  parallel::resize_fresh(out.points, static_cast<std::size_t>(3 * points));
   const Id nxy = nx * ny;
   parallel::for_each(points, [&](Id p) {
     const Id k = p / nxy, j = (p - k * nxy) / nx, i = p - k * nxy - j * nx;
@@ -92,7 +93,8 @@ UnstructuredGrid grid_points(const ImageGrid& grid) {
     for (int a = 0; a < 3; ++a)
       out.points[3 * p + a] = static_cast<float>(grid.origin[a] + grid.spacing[a] * static_cast<double>(ijk[a]));
   });
-  Field f{grid.name, 1, std::vector<float>(static_cast<std::size_t>(points))};
+  Field f{grid.name, 1, {}};
+  parallel::resize_fresh(f.values, static_cast<std::size_t>(points));
   visit_scalars(grid, [&](const auto* samples) {
     parallel::for_each(points, [&](Id p) { f.values[p] = static_cast<float>(samples[p]); });
   });

@@ -7,6 +7,7 @@
 
 #include "keymesh/mesh/fields.hpp"
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -80,8 +81,7 @@ UnstructuredGrid assemble24(const std::vector<float>& points, const std::vector<
   const float* P = points.data();
   UnstructuredGrid out;
   out.uniform_type = CellType::Tetra;
-  out.points.resize(static_cast<std::size_t>(3 * total));
-  std::copy(points.begin(), points.end(), out.points.begin());
+  extend_points(points, total, out.points);
   out.point_fields = extend_point_fields(fields, total);
   parallel::for_each(F, [&](Id face) {
     std::uint64_t ids[4];
@@ -148,7 +148,7 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
   };
   progress::report("tetrahedralize 24: weld face centres", 0.25);
   const FaceGroups g = group_faces<std::uint64_t>(keys, true, std::uint64_t(3 * N), 0, vertex_weld, face_centre);
-  keys = {};
+  free_storage(keys);  // before the output is allocated
   progress::report("tetrahedralize 24: points", 0.5);
   return assemble24(corners.points, corners.point_fields, cells, cell_corner, g);
 }
@@ -178,7 +178,7 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
     mean_position(hexes.points.data(), ids, 4, xyz);
   };
   const FaceGroups g = group_faces<std::uint64_t>(keys, false, 0, ek.key_bits(), vertex_weld, face_centre);
-  keys = {};
+  free_storage(keys);  // before the output is allocated
   UnstructuredGrid out = assemble24(hexes.points, hexes.point_fields, cells, cell_corner, g);
   out.cell_fields = repeat_cell_fields(hexes.cell_fields, cells, 24);
   return out;
