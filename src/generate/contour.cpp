@@ -173,23 +173,27 @@ struct PointWriter {
 };
 
 // The mesh's point arrays, sized for `points`, and the writer filling them.
+// With `arrays`, the arrays (but not the keys) are sized by arrays->run(),
+// beside the caller's others.
 template <class T>
 PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
                               const GridShape& s, const ContourOptions& opt, std::vector<std::uint64_t>* point_keys,
-                              std::vector<std::uint64_t>* nearest_keys, bool write_xyz) {
+                              std::vector<std::uint64_t>* nearest_keys, bool write_xyz,
+                              parallel::FreshArrays* arrays = nullptr) {
   PointWriter<T> w{interp, s, {}, 0, 0, 0, 0};
   // Output arrays at their final size, with huge pages asked for before
   // they are first touched (a host process such as Python has none by default).
+  auto sized = [&](std::vector<float>& v, Id n) {
+    if (arrays) return arrays->add(v, static_cast<std::size_t>(n));
+    parallel::resize_fresh(v, static_cast<std::size_t>(n));
+    return v.data();
+  };
+  mesh.point_fields.reserve(mesh.point_fields.size() + 3);  // fields stay put while arrays holds them
   auto field = [&](const std::string& name, int components) {
     mesh.point_fields.push_back(Field{name, components, {}});
-    auto& values = mesh.point_fields.back().values;
-    parallel::resize_fresh(values, static_cast<std::size_t>(components * points));
-    return values.data();
+    return sized(mesh.point_fields.back().values, components * points);
   };
-  if (write_xyz) {
-    parallel::resize_fresh(mesh.points, static_cast<std::size_t>(3 * points));
-    w.out.xyz = mesh.points.data();
-  }
+  if (write_xyz) w.out.xyz = sized(mesh.points, 3 * points);
   if (opt.scalars) w.out.scalar = field(grid.name, 1);
   if (opt.normals == ContourNormals::Gradient) w.out.gradient_normal = field("Normals", 3);
   if (opt.curvature) w.out.curvature = field("mean_curvature", 1);
@@ -411,6 +415,34 @@ void check_output_size(const ContourOptions& opt, Id points, Id triangles) {
                      " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
 }
 
+// Every grid line's coordinate as the float EdgeInterpolator::position()
+// rounds it to: a point on an edge along `axis` has the grid coordinates of
+// the edge's first point but along `axis`, where position() adds t, so two
+// of its three floats are looked up here instead of computed (the same
+// double expression, hence the same bits, once per line instead of once
+// per point).
+struct GridLines {
+  const GridShape& s;
+  std::vector<float> line[3];
+
+  explicit GridLines(const GridShape& shape) : s(shape) {
+    const Id n[3] = {s.nx, s.ny, s.nz}, offset[3] = {0, 0, s.k_offset};
+    for (int a = 0; a < 3; ++a) {
+      line[a].resize(static_cast<std::size_t>(n[a]));
+      for (Id c = 0; c < n[a]; ++c)
+        line[a][c] = static_cast<float>(s.origin[a] + s.spacing[a] * static_cast<double>(c + offset[a]));
+    }
+  }
+
+  template <class Point>
+  void position(const Point& p, float* xyz) const {
+    for (int a = 0; a < 3; ++a) xyz[a] = line[a][p.ijk[a]];
+    const int a = p.axis;
+    const double u = static_cast<double>(p.ijk[a] + (a == 2 ? s.k_offset : 0)) + p.t;
+    xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u);
+  }
+};
+
 // The structured plan (contour_rows.hpp): classify every isovalue, count and
 // scan rows, then write points and triangles at their final ids. No soup.
 template <class T>
@@ -466,22 +498,28 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
     return mesh;
   }
   auto t0 = Clock::now();
-  parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
+  // The output arrays: pages faulted in by the threads, then zero-filled
+  // (std::vector's resize) side by side.
+  parallel::FreshArrays arrays;
+  arrays.add(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
   progress::report("points", 0.5);
-  const PointWriter<T> write = prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true);
+  const PointWriter<T> write =
+      prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true, &arrays);
+  arrays.run();
   // Triangles and points in one pass over the rows (st.generate holds both).
   // Positions, with or without the scalar (the usual calls), get a writer
-  // of their own, inlined into the pass: the same position() and scalar()
-  // as PointWriter's, so the same bytes.
+  // of their own, inlined into the pass: position() by grid lines, and
+  // PointWriter's scalar(), so the same bytes.
   auto pass = [&](auto&& write_point) {
     for (Id iso = 0; iso < n_iso; ++iso)
       write_rows(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data(), [&](Id id, Id i, Id j, Id k, int axis) {
         write_point(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
       });
   };
+  const GridLines lines(s);
   auto inlined = [&](auto with_scalar) {
     pass([&](Id id, const typename EdgeInterpolator<T>::Point& p, Id) {
-      interp.position(p, write.out.xyz + 3 * id);
+      lines.position(p, write.out.xyz + 3 * id);
       if constexpr (decltype(with_scalar)::value) write.out.scalar[id] = interp.scalar(p);
     });
   };

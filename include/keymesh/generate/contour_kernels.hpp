@@ -96,9 +96,16 @@ struct EdgeInterpolator {
     const double v0 = static_cast<double>(samples[p.p0]);
     const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
     const double t = (p.iso - v0) / (v1 - v0);
-    // A NaN end sample (outside by definition) gives no crossing to
-    // interpolate: place the point midway rather than emit NaN.
-    p.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
+    if constexpr (std::is_integral_v<T>) {
+      // Integer samples are exact in double and the edge is cut (one end
+      // >= ceil(iso), the other below iso): t is finite and in (0, 1], so
+      // the clamp below would change nothing.
+      p.t = t;
+    } else {
+      // A NaN end sample (outside by definition) gives no crossing to
+      // interpolate: place the point midway rather than emit NaN.
+      p.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
+    }
     return p;
   }
 
