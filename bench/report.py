@@ -647,11 +647,14 @@ class Report:
                            and r["huge_pages"] == huge), None)
                 if not km:
                     continue
-                cpp = next((r for r in rows if r["case"] == case and r["tool"] == "contour_bench"), None) if huge else None
+                cpp = next((r for r in rows if r["case"] == case and r["tool"] == "contour_bench"
+                            and r.get("huge_pages", True) == huge), None)
+                fe_cpp = cpp.get("fe3d_median") if cpp else None
                 body.append([km["label"] + (f", {len(km['isovalues'])} isovalues" if len(km["isovalues"]) > 1 else ""),
                              "on" if huge else "off", f"{km['cells']:,}", f"{km['median'] * 1e3:.1f}",
                              f"{fe['median'] * 1e3:.1f}" if fe else "", f"{fe['median'] / km['median']:.2f}×" if fe else "",
                              f"{cpp['median'] * 1e3:.1f}" if cpp else "",
+                             f"{fe_cpp / cpp['median']:.2f}×" if fe_cpp else "",
                              f"{km['sum_single'] / km['median']:.2f}" if km.get("sum_single") else "",
                              f"{km['input_mib']:.0f} + {km['output_mib']:.0f}" if "output_mib" in km else "",
                              f"{cpp['peak_rss_mib']:.0f}" if cpp else "", km.get("loadavg", "")])
@@ -662,10 +665,13 @@ class Report:
                 f"{rows[0]['threads']} threads, medians after a warm-up; with huge pages "
                 "(`glibc.malloc.hugetlb=1` for the whole process) and without (a Python process's default "
                 "malloc; keymesh still asks `madvise` for its output arrays). C++ harness: `bench/contour_bench` "
-                "on the same volume (huge pages). Several isovalues: the sum of the single-isovalue medians over "
+                "on the same volume with the same huge-pages setting (`KEYMESH_HUGE_PAGES=0` without), and "
+                "FE3D / C++ harness: the FE3D median of that setting's Python run over the harness's median "
+                "(VTK's C++ library is not installed by the bench: FE3D runs in the Python process). Several isovalues: the sum of the single-isovalue medians over "
                 "the one-call median (≥ 1: one call costs no more). Memory: input + output MiB of the call, and the "
                 "C++ harness's peak RSS (the whole process: volume read, contour, output).", "",
                 table(["volume", "huge pages", "triangles", "keymesh ms", "FE3D ms", "FE3D / keymesh", "C++ harness ms",
+                       "FE3D / C++ harness",
                        "Σ single / one call", "input + output MiB", "harness peak MiB", "load"], body), ""]
 
     def write(self, path, plotdir):

@@ -275,7 +275,12 @@ def dense_rows(bench, build, threads, reps, work, quick):
     """Issue 17's real and dense volumes (bench/dense.py): keymesh.contour and
     vtkFlyingEdges3D in one Python process on the same arrays, with huge pages
     (glibc.malloc.hugetlb=1) and with the default malloc of a Python process;
-    then the C++ harness (contour_bench) on the same volumes written as .nrrd."""
+    then the C++ harness (contour_bench, positions and triangles only, as
+    dense.py runs both tools) on the same volumes written as .nrrd, with huge
+    pages and without (KEYMESH_HUGE_PAGES=0: no re-exec), each row carrying
+    the FE3D median of dense.py's run with the same setting (`fe3d_median`;
+    VTK's C++ library is not among the packages the bench installs, so FE3D
+    runs in the Python process, on the same volume, in the same bench run)."""
     cases = "brain,brain8,head256" if quick else "brain,brain8,noise,head256,sphere512"
     dense = os.path.join(HERE, "dense.py")
     env = {"PYTHONPATH": os.path.join(build, "python")}
@@ -289,11 +294,16 @@ def dense_rows(bench, build, threads, reps, work, quick):
             rows.append(skipped("dense.py", str(e)))
             return rows
     for r in [r for r in rows if r.get("dump")]:
-        progress(f"dense {r['case']}: contour_bench (C++ harness)")
-        c = run_json([bench, "--file", r["dump"], "--iso", ",".join(str(v) for v in r["isovalues"]),
-                      "--threads", str(threads), "--reps", str(reps)])[0]
-        c.update(bench="dense", case=r["case"], tool="contour_bench", huge_pages=True)
-        rows.append(c)
+        for huge in (True, False):
+            progress(f"dense {r['case']}: contour_bench (C++ harness), huge pages {huge}")
+            c = run_json([bench, "--file", r["dump"], "--iso", ",".join(str(v) for v in r["isovalues"]),
+                          "--threads", str(threads), "--reps", str(reps)],
+                         None if huge else {"KEYMESH_HUGE_PAGES": "0"}, huge_pages=huge)[0]
+            fe = next((f for f in rows if f.get("case") == r["case"] and f.get("tool") == "vtkFlyingEdges3D"
+                       and f.get("huge_pages") == huge), None)
+            c.update(bench="dense", case=r["case"], tool="contour_bench", huge_pages=huge,
+                     fe3d_median=fe["median"] if fe else None)
+            rows.append(c)
     return rows
 
 
