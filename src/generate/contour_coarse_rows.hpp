@@ -83,11 +83,16 @@ struct CoarseBits {
             k > 0 && cut[r - ny] ? far_row(r - ny, 2) : nullptr};
   }
 
-  // Coarse id of grid point i of row r (a coarse point).
-  std::uint32_t id(Id r, Id i) const {
-    const Id w = r * words_per_row + (i >> 6);
-    const std::uint64_t below = (std::uint64_t{1} << (i & 63)) - 1;
-    return first.data()[w] + static_cast<std::uint32_t>(std::popcount(points.data()[w] & below));
+  // ids[i] = the coarse id of grid point i of row r, for its coarse points
+  // (a row without any is left alone: no triangle has a corner there).
+  void row_ids(Id r, std::uint32_t* ids) const {
+    if (!live[r]) return;
+    const std::uint64_t* p = points.data() + r * words_per_row;
+    const std::uint32_t* f = first.data() + r * words_per_row;
+    for (Id q = 0; q < words_per_row; ++q) {
+      std::uint32_t id = f[q];
+      for (std::uint64_t w = p[q]; w; w &= w - 1) ids[64 * q + std::countr_zero(w)] = id++;
+    }
   }
 };
 
@@ -268,16 +273,17 @@ struct CoarseTriangleScratch {
 inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc,
                                    const CoarseBits& cb, Id fine_base, PointIndex* slots, CoarseTriangleScratch& sc) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
-  constexpr Id kRun = 16;  // voxel rows per task
-  const Id runs_per_layer = (s.ny - 1 + kRun - 1) / kRun, tasks = layers * runs_per_layer;
+  // The count pass's bricks (contour_rows.hpp), whose cube cases it kept.
+  const VoxelBricks bricks(s, 0, layers);
   sc.faces.reserve(static_cast<std::size_t>(rc.triangle_first.back() - fine_base));
   sc.face_count.resize(static_cast<std::size_t>(voxel_rows));
   sc.kept.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
   const CoarseVoxelTable& voxels = coarse_voxel_table();
   auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
-  parallel::for_each_dynamic(tasks, [&](Id task) {
-    const Id k = task / runs_per_layer;
-    const Id j_begin = (task % runs_per_layer) * kRun, j_end = std::min(s.ny - 1, j_begin + kRun);
+  parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
+    const Id j_begin = bricks.j_begin(brick), j_end = bricks.j_end(brick);
+    const std::uint8_t* cases = rc.brick_cases[brick].cases.get();
+    auto stored_case = [&](int, const CornerWords&) { return unsigned{*cases++}; };
     // Coarse ids by grid point of the rows (j, k), (j, k + 1) ("lo") and
     // (j + 1, k), (j + 1, k + 1) ("hi"), by corner bits z: each row filled
     // once as hi, then used again as lo by the next voxel row.
@@ -285,50 +291,44 @@ inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, c
     if (static_cast<Id>(id_scratch.size()) < 4 * s.nx) id_scratch.resize(static_cast<std::size_t>(4 * s.nx));
     std::uint32_t* lo[2] = {id_scratch.data(), id_scratch.data() + s.nx};
     std::uint32_t* hi[2] = {id_scratch.data() + 2 * s.nx, id_scratch.data() + 3 * s.nx};
-    auto fill = [&](std::uint32_t* ids, Id row) {
-      if (!cb.live[row]) return;  // no coarse point: no corner of a triangle
-      const std::uint64_t* points = cb.points.data() + row * cb.words_per_row;
-      const std::uint32_t* first = cb.first.data() + row * cb.words_per_row;
-      for (Id q = 0; q < cb.words_per_row; ++q) {
-        std::uint32_t id = first[q];
-        for (std::uint64_t w = points[q]; w; w &= w - 1) ids[64 * q + std::countr_zero(w)] = id++;
+    auto fill = [&](std::uint32_t* ids, Id row) { cb.row_ids(row, ids); };
+    for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k) {
+      fill(lo[0], k * s.ny + j_begin);
+      fill(lo[1], (k + 1) * s.ny + j_begin);
+      for (Id j = j_begin; j < j_end; ++j) {
+        fill(hi[0], k * s.ny + j + 1);
+        fill(hi[1], (k + 1) * s.ny + j + 1);
+        // The grid rows of the voxel row's corners, by corner bits y | z << 1.
+        const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
+        const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
+        const VoxelFarBits far_bits(cb, r);
+        const Id vr = k * (s.ny - 1) + j;
+        PointIndex* const begin = slots_of(vr);
+        PointIndex* o = begin;
+        FaceTriangle* const faces = sc.faces.data() + (rc.triangle_first[vr] - fine_base);
+        FaceTriangle* f = faces;
+        std::uint32_t written = 0;  // triangles of the row so far
+        for_each_cut_voxel(bits, s, j, k, stored_case, [&](Id i, unsigned cube_case) {
+          const CoarseVoxel v = voxels.at(cube_case, far_bits(i));
+          // Corner c's coarse id: grid point i + (c & 1) of row r[c >> 1].
+          auto id = [&](unsigned c) { return row_ids[c >> 1][i + (c & 1u)]; };
+          const int count = static_cast<int>(v >> kCoarseCountShift);
+          for (int t = 0; t < count; ++t) {
+            const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
+            o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
+            // Written always, kept when a face triangle (no branch).
+            const unsigned code = voxels.face_code[c];
+            *f = {written, static_cast<std::uint32_t>(i), static_cast<std::uint8_t>(code & 0x7fu)};
+            f += code >> 7;
+            o += 3;
+            ++written;
+          }
+        });
+        sc.face_count[vr] = static_cast<std::uint32_t>(f - faces);
+        sc.kept[vr] = written;
+        std::swap(lo[0], hi[0]);
+        std::swap(lo[1], hi[1]);
       }
-    };
-    fill(lo[0], k * s.ny + j_begin);
-    fill(lo[1], (k + 1) * s.ny + j_begin);
-    for (Id j = j_begin; j < j_end; ++j) {
-      fill(hi[0], k * s.ny + j + 1);
-      fill(hi[1], (k + 1) * s.ny + j + 1);
-      // The grid rows of the voxel row's corners, by corner bits y | z << 1.
-      const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
-      const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
-      const VoxelFarBits far_bits(cb, r);
-      const Id vr = k * (s.ny - 1) + j;
-      PointIndex* const begin = slots_of(vr);
-      PointIndex* o = begin;
-      FaceTriangle* const faces = sc.faces.data() + (rc.triangle_first[vr] - fine_base);
-      FaceTriangle* f = faces;
-      std::uint32_t written = 0;  // triangles of the row so far
-      for_each_cut_voxel(bits, s, j, k, [&](Id i, unsigned cube_case) {
-        const CoarseVoxel v = voxels.at(cube_case, far_bits(i));
-        // Corner c's coarse id: grid point i + (c & 1) of row r[c >> 1].
-        auto id = [&](unsigned c) { return row_ids[c >> 1][i + (c & 1u)]; };
-        const int count = static_cast<int>(v >> kCoarseCountShift);
-        for (int t = 0; t < count; ++t) {
-          const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
-          o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
-          // Written always, kept when a face triangle (no branch).
-          const unsigned code = voxels.face_code[c];
-          *f = {written, static_cast<std::uint32_t>(i), static_cast<std::uint8_t>(code & 0x7fu)};
-          f += code >> 7;
-          o += 3;
-          ++written;
-        }
-      });
-      sc.face_count[vr] = static_cast<std::uint32_t>(f - faces);
-      sc.kept[vr] = written;
-      std::swap(lo[0], hi[0]);
-      std::swap(lo[1], hi[1]);
     }
   }, 1);
 }
