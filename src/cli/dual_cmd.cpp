@@ -44,7 +44,7 @@ int run_dual(const DualCli& o, CommandRun& run) {
   r["input_points"] = m.num_points();
   r["input_cells"] = m.num_cells();
   generate::visit_fields(st, into(r));
-  return run.finish(r, PeakRss::Omit);
+  return run.finish(r, PeakRss::Include);
 }
 
 Register reg{make_cpu_command("dual", "the dual", add_dual_options, run_dual)};

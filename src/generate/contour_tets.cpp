@@ -5,13 +5,13 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <memory>
 #include <string>
 #include <tuple>
 #include <utility>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
@@ -241,8 +241,8 @@ std::vector<std::uint64_t> tet_soups(const UnstructuredGrid& tets, const Contour
   // memset; freed before the weld. (Kept across calls instead, as the voxel
   // contour keeps its bits, they cost their bytes in every later stage's
   // peak for no measurable gain: measured, ops_bench --op tetcontour.)
-  std::unique_ptr<std::uint8_t[]> inside(new std::uint8_t[static_cast<std::size_t>(tets.num_points())]);
-  std::unique_ptr<std::uint8_t[]> cases(new std::uint8_t[static_cast<std::size_t>(tets.num_cells())]);
+  const auto inside = uninitialized_array<std::uint8_t>(static_cast<std::size_t>(tets.num_points()));
+  const auto cases = uninitialized_array<std::uint8_t>(static_cast<std::size_t>(tets.num_cells()));
   tets.connectivity.visit([&](auto conn) {
     for (std::size_t k = 0; k < opt.isovalues.size(); ++k)
       tet_soup(conn.data(), tets.num_cells(), tets.num_points(), ep.P, ep.S, opt.isovalues[k], k, ep.ek, inside.get(),

@@ -12,6 +12,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/progress.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/mesh/cell_tables.hpp"
@@ -35,12 +36,11 @@ struct EdgeGroups {
 };
 
 template <class Position>
-EdgeGroups group_edges(const std::vector<std::uint64_t>& keys, int key_bits, SubdivideWeld weld, Position&& position) {
+EdgeGroups group_edges(const std::uint64_t* keys, Id n, int key_bits, SubdivideWeld weld, Position&& position) {
   keyreduce::WeldSpec<std::uint64_t> spec;
   spec.plan = weld == SubdivideWeld::KeyReduce ? keyreduce::WeldPlan::Sort : keyreduce::WeldPlan::ByPosition;
   spec.key_bits = key_bits;
-  auto g = keyreduce::weld(keys.data(), static_cast<Id>(keys.size()), spec,
-                           [&](Id i, float* xyz) { position(keys[i], xyz); });
+  auto g = keyreduce::weld(keys, n, spec, [&](Id i, float* xyz) { position(keys[i], xyz); });
   EdgeGroups out;
   out.edge_key = std::move(g.unique_keys);
   out.index_map = std::move(g.index_map);
@@ -75,7 +75,7 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
     throw InputError("subdivide --scheme bezier needs point normals (a 3-component \"Normals\" field; "
                      "contour with --normals average or gradient)");
   const PointIndex* C = m.connectivity.data();
-  std::vector<std::uint64_t> keys(static_cast<std::size_t>(3 * F));
+  auto keys = uninitialized_array<std::uint64_t>(static_cast<std::size_t>(3 * F));
   parallel::for_each(F, [&](Id t) {
     for (int e = 0; e < 3; ++e) keys[3 * t + e] = ek(C[3 * t + e], C[3 * t + (e + 1) % 3]);
   });
@@ -102,8 +102,9 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
     }
     xyz[0] = float(p.x), xyz[1] = float(p.y), xyz[2] = float(p.z);
   };
-  EdgeGroups g = group_edges(keys, ek.key_bits(), weld, [&](std::uint64_t k, float* xyz) { edge_point(k, xyz, nullptr); });
-  free_storage(keys);
+  EdgeGroups g = group_edges(keys.get(), 3 * F, ek.key_bits(), weld,
+                             [&](std::uint64_t k, float* xyz) { edge_point(k, xyz, nullptr); });
+  keys.reset();
   const Id E = static_cast<Id>(g.edge_key.size());
   check_points(V + E, "the surface");
 
@@ -151,7 +152,7 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
   const Id V = m.num_points(), T = m.num_cells();
   const EdgeKeys ek = EdgeKeys::for_points(V, "subdivide");
   using cells::kTetEdges;
-  std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * T));
+  auto keys = uninitialized_array<std::uint64_t>(static_cast<std::size_t>(6 * T));
   parallel::for_each(T, [&](Id t) {
     for (int e = 0; e < 6; ++e) keys[6 * t + e] = ek(m.connectivity[4 * t + kTetEdges[e][0]], m.connectivity[4 * t + kTetEdges[e][1]]);
   });
@@ -159,8 +160,8 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
     const auto [a, b] = ek.decode(key);
     for (int c = 0; c < 3; ++c) xyz[c] = 0.5f * (m.points[3 * a + c] + m.points[3 * b + c]);
   };
-  EdgeGroups g = group_edges(keys, ek.key_bits(), weld, midpoint);
-  free_storage(keys);
+  EdgeGroups g = group_edges(keys.get(), 6 * T, ek.key_bits(), weld, midpoint);
+  keys.reset();
   const Id E = static_cast<Id>(g.edge_key.size());
   check_points(V + E, "the grid");
 

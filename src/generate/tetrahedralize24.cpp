@@ -7,7 +7,7 @@
 
 #include "keymesh/mesh/fields.hpp"
 #include "keymesh/core/error.hpp"
-#include "keymesh/core/free_storage.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -32,7 +32,7 @@ struct FaceGroups {
 };
 
 template <class K, class Position>
-FaceGroups group_faces(const std::vector<K>& keys, bool dense, K key_range, int key_bits, bool vertex_weld,
+FaceGroups group_faces(const K* keys, Id n, bool dense, K key_range, int key_bits, bool vertex_weld,
                        Position&& position) {
   keyreduce::WeldSpec<K> spec;
   spec.plan = vertex_weld ? keyreduce::WeldPlan::ByPosition
@@ -43,7 +43,7 @@ FaceGroups group_faces(const std::vector<K>& keys, bool dense, K key_range, int 
   FaceGroups out;
   // The first pair of each group: a face centre is computed from the cell
   // that names it first, whichever plan grouped it.
-  auto g = keyreduce::weld(keys.data(), static_cast<Id>(keys.size()), spec, position, {nullptr, &out.first});
+  auto g = keyreduce::weld(keys, n, spec, position, {nullptr, &out.first});
   out.index_map = std::move(g.index_map);
   return out;
 }
@@ -132,7 +132,7 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
     return static_cast<std::uint64_t>((i + (c & 1)) + nx * (j + ((c >> 1) & 1)) + nxy * (k + ((c >> 2) & 1)));
   };
   progress::report("tetrahedralize 24: face keys", 0.1);
-  std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
+  auto keys = uninitialized_array<std::uint64_t>(static_cast<std::size_t>(6 * cells));
   parallel::for_each(cells, [&](Id v) {
     const std::uint64_t p0 = cell_corner(v, 0);
     const std::uint64_t step[3] = {1, std::uint64_t(nx), std::uint64_t(nxy)};
@@ -147,8 +147,9 @@ UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
     mean_position(corners.points.data(), ids, 4, xyz);
   };
   progress::report("tetrahedralize 24: weld face centres", 0.25);
-  const FaceGroups g = group_faces<std::uint64_t>(keys, true, std::uint64_t(3 * N), 0, vertex_weld, face_centre);
-  free_storage(keys);  // before the output is allocated
+  const FaceGroups g =
+      group_faces<std::uint64_t>(keys.get(), 6 * cells, true, std::uint64_t(3 * N), 0, vertex_weld, face_centre);
+  keys.reset();  // before the output is allocated
   progress::report("tetrahedralize 24: points", 0.5);
   return assemble24(corners.points, corners.point_fields, cells, cell_corner, g);
 }
@@ -164,7 +165,7 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
     throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " cells exceed the supported size");
   auto cell_corner = [&](Id v, int c) { return corner[v][c]; };
   const EdgeKeys ek = EdgeKeys::for_points(N, "tetrahedralize --scheme 24");
-  std::vector<std::uint64_t> keys(static_cast<std::size_t>(6 * cells));
+  auto keys = uninitialized_array<std::uint64_t>(static_cast<std::size_t>(6 * cells));
   parallel::for_each(cells, [&](Id c) {
     for (int f = 0; f < 6; ++f) {
       std::uint64_t cycle[4];
@@ -177,8 +178,9 @@ UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_wel
     face_ids(cell_corner, pair, ids);
     mean_position(hexes.points.data(), ids, 4, xyz);
   };
-  const FaceGroups g = group_faces<std::uint64_t>(keys, false, 0, ek.key_bits(), vertex_weld, face_centre);
-  free_storage(keys);  // before the output is allocated
+  const FaceGroups g =
+      group_faces<std::uint64_t>(keys.get(), 6 * cells, false, 0, ek.key_bits(), vertex_weld, face_centre);
+  keys.reset();  // before the output is allocated
   UnstructuredGrid out = assemble24(hexes.points, hexes.point_fields, cells, cell_corner, g);
   out.cell_fields = repeat_cell_fields(hexes.cell_fields, cells, 24);
   return out;

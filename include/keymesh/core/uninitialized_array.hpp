@@ -1,0 +1,20 @@
+#pragma once
+// Scratch whose every element a parallel pass writes before any is read
+// (the keys of a map step): left unwritten at allocation, so no serial zero
+// fill touches its pages before the threads do, and huge pages asked for,
+// as parallel::resize_fresh does for outputs.
+#include <cstddef>
+#include <memory>
+
+#include "keymesh/core/huge_pages.hpp"
+
+namespace keymesh {
+
+template <class T>
+std::unique_ptr<T[]> uninitialized_array(std::size_t n) {
+  auto a = std::make_unique_for_overwrite<T[]>(n);
+  advise_huge_pages(a.get(), n * sizeof(T));
+  return a;
+}
+
+}  // namespace keymesh
