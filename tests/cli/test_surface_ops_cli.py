@@ -32,6 +32,9 @@ def dual_counts():
     run("dual", src, "-o", out, "-q", "--report", out + ".json")
     r = report(out + ".json")
     assert r["cells"] == r["input_points"] and r["points"] == r["input_cells"], r
+    # The process's peak is reported (issue 17); it holds at least the input and the output.
+    mesh_mib = (os.path.getsize(src) + os.path.getsize(out)) / 2 ** 20
+    assert r["peak_rss_mib"] > 0.5 * mesh_mib, (r["peak_rss_mib"], mesh_mib)
     run("check", out, "--expect-closed", "-q")
     run("dual", src, "-o", os.path.join(D, "d.stl"), expect=2)
 
