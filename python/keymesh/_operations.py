@@ -106,7 +106,9 @@ def coarsen(mesh: Any, spacing: Sequence[float] = (1.0, 1.0, 1.0), origin: Seque
     separate step): every point is keyed by the lattice point
     ``origin + i * spacing`` nearest to it, KEY-REDUCE merges the points that
     share a key (positions and fields averaged), triangles left with fewer
-    than three points are dropped and folds cancel.
+    than three points are dropped and folds cancel; a point left with more
+    than one fan of triangles is split into one point per fan (copies at
+    its position), and an edge with two triangles each way into two edges.
 
     For a mesh contoured on that lattice this is the key ``contour
     --coarsen`` uses (the edge's end point nearest to the crossing).

@@ -1,14 +1,16 @@
 #include "keymesh/generate/split_nonmanifold.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
+#include "keymesh/parallel/scan.hpp"
 
 namespace keymesh::generate {
 
@@ -24,31 +26,34 @@ std::uint64_t edge_key(PointIndex a, PointIndex b) {
   return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
 }
 
-// The common point, checked without building its fans: every edge at v has
-// one triangle leaving and one arriving (walking from a leaving edge to the
-// corner whose arriving edge it is always finds exactly one), and the walk
-// visits all d corners before it returns. Anything else goes to FanRule.
-bool one_closed_fan(const PointIndex* C, PointIndex v, const std::uint32_t* list, Id d) {
-  constexpr Id kMax = 64;
-  if (d < 3 || d > kMax) return false;
-  PointIndex next[kMax], prev[kMax];
-  for (Id j = 0; j < d; ++j) {
-    next[j] = C[next_corner(list[j])];
-    prev[j] = C[prev_corner(list[j])];
-    if (next[j] == v || prev[j] == v) return false;
-  }
+// The common point, checked without building its fans: walking from each
+// corner's leaving edge to the corner whose arriving edge it is visits all
+// d corners before it returns. Taking the first such corner is enough: a
+// second corner with the same arriving edge would never be reached, so a
+// full walk proves every edge at v has one triangle leaving and one
+// arriving. The order of `list` does not matter. Anything else goes to
+// FanRule.
+bool one_closed_fan(PointIndex v, const PointIndex* next, const PointIndex* prev, Id d) {
+  if (d < 3) return false;
   Id j = 0, steps = 0;
   do {
-    Id found = -1;
-    for (Id i = 0; i < d; ++i)
-      if (prev[i] == next[j]) {
-        if (found >= 0) return false;
-        found = i;
-      }
-    if (found < 0) return false;
-    j = found;
+    const PointIndex w = next[j];
+    if (w == v) return false;
+    Id i = 0;
+    while (i < d && prev[i] != w) ++i;
+    if (i == d) return false;
+    j = i;
   } while (++steps < d && j != 0);
   return j == 0 && steps == d;
+}
+
+// The same for corners given by index (the few points looked at again).
+bool one_closed_fan(const PointIndex* C, PointIndex v, const std::uint32_t* list, Id d) {
+  constexpr Id kMax = 64;
+  if (d > kMax) return false;
+  PointIndex next[kMax], prev[kMax];
+  for (Id j = 0; j < d; ++j) next[j] = C[next_corner(list[j])], prev[j] = C[prev_corner(list[j])];
+  return one_closed_fan(v, next, prev, d);
 }
 
 // A point's fans under the pairing rule (see the header): its corners
@@ -69,6 +74,10 @@ struct FanRule {
       if (C[leaving ? next_corner(list[j]) : prev_corner(list[j])] == w) out.push_back(static_cast<std::uint32_t>(j));
   }
 
+  // Scratch, kept between calls (the rule runs on one thread).
+  mutable std::vector<std::uint64_t> ent;
+  mutable std::vector<std::uint32_t> leaving, arriving;
+
   std::uint32_t rotation_of(std::uint64_t key) const {
     if (rotation.empty()) return 0;
     const auto it = std::lower_bound(multi.begin(), multi.end(), key);
@@ -79,8 +88,7 @@ struct FanRule {
   // many triangles each way and at least two of each.
   void operator()(PointIndex v, const std::uint32_t* list, Id d, std::vector<std::uint32_t>& labels,
                   std::vector<std::uint64_t>* found) const {
-    std::vector<std::uint64_t> ent;  // other end << 32 | arriving << 31 | local index
-    ent.reserve(static_cast<std::size_t>(2 * d));
+    ent.clear();  // other end << 32 | arriving << 31 | local index
     for (Id j = 0; j < d; ++j) {
       ent.push_back((std::uint64_t{C[next_corner(list[j])]} << 32) | static_cast<std::uint64_t>(j));
       ent.push_back((std::uint64_t{C[prev_corner(list[j])]} << 32) | (std::uint64_t{1} << 31) |
@@ -97,7 +105,6 @@ struct FanRule {
       a = find(a), b = find(b);
       if (a != b) labels[std::max(a, b)] = std::min(a, b);  // the root is the smallest index
     };
-    std::vector<std::uint32_t> leaving, arriving;
     for (std::size_t g = 0; g < ent.size();) {
       const PointIndex w = static_cast<PointIndex>(ent[g] >> 32);
       leaving.clear(), arriving.clear();
@@ -144,16 +151,53 @@ struct Flagged {
   }
 };
 
-Flagged flag_points(const PointIndex* C, const keyreduce::Groups<PointIndex>& g) {
-  const Id groups = g.num_groups();
-  std::vector<std::uint8_t> odd(static_cast<std::size_t>(groups), 0);
-  parallel::for_each(groups, [&](Id k) {
-    const Id b = g.offsets[k];
-    odd[k] = one_closed_fan(C, g.unique_keys[k], g.order.data() + b, g.offsets[k + 1] - b) ? 0 : 1;
-  }, 1024);
+// Every point's corners (counted, then placed: a counting sort by point id,
+// the order within a point left to the threads), each point checked by
+// one_closed_fan; the flagged points' corners sorted, so that all after
+// this is deterministic.
+Flagged flag_points(const PointIndex* C, Id corners, Id n) {
+  std::vector<std::uint32_t> first;
+  parallel::resize_fresh(first, static_cast<std::size_t>(n + 1));
+  parallel::for_each(n + 1, [&](Id p) { first[p] = 0; });
+  parallel::for_each(corners, [&](Id c) {
+    std::atomic_ref<std::uint32_t>(first[C[c]]).fetch_add(1, std::memory_order_relaxed);
+  }, 1 << 14);
+  parallel::exclusive_scan(first.data(), first.data(), n + 1);
+  // Placed triangle by triangle: each corner's two other points, read
+  // here in order, so that the check reads each point's slots only.
+  std::vector<std::uint32_t> list, cursor(first.begin(), first.end() - 1);
+  std::vector<PointIndex> next, prev;
+  parallel::resize_fresh(list, static_cast<std::size_t>(corners));
+  parallel::resize_fresh(next, static_cast<std::size_t>(corners));
+  parallel::resize_fresh(prev, static_cast<std::size_t>(corners));
+  parallel::for_each(corners / 3, [&](Id t) {
+    const PointIndex p[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t at = std::atomic_ref<std::uint32_t>(cursor[p[k]]).fetch_add(1, std::memory_order_relaxed);
+      list[at] = static_cast<std::uint32_t>(3 * t + k);
+      next[at] = p[k == 2 ? 0 : k + 1];
+      prev[at] = p[k == 0 ? 2 : k - 1];
+    }
+  }, 1 << 12);
+  cursor = {};
+  // (each point's slots hold its corners in the threads' order: the check
+  // does not depend on it)
+  const int chunks = parallel::chunk_count(n, 1 << 14);
+  std::vector<std::vector<PointIndex>> odd(static_cast<std::size_t>(std::max(chunks, 1)));
+  parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int chunk) {
+    for (Id p = b; p < e; ++p) {
+      const Id d = first[p + 1] - first[p];
+      if (d > 0 && !one_closed_fan(static_cast<PointIndex>(p), next.data() + first[p], prev.data() + first[p], d))
+        odd[chunk].push_back(static_cast<PointIndex>(p));
+    }
+  });
   Flagged f;
-  for (Id k = 0; k < groups; ++k)
-    if (odd[k]) f.add(g.unique_keys[k], g.order.data() + g.offsets[k], g.count(k));
+  for (const auto& points : odd)
+    for (PointIndex p : points) {
+      std::uint32_t* l = list.data() + first[p];
+      std::sort(l, l + (first[p + 1] - first[p]));
+      f.add(p, l, first[p + 1] - first[p]);
+    }
   return f;
 }
 
@@ -176,44 +220,68 @@ Flagged reflag(const PointIndex* C, const Flagged& f) {
   return out;
 }
 
-// Whether multi-edge e's pairs join the same fan at both ends twice.
-bool joins_twice(const PointIndex* C, const FanRule& fans, const Flagged& f, std::uint64_t key) {
-  const PointIndex lo = static_cast<PointIndex>(key >> 32), hi = static_cast<PointIndex>(key & 0xffffffffu);
-  const std::size_t a = f.at(lo), b = f.at(hi);
-  std::vector<std::uint32_t> lab_lo, lab_hi, up_lo, up_hi;
-  fans(lo, f.list(a), f.degree(a), lab_lo, nullptr);
-  fans(hi, f.list(b), f.degree(b), lab_hi, nullptr);
-  FanRule::half_edges(C, f.list(a), f.degree(a), hi, true, up_lo);
-  FanRule::half_edges(C, f.list(b), f.degree(b), lo, false, up_hi);
-  std::vector<std::uint64_t> ends(up_lo.size());
-  for (std::size_t i = 0; i < up_lo.size(); ++i) ends[i] = (std::uint64_t{lab_lo[up_lo[i]]} << 32) | lab_hi[up_hi[i]];
-  std::sort(ends.begin(), ends.end());
-  return std::adjacent_find(ends.begin(), ends.end()) != ends.end();
-}
+// Every flagged point's fans under the current rotations, recomputed for
+// the two ends of an edge whose rotation changes.
+struct FanCache {
+  const FanRule& fans;
+  const Flagged& f;
+  std::vector<std::vector<std::uint32_t>> labels;
+
+  FanCache(const FanRule& rule, const Flagged& flagged, std::vector<std::uint64_t>* found)
+      : fans(rule), f(flagged), labels(flagged.size()) {
+    for (std::size_t k = 0; k < f.size(); ++k) fans(f.point[k], f.list(k), f.degree(k), labels[k], found);
+  }
+  void refresh(std::uint64_t key) {
+    for (PointIndex p : {static_cast<PointIndex>(key >> 32), static_cast<PointIndex>(key & 0xffffffffu)}) {
+      const std::size_t k = f.at(p);
+      fans(p, f.list(k), f.degree(k), labels[k], nullptr);
+    }
+  }
+
+  // Whether the edge's pairs join the same fan at both ends twice.
+  bool joins_twice(std::uint64_t key) {
+    const PointIndex lo = static_cast<PointIndex>(key >> 32), hi = static_cast<PointIndex>(key & 0xffffffffu);
+    const std::size_t a = f.at(lo), b = f.at(hi);
+    FanRule::half_edges(fans.C, f.list(a), f.degree(a), hi, true, up_lo);
+    FanRule::half_edges(fans.C, f.list(b), f.degree(b), lo, false, up_hi);
+    ends.resize(up_lo.size());
+    for (std::size_t i = 0; i < up_lo.size(); ++i)
+      ends[i] = (std::uint64_t{labels[a][up_lo[i]]} << 32) | labels[b][up_hi[i]];
+    std::sort(ends.begin(), ends.end());
+    return std::adjacent_find(ends.begin(), ends.end()) != ends.end();
+  }
+
+ private:
+  std::vector<std::uint32_t> up_lo, up_hi;
+  std::vector<std::uint64_t> ends;
+};
 
 // Sweeps over the multi-edges in key order: a conflicted edge takes the
 // first rotation that separates its pairs. Returns the edges left joined.
-Id rotate_pairings(const PointIndex* C, const FanRule& fans, const Flagged& f, std::vector<std::uint32_t>& rotation) {
-  const std::vector<std::uint64_t>& multi = fans.multi;
+Id rotate_pairings(FanCache& cache, std::vector<std::uint32_t>& rotation) {
+  const std::vector<std::uint64_t>& multi = cache.fans.multi;
   std::vector<std::uint32_t> up;
   for (int sweep = 0; sweep < 4; ++sweep) {
     bool changed = false;
     for (std::size_t e = 0; e < multi.size(); ++e) {
-      if (!joins_twice(C, fans, f, multi[e])) continue;
-      const std::size_t a = f.at(static_cast<PointIndex>(multi[e] >> 32));
-      FanRule::half_edges(C, f.list(a), f.degree(a), static_cast<PointIndex>(multi[e] & 0xffffffffu), true, up);
+      if (!cache.joins_twice(multi[e])) continue;
+      const std::size_t a = cache.f.at(static_cast<PointIndex>(multi[e] >> 32));
+      FanRule::half_edges(cache.fans.C, cache.f.list(a), cache.f.degree(a),
+                          static_cast<PointIndex>(multi[e] & 0xffffffffu), true, up);
       const std::uint32_t pairs = static_cast<std::uint32_t>(up.size()), was = rotation[e];
       for (std::uint32_t r = 1; r < pairs; ++r) {
         rotation[e] = (was + r) % pairs;
-        if (!joins_twice(C, fans, f, multi[e])) break;
+        cache.refresh(multi[e]);
+        if (!cache.joins_twice(multi[e])) break;
         rotation[e] = was;
+        cache.refresh(multi[e]);
       }
       changed = changed || rotation[e] != was;
     }
     if (!changed) break;
   }
   Id left = 0;
-  for (std::uint64_t key : multi) left += joins_twice(C, fans, f, key) ? 1 : 0;
+  for (std::uint64_t key : multi) left += cache.joins_twice(key) ? 1 : 0;
   return left;
 }
 
@@ -224,16 +292,15 @@ Id rotate_pairings(const PointIndex* C, const FanRule& fans, const Flagged& f, s
 Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& source) {
   std::vector<std::uint64_t> multi;
   std::vector<std::uint32_t> rotation;
-  const FanRule fans{C, multi, rotation};
-  std::vector<std::uint32_t> labels;
-  for (std::size_t k = 0; k < f.size(); ++k) fans(f.point[k], f.list(k), f.degree(k), labels, &multi);
+  const FanRule fans{C, multi, rotation, {}, {}, {}};
+  FanCache cache(fans, f, &multi);
   std::sort(multi.begin(), multi.end());
   rotation.assign(multi.size(), 0);
-  const Id left = rotate_pairings(C, fans, f, rotation);
+  const Id left = rotate_pairings(cache, rotation);
   std::vector<std::pair<std::uint32_t, PointIndex>> moves;  // corner, new id
   std::vector<PointIndex> id_of_root;
   for (std::size_t k = 0; k < f.size(); ++k) {
-    fans(f.point[k], f.list(k), f.degree(k), labels, nullptr);
+    const std::vector<std::uint32_t>& labels = cache.labels[k];
     id_of_root.assign(labels.size(), f.point[k]);
     const PointIndex original = Id{f.point[k]} < n ? f.point[k] : source[f.point[k] - n];
     for (std::size_t j = 1; j < labels.size(); ++j)
@@ -259,10 +326,7 @@ NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
   if (corners > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("split_nonmanifold: more than 2^32 - 1 corners");
   PointIndex* C = mesh.connectivity.data();
-  // The corners around each point: KEY-REDUCE over the corners keyed by
-  // point id (dense plan), each group's corners in increasing index.
-  Flagged f = flag_points(C, keyreduce::partition_dense(C, corners, static_cast<PointIndex>(n),
-                                                        keyreduce::Order::Build));
+  Flagged f = flag_points(C, corners, n);
   std::vector<PointIndex> source;  // the original point each new id copies
   NonmanifoldSplit result;
   // A split renames the corners around the points it splits, which can let
