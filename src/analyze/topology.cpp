@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 
@@ -349,7 +350,7 @@ TopologyReport check_topology(const SurfaceMesh& mesh) {
   std::vector<std::uint32_t> order;
   corners_by_point(mesh, start, order);
   count_fans(mesh, FanPass{mesh, corner_cell, degenerate}, start, order, r);
-  order = {};
+  free_storage(order);
   for (std::uint8_t f : degenerate) r.degenerate_cells += f;
   r.components = count_components(mesh, start);
   r.duplicate_points = count_duplicate_points(mesh.points.data(), n);

@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/mesh/normals.hpp"
@@ -249,7 +250,7 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   const bool average = options.normals == generate::ContourNormals::Average && !options.coarsen;
   if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
   piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
-  slab.bytes = {};
+  free_storage(slab.bytes);
   // Averaged normals, KEY-REDUCE's merge over this rank's triangles first.
   std::vector<Vec3f> normal_sums;
   if (average) normal_sums = point_normal_sums(piece.mesh);

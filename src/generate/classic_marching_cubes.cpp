@@ -6,6 +6,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -212,8 +213,8 @@ struct ClassicRun {
   void weld(std::vector<std::uint64_t> keys) {
     const std::uint64_t key_range = 3 * static_cast<std::uint64_t>(g.px * g.py * g.pz);
     groups = keyreduce::partition_dense(keys.data(), corners(), key_range, keyreduce::Order::Build);
-    keys = {};
-    above = {};
+    free_storage(keys);
+    free_storage(above);
     const Id points = groups.num_groups();
     if (points > static_cast<Id>(std::numeric_limits<std::int32_t>::max()))
       throw LimitError("marching cubes: " + std::to_string(points) + " points exceed int32 face indices");

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -186,7 +187,7 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
     all.append(m, slab_keys, slab_nearest);
     ++ss.slabs;
   }
-  slab.bytes = {};
+  free_storage(slab.bytes);
   auto t0 = Clock::now();
   std::vector<std::uint64_t> nearest;
   SurfaceMesh mesh = all.merge(nearest);

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -171,7 +172,7 @@ LabelSurface discrete_marching_cubes(const LabelVolume& vol, bool per_label_surf
     for (std::size_t s = 0; s < n; ++s) {
       keys.insert(keys.end(), surfaces[s].corner_keys.begin(), surfaces[s].corner_keys.end());
       triangle_label.insert(triangle_label.end(), surfaces[s].corner_keys.size() / 3, vol.selected[s]);
-      surfaces[s].corner_keys = {};
+      free_storage(surfaces[s].corner_keys);
     }
     weld_and_append(vol, keys, triangle_label, out);
     for (LabelIndex l : triangle_label) label_field.push_back(static_cast<float>(vol.values[l]));

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -186,7 +187,7 @@ std::vector<std::byte> LabelSlabs::count_labels() {
     detail::allocate_window(m.vol, f + 1, planes.dims[2]);
     detail::map_planes(m.vol, planes, f, &m.counts);
   }
-  m.vol.index = {};
+  free_storage(m.vol.index);
   m.st.scan += seconds_since(t0);
   return counts_bytes(m.counts);
 }
@@ -227,7 +228,7 @@ void LabelSlabs::generate() {
     if (m.options.method == LabelMethod::DiscreteMarchingCubes) m.st.generate += seconds_since(t0);
     ++m.ss.slabs;
   }
-  m.vol.index = {};
+  free_storage(m.vol.index);
 }
 
 std::vector<std::byte> LabelSlabs::pieces_bytes() const {

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/types.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
@@ -50,7 +51,7 @@ Groups<K> weld(const K* keys, Id n, const WeldSpec<K>& spec, Position&& position
     std::vector<float> xyz(static_cast<std::size_t>(3 * n));
     parallel::for_each(n, [&](Id i) { position(i, &xyz[3 * i]); });
     weld::WeldResult w = weld::vertex_weld(xyz.data(), n);
-    xyz = {};
+    free_storage(xyz);
     Groups<K> groups;
     groups.index_map = std::move(w.index_map);
     groups.unique_keys.resize(w.first.size());
