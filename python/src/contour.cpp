@@ -20,6 +20,7 @@
 #include "keymesh/generate/option_names.hpp"
 #include "keymesh/generate/report_fields.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/fresh_memory.hpp"
 
 namespace keymesh::python {
 
@@ -28,18 +29,47 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Mirrors a mesh contoured over the reversed axes back: x <-> z.
-void swap_x_z(SurfaceMesh& mesh) {
-  float* p = mesh.points.data();
-  parallel::for_each(mesh.num_points(), [p](Id i) { std::swap(p[3 * i], p[3 * i + 2]); });
-  for (Field& f : mesh.point_fields) {
-    if (f.components != 3) continue;
-    float* v = f.values.data();
-    parallel::for_each(mesh.num_points(), [v](Id i) { std::swap(v[3 * i], v[3 * i + 2]); });
-  }
-  PointIndex* c = mesh.connectivity.data();
-  parallel::for_each(mesh.num_cells(), [c](Id t) { std::swap(c[3 * t + 1], c[3 * t + 2]); });
+// Mirrors n points (or 3-vectors) and m triangles contoured over the
+// reversed axes back: x <-> z, and two corners of every triangle swapped so
+// that it still faces lower values.
+void swap_x_z(float* p, Id n) {
+  parallel::for_each(n, [p](Id i) { std::swap(p[3 * i], p[3 * i + 2]); });
 }
+void swap_corners(PointIndex* c, Id m) {
+  parallel::for_each(m, [c](Id t) { std::swap(c[3 * t + 1], c[3 * t + 2]); });
+}
+void swap_x_z(SurfaceMesh& mesh) {
+  swap_x_z(mesh.points.data(), mesh.num_points());
+  for (Field& f : mesh.point_fields)
+    if (f.components == 3) swap_x_z(f.values.data(), mesh.num_points());
+  swap_corners(mesh.connectivity.data(), mesh.num_cells());
+}
+
+// The output of a contour with positions and triangles (and the scalar)
+// only, in arrays the module allocates itself (ContourOptions::
+// output_arrays): uninitialised until the contour writes them, where a
+// SurfaceMesh's vectors are zero-filled first, in one thread.
+struct OwnArrays {
+  Id points = 0, triangles = 0;
+  std::unique_ptr<float[]> xyz, scalars;
+  std::unique_ptr<PointIndex[]> connectivity;
+
+  generate::ContourArrays allocate(Id n, Id m, bool with_scalars) {
+    points = n, triangles = m;
+    xyz = parallel::fresh_array<float>(static_cast<std::size_t>(3 * n));
+    connectivity = parallel::fresh_array<PointIndex>(static_cast<std::size_t>(3 * m));
+    if (with_scalars) scalars = parallel::fresh_array<float>(static_cast<std::size_t>(n));
+    return {xyz.get(), connectivity.get(), scalars.get()};
+  }
+
+  // (points, cells, None, point_data), as mesh_to_python gives them.
+  py::tuple to_python(const std::string& scalar_name) {
+    py::dict point_data;
+    if (scalars) point_data[py::str(scalar_name)] = adopt(std::move(scalars), {points});
+    py::array p = adopt(std::move(xyz), {points, 3});
+    return py::make_tuple(p, adopt(std::move(connectivity), {triangles, 3}), py::none(), point_data);
+  }
+};
 
 // The grid contour reads: a Volume's own, or a view of a numpy array's samples.
 const ImageGrid& contour_grid(const py::object& volume, const py::object& spacing, const py::object& origin,
@@ -87,6 +117,13 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   opt.scalars = scalars;
   ArrayVolume view;  // keeps a numpy array's samples alive while the GIL is released
   const ImageGrid& grid = contour_grid(volume, spacing, origin, view);
+  // Positions and triangles (and the scalar) only: written into the
+  // module's own arrays, handed to numpy as they are.
+  OwnArrays own;
+  const bool own_arrays = opt.weld == generate::ContourWeld::KeyReduce &&
+                          opt.normals == generate::ContourNormals::None && !coarsen && !curvature;
+  if (own_arrays)
+    opt.output_arrays = [&own, &opt](Id n, Id m) { return own.allocate(n, m, opt.scalars); };
   SurfaceMesh mesh;
   generate::ContourStats stats;
   double contour_s = 0, mirror_s = 0;
@@ -96,12 +133,17 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
     mesh = generate::contour(grid, opt, &stats);
     contour_s = seconds_since(t0);
     t0 = Clock::now();
-    if (view.reversed) swap_x_z(mesh);
+    if (view.reversed && own_arrays) {
+      swap_x_z(own.xyz.get(), own.points);
+      swap_corners(own.connectivity.get(), own.triangles);
+    } else if (view.reversed) {
+      swap_x_z(mesh);
+    }
     mirror_s = seconds_since(t0);
     progress::report("contour", 1.0);
   });
   py::dict info = contour_info(stats, contour_s, mirror_s);
-  return py::make_tuple(mesh_to_python(std::move(mesh)), info);
+  return py::make_tuple(own_arrays ? own.to_python(grid.name) : mesh_to_python(std::move(mesh)), info);
 }
 
 }  // namespace

@@ -443,6 +443,31 @@ struct GridLines {
   }
 };
 
+// The structured plan's output arrays, for `points` points and `triangles`
+// triangles, and the writer filling them; `connectivity` is set to the
+// triangles' array. The caller's (ContourOptions::output_arrays: positions
+// and the scalar only, as contour() checked), or the mesh's: pages faulted
+// in by the threads, then zero-filled (std::vector's resize) side by side.
+template <class T>
+PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, const ImageGrid& grid,
+                                  const EdgeInterpolator<T>& interp, const GridShape& s, const ContourOptions& opt,
+                                  std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys,
+                                  PointIndex*& connectivity) {
+  if (opt.output_arrays) {
+    const ContourArrays out = opt.output_arrays(points, triangles);
+    connectivity = out.connectivity;
+    PointWriter<T> w{interp, s, {}, 0, 0, 0, 0};
+    w.out.xyz = out.points;
+    if (opt.scalars) w.out.scalar = out.scalars;
+    return w;
+  }
+  parallel::FreshArrays arrays;
+  connectivity = arrays.add(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
+  PointWriter<T> w = prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true, &arrays);
+  arrays.run();
+  return w;
+}
+
 // The structured plan (contour_rows.hpp): classify every isovalue, count and
 // scan rows, then write points and triangles at their final ids. No soup.
 template <class T>
@@ -498,21 +523,17 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
     return mesh;
   }
   auto t0 = Clock::now();
-  // The output arrays: pages faulted in by the threads, then zero-filled
-  // (std::vector's resize) side by side.
-  parallel::FreshArrays arrays;
-  arrays.add(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
   progress::report("points", 0.5);
+  PointIndex* connectivity = nullptr;
   const PointWriter<T> write =
-      prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true, &arrays);
-  arrays.run();
+      structured_outputs(mesh, points, triangles, grid, interp, s, opt, point_keys, nearest_keys, connectivity);
   // Triangles and points in one pass over the rows (st.generate holds both).
   // Positions, with or without the scalar (the usual calls), get a writer
   // of their own, inlined into the pass: position() by grid lines, and
   // PointWriter's scalar(), so the same bytes.
   auto pass = [&](auto&& write_point) {
     for (Id iso = 0; iso < n_iso; ++iso)
-      write_rows(bits[iso], s, kb, ke, rows[iso], mesh.connectivity.data(), [&](Id id, Id i, Id j, Id k, int axis) {
+      write_rows(bits[iso], s, kb, ke, rows[iso], connectivity, [&](Id id, Id i, Id j, Id k, int axis) {
         write_point(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
       });
   };
@@ -633,6 +654,11 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
                      std::to_string(options.ghost_above) + " above) need a slab of at least two other planes");
   if ((options.ghost_below || options.ghost_above) && options.coarsen)
     throw InputError("contour: coarsening a slab with ghost planes is not supported");
+  if (options.output_arrays &&
+      (options.weld != ContourWeld::KeyReduce || options.normals != ContourNormals::None || options.curvature ||
+       options.coarsen || point_keys || nearest_keys))
+    throw InputError("contour: output arrays are written by the structured plan (weld keyreduce) with no "
+                     "normals, curvature, coarsening or keys");
   if ((point_keys || nearest_keys) && options.coarsen)
     throw InputError("contour: coarsened points have no edge keys (a slab's fine points and their nearest grid "
                      "points are merged, then coarsened, by the caller)");

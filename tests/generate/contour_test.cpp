@@ -377,6 +377,55 @@ TEST(Contour, StructuredPlanOnSparseSpikesEqualsSortPlan) {
   parallel::set_thread_count(0);
 }
 
+// ContourOptions::output_arrays: the caller's arrays get every byte the
+// mesh's vectors get (arrays filled with NaN and ~0 first, so an element
+// left unwritten shows), and the mesh returned holds none of them; options
+// the arrays do not cover are refused.
+TEST(Contour, OutputArraysGetTheBytesOfTheMeshsVectors) {
+  ImageGrid g;
+  g.allocate({37, 29, 23}, ScalarType::Float32);
+  auto* v = static_cast<float*>(g.data());
+  std::mt19937 rng(3);
+  for (Id p = 0; p < g.num_points(); ++p) v[p] = std::uniform_real_distribution<float>(0, 1)(rng);
+  g.spacing = {0.5, 1.25, 2.0};
+  g.origin = {-3, 1, 7};
+  for (bool scalars : {true, false})
+    for (int threads : {1, 2}) {
+      parallel::set_thread_count(threads);
+      ContourOptions opt;
+      opt.isovalues = {0.3, 0.62};
+      opt.scalars = scalars;
+      const SurfaceMesh ref = generate::contour(g, opt);
+      std::vector<float> xyz, scalar;
+      std::vector<PointIndex> ids;
+      opt.output_arrays = [&](Id n, Id m) {
+        xyz.assign(static_cast<std::size_t>(3 * n), std::numeric_limits<float>::quiet_NaN());
+        scalar.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::quiet_NaN());
+        ids.assign(static_cast<std::size_t>(3 * m), ~PointIndex{0});
+        return generate::ContourArrays{xyz.data(), ids.data(), scalars ? scalar.data() : nullptr};
+      };
+      const SurfaceMesh out = generate::contour(g, opt);
+      EXPECT_TRUE(out.points.empty() && out.connectivity.empty() && out.point_fields.empty());
+      EXPECT_EQ(xyz, ref.points) << scalars << threads;
+      EXPECT_EQ(ids, ref.connectivity) << scalars << threads;
+      if (scalars) {
+        ASSERT_EQ(ref.point_fields.size(), 1u);
+        EXPECT_EQ(scalar, ref.point_fields[0].values) << threads;
+      }
+      auto refused = [&](auto change) {
+        ContourOptions bad = opt;
+        change(bad);
+        EXPECT_THROW(generate::contour(g, bad), InputError);
+      };
+      refused([](ContourOptions& o) { o.coarsen = true; });
+      refused([](ContourOptions& o) { o.curvature = true; });
+      refused([](ContourOptions& o) { o.normals = ContourNormals::Gradient; });
+      refused([](ContourOptions& o) { o.normals = ContourNormals::Average; });
+      refused([](ContourOptions& o) { o.weld = ContourWeld::KeyReduceSort; });
+    }
+  parallel::set_thread_count(0);
+}
+
 TEST(Contour, StructuredPlanEqualsSortPlanOnNoise) {
   std::mt19937 rng(11);
   for (const std::array<Id, 3> dims : {std::array<Id, 3>{2, 2, 2}, {63, 5, 4}, {64, 6, 5}, {65, 7, 6}, {129, 4, 9},

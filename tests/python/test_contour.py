@@ -160,3 +160,30 @@ def test_scalars_switch():
     vol = keymesh.Volume(f, name="distance")
     assert set(keymesh.contour(vol, ISO, normals="none").point_data) == {"distance"}
     assert keymesh.contour(vol, ISO, normals="none", scalars=False).point_data == {}
+
+
+def test_positions_only_are_written_into_the_modules_own_arrays():
+    """normals="none" without coarsening or curvature: the structured plan
+    writes into arrays the module allocates (no zero-fill) and hands to
+    numpy; the same bytes as the sort plan's mesh, in C order (mirrored
+    back) and Fortran order, with and without scalars, and the arrays own
+    their memory."""
+    f = smooth_random_field().astype(np.float32)
+    for layout in (np.ascontiguousarray(f), np.asfortranarray(f)):
+        for scalars in (True, False):
+            own = keymesh.contour(layout, [0.0123, 0.3], normals="none", scalars=scalars)
+            ref = keymesh.contour(layout, [0.0123, 0.3], normals="none", scalars=scalars, weld="keyreduce-sort")
+            assert own.points.dtype == np.float32 and own.cells.dtype == np.uint32
+            assert own.points.shape == ref.points.shape and own.cells.shape == ref.cells.shape
+            assert np.array_equal(own.points, ref.points) and np.array_equal(own.cells, ref.cells)
+            assert own.points.flags.writeable and own.cells.flags.c_contiguous
+            if scalars:
+                assert np.array_equal(own.point_data["scalars"], ref.point_data["scalars"])
+            else:
+                assert own.point_data == {}
+    cells = keymesh.contour(f, 0.0123, normals="none").cells
+    import gc
+    gc.collect()
+    assert cells.max() > 0 and cells.base is not None
+    empty = keymesh.contour(np.zeros((4, 5, 6), np.float32), 0.5, normals="none")
+    assert empty.points.shape == (0, 3) and empty.cells.shape == (0, 3)

@@ -20,6 +20,7 @@
 //  - output is bit-identical for any thread count.
 //  - ContourWeld::VertexWeld welds the same triangle soup by coordinates instead
 //    (the paper's baseline); its mesh equals the KEY-REDUCE mesh up to point order.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,14 @@ enum class ContourWeld { KeyReduce, KeyReduceSort, VertexWeld };
 // byte-identical output; what the GPU does not support yet is refused by name).
 // The choice is made by keymesh/backend/contour.hpp, above generate.
 enum class Backend { Cpu, Cuda };
+
+// Output arrays a caller owns (ContourOptions::output_arrays): 3 floats per
+// point, 3 ids per triangle, and one float per point when scalars are on.
+struct ContourArrays {
+  float* points = nullptr;
+  PointIndex* connectivity = nullptr;
+  float* scalars = nullptr;
+};
 
 struct ContourOptions {
   std::vector<double> isovalues;        // at least one, all finite
@@ -80,6 +89,16 @@ struct ContourOptions {
   // Unstructured grids only: the point field to contour (empty: the first
   // one-component point field). Every point field is carried, interpolated.
   std::string array;
+  // Voxel grids, structured plan (weld KeyReduce) with no normals, no
+  // curvature and no coarsening: when set, called once the rows are
+  // counted, with the output's point and triangle counts, for the arrays
+  // to write the points, triangles and scalars into (in place, each
+  // element once); the mesh returned then holds none of them. For a host
+  // that hands the output over as it is (the Python module): arrays it
+  // allocates need no zero-fill, where std::vector's resize zero-fills its
+  // new elements in one thread (66 MB for a 3.7 M-triangle contour). Other
+  // options with it are refused (InputError).
+  std::function<ContourArrays(Id points, Id triangles)> output_arrays;
 };
 
 // Where the time went, in seconds, and the sizes involved.

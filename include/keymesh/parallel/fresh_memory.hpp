@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cstddef>
 #include <functional>
+#include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "keymesh/core/huge_pages.hpp"
@@ -17,23 +19,40 @@
 
 namespace keymesh::parallel {
 
+// Huge pages asked for on fresh storage [data, data + bytes), then its
+// pages from byte `from` on faulted in by the threads, one write per page
+// (bytes whose values nobody reads yet).
+inline void fault_in(void* data, std::size_t bytes, std::size_t from = 0) {
+  advise_huge_pages(data, bytes);
+  auto* raw = static_cast<volatile unsigned char*>(data);
+  constexpr std::size_t kPage = 4096;
+  const std::size_t first = (from + kPage - 1) / kPage;
+  const std::size_t pages = (bytes + kPage - 1) / kPage;
+  if (pages > first)
+    for_each(static_cast<Id>(pages - first), [&](Id p) { raw[(first + static_cast<std::size_t>(p)) * kPage] = 0; },
+             512);
+}
+
 // Gives `v` room for n elements, its pages faulted in by the threads (no
 // element added: the resize that follows only zero-fills mapped memory).
 template <class T>
 void reserve_fresh(std::vector<T>& v, std::size_t n) {
   if (n <= v.capacity()) return;
   v.reserve(n);
-  const std::size_t bytes = n * sizeof(T);
-  advise_huge_pages(v.data(), bytes);
   // Raw storage past the elements held: bytes may be written, and resize
   // zero-fills them after.
-  auto* raw = reinterpret_cast<volatile unsigned char*>(v.data());
-  constexpr std::size_t kPage = 4096;
-  const std::size_t first = (v.size() * sizeof(T) + kPage - 1) / kPage;
-  const std::size_t pages = (bytes + kPage - 1) / kPage;
-  if (pages > first)
-    for_each(static_cast<Id>(pages - first), [&](Id p) { raw[(first + static_cast<std::size_t>(p)) * kPage] = 0; },
-             512);
+  fault_in(v.data(), n * sizeof(T), v.size() * sizeof(T));
+}
+
+// An array of n elements left uninitialised (no zero-fill), its pages
+// faulted in by the threads: for output written in place, element by
+// element, before anyone reads it.
+template <class T>
+std::unique_ptr<T[]> fresh_array(std::size_t n) {
+  static_assert(std::is_trivially_default_constructible_v<T>);
+  std::unique_ptr<T[]> a(new T[n]);
+  fault_in(a.get(), n * sizeof(T));
+  return a;
 }
 
 // Sizes `v` to n elements (zero-filled, as resize does).
