@@ -15,15 +15,15 @@
 #include <vector>
 
 #include "keymesh/core/huge_pages.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::parallel {
 
-// Huge pages asked for on fresh storage [data, data + bytes), then its
-// pages from byte `from` on faulted in by the threads, one write per page
-// (bytes whose values nobody reads yet).
-inline void fault_in(void* data, std::size_t bytes, std::size_t from = 0) {
-  advise_huge_pages(data, bytes);
+// The pages of fresh storage [data, data + bytes) from byte `from` on,
+// faulted in by the threads, one write per page (bytes whose values nobody
+// reads yet).
+inline void touch_pages(void* data, std::size_t bytes, std::size_t from = 0) {
   auto* raw = static_cast<volatile unsigned char*>(data);
   constexpr std::size_t kPage = 4096;
   const std::size_t first = (from + kPage - 1) / kPage;
@@ -31,6 +31,12 @@ inline void fault_in(void* data, std::size_t bytes, std::size_t from = 0) {
   if (pages > first)
     for_each(static_cast<Id>(pages - first), [&](Id p) { raw[(first + static_cast<std::size_t>(p)) * kPage] = 0; },
              512);
+}
+
+// touch_pages, with huge pages asked for first.
+inline void fault_in(void* data, std::size_t bytes, std::size_t from = 0) {
+  advise_huge_pages(data, bytes);
+  touch_pages(data, bytes, from);
 }
 
 // Gives `v` room for n elements, its pages faulted in by the threads (no
@@ -50,8 +56,8 @@ void reserve_fresh(std::vector<T>& v, std::size_t n) {
 template <class T>
 std::unique_ptr<T[]> fresh_array(std::size_t n) {
   static_assert(std::is_trivially_default_constructible_v<T>);
-  std::unique_ptr<T[]> a(new T[n]);
-  fault_in(a.get(), n * sizeof(T));
+  std::unique_ptr<T[]> a = uninitialized_array<T>(n);  // huge pages asked for
+  touch_pages(a.get(), n * sizeof(T));
   return a;
 }
 
