@@ -269,11 +269,12 @@ struct CoarsePointWriter {
   // Positions, with or without the scalar (the usual calls): the same sums
   // as operator()'s, kept in registers.
   template <bool Scalar>
-  void positions(std::uint32_t id, const CoarseCrossing* x, int n, Id iso) const {
+  void positions(std::uint32_t id, Id i, Id j, Id k, const std::uint8_t* codes, int n, Id iso) const {
     const GridShape& s = out.s;
     double sx = 0, sy = 0, sz = 0, sv = 0;
     for (int c = 0; c < n; ++c) {
-      const auto p = out.interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso);
+      const CoarseCrossing x = crossing_at(i, j, k, codes[c]);
+      const auto p = out.interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, x.axis, iso);
       float xyz[3];
       out.interp.position(p, xyz);
       sx += as_stored(xyz[0]), sy += as_stored(xyz[1]), sz += as_stored(xyz[2]);
@@ -285,13 +286,14 @@ struct CoarsePointWriter {
     if constexpr (Scalar) out.out.scalar[id] = static_cast<float>(sv / count);
   }
 
-  void operator()(std::uint32_t id, const CoarseCrossing* x, int n, Id iso) const {
+  void operator()(std::uint32_t id, Id i, Id j, Id k, const std::uint8_t* codes, int n, Id iso) const {
     const GridShape& s = out.s;
     double sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     const bool derivatives = out.out.gradient_normal || out.out.curvature;
     for (int c = 0; c < n; ++c) {
       float fine[8];
-      const auto p = out.interp.at(x[c].i + x[c].j * s.nx + x[c].k * s.nxy, x[c].i, x[c].j, x[c].k, x[c].axis, iso);
+      const CoarseCrossing x = crossing_at(i, j, k, codes[c]);
+      const auto p = out.interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, x.axis, iso);
       if (derivatives) {
         PointWriter<T> w = out;
         w.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
@@ -367,16 +369,18 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
     t0 = Clock::now();
+    using Codes = const std::uint8_t*;
     if (!write.out.positions_and_scalar_only())
-      for_each_coarse_point(bits[iso], s, cb,
-                            [&](std::uint32_t id, const CoarseCrossing* x, int n) { write(id, x, n, iso); });
+      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, Id i, Id j, Id k, Codes x, int n) {
+        write(id, i, j, k, x, n, iso);
+      });
     else if (write.out.out.scalar)
-      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, const CoarseCrossing* x, int n) {
-        write.template positions<true>(id, x, n, iso);
+      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, Id i, Id j, Id k, Codes x, int n) {
+        write.template positions<true>(id, i, j, k, x, n, iso);
       });
     else
-      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, const CoarseCrossing* x, int n) {
-        write.template positions<false>(id, x, n, iso);
+      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, Id i, Id j, Id k, Codes x, int n) {
+        write.template positions<false>(id, i, j, k, x, n, iso);
       });
     st.fields += seconds_since(t0);
     t0 = Clock::now();

@@ -187,8 +187,20 @@ struct CoarseCrossing {
   int axis;
 };
 
-// Step 3: calls f(id, crossings, n) for every coarse point of the isovalue,
-// its n (1 to 6) crossings in the order of their edge keys.
+// A coarse point's crossings as codes, in edge-key order (keys 3 p + axis
+// grow with p = i + j nx + k nxy): 0 the z edge from the plane below, 1 the
+// y edge from the row below, 2 the x edge from the point before, then 3, 4,
+// 5 the point's own x, y, z edges. The crossing of code c at point (i, j, k).
+inline CoarseCrossing crossing_at(Id i, Id j, Id k, int code) {
+  constexpr int kAxis[6] = {2, 1, 0, 0, 1, 2};
+  const int a = kAxis[code];
+  const Id back = code < 3 ? 1 : 0;
+  return {i - (a == 0 ? back : 0), j - (a == 1 ? back : 0), k - (a == 2 ? back : 0), a};
+}
+
+// Step 3: calls f(id, i, j, k, codes, n) for every coarse point (i, j, k) of
+// the isovalue, its n (1 to 6) crossings' codes (crossing_at) in the order
+// of their edge keys.
 template <class F>
 void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
   const Id wpr = cb.words_per_row, last_plane = s.nz - 1;
@@ -207,25 +219,16 @@ void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const Coa
         const int b = std::countr_zero(c);
         c &= c - 1;
         const Id i = 64 * q + b;
-        CoarseCrossing x[6];
+        std::uint8_t x[6];
         int n = 0;
-        // Edge keys 3 p + axis grow with p = i + j nx + k nxy: the z edge
-        // from the plane below, the y edge from the row below, the x edge
-        // from the point before, then this point's x, y, z edges.
         // Each written, then kept by its bit (no branch on a coin toss).
-        x[n] = {i, j, k - 1, 2};
-        n += fz_below ? static_cast<int>((fz_below[q] >> b) & 1) : 0;
-        x[n] = {i, j - 1, k, 1};
-        n += fy_below ? static_cast<int>((fy_below[q] >> b) & 1) : 0;
-        x[n] = {i - 1, j, k, 0};
-        n += static_cast<int>((fx_before >> b) & 1);
-        x[n] = {i, j, k, 0};
-        n += static_cast<int>(((w.x ^ fx[q]) >> b) & 1);
-        x[n] = {i, j, k, 1};
-        n += static_cast<int>(((w.y ^ fy[q]) >> b) & 1);
-        x[n] = {i, j, k, 2};
-        n += static_cast<int>(((w.z ^ fz[q]) >> b) & 1);
-        f(id++, x, n);
+        x[n] = 0, n += fz_below ? static_cast<int>((fz_below[q] >> b) & 1) : 0;
+        x[n] = 1, n += fy_below ? static_cast<int>((fy_below[q] >> b) & 1) : 0;
+        x[n] = 2, n += static_cast<int>((fx_before >> b) & 1);
+        x[n] = 3, n += static_cast<int>(((w.x ^ fx[q]) >> b) & 1);
+        x[n] = 4, n += static_cast<int>(((w.y ^ fy[q]) >> b) & 1);
+        x[n] = 5, n += static_cast<int>(((w.z ^ fz[q]) >> b) & 1);
+        f(id++, i, j, k, x, n);
       }
     }
   });
