@@ -152,51 +152,39 @@ struct Flagged {
 };
 
 // Every point's corners (counted, then placed: a counting sort by point id,
-// the order within a point left to the threads), each point checked by
-// one_closed_fan; the flagged points' corners sorted, so that all after
-// this is deterministic.
+// the order within a point left to the threads; 4 bytes a corner), each
+// point checked by one_closed_fan; the flagged points' corners sorted, so
+// that all after this is deterministic.
 Flagged flag_points(const PointIndex* C, Id corners, Id n) {
-  std::vector<std::uint32_t> first;
-  parallel::resize_fresh(first, static_cast<std::size_t>(n + 1));
-  parallel::for_each(n + 1, [&](Id p) { first[p] = 0; });
+  std::vector<std::uint32_t> end;  // counts, then each point's first slot, then its end
+  parallel::resize_fresh(end, static_cast<std::size_t>(n + 1));
+  parallel::for_each(n + 1, [&](Id p) { end[p] = 0; });
   parallel::for_each(corners, [&](Id c) {
-    std::atomic_ref<std::uint32_t>(first[C[c]]).fetch_add(1, std::memory_order_relaxed);
+    std::atomic_ref<std::uint32_t>(end[C[c]]).fetch_add(1, std::memory_order_relaxed);
   }, 1 << 14);
-  parallel::exclusive_scan(first.data(), first.data(), n + 1);
-  // Placed triangle by triangle: each corner's two other points, read
-  // here in order, so that the check reads each point's slots only.
-  std::vector<std::uint32_t> list, cursor(first.begin(), first.end() - 1);
-  std::vector<PointIndex> next, prev;
+  parallel::exclusive_scan(end.data(), end.data(), n + 1);
+  std::vector<std::uint32_t> list;
   parallel::resize_fresh(list, static_cast<std::size_t>(corners));
-  parallel::resize_fresh(next, static_cast<std::size_t>(corners));
-  parallel::resize_fresh(prev, static_cast<std::size_t>(corners));
-  parallel::for_each(corners / 3, [&](Id t) {
-    const PointIndex p[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t at = std::atomic_ref<std::uint32_t>(cursor[p[k]]).fetch_add(1, std::memory_order_relaxed);
-      list[at] = static_cast<std::uint32_t>(3 * t + k);
-      next[at] = p[k == 2 ? 0 : k + 1];
-      prev[at] = p[k == 0 ? 2 : k - 1];
-    }
-  }, 1 << 12);
-  cursor = {};
-  // (each point's slots hold its corners in the threads' order: the check
-  // does not depend on it)
+  parallel::for_each(corners, [&](Id c) {
+    list[std::atomic_ref<std::uint32_t>(end[C[c]]).fetch_add(1, std::memory_order_relaxed)] =
+        static_cast<std::uint32_t>(c);
+  }, 1 << 14);
+  auto begin = [&](Id p) { return p == 0 ? std::uint32_t{0} : end[p - 1]; };
   const int chunks = parallel::chunk_count(n, 1 << 14);
   std::vector<std::vector<PointIndex>> odd(static_cast<std::size_t>(std::max(chunks, 1)));
   parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int chunk) {
     for (Id p = b; p < e; ++p) {
-      const Id d = first[p + 1] - first[p];
-      if (d > 0 && !one_closed_fan(static_cast<PointIndex>(p), next.data() + first[p], prev.data() + first[p], d))
+      const Id d = end[p] - begin(p);
+      if (d > 0 && !one_closed_fan(C, static_cast<PointIndex>(p), list.data() + begin(p), d))
         odd[chunk].push_back(static_cast<PointIndex>(p));
     }
   });
   Flagged f;
   for (const auto& points : odd)
     for (PointIndex p : points) {
-      std::uint32_t* l = list.data() + first[p];
-      std::sort(l, l + (first[p + 1] - first[p]));
-      f.add(p, l, first[p + 1] - first[p]);
+      std::uint32_t* l = list.data() + begin(p);
+      std::sort(l, l + (end[p] - begin(p)));
+      f.add(p, l, end[p] - begin(p));
     }
   return f;
 }
@@ -339,10 +327,13 @@ NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
     f = reflag(C, f);
   }
   const Id added = static_cast<Id>(source.size());
+  // Grown to their exact size (resize() would double the capacity).
   auto append_copies = [&](std::vector<float>& values, int k) {
-    values.resize(static_cast<std::size_t>((n + added) * k));
-    for (Id i = 0; i < added; ++i)
-      std::copy_n(values.begin() + Id{source[i]} * k, k, values.begin() + (n + i) * k);
+    std::vector<float> grown;
+    parallel::resize_fresh(grown, static_cast<std::size_t>((n + added) * k));
+    parallel::for_each(n * k, [&](Id i) { grown[i] = values[i]; }, 1 << 16);
+    for (Id i = 0; i < added; ++i) std::copy_n(values.begin() + Id{source[i]} * k, k, grown.begin() + (n + i) * k);
+    values.swap(grown);
   };
   append_copies(mesh.points, 3);
   for (Field& field : mesh.point_fields) append_copies(field.values, field.components);
