@@ -322,8 +322,10 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
   spec.plan = by_position ? keyreduce::WeldPlan::ByPosition : keyreduce::WeldPlan::Sort;
   spec.key_bits = ep.ek.key_bits() + iso_bits;
   spec.order = average ? keyreduce::Order::Build : keyreduce::Order::Skip;
+  // The soup is given up: the sort plan sorts it in place (VERTEX-WELD
+  // reads it, through `position`, and leaves it).
   keyreduce::Groups<std::uint64_t> groups =
-      keyreduce::weld(soup.data(), corners, spec, [&](Id c, float* xyz) { ep.position(soup[c], xyz); },
+      keyreduce::weld(std::move(soup), spec, [&](Id c, float* xyz) { ep.position(soup[c], xyz); },
                       {by_position ? &mesh.points : nullptr, nullptr});
   // The index map is the connectivity (no copy); the soup is freed before
   // the points are allocated.

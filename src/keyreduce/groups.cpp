@@ -28,8 +28,15 @@ void check_pair_count(Id n) {
 template <class K>
 Groups<K> partition_sort(const K* keys, Id n, int significant_bits, Order order) {
   check_pair_count(n);
+  return partition_sort(std::vector<K>(keys, keys + n), significant_bits, order);
+}
+
+template <class K>
+Groups<K> partition_sort(std::vector<K>&& keys, int significant_bits, Order order) {
+  const Id n = static_cast<Id>(keys.size());
+  check_pair_count(n);
   Groups<K> groups;
-  std::vector<K> sorted(keys, keys + n);
+  std::vector<K> sorted = std::move(keys);
   std::vector<std::uint32_t> perm(n);
   parallel::for_each(n, [&](Id i) { perm[i] = static_cast<std::uint32_t>(i); });
   parallel::sort_pairs(sorted, perm, significant_bits);
@@ -162,6 +169,8 @@ void build_order(Groups<K>& groups) {
 
 template Groups<std::uint32_t> partition_sort(const std::uint32_t*, Id, int, Order);
 template Groups<std::uint64_t> partition_sort(const std::uint64_t*, Id, int, Order);
+template Groups<std::uint32_t> partition_sort(std::vector<std::uint32_t>&&, int, Order);
+template Groups<std::uint64_t> partition_sort(std::vector<std::uint64_t>&&, int, Order);
 template Groups<std::uint32_t> partition_dense(const std::uint32_t*, Id, std::uint32_t, Order);
 template Groups<std::uint64_t> partition_dense(const std::uint64_t*, Id, std::uint64_t, Order);
 template void build_order(Groups<std::uint32_t>&);

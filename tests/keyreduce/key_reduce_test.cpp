@@ -46,6 +46,17 @@ void expect_both_plans(const std::vector<K>& keys, K range) {
   expect_matches_reference(keys, keyreduce::partition_dense(keys.data(), n, range, Order::Skip));
 }
 
+// A weld over keys < range (bits of them), with the pair order built.
+template <class K>
+keyreduce::WeldSpec<K> weld_spec(keyreduce::WeldPlan plan, K range, int bits) {
+  keyreduce::WeldSpec<K> spec;
+  spec.plan = plan;
+  spec.key_range = range;
+  spec.key_bits = bits;
+  spec.order = Order::Build;
+  return spec;
+}
+
 class KeyReduceThreads : public keymesh::tests::ThreadCountTest {};
 
 }  // namespace
@@ -207,11 +218,7 @@ TEST(Weld, ThreePlansGroupAlike) {
     xyz[2] = 0.5f;
   };
   for (auto plan : {keyreduce::WeldPlan::Dense, keyreduce::WeldPlan::Sort, keyreduce::WeldPlan::ByPosition}) {
-    keyreduce::WeldSpec<std::uint32_t> spec;
-    spec.plan = plan;
-    spec.key_range = 3000;
-    spec.key_bits = 12;
-    spec.order = Order::Build;
+    const auto spec = weld_spec<std::uint32_t>(plan, 3000, 12);
     std::vector<float> points;
     std::vector<std::uint32_t> first;
     const auto g = keyreduce::weld(keys.data(), static_cast<Id>(keys.size()), spec, position, {&points, &first});
@@ -234,5 +241,28 @@ TEST(Weld, ThreePlansGroupAlike) {
     for (std::size_t i = 0; i < keys.size(); ++i)
       smallest[g.index_map[i]] = std::min(smallest[g.index_map[i]], static_cast<std::uint32_t>(i));
     EXPECT_EQ(first, smallest);
+  }
+}
+
+// Keys given up to the weld: the sort plan sorts them in their own storage
+// (the caller's vector is left empty) and groups them as the reference does;
+// the other plans leave them to `position`.
+TEST(Weld, GivenUpKeysGroupAlike) {
+  std::mt19937 rng(9);
+  std::vector<std::uint64_t> reference(50000);
+  for (auto& k : reference) k = std::uniform_int_distribution<std::uint64_t>(0, (std::uint64_t{1} << 40) - 1)(rng) % 7001;
+  for (auto plan : {keyreduce::WeldPlan::Sort, keyreduce::WeldPlan::Dense, keyreduce::WeldPlan::ByPosition}) {
+    const auto spec = weld_spec<std::uint64_t>(plan, 7001, 13);
+    std::vector<std::uint64_t> keys = reference;
+    auto position = [&](Id i, float* xyz) {
+      xyz[0] = static_cast<float>(keys.at(static_cast<std::size_t>(i)));
+      xyz[1] = xyz[2] = 0;
+    };
+    std::vector<std::uint32_t> first;
+    const auto g = keyreduce::weld(std::move(keys), spec, position, {nullptr, &first});
+    if (plan != keyreduce::WeldPlan::ByPosition) expect_matches_reference(reference, g);
+    EXPECT_EQ(keys.empty(), plan == keyreduce::WeldPlan::Sort);
+    ASSERT_EQ(static_cast<Id>(first.size()), g.num_groups());
+    for (std::size_t i = 0; i < reference.size(); ++i) EXPECT_LE(first[g.index_map[i]], i);
   }
 }

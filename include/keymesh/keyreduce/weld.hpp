@@ -14,6 +14,7 @@
 // of its first pair. Voxel-grid marching cubes numbers its keys without a soup
 // (src/generate/contour_rows.hpp) and is not a client.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "keymesh/core/free_storage.hpp"
@@ -44,6 +45,13 @@ struct WeldExtras {
   std::vector<std::uint32_t>* first = nullptr;
 };
 
+// Every group's first pair (WeldExtras::first) from the index map.
+template <class K>
+void first_pairs(const Groups<K>& groups, Id n, std::vector<std::uint32_t>& first) {
+  first.assign(static_cast<std::size_t>(groups.num_groups()), 0);
+  for (Id i = n - 1; i >= 0; --i) first[groups.index_map[i]] = static_cast<std::uint32_t>(i);
+}
+
 // `position(i, xyz)` writes pair i's coordinates; called only by ByPosition.
 template <class K, class Position>
 Groups<K> weld(const K* keys, Id n, const WeldSpec<K>& spec, Position&& position, WeldExtras extras = {}) {
@@ -63,10 +71,21 @@ Groups<K> weld(const K* keys, Id n, const WeldSpec<K>& spec, Position&& position
   }
   Groups<K> groups = spec.plan == WeldPlan::Dense ? partition_dense(keys, n, spec.key_range, spec.order)
                                                   : partition_sort(keys, n, spec.key_bits, spec.order);
-  if (extras.first) {
-    extras.first->assign(static_cast<std::size_t>(groups.num_groups()), 0);
-    for (Id i = n - 1; i >= 0; --i) (*extras.first)[groups.index_map[i]] = static_cast<std::uint32_t>(i);
-  }
+  if (extras.first) first_pairs(groups, n, *extras.first);
+  return groups;
+}
+
+// The same on keys the caller gives up: the sort plan sorts them in their
+// own storage (partition_sort on a vector); the other plans read them, and
+// `position` may still read the caller's vector, which only the sort plan
+// empties.
+template <class K, class Position>
+Groups<K> weld(std::vector<K>&& keys, const WeldSpec<K>& spec, Position&& position, WeldExtras extras = {}) {
+  if (spec.plan != WeldPlan::Sort)
+    return weld(keys.data(), static_cast<Id>(keys.size()), spec, std::forward<Position>(position), extras);
+  const Id n = static_cast<Id>(keys.size());
+  Groups<K> groups = partition_sort(std::move(keys), spec.key_bits, spec.order);
+  if (extras.first) first_pairs(groups, n, *extras.first);
   return groups;
 }
 
