@@ -108,9 +108,8 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
   const Id E = static_cast<Id>(g.edge_key.size());
   check_points(V + E, "the surface");
 
-  // Output arrays at their final size, written in place; each scratch array
-  // is released once its last pass is done (the edge keys before the
-  // triangles are allocated).
+  // Outputs at their final size, written in place; scratch freed after its
+  // last pass (the edge keys before the triangles are allocated).
   SurfaceMesh out;
   extend_points(m.points, V + E, out.points);
   out.point_fields = extend_point_fields(m.point_fields, V + E);
