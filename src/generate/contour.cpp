@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/core/work_estimate.hpp"
 #include "keymesh/generate/coarsen.hpp"
@@ -346,8 +347,8 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     ~Release() {
       std::size_t bytes = slots.capacity() * sizeof(PointIndex);
       for (const auto& c : coarse) bytes += c.far.size * sizeof(std::uint64_t) * 2;
-      bytes += triangle_scratch.faces.size * sizeof(FaceTriangle);
-      if (bytes > kKeepScratch) std::vector<CoarseBits>().swap(coarse), slots = {}, triangle_scratch = {};
+      for (const auto& f : triangle_scratch.faces) bytes += f.size * sizeof(FaceTriangle);
+      if (bytes > kKeepScratch) free_storage(coarse), free_storage(slots), triangle_scratch = {};
     }
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
@@ -607,7 +608,7 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
     mesh.connectivity = spec.order == keyreduce::Order::Build ? groups.index_map : std::move(groups.index_map);
     st.weld += seconds_since(t0);
   }
-  bits.words = {};
+  free_storage(bits.words);
 
   progress::report("points", 0.7);
   auto t0 = Clock::now();

@@ -262,9 +262,12 @@ struct VoxelFarBits {
 // Scratch of write_coarse_triangles, kept by its caller across isovalues
 // and calls: each task's face triangles, and each voxel row's range of them.
 struct CoarseTriangleScratch {
-  RawWords<FaceTriangle> faces;        // a voxel row's at its fine triangles' offset (as its slots)
+  // Each brick's face triangles, its rows' one after the other (room for
+  // the brick's fine triangles, only the records written touched).
+  std::vector<RawWords<FaceTriangle>> faces;
+  std::vector<std::uint32_t> face_first;  // by voxel row: its first record in its brick's
   std::vector<std::uint32_t> face_count;  // by voxel row
-  std::vector<Id> kept;                // by voxel row: triangles kept
+  std::vector<Id> kept;                   // by voxel row: triangles kept
 };
 
 // Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
@@ -278,7 +281,8 @@ inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   // The count pass's bricks (contour_rows.hpp), whose cube cases it kept.
   const VoxelBricks bricks(s, 0, layers);
-  sc.faces.reserve(static_cast<std::size_t>(rc.triangle_first.back() - fine_base));
+  if (sc.faces.size() < static_cast<std::size_t>(bricks.count())) sc.faces.resize(static_cast<std::size_t>(bricks.count()));
+  sc.face_first.resize(static_cast<std::size_t>(voxel_rows));
   sc.face_count.resize(static_cast<std::size_t>(voxel_rows));
   sc.kept.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
   const CoarseVoxelTable& voxels = coarse_voxel_table();
@@ -286,6 +290,11 @@ inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
     const Id j_begin = bricks.j_begin(brick), j_end = bricks.j_end(brick);
     const std::uint8_t* cases = rc.brick_cases[brick].cases.get();
+    Id room = 0;  // the brick's fine triangles bound its face triangles
+    for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
+      room += rc.triangle_first[k * (s.ny - 1) + j_end] - rc.triangle_first[k * (s.ny - 1) + j_begin];
+    sc.faces[brick].reserve(static_cast<std::size_t>(room));
+    FaceTriangle* f = sc.faces[brick].data();
     auto stored_case = [&](int, const CornerWords&) { return unsigned{*cases++}; };
     // Coarse ids by grid point of the rows (j, k), (j, k + 1) ("lo") and
     // (j + 1, k), (j + 1, k + 1) ("hi"), by corner bits z: each row filled
@@ -308,8 +317,8 @@ inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, c
         const Id vr = k * (s.ny - 1) + j;
         PointIndex* const begin = slots_of(vr);
         PointIndex* o = begin;
-        FaceTriangle* const faces = sc.faces.data() + (rc.triangle_first[vr] - fine_base);
-        FaceTriangle* f = faces;
+        FaceTriangle* const faces = f;
+        sc.face_first[vr] = static_cast<std::uint32_t>(f - sc.faces[brick].data());
         std::uint32_t written = 0;  // triangles of the row so far
         for_each_cut_voxel(bits, s, j, k, stored_case, [&](Id i, unsigned cube_case) {
           const CoarseVoxel v = voxels.at(cube_case, far_bits(i));
@@ -345,7 +354,10 @@ Id fold_and_pack(const GridShape& s, const RowCounts& rc, Id fine_base, PointInd
                  Grow&& grow) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
-  auto faces_of = [&](Id vr) { return sc.faces.data() + (rc.triangle_first[vr] - fine_base); };
+  const VoxelBricks bricks(s, 0, layers);
+  auto faces_of = [&](Id vr) {
+    return sc.faces[bricks.brick_of(vr % (s.ny - 1), vr / (s.ny - 1))].data() + sc.face_first[vr];
+  };
   auto face_count = [&](Id vr) { return static_cast<std::size_t>(sc.face_count[vr]); };
   parallel::for_each_dynamic(voxel_rows, [&](Id vr) {
     const Id j = vr % (s.ny - 1), k = vr / (s.ny - 1);

@@ -140,6 +140,7 @@ struct VoxelBricks {
   Id k_end(Id b) const { return std::min(ke, k_begin(b) + kLayers); }
   Id j_begin(Id b) const { return (b % runs) * kRun; }
   Id j_end(Id b) const { return std::min(ny - 1, j_begin(b) + kRun); }
+  Id brick_of(Id j, Id k) const { return ((k - kb) / kLayers) * runs + j / kRun; }
 };
 
 // One brick's cut voxels' cube cases, a byte each, in the brick's row
