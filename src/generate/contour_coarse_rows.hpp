@@ -20,10 +20,16 @@
 //   3. points  every coarse point sums its at most six crossings in the
 //              order of their edge keys (the order a KEY-REDUCE over the
 //              fine points would merge them in) and writes the mean;
-//   4. triangles  written once with coarse ids, those with a repeated id
-//              dropped, each voxel row's survivors packed.
+//   4. triangles  each cut voxel's coarse triangles looked up by its cube
+//              case and far bits (coarse_cases.hpp: repeated corners and
+//              folds within the voxel already decided), written once with
+//              coarse ids; face triangles recorded;
+//   5. folds   across the faces between voxels (coarse_folds.hpp), then
+//              each voxel row's survivors packed.
 // The fine points are never written. The bytes are those of coarsen() over
-// the fine mesh (generate/coarsen.hpp): a test holds them equal.
+// the fine mesh (generate/coarsen.hpp): tests hold them equal. The caller
+// then splits non-manifold points and edges (split_nonmanifold.hpp), as
+// coarsen() does.
 #include <algorithm>
 #include <bit>
 #include <cstdint>
