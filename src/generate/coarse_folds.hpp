@@ -76,19 +76,14 @@ void resolve_equal_triangles(int n, Positive&& positive, Drop&& drop) {
 // another of the voxel are decided here, and the voxel's triangles packed.
 // Returns the number kept.
 inline int fold_within_voxel(std::uint32_t* tri, const CornerTriangle* facts, int n, int* kept_index) {
-  bool drop[5] = {false, false, false, false, false};
+  bool drop[5] = {false, false, false, false, false}, decided[5] = {false, false, false, false, false};
   bool any = false;
   for (int a = 0; a < n; ++a) {
-    if (facts[a].on_face || drop[a]) continue;
+    if (facts[a].on_face || decided[a]) continue;
     int members[5], m = 0;
-    members[m++] = a;
-    for (int b = a + 1; b < n; ++b)
-      if (!facts[b].on_face && facts[b].points == facts[a].points) members[m++] = b;
+    for (int b = a; b < n; ++b)
+      if (!facts[b].on_face && facts[b].points == facts[a].points) members[m++] = b, decided[b] = true;
     if (m == 1) continue;
-    // Members before `a` with the same points would have taken `a` in: none.
-    bool done = false;
-    for (int b = 0; b < a && !done; ++b) done = !facts[b].on_face && facts[b].points == facts[a].points;
-    if (done) continue;
     any = true;
     resolve_equal_triangles(m, [&](int x) { return facts[members[x]].positive; },
                             [&](int x) { drop[members[x]] = true; });
@@ -117,6 +112,14 @@ struct FaceTriangle {
 // large: ids are below the number of triangle corners, < 2^32 - 1).
 constexpr std::uint32_t kDroppedTriangle = ~std::uint32_t{0};
 
+// A face triangle as fold_across_faces sorts it.
+struct FoldEntry {
+  std::uint64_t key;      // the face and its three points
+  std::uint32_t row, tri; // mesh order: row 0 (this one) before 1 (the next), then tri
+  bool positive;
+  std::uint32_t* slot;
+};
+
 // Decides the faces that voxel row (j, k) owns: the x faces between its
 // voxels, its +y and +z faces (shared with rows (j + 1, k) and (j, k + 1),
 // whose -y and -z face triangles are passed as `next_y` and `next_z`, empty
@@ -125,13 +128,6 @@ constexpr std::uint32_t kDroppedTriangle = ~std::uint32_t{0};
 // rows kDroppedTriangle in their slots (`own_slots`, `next_y_slots`,
 // `next_z_slots`: each row's triangles, 3 ids apiece). Every face is owned by
 // one row, so rows decided at once touch different triangles.
-struct FoldEntry {
-  std::uint64_t key;      // the face and its three points
-  std::uint32_t row, tri; // mesh order: row 0 (this one) before 1 (the next), then tri
-  bool positive;
-  std::uint32_t* slot;
-};
-
 inline void fold_across_faces(const FaceTriangle* own, std::size_t n_own, std::uint32_t* own_slots, bool j_first,
                               bool k_first, const FaceTriangle* next_y, std::size_t n_next_y,
                               std::uint32_t* next_y_slots, const FaceTriangle* next_z, std::size_t n_next_z,
@@ -168,13 +164,13 @@ inline void fold_across_faces(const FaceTriangle* own, std::size_t n_own, std::u
   // sorted and decided.
   std::size_t size = 16;
   while (size < 2 * entries.size()) size *= 2;
-  thread_local std::vector<std::uint64_t> slots;  // key + 1, 0 when empty; top bit: seen twice
-  slots.assign(size, 0);
+  thread_local std::vector<std::uint64_t> seen;  // key + 1, 0 when empty; top bit: seen twice
+  seen.assign(size, 0);
   constexpr std::uint64_t kTwice = std::uint64_t{1} << 63;
   auto find = [&](std::uint64_t k) -> std::uint64_t& {
     std::size_t h = static_cast<std::size_t>((k * 0x9E3779B97F4A7C15ull) >> 40) & (size - 1);
-    while (slots[h] && (slots[h] & ~kTwice) != k + 1) h = (h + 1) & (size - 1);
-    return slots[h];
+    while (seen[h] && (seen[h] & ~kTwice) != k + 1) h = (h + 1) & (size - 1);
+    return seen[h];
   };
   bool any = false;
   for (const FoldEntry& e : entries) {

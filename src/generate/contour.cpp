@@ -287,26 +287,19 @@ struct CoarsePointWriter {
     if constexpr (Scalar) out.out.scalar[id] = static_cast<float>(sv / count);
   }
 
+  // Every field (gradient normals, curvature: the calls positions() does
+  // not take), each crossing's made by PointWriter into a small array.
   void operator()(std::uint32_t id, Id i, Id j, Id k, const std::uint8_t* codes, int n, Id iso) const {
     const GridShape& s = out.s;
     double sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    const bool derivatives = out.out.gradient_normal || out.out.curvature;
+    PointWriter<T> w = out;
+    float fine[8];
+    w.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
+                        out.out.gradient_normal ? fine + at_normal : nullptr,
+                        out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
     for (int c = 0; c < n; ++c) {
-      float fine[8];
       const CoarseCrossing x = crossing_at(i, j, k, codes[c]);
-      const auto p = out.interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, x.axis, iso);
-      if (derivatives) {
-        PointWriter<T> w = out;
-        w.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
-                            out.out.gradient_normal ? fine + at_normal : nullptr,
-                            out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
-        w(0, p, iso);
-      } else {
-        // Positions and the scalar (the usual call): PointWriter's own
-        // position() and scalar(), without its per-field checks.
-        out.interp.position(p, fine);
-        if (out.out.scalar) fine[at_scalar] = out.interp.scalar(p);
-      }
+      w(0, out.interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, x.axis, iso), iso);
       for (int v = 0; v < values; ++v) sum[v] += fine[v];
     }
     float mean[8];
@@ -346,7 +339,8 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   struct Release {
     ~Release() {
       std::size_t bytes = slots.capacity() * sizeof(PointIndex);
-      for (const auto& c : coarse) bytes += c.far.size * sizeof(std::uint64_t) * 2;
+      for (const auto& c : coarse)
+        bytes += (c.far.size + c.points.size) * sizeof(std::uint64_t) + c.first.size * sizeof(std::uint32_t);
       for (const auto& f : triangle_scratch.faces) bytes += f.size * sizeof(FaceTriangle);
       if (bytes > kKeepScratch) free_storage(coarse), free_storage(slots), triangle_scratch = {};
     }
@@ -497,7 +491,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
       std::size_t bytes = 0;
       for (const auto& b : bits) bytes += b.words.capacity() * sizeof(std::uint64_t);
       for (const auto& r : rows)
-        for (const auto& c : r.brick_cases) bytes += c.capacity;
+        for (const auto& c : r.brick_cases) bytes += c.cases.size;
       if (bytes > kKeepScratch) std::vector<InsideBits>().swap(bits), std::vector<RowCounts>().swap(rows);
     }
   } release;

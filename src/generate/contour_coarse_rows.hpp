@@ -34,13 +34,13 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
-#include <memory>
 #include <vector>
 
 #include "coarse_cases.hpp"
 #include "coarse_folds.hpp"
 #include "contour_rows.hpp"
 #include "keymesh/core/types.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/scan.hpp"
@@ -49,26 +49,15 @@
 namespace keymesh::generate {
 
 // One isovalue's far bits, coarse-point bits and ranks, grid rows of planes
-// [0, nz) in the layout of InsideBits (words_per_row words a row).
-// Words are left uninitialised when sized (a sparse surface's grid has few
+// [0, nz) in the layout of InsideBits (words_per_row words a row). The
+// words are left uninitialised when sized (a sparse surface's grid has few
 // rows with cut edges: only those rows' words, and their neighbours', are
 // written, and only they are read).
-template <class T>
-struct RawWords {
-  std::unique_ptr<T[]> words;
-  std::size_t size = 0;
-  void reserve(std::size_t n) {
-    if (n > size) words.reset(new T[n]), size = n;
-  }
-  T* data() { return words.get(); }
-  const T* data() const { return words.get(); }
-};
-
 struct CoarseBits {
   Id words_per_row = 0;
-  RawWords<std::uint64_t> far;     // (row * 3 + axis) * words_per_row + q; rows with cut edges only
-  RawWords<std::uint64_t> points;  // row * words_per_row + q: coarse points; live rows only
-  RawWords<std::uint32_t> first;   // row * words_per_row + q: id of the word's first coarse point; live rows only
+  KeptArray<std::uint64_t> far;     // (row * 3 + axis) * words_per_row + q; rows with cut edges only
+  KeptArray<std::uint64_t> points;  // row * words_per_row + q: coarse points; live rows only
+  KeptArray<std::uint32_t> first;   // row * words_per_row + q: id of the word's first coarse point; live rows only
   std::vector<std::uint8_t> cut;   // per row: has cut edges (its far words are written)
   std::vector<std::uint8_t> live;  // per row: may hold coarse points (its own cuts, or the rows below it have some)
   std::vector<std::uint64_t> zeros;  // a row of zero words: the far bits of a row without cut edges
@@ -126,9 +115,9 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
                         CoarseBits& cb) {
   const Id wpr = bits.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
   cb.words_per_row = wpr;
-  cb.far.reserve(static_cast<std::size_t>(3 * wpr * rows));
-  cb.points.reserve(static_cast<std::size_t>(wpr * rows));
-  cb.first.reserve(static_cast<std::size_t>(wpr * rows));
+  cb.far.room_for(static_cast<std::size_t>(3 * wpr * rows));
+  cb.points.room_for(static_cast<std::size_t>(wpr * rows));
+  cb.first.room_for(static_cast<std::size_t>(wpr * rows));
   cb.zeros.assign(static_cast<std::size_t>(wpr), 0);
   cb.cut.resize(static_cast<std::size_t>(rows));
   cb.live.resize(static_cast<std::size_t>(rows));
@@ -265,15 +254,16 @@ struct VoxelFarBits {
   }
 };
 
-// Scratch of write_coarse_triangles, kept by its caller across isovalues
-// and calls: each task's face triangles, and each voxel row's range of them.
+// Scratch of write_coarse_triangles and fold_and_pack, kept by their caller
+// across isovalues and calls: each brick's face triangles, each voxel row's
+// range of them, and each voxel row's triangles.
 struct CoarseTriangleScratch {
   // Each brick's face triangles, its rows' one after the other (room for
   // the brick's fine triangles, only the records written touched).
-  std::vector<RawWords<FaceTriangle>> faces;
+  std::vector<KeptArray<FaceTriangle>> faces;
   std::vector<std::uint32_t> face_first;  // by voxel row: its first record in its brick's
   std::vector<std::uint32_t> face_count;  // by voxel row
-  std::vector<Id> kept;                   // by voxel row: triangles kept
+  std::vector<Id> kept;                   // by voxel row: triangles written, then (fold_and_pack) its first
 };
 
 // Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
@@ -295,12 +285,11 @@ inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
     const Id j_begin = bricks.j_begin(brick), j_end = bricks.j_end(brick);
-    const std::uint8_t* cases = rc.brick_cases[brick].cases.get();
+    const std::uint8_t* cases = rc.brick_cases[brick].cases.data();
     Id room = 0;  // the brick's fine triangles bound its face triangles
     for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
       room += rc.triangle_first[k * (s.ny - 1) + j_end] - rc.triangle_first[k * (s.ny - 1) + j_begin];
-    sc.faces[brick].reserve(static_cast<std::size_t>(room));
-    FaceTriangle* f = sc.faces[brick].data();
+    FaceTriangle* f = sc.faces[brick].room_for(static_cast<std::size_t>(room));
     auto stored_case = [&](int, const CornerWords&) { return unsigned{*cases++}; };
     // Coarse ids by grid point of the rows (j, k), (j, k + 1) ("lo") and
     // (j + 1, k), (j + 1, k + 1) ("hi"), by corner bits z: each row filled
@@ -309,13 +298,12 @@ inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, c
     if (static_cast<Id>(id_scratch.size()) < 4 * s.nx) id_scratch.resize(static_cast<std::size_t>(4 * s.nx));
     std::uint32_t* lo[2] = {id_scratch.data(), id_scratch.data() + s.nx};
     std::uint32_t* hi[2] = {id_scratch.data() + 2 * s.nx, id_scratch.data() + 3 * s.nx};
-    auto fill = [&](std::uint32_t* ids, Id row) { cb.row_ids(row, ids); };
     for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k) {
-      fill(lo[0], k * s.ny + j_begin);
-      fill(lo[1], (k + 1) * s.ny + j_begin);
+      cb.row_ids(k * s.ny + j_begin, lo[0]);
+      cb.row_ids((k + 1) * s.ny + j_begin, lo[1]);
       for (Id j = j_begin; j < j_end; ++j) {
-        fill(hi[0], k * s.ny + j + 1);
-        fill(hi[1], (k + 1) * s.ny + j + 1);
+        cb.row_ids(k * s.ny + j + 1, hi[0]);
+        cb.row_ids((k + 1) * s.ny + j + 1, hi[1]);
         // The grid rows of the voxel row's corners, by corner bits y | z << 1.
         const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
         const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "keymesh/core/types.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/scan.hpp"
@@ -150,21 +151,12 @@ struct VoxelBricks {
 // check per voxel, no fill: the bound is loose, and only the bytes written
 // are touched) and kept for later calls.
 struct BrickCases {
-  std::unique_ptr<std::uint8_t[]> cases;
-  std::size_t capacity = 0;
+  KeptArray<std::uint8_t> cases;
 
   // The most cut voxels a voxel row of nx samples has when its four grid
   // rows have `cut_edges` cut edges in all: each of its cut voxels has one
   // of them, and an edge is shared by two voxels of the row at most.
   static Id most_per_row(Id nx, Id cut_edges) { return std::min(nx - 1, 2 * cut_edges); }
-
-  std::uint8_t* room_for(Id n) {
-    if (static_cast<std::size_t>(n) > capacity) {
-      capacity = static_cast<std::size_t>(n);
-      cases.reset(new std::uint8_t[capacity]);
-    }
-    return cases.get();
-  }
 };
 
 // Point and triangle counts of one isovalue's rows, and their prefix sums.
@@ -199,7 +191,7 @@ inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke,
       for (Id j = bricks.j_begin(b); j < bricks.j_end(b); ++j)
         room += BrickCases::most_per_row(
             s.nx, cut_edges(j, k) + cut_edges(j + 1, k) + cut_edges(j, k + 1) + cut_edges(j + 1, k + 1));
-    std::uint8_t* cases = rc.brick_cases[b].room_for(room);
+    std::uint8_t* cases = rc.brick_cases[b].cases.room_for(static_cast<std::size_t>(room));
     for (Id k = bricks.k_begin(b); k < bricks.k_end(b); ++k)
       for (Id j = bricks.j_begin(b); j < bricks.j_end(b); ++j) {
         Id t = 0;
@@ -241,7 +233,7 @@ void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const 
     const Id k_begin = bricks.k_begin(task), k_end = bricks.k_end(task);
     const Id j_begin = bricks.j_begin(task), j_end = bricks.j_end(task);
     // The cases of the brick's cut voxels, in the order it visits them.
-    const std::uint8_t* cases = rc.brick_cases[task].cases.get();
+    const std::uint8_t* cases = rc.brick_cases[task].cases.data();
     auto stored_case = [&](int, const CornerWords&) { return unsigned{*cases++}; };
     // Grid rows j_begin .. j_end of two planes, in this thread's scratch.
     thread_local std::vector<std::uint32_t> scratch;

@@ -17,4 +17,19 @@ std::unique_ptr<T[]> uninitialized_array(std::size_t n) {
   return a;
 }
 
+// An uninitialized_array kept between calls (a session's scratch): grown to
+// the size asked for, never shrunk; its contents are dropped when it grows.
+template <class T>
+struct KeptArray {
+  std::unique_ptr<T[]> elements;
+  std::size_t size = 0;
+
+  T* room_for(std::size_t n) {
+    if (n > size) elements = uninitialized_array<T>(n), size = n;
+    return elements.get();
+  }
+  T* data() { return elements.get(); }
+  const T* data() const { return elements.get(); }
+};
+
 }  // namespace keymesh
