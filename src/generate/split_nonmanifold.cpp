@@ -1,13 +1,20 @@
 #include "keymesh/generate/split_nonmanifold.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <atomic>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/fresh_memory.hpp"
 #include "keymesh/parallel/scan.hpp"
@@ -26,22 +33,85 @@ std::uint64_t edge_key(PointIndex a, PointIndex b) {
   return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
 }
 
-// The common point, checked without building its fans: walking from each
-// corner's leaving edge to the corner whose arriving edge it is visits all
-// d corners before it returns. Taking the first such corner is enough: a
-// second corner with the same arriving edge would never be reached, so a
-// full walk proves every edge at v has one triangle leaving and one
-// arriving. The order of `list` does not matter. Anything else goes to
-// FanRule.
-bool one_closed_fan(PointIndex v, const PointIndex* next, const PointIndex* prev, Id d) {
+// The spokes of a corner of point v: the point its triangle's edge leaving
+// v ends at, and the point the edge arriving at v starts from.
+struct Spokes {
+  PointIndex next, prev;
+};
+
+// The arriving edges of eight corners' spokes, for finding which start at a
+// point: straight from the spokes (four loads, two shuffles where SSE2 is
+// there; copying them out first stalled on every point, the wide load
+// waiting for the narrow stores).
+struct EightPrev {
+#if defined(__SSE2__)
+  __m128 lo, hi;
+  explicit EightPrev(const Spokes* s) {
+    auto two = [&](int k) { return _mm_loadu_ps(reinterpret_cast<const float*>(s + k)); };
+    lo = _mm_shuffle_ps(two(0), two(2), _MM_SHUFFLE(3, 1, 3, 1));
+    hi = _mm_shuffle_ps(two(4), two(6), _MM_SHUFFLE(3, 1, 3, 1));
+  }
+  // Bit k set when corner k's arriving edge starts at w.
+  unsigned starting_at(PointIndex w) const {
+    const __m128i wide = _mm_set1_epi32(static_cast<int>(w));
+    auto mask = [&](__m128 four) {
+      return static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_castps_si128(four), wide))));
+    };
+    return mask(lo) | mask(hi) << 4;
+  }
+#else
+  PointIndex prev[8];
+  explicit EightPrev(const Spokes* s) {
+    for (int k = 0; k < 8; ++k) prev[k] = s[k].prev;
+  }
+  unsigned starting_at(PointIndex w) const {
+    unsigned m = 0;
+    for (unsigned k = 0; k < 8; ++k) m |= unsigned{prev[k] == w} << k;
+    return m;
+  }
+#endif
+};
+
+// The common point, checked without building its fans: from each corner
+// the leaving edge's end w leads to the one corner whose arriving edge
+// starts at w; v is one closed fan when that is a single cycle through all
+// d corners. No w may be v, and each w must start exactly one arriving
+// edge (a second corner with the same arriving edge is another fan, or a
+// non-manifold edge). The order of the corners does not matter. Anything
+// else goes to FanRule.
+// Up to kSmall corners (nearly every point) the corner w leads to is found
+// by comparing w with all kSmall arriving edges at once, without a branch
+// on where it is (a coin toss that mispredicted at every step).
+constexpr Id kSpokesRead = 8;
+
+bool one_closed_fan(PointIndex v, const Spokes* s, Id d) {
+  constexpr Id kSmall = kSpokesRead;
   if (d < 3) return false;
+  if (d <= kSmall) {
+    const EightPrev prev(s);  // reads s[0, 8): the callers' arrays have room
+    const unsigned corners = (1u << d) - 1;
+    std::uint8_t to[kSmall] = {};
+    bool bad = false;
+    for (Id j = 0; j < d; ++j) {
+      const PointIndex w = s[j].next;
+      const unsigned match = prev.starting_at(w) & corners;
+      bad |= (w == v) | (std::popcount(match) != 1);
+      to[j] = static_cast<std::uint8_t>(std::countr_zero(match | 0x100u));
+    }
+    if (bad) return false;
+    Id j = to[0], steps = 1;
+    while (j != 0 && steps < d) j = to[j], ++steps;
+    return j == 0 && steps == d;
+  }
   Id j = 0, steps = 0;
   do {
-    const PointIndex w = next[j];
+    const PointIndex w = s[j].next;
     if (w == v) return false;
     Id i = 0;
-    while (i < d && prev[i] != w) ++i;
+    while (i < d && s[i].prev != w) ++i;
     if (i == d) return false;
+    for (Id other = i + 1; other < d; ++other)
+      if (s[other].prev == w) return false;
     j = i;
   } while (++steps < d && j != 0);
   return j == 0 && steps == d;
@@ -51,9 +121,9 @@ bool one_closed_fan(PointIndex v, const PointIndex* next, const PointIndex* prev
 bool one_closed_fan(const PointIndex* C, PointIndex v, const std::uint32_t* list, Id d) {
   constexpr Id kMax = 64;
   if (d > kMax) return false;
-  PointIndex next[kMax], prev[kMax];
-  for (Id j = 0; j < d; ++j) next[j] = C[next_corner(list[j])], prev[j] = C[prev_corner(list[j])];
-  return one_closed_fan(v, next, prev, d);
+  Spokes s[kMax] = {};
+  for (Id j = 0; j < d; ++j) s[j] = {C[next_corner(list[j])], C[prev_corner(list[j])]};
+  return one_closed_fan(v, s, d);
 }
 
 // A point's fans under the pairing rule (see the header): its corners
@@ -151,41 +221,131 @@ struct Flagged {
   }
 };
 
-// Every point's corners (counted, then placed: a counting sort by point id,
-// the order within a point left to the threads; 4 bytes a corner), each
-// point checked by one_closed_fan; the flagged points' corners sorted, so
-// that all after this is deterministic.
+// Every point's spokes, grouped by point: a counting sort, counted then
+// placed, the order within a point left to the threads (one_closed_fan does
+// not depend on it). Stored as spokes rather than corner ids, so that the
+// check reads one contiguous run per point instead of gathering from the
+// triangles.
+// Without atomics where the triangles come in the order of their points, as
+// a contour's do (a voxel row's triangles use the points of two grid rows of
+// two planes): each chunk of triangles owns the points from its smallest to
+// the next chunk's smallest and counts and places its corners there with
+// plain stores, before the others; the corners it holds of other chunks'
+// points (a contour's: those of its last plane) are counted and placed
+// after, with atomics. Triangles in any other order are grouped the same,
+// only with more atomics.
+// Kept by the calling thread between calls (a session splitting one mesh
+// after another reuses mapped pages instead of faulting in fresh ones),
+// unless past kKeepBytes.
+struct CornersByPoint {
+  std::uint32_t* end;  // point p's spokes: [p ? end[p - 1] : 0, end[p])
+  Spokes* spokes;      // kSpokesRead more than the corners: one_closed_fan reads 8 at once
+
+  static constexpr std::size_t kKeepBytes = std::size_t{256} << 20;
+  struct Scratch {
+    KeptArray<std::uint32_t> end;
+    KeptArray<Spokes> spokes;
+  };
+  static Scratch& scratch() {
+    thread_local Scratch kept;
+    return kept;
+  }
+  ~CornersByPoint() {
+    Scratch& s = scratch();
+    if (s.end.size * sizeof(std::uint32_t) + s.spokes.size * sizeof(Spokes) > kKeepBytes) s = {};
+  }
+
+  CornersByPoint(const PointIndex* C, Id corners, Id n)
+      : end(scratch().end.room_for(static_cast<std::size_t>(n + 1))),
+        spokes(scratch().spokes.room_for(static_cast<std::size_t>(corners) + kSpokesRead)) {
+    const Id triangles = corners / 3;
+    const int chunks = parallel::chunk_count(triangles, 1 << 14);
+    std::vector<PointIndex> owned(static_cast<std::size_t>(chunks) + 1);  // chunk c's: [owned[c], owned[c + 1])
+    parallel::for_each_chunk(triangles, chunks, [&](Id b, Id e, int c) {
+      owned[c] = b < e ? *std::min_element(C + 3 * b, C + 3 * e) : static_cast<PointIndex>(n);
+    });
+    owned[0] = 0;
+    for (int c = 1; c < chunks; ++c) owned[c] = std::max(owned[c], owned[c - 1]);
+    owned[chunks] = static_cast<PointIndex>(n);
+    std::fill(spokes + corners, spokes + corners + kSpokesRead, Spokes{0, 0});
+    std::uint32_t* count = end;
+    count[n] = 0;
+    std::vector<std::vector<std::uint32_t>> spilled(static_cast<std::size_t>(chunks));
+    parallel::for_each_chunk(triangles, chunks, [&](Id b, Id e, int c) {
+      const PointIndex lo = owned[c], hi = owned[c + 1];
+      std::fill(count + lo, count + hi, 0u);
+      for (Id x = 3 * b; x < 3 * e; ++x) {
+        const PointIndex p = C[x];
+        if (p - lo < hi - lo)  // lo <= p < hi
+          ++count[p];
+        else
+          spilled[c].push_back(static_cast<std::uint32_t>(x));
+      }
+    });
+    auto spilled_corners = [&](auto&& f) {
+      parallel::for_each_chunk(chunks, chunks, [&](Id c, Id, int) {
+        for (std::uint32_t x : spilled[c]) f(x, std::atomic_ref<std::uint32_t>(count[C[x]]));
+      });
+    };
+    spilled_corners([](std::uint32_t, std::atomic_ref<std::uint32_t> n_p) { n_p.fetch_add(1, std::memory_order_relaxed); });
+    parallel::exclusive_scan(count, count, n + 1);  // each point's first slot, then (placed) its end
+    parallel::for_each_chunk(triangles, chunks, [&](Id b, Id e, int c) {
+      const PointIndex lo = owned[c], hi = owned[c + 1];
+      for (Id t = b; t < e; ++t) {
+        const PointIndex* x = C + 3 * t;
+        for (int k = 0; k < 3; ++k) {
+          const PointIndex p = x[k];
+          if (p - lo < hi - lo) spokes[count[p]++] = {x[k == 2 ? 0 : k + 1], x[k == 0 ? 2 : k - 1]};
+        }
+      }
+    });
+    spilled_corners([&](std::uint32_t x, std::atomic_ref<std::uint32_t> slot) {
+      spokes[slot.fetch_add(1, std::memory_order_relaxed)] = {C[next_corner(x)], C[prev_corner(x)]};
+    });
+  }
+
+  Id begin(Id p) const { return p == 0 ? 0 : end[p - 1]; }
+};
+
+// The points that are not one closed fan (one_closed_fan over their
+// spokes), then their corners gathered in one pass over the triangles, by
+// point and increasing corner: the few the rule looks at, in an order that
+// makes all after this deterministic.
 Flagged flag_points(const PointIndex* C, Id corners, Id n) {
-  std::vector<std::uint32_t> end;  // counts, then each point's first slot, then its end
-  parallel::resize_fresh(end, static_cast<std::size_t>(n + 1));
-  parallel::for_each(n + 1, [&](Id p) { end[p] = 0; });
-  parallel::for_each(corners, [&](Id c) {
-    std::atomic_ref<std::uint32_t>(end[C[c]]).fetch_add(1, std::memory_order_relaxed);
-  }, 1 << 14);
-  parallel::exclusive_scan(end.data(), end.data(), n + 1);
-  std::vector<std::uint32_t> list;
-  parallel::resize_fresh(list, static_cast<std::size_t>(corners));
-  parallel::for_each(corners, [&](Id c) {
-    list[std::atomic_ref<std::uint32_t>(end[C[c]]).fetch_add(1, std::memory_order_relaxed)] =
-        static_cast<std::uint32_t>(c);
-  }, 1 << 14);
-  auto begin = [&](Id p) { return p == 0 ? std::uint32_t{0} : end[p - 1]; };
-  const int chunks = parallel::chunk_count(n, 1 << 14);
-  std::vector<std::vector<PointIndex>> odd(static_cast<std::size_t>(std::max(chunks, 1)));
-  parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int chunk) {
-    for (Id p = b; p < e; ++p) {
-      const Id d = end[p] - begin(p);
-      if (d > 0 && !one_closed_fan(C, static_cast<PointIndex>(p), list.data() + begin(p), d))
-        odd[chunk].push_back(static_cast<PointIndex>(p));
-    }
-  });
+  std::vector<PointIndex> odd;
+  {
+    const CornersByPoint by_point(C, corners, n);
+    const int chunks = parallel::chunk_count(n, 1 << 14);
+    std::vector<std::vector<PointIndex>> found(static_cast<std::size_t>(std::max(chunks, 1)));
+    parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int chunk) {
+      for (Id p = b; p < e; ++p) {
+        const Id first = by_point.begin(p), d = by_point.end[p] - first;
+        if (d > 0 && !one_closed_fan(static_cast<PointIndex>(p), by_point.spokes + first, d))
+          found[chunk].push_back(static_cast<PointIndex>(p));
+      }
+    });
+    for (const auto& points : found) odd.insert(odd.end(), points.begin(), points.end());
+  }
   Flagged f;
-  for (const auto& points : odd)
-    for (PointIndex p : points) {
-      std::uint32_t* l = list.data() + begin(p);
-      std::sort(l, l + (end[p] - begin(p)));
-      f.add(p, l, end[p] - begin(p));
-    }
+  if (odd.empty()) return f;
+  std::vector<std::uint64_t> is_odd(static_cast<std::size_t>(n / 64 + 1), 0);
+  for (PointIndex p : odd) is_odd[p / 64] |= std::uint64_t{1} << (p % 64);
+  const int chunks = parallel::chunk_count(corners, 1 << 16);
+  std::vector<std::vector<std::uint64_t>> at(static_cast<std::size_t>(std::max(chunks, 1)));  // point << 32 | corner
+  parallel::for_each_chunk(corners, chunks, [&](Id b, Id e, int chunk) {
+    for (Id x = b; x < e; ++x)
+      if ((is_odd[C[x] / 64] >> (C[x] % 64)) & 1) at[chunk].push_back((std::uint64_t{C[x]} << 32) | std::uint64_t(x));
+  });
+  std::vector<std::uint64_t> all;
+  for (const auto& a : at) all.insert(all.end(), a.begin(), a.end());
+  std::sort(all.begin(), all.end());
+  std::vector<std::uint32_t> list;
+  for (std::size_t i = 0; i < all.size();) {
+    const PointIndex p = static_cast<PointIndex>(all[i] >> 32);
+    list.clear();
+    for (; i < all.size() && (all[i] >> 32) == p; ++i) list.push_back(static_cast<std::uint32_t>(all[i]));
+    f.add(p, list.data(), static_cast<Id>(list.size()));
+  }
   return f;
 }
 
@@ -335,8 +495,10 @@ NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
     for (Id i = 0; i < added; ++i) std::copy_n(values.begin() + Id{source[i]} * k, k, grown.begin() + (n + i) * k);
     values.swap(grown);
   };
-  append_copies(mesh.points, 3);
-  for (Field& field : mesh.point_fields) append_copies(field.values, field.components);
+  if (added > 0) {
+    append_copies(mesh.points, 3);
+    for (Field& field : mesh.point_fields) append_copies(field.values, field.components);
+  }
   result.points_added = added;
   return result;
 }

@@ -99,6 +99,41 @@ TEST(SplitNonmanifold, TwoTetrahedraOnOneEdgeBecomeTwo) {
   }
 }
 
+// A bipyramid: apex `top`, `d` equator points from `first` on, apex
+// `bottom`; closed, every point one fan (the apexes of degree d).
+std::vector<PointIndex> bipyramid(PointIndex top, PointIndex bottom, PointIndex first, PointIndex d) {
+  std::vector<PointIndex> t;
+  for (PointIndex k = 0; k < d; ++k) {
+    const PointIndex a = first + k, b = first + (k + 1) % d;
+    t.insert(t.end(), {top, a, b, bottom, b, a});
+  }
+  return t;
+}
+
+// A point of every degree from 3 to 20 (the fan check has a path up to 8
+// corners and another above): one bipyramid's apex is one fan; two
+// bipyramids sharing their top apex make it a point of two fans (degree
+// d1 + d2), split into exactly one copy.
+TEST(SplitNonmanifold, FansOfEveryDegree) {
+  for (PointIndex d1 = 3; d1 <= 12; ++d1) {
+    SurfaceMesh one = points_at_random(d1 + 2);
+    one.connectivity = bipyramid(0, 1, 2, d1);
+    ASSERT_TRUE(analyze::check_topology(one).closed_manifold);
+    EXPECT_EQ(generate::split_nonmanifold(one).points_added, 0) << d1;
+    for (PointIndex d2 : {PointIndex{3}, PointIndex{5}, PointIndex{8}}) {
+      SurfaceMesh two = points_at_random(d1 + d2 + 3);
+      two.connectivity = bipyramid(0, 1, 2, d1);
+      const auto second = bipyramid(0, 2 + d1, 3 + d1, d2);
+      two.connectivity.insert(two.connectivity.end(), second.begin(), second.end());
+      const auto r = generate::split_nonmanifold(two);
+      EXPECT_EQ(r.points_added, 1) << d1 << " " << d2;
+      const auto t = analyze::check_topology(two);
+      EXPECT_TRUE(t.closed_manifold) << d1 << " " << d2;
+      EXPECT_EQ(t.components, 2) << d1 << " " << d2;
+    }
+  }
+}
+
 // A closed 2-manifold: smoothed noise inside a border of low values.
 SurfaceMesh closed_noise_surface() {
   ImageGrid g;
@@ -181,18 +216,31 @@ TEST(SplitNonmanifold, UndoesIdentifiedPointsAndEdges) {
   const auto pinched = analyze::check_topology(m);
   EXPECT_EQ(pinched.nonmanifold_edges, 20);
   EXPECT_GE(pinched.nonmanifold_vertices, 20);
-  for (int threads : {1, 2}) {
-    parallel::set_thread_count(threads);
-    SurfaceMesh s = m;
-    const auto r = generate::split_nonmanifold(s);
-    EXPECT_EQ(r.points_added, 20 + 2 * 20);
-    EXPECT_EQ(r.edges_left, 0);
-    EXPECT_TRUE(renamed(ref, s));
-    const auto t = analyze::check_topology(s);
-    EXPECT_TRUE(t.closed_manifold);
-    EXPECT_EQ(t.euler_characteristic, topo.euler_characteristic);
-    EXPECT_EQ(t.components, topo.components);
-  }
+  // Also with the triangles shuffled (both meshes alike): a contour's come
+  // in the order of their points, which the grouping of corners by point
+  // uses; any other order must give the same answer.
+  std::vector<std::size_t> order(static_cast<std::size_t>(ref.num_cells()));
+  for (std::size_t t = 0; t < order.size(); ++t) order[t] = t;
+  std::shuffle(order.begin(), order.end(), rng);
+  auto shuffled = [&](const SurfaceMesh& x) {
+    SurfaceMesh y = x;
+    for (std::size_t t = 0; t < order.size(); ++t)
+      for (int k = 0; k < 3; ++k) y.connectivity[3 * t + k] = x.connectivity[3 * order[t] + k];
+    return y;
+  };
+  for (bool shuffle : {false, true})
+    for (int threads : {1, 2, 3}) {
+      parallel::set_thread_count(threads);
+      SurfaceMesh s = shuffle ? shuffled(m) : m;
+      const auto r = generate::split_nonmanifold(s);
+      EXPECT_EQ(r.points_added, 20 + 2 * 20);
+      EXPECT_EQ(r.edges_left, 0);
+      EXPECT_TRUE(renamed(shuffle ? shuffled(ref) : ref, s)) << shuffle << " " << threads;
+      const auto t = analyze::check_topology(s);
+      EXPECT_TRUE(t.closed_manifold);
+      EXPECT_EQ(t.euler_characteristic, topo.euler_characteristic);
+      EXPECT_EQ(t.components, topo.components);
+    }
   parallel::set_thread_count(0);
 }
 
