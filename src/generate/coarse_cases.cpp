@@ -45,11 +45,14 @@ CoarseVoxelTable build() {
       int kept_index[5];
       const int kept = fold_within_voxel(tri, facts, n, kept_index);
       CoarseVoxel v = static_cast<CoarseVoxel>(kept) << kCoarseCountShift;
-      for (int k = 0; k < kept; ++k)
+      for (int k = 0; k < kept; ++k) {
         v |= static_cast<CoarseVoxel>(tri[3 * k] | tri[3 * k + 1] << 3 | tri[3 * k + 2] << 6) << (9 * k);
+        if (facts[kept_index[k]].on_face) v |= CoarseVoxel{1} << (kCoarseFaceShift + k);
+      }
       t.entries.push_back(v);
     }
   }
+  if (t.entries.size() > 65536) throw std::logic_error("coarse_voxel_table: entries do not fit a 16-bit index");
   for (unsigned c = 0; c < 512; ++c) {
     const unsigned a = c & 7u, b = (c >> 3) & 7u, d = c >> 6;
     if (a == b || b == d || a == d) continue;

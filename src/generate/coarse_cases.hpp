@@ -7,7 +7,7 @@
 // corners dropped, and the folds decided within the voxel (coarse_folds.hpp:
 // triangles off the voxel's faces over the same three corners). Face
 // triangles are kept with their face code, for the decision across faces.
-// 36,450 entries of 16 bytes (the sum over cube cases of 2^(cut edges)).
+// 36,450 entries of 8 bytes (the sum over cube cases of 2^(cut edges)).
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -21,10 +21,13 @@ constexpr std::uint8_t kCubeEdgeLayout[12][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1},
                                                  {2, 2}, {3, 2}, {4, 0}, {4, 1}, {5, 1}, {6, 0}};
 
 // A voxel's coarse triangles: triangle t's corners c0 | c1 << 3 | c2 << 6
-// (x | y << 1 | z << 2) in bits [9 t, 9 t + 9), the count in bits 45-47.
-// 8 bytes, so that the table (292 KB) stays in the second-level cache.
+// (x | y << 1 | z << 2) in bits [9 t, 9 t + 9), the count in bits 45-47,
+// and in bits 48-52 which of them are face triangles (bit 48 + t), so that
+// the tally pass visits only those. 8 bytes, so that the table (292 KB)
+// stays in the second-level cache.
 using CoarseVoxel = std::uint64_t;
 constexpr int kCoarseCountShift = 45;
+constexpr int kCoarseFaceShift = 48;
 
 struct CoarseVoxelTable {
   std::vector<CoarseVoxel> entries;
@@ -37,8 +40,10 @@ struct CoarseVoxelTable {
   // corners lie on one face of the voxel, else 0.
   std::array<std::uint8_t, 512> face_code{};
 
-  CoarseVoxel at(unsigned cube_case, unsigned far) const {
-    return entries[first[cube_case] + low[cube_case][far & 63u] + high[cube_case][far >> 6]];
+  // The entry of a voxel of this cube case and far bits (below 2^16: there
+  // are 36,450).
+  std::uint16_t index(unsigned cube_case, unsigned far) const {
+    return static_cast<std::uint16_t>(first[cube_case] + low[cube_case][far & 63u] + high[cube_case][far >> 6]);
   }
 };
 

@@ -103,42 +103,38 @@ inline int fold_within_voxel(std::uint32_t* tri, const CornerTriangle* facts, in
 
 // A face triangle, recorded for the row that decides its face.
 struct FaceTriangle {
-  std::uint32_t tri;  // index among its voxel row's triangles
-  std::uint32_t i;    // its voxel along the row
-  std::uint8_t code;  // CornerTriangle::code
+  std::uint32_t tri;    // index among its voxel row's triangles
+  std::uint32_t i;      // its voxel along the row
+  std::uint8_t code;    // CornerTriangle::code
+  std::uint8_t folded;  // 1 once fold_across_faces dropped it (a member of its own, so
+                        // that marking it races with no thread reading the others)
 };
-
-// The mark of a dropped triangle in the rows' slots (no coarse id is this
-// large: ids are below the number of triangle corners, < 2^32 - 1).
-constexpr std::uint32_t kDroppedTriangle = ~std::uint32_t{0};
 
 // A face triangle as fold_across_faces sorts it.
 struct FoldEntry {
   std::uint64_t key;      // the face and its three points
   std::uint32_t row, tri; // mesh order: row 0 (this one) before 1 (the next), then tri
   bool positive;
-  std::uint32_t* slot;
+  FaceTriangle* face;
 };
 
 // Decides the faces that voxel row (j, k) owns: the x faces between its
 // voxels, its +y and +z faces (shared with rows (j + 1, k) and (j, k + 1),
 // whose -y and -z face triangles are passed as `next_y` and `next_z`, empty
 // when there is no such row), and its -y and -z faces when they lie on the
-// grid's border (j == 0, k == 0). Marks the dropped triangles of all three
-// rows kDroppedTriangle in their slots (`own_slots`, `next_y_slots`,
-// `next_z_slots`: each row's triangles, 3 ids apiece). Every face is owned by
-// one row, so rows decided at once touch different triangles.
-inline void fold_across_faces(const FaceTriangle* own, std::size_t n_own, std::uint32_t* own_slots, bool j_first,
-                              bool k_first, const FaceTriangle* next_y, std::size_t n_next_y,
-                              std::uint32_t* next_y_slots, const FaceTriangle* next_z, std::size_t n_next_z,
-                              std::uint32_t* next_z_slots, std::vector<FoldEntry>& entries) {
+// grid's border (j == 0, k == 0). Marks the dropped face triangles of all
+// three rows `folded`. Every face is owned by one row, so rows decided at
+// once mark different triangles.
+inline void fold_across_faces(FaceTriangle* own, std::size_t n_own, bool j_first, bool k_first, FaceTriangle* next_y,
+                              std::size_t n_next_y, FaceTriangle* next_z, std::size_t n_next_z,
+                              std::vector<FoldEntry>& entries) {
   entries.clear();
   // key: ((face position along the row * 3 + axis) * 2 + upper) * 4 + missing corner
   auto key = [](std::uint64_t position, unsigned axis, unsigned upper, unsigned code) {
     return ((position * 3 + axis) * 2 + upper) * 4 + ((code >> 3) & 3u);
   };
   for (std::size_t e = 0; e < n_own; ++e) {
-    const FaceTriangle& f = own[e];
+    FaceTriangle& f = own[e];
     const unsigned axis = f.code & 3u, side = (f.code >> 2) & 1u;
     const bool positive = (f.code >> 5) & 1u;
     std::uint64_t k = 0;
@@ -146,18 +142,17 @@ inline void fold_across_faces(const FaceTriangle* own, std::size_t n_own, std::u
     else if (side == 1) k = key(f.i, axis, 1, f.code);
     else if (axis == 1 ? j_first : k_first) k = key(f.i, axis, 0, f.code);
     else continue;  // owned by the row below
-    entries.push_back({k, 0, f.tri, positive, own_slots + 3 * std::size_t{f.tri}});
+    entries.push_back({k, 0, f.tri, positive, &f});
   }
-  auto add_next = [&](const FaceTriangle* next, std::size_t n, std::uint32_t* slots, unsigned axis) {
+  auto add_next = [&](FaceTriangle* next, std::size_t n, unsigned axis) {
     for (std::size_t e = 0; e < n; ++e) {
-      const FaceTriangle& f = next[e];
+      FaceTriangle& f = next[e];
       if ((f.code & 3u) != axis || ((f.code >> 2) & 1u) != 0) continue;
-      entries.push_back({key(f.i, axis, 1, f.code), 1, f.tri, ((f.code >> 5) & 1u) != 0,
-                         slots + 3 * std::size_t{f.tri}});
+      entries.push_back({key(f.i, axis, 1, f.code), 1, f.tri, ((f.code >> 5) & 1u) != 0, &f});
     }
   };
-  add_next(next_y, n_next_y, next_y_slots, 1);
-  add_next(next_z, n_next_z, next_z_slots, 2);
+  add_next(next_y, n_next_y, 1);
+  add_next(next_z, n_next_z, 2);
   if (entries.size() < 2) return;
   // Most face triangles share their face with no other: the keys that occur
   // more than once are found with a small hash set, and only their entries
@@ -190,7 +185,7 @@ inline void fold_across_faces(const FaceTriangle* own, std::size_t n_own, std::u
     std::size_t e = b + 1;
     while (e < entries.size() && entries[e].key == entries[b].key) ++e;
     resolve_equal_triangles(static_cast<int>(e - b), [&](int m) { return entries[b + m].positive; },
-                            [&](int m) { entries[b + m].slot[0] = kDroppedTriangle; });
+                            [&](int m) { entries[b + m].face->folded = 1; });
     b = e;
   }
 }

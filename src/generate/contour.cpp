@@ -316,38 +316,44 @@ struct CoarsePointWriter {
   }
 };
 
+// The structured plan's output arrays (below).
+template <class T>
+PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, const ImageGrid& grid,
+                                  const EdgeInterpolator<T>& interp, const GridShape& s, const ContourOptions& opt,
+                                  std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys,
+                                  PointIndex*& connectivity);
+
 // Coarsening in the structured plan's pass (contour_coarse_rows.hpp): for
-// every isovalue, rank the coarse points, write each as the mean of its
-// crossings (the fine point values, as PointWriter makes them, summed in
-// double in key order, as coarsen() sums a group), then the triangles with
-// coarse ids, folds removed in that pass by remove_folds' rule.
+// every isovalue, rank the coarse points and count the coarse triangles
+// kept (folds removed in that pass by remove_folds' rule), so that the
+// outputs are allocated once at their final size; then write each coarse
+// point as the mean of its crossings (the fine point values, as PointWriter
+// makes them, summed in double in key order, as coarsen() sums a group) and
+// the triangles with coarse ids, each once at its final place.
 template <class T>
 void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const std::vector<RowCounts>& rows,
                   Id fine_triangles, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
                   const GridShape& s, const ContourOptions& opt, ContourStats& st) {
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
-  // Every isovalue's coarse points ranked first, so that the point arrays
-  // are allocated at their final size. Scratch kept by the calling thread,
-  // like the inside bits.
-  // `slots`: one isovalue's fine triangles' room, where each voxel row's
-  // coarse triangles are written before they are packed.
-  // `triangle_scratch`: the face triangles of write_coarse_triangles.
+  // Scratch kept by the calling thread, like the inside bits: every
+  // isovalue's coarse points and face triangles.
   thread_local std::vector<CoarseBits> coarse;
-  thread_local std::vector<PointIndex> slots;
-  thread_local CoarseTriangleScratch triangle_scratch;
+  thread_local std::vector<CoarseTriangles> triangles;
   coarse.resize(static_cast<std::size_t>(n_iso));
+  triangles.resize(static_cast<std::size_t>(n_iso));
   struct Release {
     ~Release() {
-      std::size_t bytes = slots.capacity() * sizeof(PointIndex);
+      std::size_t bytes = 0;
       for (const auto& c : coarse)
         bytes += (c.far.size + c.points.size) * sizeof(std::uint64_t) + c.first.size * sizeof(std::uint32_t);
-      for (const auto& f : triangle_scratch.faces) bytes += f.size * sizeof(FaceTriangle);
-      if (bytes > kKeepScratch) free_storage(coarse), free_storage(slots), triangle_scratch = {};
+      for (const auto& t : triangles)
+        for (const auto& f : t.faces) bytes += f.size * sizeof(FaceTriangle);
+      if (bytes > kKeepScratch) free_storage(coarse), free_storage(triangles);
     }
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
-  auto t0 = Clock::now();
   for (Id iso = 0; iso < n_iso; ++iso) {
+    auto t0 = Clock::now();
     const double isovalue = opt.isovalues[iso];
     rank_coarse_points(bits[iso], s, rows[iso], coarse_points, [&](Id i, Id j, Id k, int axis) {
       const Id p0 = i + j * s.nx + k * s.nxy;
@@ -357,10 +363,20 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
       return !std::isfinite(t) || t >= 0.5;  // EdgeInterpolator::at's t, clamped, >= 0.5
     }, coarse[iso]);
     coarse_points += coarse[iso].count;
+    st.weld += seconds_since(t0);
+    t0 = Clock::now();
+    tally_coarse_triangles(bits[iso], s, rows[iso], coarse[iso], triangles[iso]);
+    st.generate += seconds_since(t0);
+    t0 = Clock::now();
+    fold_and_count(s, coarse_triangles, triangles[iso]);
+    coarse_triangles += triangles[iso].count;
+    st.coarsen += seconds_since(t0);
   }
-  st.weld += seconds_since(t0);
-  std::vector<std::uint64_t>* no_keys = nullptr;
-  const CoarsePointWriter<T> write{prepare_points(mesh, coarse_points, grid, interp, s, opt, no_keys, no_keys, true)};
+  auto t0 = Clock::now();
+  PointIndex* connectivity = nullptr;
+  const CoarsePointWriter<T> write{structured_outputs(mesh, coarse_points, coarse_triangles, grid, interp, s, opt,
+                                                      nullptr, nullptr, connectivity)};
+  st.fields += seconds_since(t0);
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
     t0 = Clock::now();
@@ -379,17 +395,8 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
       });
     st.fields += seconds_since(t0);
     t0 = Clock::now();
-    const RowCounts& rc = rows[iso];
-    const Id fine = rc.triangle_first.back() - rc.triangle_first.front();
-    if (static_cast<Id>(slots.size()) < 3 * fine) parallel::resize_fresh(slots, static_cast<std::size_t>(3 * fine));
-    write_coarse_triangles(bits[iso], s, rc, cb, rc.triangle_first.front(), slots.data(), triangle_scratch);
+    write_coarse_triangles(bits[iso], s, cb, triangles[iso], connectivity);
     st.generate += seconds_since(t0);
-    t0 = Clock::now();
-    coarse_triangles += fold_and_pack(s, rc, rc.triangle_first.front(), slots.data(), triangle_scratch, [&](Id kept) {
-      parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * (coarse_triangles + kept)));
-      return mesh.connectivity.data() + 3 * coarse_triangles;
-    });
-    st.coarsen += seconds_since(t0);
   }
   st.triangles_before_coarsening = fine_triangles;
   t0 = Clock::now();

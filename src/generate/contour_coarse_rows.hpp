@@ -20,13 +20,20 @@
 //   3. points  every coarse point sums its at most six crossings in the
 //              order of their edge keys (the order a KEY-REDUCE over the
 //              fine points would merge them in) and writes the mean;
-//   4. triangles  each cut voxel's coarse triangles looked up by its cube
-//              case and far bits (coarse_cases.hpp: repeated corners and
-//              folds within the voxel already decided), written once with
-//              coarse ids; face triangles recorded;
-//   5. folds   across the faces between voxels (coarse_folds.hpp), then
-//              each voxel row's survivors packed.
-// The fine points are never written. The bytes are those of coarsen() over
+//   4. tally   each cut voxel's coarse triangles looked up by its cube case
+//              and far bits (coarse_cases.hpp: repeated corners and folds
+//              within the voxel already decided) and the entry kept; every
+//              voxel row counts its triangles and records its face
+//              triangles;
+//   5. folds   across the faces between voxels decided (coarse_folds.hpp),
+//              then each voxel row's kept triangles counted and prefix
+//              sums give its first: the caller allocates the triangles'
+//              array once, at its final size;
+//   6. write   each voxel row's kept triangles written once, at their final
+//              place, with coarse ids (from the kept entries: no second
+//              lookup).
+// The caller runs steps 1, 2, 4 and 5 for every isovalue, allocates the
+// outputs, then runs 3 and 6. The fine points are never written. The bytes are those of coarsen() over
 // the fine mesh (generate/coarsen.hpp): tests hold them equal. The caller
 // then splits non-manifold points and edges (split_nonmanifold.hpp), as
 // coarsen() does.
@@ -254,105 +261,97 @@ struct VoxelFarBits {
   }
 };
 
-// Scratch of write_coarse_triangles and fold_and_pack, kept by their caller
-// across isovalues and calls: each brick's face triangles, each voxel row's
-// range of them, and each voxel row's triangles.
-struct CoarseTriangleScratch {
-  // Each brick's face triangles, its rows' one after the other (room for
-  // the brick's fine triangles, only the records written touched).
-  std::vector<KeptArray<FaceTriangle>> faces;
+// One isovalue's coarse triangles between their passes, kept by the caller
+// across isovalues and calls. By brick (contour_rows.hpp's VoxelBricks):
+// its cut voxels' table entries and its face triangles; by voxel row: its
+// range of face triangles, its triangle count, then its first triangle.
+struct CoarseTriangles {
+  // Room for the brick's fine triangles (a bound on both its cut voxels
+  // and its face triangles); only the elements written are touched.
+  std::vector<KeptArray<std::uint16_t>> entries;  // CoarseVoxelTable::index of each cut voxel, in walk order
+  std::vector<KeptArray<FaceTriangle>> faces;     // its rows' one after the other
   std::vector<std::uint32_t> face_first;  // by voxel row: its first record in its brick's
   std::vector<std::uint32_t> face_count;  // by voxel row
-  std::vector<Id> kept;                   // by voxel row: triangles written, then (fold_and_pack) its first
+  std::vector<Id> first;                  // by voxel row: its triangles (tally), then its first (fold_and_count)
+  std::vector<std::uint8_t> folded;       // by voxel row: fold_across_faces dropped some of its triangles
+  Id count = 0;                           // triangles kept
+
+  FaceTriangle* faces_of(const VoxelBricks& bricks, Id ny, Id vr) const {
+    return faces[bricks.brick_of(vr % (ny - 1), vr / (ny - 1))].elements.get() + face_first[vr];
+  }
 };
 
-// Step 4: the triangles of voxel rows (j, k), k in [0, nz - 1), with coarse
-// ids, written into `slots` (room for the fine triangles at their fine
-// offsets rc.triangle_first, shifted by `fine_base`), each voxel row's
-// triangles at the start of its slots: those with two equal corners dropped
-// and the folds within each voxel decided (coarse_cases.hpp); the face
-// triangles recorded in `sc` for fold_and_pack.
-inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc,
-                                   const CoarseBits& cb, Id fine_base, PointIndex* slots, CoarseTriangleScratch& sc) {
+// Calls row(j, k, walk) for each voxel row (j, k) of `brick` in the count
+// pass's order (contour_rows.hpp's VoxelBricks), where walk(voxel) calls
+// voxel(i, value) for each cut voxel i of the row, in increasing i, and
+// `value` is the next of the brick's values stored in that order (the
+// count pass's cube cases, the tally's table entries).
+template <class Stored, class Row>
+void for_each_brick_row(const InsideBits& bits, const GridShape& s, const VoxelBricks& bricks, Id brick,
+                        const Stored* stored, Row&& row) {
+  auto next_stored = [&](int, const CornerWords&) { return unsigned{*stored++}; };
+  for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
+    for (Id j = bricks.j_begin(brick); j < bricks.j_end(brick); ++j)
+      row(j, k, [&](auto&& voxel) { for_each_cut_voxel(bits, s, j, k, next_stored, voxel); });
+}
+
+// Step 4: each cut voxel's table entry looked up by its cube case and far
+// bits (coarse_cases.hpp) and kept; every voxel row's coarse triangles
+// counted (those with two equal corners dropped and the folds within each
+// voxel decided: the table's) and its face triangles recorded, before any
+// triangle is written.
+inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc,
+                                   const CoarseBits& cb, CoarseTriangles& ct) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
-  // The count pass's bricks (contour_rows.hpp), whose cube cases it kept.
   const VoxelBricks bricks(s, 0, layers);
-  if (sc.faces.size() < static_cast<std::size_t>(bricks.count())) sc.faces.resize(static_cast<std::size_t>(bricks.count()));
-  sc.face_first.resize(static_cast<std::size_t>(voxel_rows));
-  sc.face_count.resize(static_cast<std::size_t>(voxel_rows));
-  sc.kept.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
-  const CoarseVoxelTable& voxels = coarse_voxel_table();
-  auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
+  const auto n_bricks = static_cast<std::size_t>(bricks.count());
+  if (ct.faces.size() < n_bricks) ct.faces.resize(n_bricks), ct.entries.resize(n_bricks);
+  ct.face_first.resize(static_cast<std::size_t>(voxel_rows));
+  ct.face_count.resize(static_cast<std::size_t>(voxel_rows));
+  ct.first.resize(static_cast<std::size_t>(voxel_rows + 1));
+  const CoarseVoxelTable& table = coarse_voxel_table();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
-    const Id j_begin = bricks.j_begin(brick), j_end = bricks.j_end(brick);
-    const std::uint8_t* cases = rc.brick_cases[brick].cases.data();
-    Id room = 0;  // the brick's fine triangles bound its face triangles
+    Id room = 0;  // the brick's fine triangles
     for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
-      room += rc.triangle_first[k * (s.ny - 1) + j_end] - rc.triangle_first[k * (s.ny - 1) + j_begin];
-    FaceTriangle* f = sc.faces[brick].room_for(static_cast<std::size_t>(room));
-    auto stored_case = [&](int, const CornerWords&) { return unsigned{*cases++}; };
-    // Coarse ids by grid point of the rows (j, k), (j, k + 1) ("lo") and
-    // (j + 1, k), (j + 1, k + 1) ("hi"), by corner bits z: each row filled
-    // once as hi, then used again as lo by the next voxel row.
-    thread_local std::vector<std::uint32_t> id_scratch;
-    if (static_cast<Id>(id_scratch.size()) < 4 * s.nx) id_scratch.resize(static_cast<std::size_t>(4 * s.nx));
-    std::uint32_t* lo[2] = {id_scratch.data(), id_scratch.data() + s.nx};
-    std::uint32_t* hi[2] = {id_scratch.data() + 2 * s.nx, id_scratch.data() + 3 * s.nx};
-    for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k) {
-      cb.row_ids(k * s.ny + j_begin, lo[0]);
-      cb.row_ids((k + 1) * s.ny + j_begin, lo[1]);
-      for (Id j = j_begin; j < j_end; ++j) {
-        cb.row_ids(k * s.ny + j + 1, hi[0]);
-        cb.row_ids((k + 1) * s.ny + j + 1, hi[1]);
-        // The grid rows of the voxel row's corners, by corner bits y | z << 1.
-        const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
-        const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
-        const VoxelFarBits far_bits(cb, r);
-        const Id vr = k * (s.ny - 1) + j;
-        PointIndex* const begin = slots_of(vr);
-        PointIndex* o = begin;
-        FaceTriangle* const faces = f;
-        sc.face_first[vr] = static_cast<std::uint32_t>(f - sc.faces[brick].data());
-        std::uint32_t written = 0;  // triangles of the row so far
-        for_each_cut_voxel(bits, s, j, k, stored_case, [&](Id i, unsigned cube_case) {
-          const CoarseVoxel v = voxels.at(cube_case, far_bits(i));
-          // Corner c's coarse id: grid point i + (c & 1) of row r[c >> 1].
-          auto id = [&](unsigned c) { return row_ids[c >> 1][i + (c & 1u)]; };
-          const int count = static_cast<int>(v >> kCoarseCountShift);
-          for (int t = 0; t < count; ++t) {
-            const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
-            o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
-            // Written always, kept when a face triangle (no branch).
-            const unsigned code = voxels.face_code[c];
-            *f = {written, static_cast<std::uint32_t>(i), static_cast<std::uint8_t>(code & 0x7fu)};
-            f += code >> 7;
-            o += 3;
-            ++written;
-          }
-        });
-        sc.face_count[vr] = static_cast<std::uint32_t>(f - faces);
-        sc.kept[vr] = written;
-        std::swap(lo[0], hi[0]);
-        std::swap(lo[1], hi[1]);
-      }
-    }
+      room += rc.triangle_first[k * (s.ny - 1) + bricks.j_end(brick)] -
+              rc.triangle_first[k * (s.ny - 1) + bricks.j_begin(brick)];
+    FaceTriangle* const base = ct.faces[brick].room_for(static_cast<std::size_t>(room));
+    FaceTriangle* f = base;
+    std::uint16_t* entry = ct.entries[brick].room_for(static_cast<std::size_t>(room));
+    for_each_brick_row(bits, s, bricks, brick, rc.brick_cases[brick].cases.data(), [&](Id j, Id k, auto&& walk) {
+      // The grid rows of the voxel row's corners, by corner bits y | z << 1.
+      const Id r[4] = {k * s.ny + j, k * s.ny + j + 1, (k + 1) * s.ny + j, (k + 1) * s.ny + j + 1};
+      const VoxelFarBits far_bits(cb, r);
+      const Id vr = k * (s.ny - 1) + j;
+      FaceTriangle* const row_faces = f;
+      std::uint32_t written = 0;  // triangles of the row so far
+      walk([&](Id i, unsigned cube_case) {
+        const std::uint16_t e = table.index(cube_case, far_bits(i));
+        *entry++ = e;
+        const CoarseVoxel v = table.entries[e];
+        for (unsigned m = static_cast<unsigned>(v >> kCoarseFaceShift); m; m &= m - 1) {
+          const int t = std::countr_zero(m);
+          const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
+          *f++ = {written + static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(i),
+                  static_cast<std::uint8_t>(table.face_code[c] & 0x7fu), 0};
+        }
+        written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
+      });
+      ct.face_first[vr] = static_cast<std::uint32_t>(row_faces - base);
+      ct.face_count[vr] = static_cast<std::uint32_t>(f - row_faces);
+      ct.first[vr] = written;
+    });
   }, 1);
 }
 
 // Step 5: the folds across the faces between voxels decided (each row the
-// faces it owns, coarse_folds.hpp), then each voxel row's survivors packed in
-// parallel into `out` (given by `grow(kept)`, room for the triangles kept).
-// Returns the triangles kept.
-template <class Grow>
-Id fold_and_pack(const GridShape& s, const RowCounts& rc, Id fine_base, PointIndex* slots, CoarseTriangleScratch& sc,
-                 Grow&& grow) {
+// faces it owns, coarse_folds.hpp), then each voxel row's kept triangles
+// counted and its first triangle found by a prefix sum, starting at
+// `first_triangle`. Sets ct.count.
+inline void fold_and_count(const GridShape& s, Id first_triangle, CoarseTriangles& ct) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
-  auto slots_of = [&](Id vr) { return slots + 3 * (rc.triangle_first[vr] - fine_base); };
   const VoxelBricks bricks(s, 0, layers);
-  auto faces_of = [&](Id vr) {
-    return sc.faces[bricks.brick_of(vr % (s.ny - 1), vr / (s.ny - 1))].data() + sc.face_first[vr];
-  };
-  auto face_count = [&](Id vr) { return static_cast<std::size_t>(sc.face_count[vr]); };
+  auto face_count = [&](Id vr) { return static_cast<std::size_t>(ct.face_count[vr]); };
   parallel::for_each_dynamic(voxel_rows, [&](Id vr) {
     const Id j = vr % (s.ny - 1), k = vr / (s.ny - 1);
     const Id ny_row = j + 1 < s.ny - 1 ? vr + 1 : -1, nz_row = k + 1 < layers ? vr + (s.ny - 1) : -1;
@@ -360,36 +359,85 @@ Id fold_and_pack(const GridShape& s, const RowCounts& rc, Id fine_base, PointInd
                       n_z = nz_row >= 0 ? face_count(nz_row) : 0;
     if (n_own + n_y + n_z < 2) return;
     thread_local std::vector<FoldEntry> entries;
-    fold_across_faces(faces_of(vr), n_own, slots_of(vr), j == 0, k == 0, n_y ? faces_of(ny_row) : nullptr, n_y,
-                      n_y ? slots_of(ny_row) : nullptr, n_z ? faces_of(nz_row) : nullptr, n_z,
-                      n_z ? slots_of(nz_row) : nullptr, entries);
+    fold_across_faces(ct.faces_of(bricks, s.ny, vr), n_own, j == 0, k == 0,
+                      n_y ? ct.faces_of(bricks, s.ny, ny_row) : nullptr, n_y,
+                      n_z ? ct.faces_of(bricks, s.ny, nz_row) : nullptr, n_z, entries);
   }, 64);
-  // Each row's survivors counted, first index by a prefix sum, then the rows
-  // copied in parallel.
-  std::vector<Id>& first = sc.kept;
-  std::vector<std::uint8_t> folded(static_cast<std::size_t>(voxel_rows));
+  ct.folded.resize(static_cast<std::size_t>(voxel_rows));
   parallel::for_each(voxel_rows, [&](Id vr) {
-    const FaceTriangle* f = faces_of(vr);
-    const PointIndex* row = slots_of(vr);
+    const FaceTriangle* f = ct.faces_of(bricks, s.ny, vr);
     Id dropped = 0;
-    for (std::size_t e = 0; e < face_count(vr); ++e) dropped += row[3 * std::size_t{f[e].tri}] == kDroppedTriangle;
-    first[vr] -= dropped;
-    folded[vr] = dropped > 0;
+    for (std::size_t e = 0; e < face_count(vr); ++e) dropped += f[e].folded;
+    ct.first[vr] -= dropped;
+    ct.folded[vr] = dropped > 0;
   });
-  const Id total = parallel::exclusive_scan(first.data(), first.data(), voxel_rows + 1);
-  PointIndex* out = grow(total);
-  parallel::for_each(voxel_rows, [&](Id vr) {
-    const PointIndex* row = slots_of(vr);
-    PointIndex* o = out + 3 * first[vr];
-    PointIndex* const end = out + 3 * first[vr + 1];
-    if (!folded[vr]) {
-      std::memcpy(o, row, static_cast<std::size_t>(end - o) * sizeof(PointIndex));
-      return;
-    }
-    for (; o < end; row += 3)
-      if (row[0] != kDroppedTriangle) o[0] = row[0], o[1] = row[1], o[2] = row[2], o += 3;
-  });
-  return total;
+  ct.first[voxel_rows] = 0;
+  ct.count = parallel::exclusive_scan(ct.first.data(), ct.first.data(), voxel_rows + 1);
+  if (first_triangle) parallel::for_each(voxel_rows + 1, [&](Id vr) { ct.first[vr] += first_triangle; });
+}
+
+// Step 6: the kept triangles of voxel rows (j, k), k in [0, nz - 1), with
+// coarse ids, written once at their final place in `connectivity` (the
+// rows' first triangles of fold_and_count), from the entries the tally kept.
+inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, const CoarseBits& cb,
+                                   const CoarseTriangles& ct, PointIndex* connectivity) {
+  const VoxelBricks bricks(s, 0, s.nz - 1);
+  const CoarseVoxel* table = coarse_voxel_table().entries.data();
+  parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
+    // Coarse ids by grid point of the rows (j, k), (j, k + 1) ("lo") and
+    // (j + 1, k), (j + 1, k + 1) ("hi"), by corner bits z: each row filled
+    // once as hi, then used again as lo by the next voxel row.
+    thread_local std::vector<std::uint32_t> id_scratch;
+    if (static_cast<Id>(id_scratch.size()) < 4 * s.nx) id_scratch.resize(static_cast<std::size_t>(4 * s.nx));
+    std::uint32_t* lo[2] = {id_scratch.data(), id_scratch.data() + s.nx};
+    std::uint32_t* hi[2] = {id_scratch.data() + 2 * s.nx, id_scratch.data() + 3 * s.nx};
+    const std::uint16_t* entries = ct.entries[brick].data();
+    for_each_brick_row(bits, s, bricks, brick, entries, [&](Id j, Id k, auto&& walk) {
+      if (j == bricks.j_begin(brick)) {  // a layer's first row: its lo rows
+        cb.row_ids(k * s.ny + j, lo[0]);
+        cb.row_ids((k + 1) * s.ny + j, lo[1]);
+      }
+      cb.row_ids(k * s.ny + j + 1, hi[0]);
+      cb.row_ids((k + 1) * s.ny + j + 1, hi[1]);
+      const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
+      const Id vr = k * (s.ny - 1) + j;
+      PointIndex* o = connectivity + 3 * ct.first[vr];
+      // Triangle corners c0 | c1 << 3 | c2 << 6 of voxel i as coarse ids:
+      // corner c is grid point i + (c & 1) of corner row c >> 1.
+      auto write = [&](Id i, unsigned c) {
+        auto id = [&](unsigned corner) { return row_ids[corner >> 1][i + (corner & 1u)]; };
+        o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
+        o += 3;
+      };
+      if (!ct.folded[vr]) {
+        walk([&](Id i, unsigned e) {
+          const CoarseVoxel v = table[e];
+          const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
+          for (int t = 0; t < count; ++t) write(i, static_cast<unsigned>(v >> (9 * t)) & 511u);
+        });
+      } else {
+        // A row with folds across faces (few): its dropped triangles, in
+        // the order of its face records, skipped.
+        const FaceTriangle* f = ct.faces_of(bricks, s.ny, vr);
+        const FaceTriangle* const f_end = f + ct.face_count[vr];
+        auto next_drop = [&] {
+          while (f < f_end && !f->folded) ++f;
+          return f < f_end ? f++->tri : ~std::uint32_t{0};
+        };
+        std::uint32_t drop = next_drop(), written = 0;
+        walk([&](Id i, unsigned e) {
+          const CoarseVoxel v = table[e];
+          const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
+          for (int t = 0; t < count; ++t, ++written) {
+            if (written == drop) drop = next_drop();
+            else write(i, static_cast<unsigned>(v >> (9 * t)) & 511u);
+          }
+        });
+      }
+      std::swap(lo[0], hi[0]);
+      std::swap(lo[1], hi[1]);
+    });
+  }, 1);
 }
 
 }  // namespace keymesh::generate
