@@ -268,16 +268,23 @@ struct CoarsePointWriter {
   }
 
   // Positions, with or without the scalar (the usual calls): the same sums
-  // as operator()'s, kept in registers.
+  // as operator()'s, kept in registers. A crossing's two coordinates off
+  // its edge's axis are the point's own: computed once a point, by
+  // position()'s expression (hence the same floats), and per crossing only
+  // the one along its axis.
   template <bool Scalar>
   void positions(std::uint32_t id, Id i, Id j, Id k, const std::uint8_t* codes, int n, Id iso) const {
     const GridShape& s = out.s;
+    auto coordinate = [&](int a, double u) { return static_cast<float>(s.origin[a] + s.spacing[a] * u); };
+    const float grid[3] = {coordinate(0, static_cast<double>(i)), coordinate(1, static_cast<double>(j)),
+                           coordinate(2, static_cast<double>(k + s.k_offset))};
     double sx = 0, sy = 0, sz = 0, sv = 0;
     for (int c = 0; c < n; ++c) {
       const CoarseCrossing x = crossing_at(i, j, k, codes[c]);
       const auto p = out.interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, x.axis, iso);
-      float xyz[3];
-      out.interp.position(p, xyz);
+      float xyz[3] = {grid[0], grid[1], grid[2]};
+      const int a = p.axis;
+      xyz[a] = coordinate(a, static_cast<double>(p.ijk[a] + (a == 2 ? s.k_offset : 0)) + p.t);
       sx += as_stored(xyz[0]), sy += as_stored(xyz[1]), sz += as_stored(xyz[2]);
       if constexpr (Scalar) sv += as_stored(out.interp.scalar(p));
     }
