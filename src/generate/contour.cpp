@@ -1,5 +1,6 @@
 #include "keymesh/generate/contour.hpp"
 
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -362,13 +363,34 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   for (Id iso = 0; iso < n_iso; ++iso) {
     auto t0 = Clock::now();
     const double isovalue = opt.isovalues[iso];
-    rank_coarse_points(bits[iso], s, rows[iso], coarse_points, [&](Id i, Id j, Id k, int axis) {
-      const Id p0 = i + j * s.nx + k * s.nxy;
-      const double v0 = static_cast<double>(interp.samples[p0]);
-      const double v1 = static_cast<double>(interp.samples[p0 + s.stride[axis]]);
+    // Whether a cut edge's crossing is nearer its far end: EdgeInterpolator::at's t, clamped, >= 0.5.
+    auto nearer_far_end = [isovalue](double v0, double v1) {
       const double t = (isovalue - v0) / (v1 - v0);
-      return !std::isfinite(t) || t >= 0.5;  // EdgeInterpolator::at's t, clamped, >= 0.5
-    }, coarse[iso]);
+      return !std::isfinite(t) || t >= 0.5;
+    };
+    auto rank = [&](auto&& far_end) {
+      rank_coarse_points(bits[iso], s, rows[iso], coarse_points, [&](Id i, Id j, Id k, int axis) {
+        const Id p0 = i + j * s.nx + k * s.nxy;
+        return far_end(interp.samples[p0], interp.samples[p0 + s.stride[axis]]);
+      }, coarse[iso]);
+    };
+    if constexpr (sizeof(T) == 1) {
+      // 8-bit samples: the answer for every pair of end samples, 64 K bits
+      // made by the same expression, looked up instead of a division per
+      // cut edge.
+      std::array<std::uint64_t, 1024> far_end{};
+      for (unsigned a = 0; a < 256; ++a)
+        for (unsigned b = 0; b < 256; ++b)
+          far_end[(a << 8 | b) >> 6] |= std::uint64_t{nearer_far_end(static_cast<double>(static_cast<T>(a)),
+                                                                     static_cast<double>(static_cast<T>(b)))}
+                                        << (b & 63u);
+      rank([&](T v0, T v1) {
+        const unsigned pair = static_cast<unsigned>(static_cast<std::uint8_t>(v0)) << 8 | static_cast<std::uint8_t>(v1);
+        return ((far_end[pair >> 6] >> (pair & 63u)) & 1u) != 0;
+      });
+    } else {
+      rank([&](T v0, T v1) { return nearer_far_end(static_cast<double>(v0), static_cast<double>(v1)); });
+    }
     coarse_points += coarse[iso].count;
     st.weld += seconds_since(t0);
     t0 = Clock::now();

@@ -183,6 +183,42 @@ TEST(Coarsen, InThePassEqualsAfterTheContourWithNaNs) {
   parallel::set_thread_count(0);
 }
 
+// 8-bit samples take the pass's table of far ends (one answer per pair of
+// end samples) instead of a division per edge; coarsen() after the sort
+// plan's contour decides each crossing from its own t. Both agree on signed
+// and unsigned bytes, with isovalues that put crossings exactly midway
+// (t = 0.5: nearer the far end) and fractional ones.
+TEST(Coarsen, InThePassEqualsAfterTheContourOnBytes) {
+  for (const ScalarType type : {ScalarType::UInt8, ScalarType::Int8}) {
+    ImageGrid g;
+    g.allocate({31, 23, 19}, type);
+    std::mt19937 rng(type == ScalarType::UInt8 ? 5 : 6);
+    const Id n = g.num_points();
+    for (Id p = 0; p < n; ++p) {
+      const Id i = p % 31, j = p / 31 % 23, k = p / (31 * 23);
+      const double smooth = 60 * std::sin(0.3 * i) * std::cos(0.25 * j) + 40 * std::sin(0.35 * k);
+      const int v = static_cast<int>(std::lround(smooth)) + static_cast<int>(rng() % 9) - 4;  // -104 .. 104
+      if (type == ScalarType::UInt8) static_cast<std::uint8_t*>(g.data())[p] = static_cast<std::uint8_t>(v + 128);
+      else static_cast<std::int8_t*>(g.data())[p] = static_cast<std::int8_t>(v);
+    }
+    const double offset = type == ScalarType::UInt8 ? 128 : 0;
+    generate::ContourOptions o;
+    o.isovalues = {offset + 1, offset - 20.5, offset + 37.25};
+    o.coarsen = true;
+    for (int threads : {1, 2}) {
+      parallel::set_thread_count(threads);
+      o.weld = generate::ContourWeld::KeyReduce;
+      const SurfaceMesh rows = generate::contour(g, o);
+      o.weld = generate::ContourWeld::KeyReduceSort;
+      const SurfaceMesh sort = generate::contour(g, o);
+      ASSERT_GT(rows.num_cells(), 0);
+      EXPECT_EQ(rows.points, sort.points) << static_cast<int>(type) << " threads " << threads;
+      EXPECT_EQ(rows.connectivity, sort.connectivity) << static_cast<int>(type) << " threads " << threads;
+    }
+  }
+  parallel::set_thread_count(0);
+}
+
 // The pass decides folds voxel by voxel and face by face (coarse_folds.hpp,
 // the tabulated voxels of coarse_cases.hpp); coarsen() compares the whole
 // mesh's triangles (remove_folds). On coarse random volumes, where many
