@@ -118,15 +118,15 @@ struct FoldEntry {
   FaceTriangle* face;
 };
 
-// Decides the faces that voxel row (j, k) owns: the x faces between its
-// voxels, its +y and +z faces (shared with rows (j + 1, k) and (j, k + 1),
-// whose -y and -z face triangles are passed as `next_y` and `next_z`, empty
-// when there is no such row), and its -y and -z faces when they lie on the
-// grid's border (j == 0, k == 0). Marks the dropped face triangles of all
+// Decides the faces that voxel row (j, k) of a grid of `positions` points
+// along x owns: the x faces between its voxels, its +y and +z faces (shared
+// with rows (j + 1, k) and (j, k + 1), whose -y and -z face triangles are
+// passed as `next_y` and `next_z`, empty when there is no such row), and its
+// -y and -z faces when they lie on the grid's border (j == 0, k == 0). Marks the dropped face triangles of all
 // three rows `folded`. Every face is owned by one row, so rows decided at
 // once mark different triangles.
-inline void fold_across_faces(FaceTriangle* own, std::size_t n_own, bool j_first, bool k_first, FaceTriangle* next_y,
-                              std::size_t n_next_y, FaceTriangle* next_z, std::size_t n_next_z,
+inline void fold_across_faces(std::size_t positions, FaceTriangle* own, std::size_t n_own, bool j_first, bool k_first,
+                              FaceTriangle* next_y, std::size_t n_next_y, FaceTriangle* next_z, std::size_t n_next_z,
                               std::vector<FoldEntry>& entries) {
   entries.clear();
   // key: ((face position along the row * 3 + axis) * 2 + upper) * 4 + missing corner
@@ -155,28 +155,26 @@ inline void fold_across_faces(FaceTriangle* own, std::size_t n_own, bool j_first
   add_next(next_z, n_next_z, 2);
   if (entries.size() < 2) return;
   // Most face triangles share their face with no other: the keys that occur
-  // more than once are found with a small hash set, and only their entries
-  // sorted and decided.
-  std::size_t size = 16;
-  while (size < 2 * entries.size()) size *= 2;
-  thread_local std::vector<std::uint64_t> seen;  // key + 1, 0 when empty; top bit: seen twice
-  seen.assign(size, 0);
-  constexpr std::uint64_t kTwice = std::uint64_t{1} << 63;
-  auto find = [&](std::uint64_t k) -> std::uint64_t& {
-    std::size_t h = static_cast<std::size_t>((k * 0x9E3779B97F4A7C15ull) >> 40) & (size - 1);
-    while (seen[h] && (seen[h] & ~kTwice) != k + 1) h = (h + 1) & (size - 1);
-    return seen[h];
+  // more than once are found by direct addressing (a key names a face
+  // position along the row: below 24 * positions), the slots stamped with
+  // the call instead of cleared, and only their entries sorted and decided.
+  struct Seen {
+    std::uint32_t call = 0, count = 0;
   };
+  thread_local std::vector<Seen> seen;
+  thread_local std::uint32_t call = 0;
+  if (seen.size() < 24 * positions) seen.resize(24 * positions);  // new slots belong to no call
+  if (++call == 0) std::fill(seen.begin(), seen.end(), Seen{}), call = 1;
   bool any = false;
   for (const FoldEntry& e : entries) {
-    std::uint64_t& slot = find(e.key);
-    if (slot) slot |= kTwice, any = true;
-    else slot = e.key + 1;
+    Seen& slot = seen[e.key];
+    if (slot.call == call) ++slot.count, any = true;
+    else slot = {call, 1};
   }
   if (!any) return;
   std::size_t n = 0;
   for (const FoldEntry& e : entries)
-    if (find(e.key) & kTwice) entries[n++] = e;
+    if (seen[e.key].count > 1) entries[n++] = e;
   entries.resize(n);
   std::sort(entries.begin(), entries.end(), [](const FoldEntry& a, const FoldEntry& b) {
     return a.key != b.key ? a.key < b.key : a.row != b.row ? a.row < b.row : a.tri < b.tri;

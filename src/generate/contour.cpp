@@ -354,8 +354,10 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
       std::size_t bytes = 0;
       for (const auto& c : coarse)
         bytes += (c.far.size + c.points.size) * sizeof(std::uint64_t) + c.first.size * sizeof(std::uint32_t);
-      for (const auto& t : triangles)
+      for (const auto& t : triangles) {
         for (const auto& f : t.faces) bytes += f.size * sizeof(FaceTriangle);
+        for (const auto& e : t.entries) bytes += e.size * sizeof(std::uint16_t);
+      }
       if (bytes > kKeepScratch) free_storage(coarse), free_storage(triangles);
     }
   } release;

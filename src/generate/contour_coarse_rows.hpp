@@ -403,7 +403,7 @@ inline void fold_and_count(const GridShape& s, Id first_triangle, CoarseTriangle
                       n_z = nz_row >= 0 ? face_count(nz_row) : 0;
     if (n_own + n_y + n_z < 2) return;
     thread_local std::vector<FoldEntry> entries;
-    fold_across_faces(ct.faces_of(bricks, s.ny, vr), n_own, j == 0, k == 0,
+    fold_across_faces(static_cast<std::size_t>(s.nx), ct.faces_of(bricks, s.ny, vr), n_own, j == 0, k == 0,
                       n_y ? ct.faces_of(bricks, s.ny, ny_row) : nullptr, n_y,
                       n_z ? ct.faces_of(bricks, s.ny, nz_row) : nullptr, n_z, entries);
   }, 64);
