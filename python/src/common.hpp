@@ -25,12 +25,12 @@ namespace py = pybind11;
 // vector moves to the heap and a capsule, the array's base, deletes it when
 // the last view goes. `View` lets the bytes be read as another type of the
 // same size (uint64 keys shown as int64).
-template <class View = void, class T>
-py::array adopt(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
+template <class View = void, class T, class A>
+py::array adopt(std::vector<T, A>&& v, std::vector<py::ssize_t> shape) {
   using V = std::conditional_t<std::is_void_v<View>, T, View>;
   static_assert(sizeof(V) == sizeof(T));
-  auto* owned = new std::vector<T>(std::move(v));
-  py::capsule base(owned, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  auto* owned = new std::vector<T, A>(std::move(v));
+  py::capsule base(owned, [](void* p) { delete static_cast<std::vector<T, A>*>(p); });
   return py::array_t<V>(std::move(shape), reinterpret_cast<const V*>(owned->data()), base);
 }
 

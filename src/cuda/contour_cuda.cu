@@ -345,12 +345,12 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const ge
   xyz.download(mesh.points.data(), mesh.points.size());
   index_map.download(mesh.connectivity.data(), mesh.connectivity.size());
   if (opt.scalars) {
-    Field f{grid.name, 1, std::vector<float>(static_cast<std::size_t>(points))};
+    Field f{grid.name, 1, Array<float>(static_cast<std::size_t>(points))};
     scalar.download(f.values.data(), f.values.size());
     mesh.point_fields.push_back(std::move(f));
   }
   if (opt.normals != generate::ContourNormals::None) {
-    Field f{"Normals", 3, std::vector<float>(static_cast<std::size_t>(3 * points))};
+    Field f{"Normals", 3, Array<float>(static_cast<std::size_t>(3 * points))};
     normal.download(f.values.data(), f.values.size());
     mesh.point_fields.push_back(std::move(f));
   }

@@ -33,9 +33,9 @@ int checked_int(long long n, const char* what) {
 // Gathers per-rank arrays packed segment after segment (count[q * S + s]
 // elements of `per` values from rank q for segment s) to rank 0, reordered
 // segment-major, rank order within a segment.
-template <class T>
+template <class T, class A>
 void gather_segments(const std::vector<T>& local, int per, MPI_Datatype type, const std::vector<long long>& count,
-                     int segments, std::vector<T>& out) {
+                     int segments, std::vector<T, A>& out) {
   int P = 1, r = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &P);
   MPI_Comm_rank(MPI_COMM_WORLD, &r);

@@ -106,7 +106,7 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
   const Id m = groups.num_groups();
   SurfaceMesh out;
   // Positions and every field: the mean over the group, in pair order.
-  auto average = [&](const std::vector<float>& in, int k, std::vector<float>& dst) {
+  auto average = [&](const Array<float>& in, int k, Array<float>& dst) {
     dst.assign(static_cast<std::size_t>(m * k), 0.f);
     parallel::for_each(m, [&](Id g) {
       for (int c = 0; c < k; ++c) {

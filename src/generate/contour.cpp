@@ -118,7 +118,7 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, Id k_begin, Id k_en
 // in increasing corner order, from zero.
 template <class K>
 void average_normals(const keyreduce::Groups<K>* groups, const std::vector<Id>* blocks, const SurfaceMesh& mesh,
-                     std::vector<float>& normals) {
+                     Array<float>& normals) {
   const float* P = mesh.points.data();
   const PointIndex* C = mesh.connectivity.data();
   const Id points = mesh.num_points();
@@ -175,22 +175,19 @@ struct PointWriter {
 };
 
 // The mesh's point arrays, sized for `points`, and the writer filling them.
-// With `arrays`, the arrays (but not the keys) are sized by arrays->run(),
-// beside the caller's others.
 template <class T>
 PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
                               const GridShape& s, const ContourOptions& opt, std::vector<std::uint64_t>* point_keys,
-                              std::vector<std::uint64_t>* nearest_keys, bool write_xyz,
-                              parallel::FreshArrays* arrays = nullptr) {
+                              std::vector<std::uint64_t>* nearest_keys, bool write_xyz) {
   PointWriter<T> w{interp, s, {}, 0, 0, 0, 0};
-  // Output arrays at their final size, with huge pages asked for before
-  // they are first touched (a host process such as Python has none by default).
-  auto sized = [&](std::vector<float>& v, Id n) {
-    if (arrays) return arrays->add(v, static_cast<std::size_t>(n));
+  // Output arrays at their final size, unwritten (Array), with huge pages
+  // asked for and their pages faulted in by the threads (a host process
+  // such as Python has no huge pages by default).
+  auto sized = [&](Array<float>& v, Id n) {
     parallel::resize_fresh(v, static_cast<std::size_t>(n));
     return v.data();
   };
-  mesh.point_fields.reserve(mesh.point_fields.size() + 3);  // fields stay put while arrays holds them
+  mesh.point_fields.reserve(mesh.point_fields.size() + 3);  // the writer's pointers stay valid
   auto field = [&](const std::string& name, int components) {
     mesh.point_fields.push_back(Field{name, components, {}});
     return sized(mesh.point_fields.back().values, components * points);
@@ -483,8 +480,9 @@ struct GridLines {
 // The structured plan's output arrays, for `points` points and `triangles`
 // triangles, and the writer filling them; `connectivity` is set to the
 // triangles' array. The caller's (ContourOptions::output_arrays: positions
-// and the scalar only, as contour() checked), or the mesh's: pages faulted
-// in by the threads, then zero-filled (std::vector's resize) side by side.
+// and the scalar only, as contour() checked), or the mesh's: unwritten
+// Arrays whose pages the threads fault in, so the contour writes each byte
+// once, as it does the caller's.
 template <class T>
 PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, const ImageGrid& grid,
                                   const EdgeInterpolator<T>& interp, const GridShape& s, const ContourOptions& opt,
@@ -498,11 +496,9 @@ PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, co
     if (opt.scalars) w.out.scalar = out.scalars;
     return w;
   }
-  parallel::FreshArrays arrays;
-  connectivity = arrays.add(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
-  PointWriter<T> w = prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true, &arrays);
-  arrays.run();
-  return w;
+  parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
+  connectivity = mesh.connectivity.data();
+  return prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true);
 }
 
 // The structured plan (contour_rows.hpp): classify every isovalue, count and

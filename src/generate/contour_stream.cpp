@@ -100,7 +100,7 @@ struct SlabPoints {
     const Id unique = g.num_groups();
     mesh.points.resize(static_cast<std::size_t>(3 * unique));
     for (const Field& f : fields)
-      mesh.point_fields.push_back(Field{f.name, f.components, std::vector<float>(static_cast<std::size_t>(unique * f.components))});
+      mesh.point_fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(unique * f.components))});
     std::vector<Vec3f> normals(average ? static_cast<std::size_t>(unique) : 0);
     merged_nearest.resize(coarsen ? static_cast<std::size_t>(unique) : 0);
     parallel::for_each(unique, [&](Id p) {

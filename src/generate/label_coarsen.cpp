@@ -101,11 +101,11 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
     if (faces[static_cast<std::size_t>(t)].sign == 0) keep[static_cast<std::size_t>(t)] = 0;
   });
   const Id faces_out = parallel::exclusive_scan(keep.data(), keep.data(), faces_in + 1);
-  std::vector<PointIndex> conn(static_cast<std::size_t>(3 * faces_out));
+  Array<PointIndex> conn(static_cast<std::size_t>(3 * faces_out));  // every element written below
   std::vector<std::uint32_t> pair(static_cast<std::size_t>(faces_out));
   std::vector<Field> fields;
   for (const Field& f : s.mesh.cell_fields)
-    fields.push_back(Field{f.name, f.components, std::vector<float>(static_cast<std::size_t>(faces_out * f.components))});
+    fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(faces_out * f.components))});
   parallel::for_each(faces_in, [&](Id t) {
     const Id at = keep[static_cast<std::size_t>(t)];
     if (keep[static_cast<std::size_t>(t + 1)] == at) return;
@@ -121,7 +121,7 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
   std::vector<Id> used(static_cast<std::size_t>(m + 1), 0);
   parallel::for_each(3 * faces_out, [&](Id k) { used[conn[static_cast<std::size_t>(k)]] = 1; });
   const Id m_used = parallel::exclusive_scan(used.data(), used.data(), m + 1);
-  std::vector<float> compact(static_cast<std::size_t>(3 * m_used));
+  Array<float> compact(static_cast<std::size_t>(3 * m_used));
   parallel::for_each(m, [&](Id p) {
     if (used[static_cast<std::size_t>(p + 1)] == used[static_cast<std::size_t>(p)]) return;
     std::copy_n(merged.begin() + 3 * p, 3, compact.begin() + 3 * used[static_cast<std::size_t>(p)]);

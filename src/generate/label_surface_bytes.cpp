@@ -17,8 +17,8 @@ struct Writer {
     out.insert(out.end(), b, b + n);
   }
   void count(std::uint64_t n) { raw(&n, sizeof n); }
-  template <class T>
-  void array(const std::vector<T>& v) {
+  template <class T, class A>
+  void array(const std::vector<T, A>& v) {
     count(v.size());
     raw(v.data(), v.size() * sizeof(T));
   }
@@ -43,8 +43,8 @@ struct Reader {
     if (n > (in.size() - at) / size) throw InputError("labels: a rank's pieces end early");
     return static_cast<std::size_t>(n);
   }
-  template <class T>
-  void array(std::vector<T>& v) {
+  template <class T, class A>
+  void array(std::vector<T, A>& v) {
     v.resize(items(sizeof(T)));
     raw(v.data(), v.size() * sizeof(T));
   }

@@ -60,7 +60,7 @@ SurfaceMesh detail::finish_label_mesh(LabelSurface& surface, const LabelVolume& 
 
   SurfaceMesh mesh = std::move(surface.mesh);
   // boundary_labels first, then `label` when the generator wrote one.
-  Field pairs{"boundary_labels", 2, std::vector<float>(2 * surface.pair.size())};
+  Field pairs{"boundary_labels", 2, Array<float>(2 * surface.pair.size())};
   parallel::for_each(static_cast<Id>(surface.pair.size()), [&](Id t) {
     const std::uint32_t pq = surface.pair[static_cast<std::size_t>(t)];
     pairs.values[2 * t] = static_cast<float>(vol.values[pq >> 16]);

@@ -153,7 +153,7 @@ LabelSurface discrete_marching_cubes(const LabelVolume& vol, bool per_label_surf
   st.generate += seconds_since(t0);
   t0 = Clock::now();
   LabelSurface out;
-  std::vector<float> label_field;
+  Array<float> label_field;
   for (const auto& s : surfaces) st.soup_corners += static_cast<Id>(s.corner_keys.size());
   if (per_label_surfaces) {
     // Each label's surface with its own points, in label order.
@@ -196,7 +196,7 @@ std::vector<LabelSurface> discrete_marching_cubes_rows(const LabelVolume& vol, s
     const std::size_t triangles = tri.corner_keys.size() / 3;
     weld_and_append(vol, tri.corner_keys, std::vector<LabelIndex>(triangles, vol.selected[at]), parts[at]);
     parts[at].mesh.cell_fields.push_back(
-        Field{"label", 1, std::vector<float>(triangles, static_cast<float>(vol.values[vol.selected[at]]))});
+        Field{"label", 1, Array<float>(triangles, static_cast<float>(vol.values[vol.selected[at]]))});
   }, 1);
   for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());
   return parts;

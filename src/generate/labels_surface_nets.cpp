@@ -500,7 +500,7 @@ std::vector<LabelSurface> per_label(const LabelVolume& vol, std::pair<Id, Id> ro
     generate_quads(vol, box, vol.selected[static_cast<std::size_t>(s)], rows_in(box, rows), soup);
     weld_and_append(vol, box, vol.selected[static_cast<std::size_t>(s)], soup, parts[static_cast<std::size_t>(s)]);
     parts[static_cast<std::size_t>(s)].mesh.cell_fields.push_back(
-        Field{"label", 1, std::vector<float>(soup.pair.size(), static_cast<float>(vol.values[vol.selected[s]]))});
+        Field{"label", 1, Array<float>(soup.pair.size(), static_cast<float>(vol.values[vol.selected[s]]))});
   }, 1);
   st.generate += seconds_since(t0);
   for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());

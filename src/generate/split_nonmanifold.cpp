@@ -488,8 +488,8 @@ NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
   }
   const Id added = static_cast<Id>(source.size());
   // Grown to their exact size (resize() would double the capacity).
-  auto append_copies = [&](std::vector<float>& values, int k) {
-    std::vector<float> grown;
+  auto append_copies = [&](Array<float>& values, int k) {
+    Array<float> grown;
     parallel::resize_fresh(grown, static_cast<std::size_t>((n + added) * k));
     parallel::for_each(n * k, [&](Id i) { grown[i] = values[i]; }, 1 << 16);
     for (Id i = 0; i < added; ++i) std::copy_n(values.begin() + Id{source[i]} * k, k, grown.begin() + (n + i) * k);

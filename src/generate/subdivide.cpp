@@ -32,7 +32,7 @@ namespace {
 // given by `position(key, xyz)` (the baseline).
 struct EdgeGroups {
   std::vector<std::uint64_t> edge_key;     // per new point
-  std::vector<std::uint32_t> index_map;    // per pair
+  Array<std::uint32_t> index_map;          // per pair
 };
 
 template <class Position>

@@ -27,7 +27,7 @@ constexpr const auto& kFaceCycle = cells::kHexFaceCycle;
 // The face centres of the soup: for every (cell, face) pair its group (the
 // face-centre index) and for every group the first pair naming it.
 struct FaceGroups {
-  std::vector<std::uint32_t> index_map;
+  Array<std::uint32_t> index_map;
   std::vector<std::uint32_t> first;
 };
 
@@ -73,7 +73,7 @@ void face_ids(const CornerOf& corner_of, Id pair, std::uint64_t ids[4]) {
 // pair) and a centre per cell, fields averaged alike; 24 tets per cell.
 // corner_of(cell, bit corner) gives a corner's point id.
 template <class CornerOf>
-UnstructuredGrid assemble24(const std::vector<float>& points, const std::vector<Field>& fields, Id cells,
+UnstructuredGrid assemble24(const Array<float>& points, const std::vector<Field>& fields, Id cells,
                             const CornerOf& corner_of, const FaceGroups& g) {
   const Id N = static_cast<Id>(points.size() / 3), F = static_cast<Id>(g.first.size()), total = N + F + cells;
   if (total > Id{std::numeric_limits<std::uint32_t>::max()})

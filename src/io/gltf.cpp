@@ -49,7 +49,7 @@ struct BinArray {
 };
 
 // Per-component minimum and maximum of `count` tuples of `components` floats.
-std::pair<nlohmann::json, nlohmann::json> float_bounds(const std::vector<float>& values, int components) {
+std::pair<nlohmann::json, nlohmann::json> float_bounds(const Array<float>& values, int components) {
   std::vector<float> lo(components, std::numeric_limits<float>::infinity());
   std::vector<float> hi(components, -std::numeric_limits<float>::infinity());
   for (std::size_t i = 0; i < values.size(); ++i) {
@@ -68,7 +68,7 @@ std::pair<nlohmann::json, nlohmann::json> float_bounds(const std::vector<float>&
 
 // The triangles' indices: the cells as they are when all are triangles, fans
 // of the polygons otherwise (in `fans`).
-const std::vector<PointIndex>& triangle_indices(const SurfaceMesh& mesh, std::vector<PointIndex>& fans) {
+const Array<PointIndex>& triangle_indices(const SurfaceMesh& mesh, Array<PointIndex>& fans) {
   if (mesh.all_triangles()) return mesh.connectivity;
   for (Id c = 0; c < mesh.num_cells(); ++c) {
     const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
@@ -87,7 +87,7 @@ struct GlbContent {
 
 // The accessors, buffer views and buffer of a mesh's points, point fields
 // (1 to 4 components; Normals as NORMAL) and triangles.
-void describe_mesh(const SurfaceMesh& mesh, const std::vector<PointIndex>& indices, GlbContent& glb) {
+void describe_mesh(const SurfaceMesh& mesh, const Array<PointIndex>& indices, GlbContent& glb) {
   nlohmann::json& doc = glb.doc;
   doc["nodes"] = nlohmann::json::array({{{"mesh", 0}}});
   nlohmann::json accessors = nlohmann::json::array(), views = nlohmann::json::array();
@@ -99,7 +99,7 @@ void describe_mesh(const SurfaceMesh& mesh, const std::vector<PointIndex>& indic
     return static_cast<int>(views.size()) - 1;
   };
   const auto count = static_cast<std::uint64_t>(mesh.num_points());
-  auto add_float_attribute = [&](const std::vector<float>& values, int components) {
+  auto add_float_attribute = [&](const Array<float>& values, int components) {
     const int view = add_array(values.data(), values.size() * sizeof(float), kArrayBuffer);
     auto [lo, hi] = float_bounds(values, components);
     accessors.push_back({{"bufferView", view}, {"componentType", kFloat}, {"count", count},
@@ -167,8 +167,8 @@ void write_glb(const GlbContent& glb, const std::string& path) {
 
 void write_gltf_binary(const SurfaceMesh& mesh, const std::string& path) {
   mesh_bytes::validate_mesh(mesh, path);
-  std::vector<PointIndex> fans;
-  const std::vector<PointIndex>& indices = triangle_indices(mesh, fans);
+  Array<PointIndex> fans;
+  const Array<PointIndex>& indices = triangle_indices(mesh, fans);
   GlbContent glb;
   glb.doc["asset"] = {{"version", "2.0"}, {"generator", "keymesh"}};
   glb.doc["scene"] = 0;

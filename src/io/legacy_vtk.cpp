@@ -127,9 +127,9 @@ class Reader {
     }
   }
   // n numbers as floats.
-  std::vector<float> floats(std::int64_t n, ScalarType s, const std::string& what) {
+  Array<float> floats(std::int64_t n, ScalarType s, const std::string& what) {
     check_count(n, s, what);
-    std::vector<float> out(static_cast<std::size_t>(n));
+    Array<float> out(static_cast<std::size_t>(n));  // every value written (or the read fails)
     values(
         n, s, what,
         [&](std::int64_t i, std::string_view w) {
@@ -198,7 +198,7 @@ void read_field_block(Reader& r, std::int64_t tuples, std::vector<Field>& fields
     const std::string_view t = r.word();
     if (!legacy_type(t, s)) r.fail("unknown data type '" + std::string(t.substr(0, 40)) + "' of FIELD array " + name);
     if (comps < 1 || comps > 4096) r.fail("FIELD array " + name + " has " + std::to_string(comps) + " components");
-    std::vector<float> v = r.floats(n * comps, s, "FIELD array " + name);
+    Array<float> v = r.floats(n * comps, s, "FIELD array " + name);
     if (tuples >= 0 && n == tuples) fields.push_back(Field{name, int(comps), std::move(v)});
   }
 }

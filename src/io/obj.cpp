@@ -91,7 +91,7 @@ void add_point_normals(SurfaceMesh& mesh, const CornerNormals& cn) {
   }
   for (std::size_t p = 0; p < np; ++p)
     if (of_point[p] < 0) return;  // unused point: no normal to give it
-  Field f{"Normals", 3, std::vector<float>(3 * np)};
+  Field f{"Normals", 3, Array<float>(3 * np)};
   for (std::size_t p = 0; p < np; ++p)
     for (int a = 0; a < 3; ++a) f.values[3 * p + a] = cn.normals[3 * of_point[p] + a];
   mesh.point_fields.push_back(std::move(f));

@@ -73,7 +73,7 @@ std::string field_attributes(const std::vector<Field>& fields) {
   return a;
 }
 
-std::string AppendedArrays::floats(std::string_view name, int components, const std::vector<float>& values) {
+std::string AppendedArrays::floats(std::string_view name, int components, const keymesh::Array<float>& values) {
   return declare({ScalarType::Float32, values.size(), values.data(), {}}, name, components);
 }
 

@@ -33,7 +33,7 @@ class AppendedArrays {
   // Each declares one array and returns its <DataArray .../> line (indented
   // for a section of a <Piece>); `components` 0 leaves NumberOfComponents out.
   // The data must stay alive and unchanged until write().
-  std::string floats(std::string_view name, int components, const std::vector<float>& values);
+  std::string floats(std::string_view name, int components, const keymesh::Array<float>& values);
   // Values of `type` stored in memory as the file wants them (native order).
   std::string bytes(ScalarType type, std::string_view name, int components, const void* data, std::uint64_t size);
   // `count` integers of `type` (Int32, Int64 or UInt8): value_at(i) for each i.

@@ -135,7 +135,7 @@ PiecePointData read_point_data(const XmlNode& piece, std::int64_t npts, const Co
       out.has_ids = true;
       continue;
     }
-    Field f{name ? *name : std::string("array"), a.components, std::vector<float>(a.count())};
+    Field f{name ? *name : std::string("array"), a.components, keymesh::Array<float>(a.count())};
     for (std::size_t i = 0; i < a.count(); ++i) f.values[i] = static_cast<float>(a.as_double(i));
     out.fields.push_back(std::move(f));
   }

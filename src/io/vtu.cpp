@@ -95,7 +95,7 @@ Values get_array(const XmlNode& node, const Context& ctx, const std::string& wha
 
 // Appends the values of `a`, converted to float, to out (in parallel: the
 // points of 256^3 are 50 M values).
-void append_floats(const Values& a, std::vector<float>& out) {
+void append_floats(const Values& a, keymesh::Array<float>& out) {
   const std::size_t at = out.size();
   out.resize(at + a.count());
   float* dst = out.data() + at;

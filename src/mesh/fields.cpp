@@ -10,7 +10,7 @@ namespace keymesh {
 namespace {
 
 // to[0 .. from.size()) = from, the threads copying one range each.
-void copy_prefix(const std::vector<float>& from, std::vector<float>& to) {
+void copy_prefix(const Array<float>& from, Array<float>& to) {
   const Id n = static_cast<Id>(from.size());
   parallel::for_each_chunk(n, parallel::chunk_count(n, Id{1} << 16),
                            [&](Id b, Id e, int) { std::copy(from.data() + b, from.data() + e, to.data() + b); });
@@ -34,7 +34,7 @@ std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total) {
   return out;
 }
 
-void extend_points(const std::vector<float>& in, Id total, std::vector<float>& out) {
+void extend_points(const Array<float>& in, Id total, Array<float>& out) {
   parallel::resize_fresh(out, static_cast<std::size_t>(3 * total));
   copy_prefix(in, out);
 }
@@ -44,7 +44,7 @@ std::vector<Field> repeat_cell_fields(const std::vector<Field>& in, Id cells, in
   std::vector<Field> out;
   out.reserve(in.size());
   for (const Field& f : in) {
-    Field h{f.name, f.components, std::vector<float>(f.values.size() * static_cast<std::size_t>(children))};
+    Field h{f.name, f.components, Array<float>(f.values.size() * static_cast<std::size_t>(children))};
     const auto k = static_cast<std::size_t>(f.components);
     parallel::for_each(cells, [&](Id c) {
       for (int t = 0; t < children; ++t)

@@ -40,7 +40,7 @@ void normalize(Vec3f* v, Id n) {
 }
 
 Field normals_field(const std::vector<Vec3f>& v) {
-  Field n{"Normals", 3, std::vector<float>(3 * v.size())};
+  Field n{"Normals", 3, Array<float>(3 * v.size())};
   std::copy_n(reinterpret_cast<const float*>(v.data()), n.values.size(), n.values.data());
   return n;
 }

@@ -15,7 +15,7 @@ using analyze::TopologyReport;
 
 namespace {
 
-SurfaceMesh make_mesh(std::vector<float> pts, std::vector<PointIndex> conn, std::vector<std::uint64_t> offsets = {}) {
+SurfaceMesh make_mesh(Array<float> pts, Array<PointIndex> conn, Array<std::uint64_t> offsets = {}) {
   SurfaceMesh m;
   m.points = std::move(pts);
   m.connectivity = std::move(conn);
@@ -37,14 +37,14 @@ SurfaceMesh octahedron() {
   return m;
 }
 
-std::vector<float> cube_points() {
-  std::vector<float> p;
+Array<float> cube_points() {
+  Array<float> p;
   for (int i = 0; i < 8; ++i) p.insert(p.end(), {float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
   return p;
 }
 
 // The six faces of the unit cube as quads (point i = (i&1, i>>1&1, i>>2&1)).
-const std::vector<PointIndex> kCubeQuads = {0, 2, 3, 1, 4, 5, 7, 6, 0, 1, 5, 4, 2, 6, 7, 3, 0, 4, 6, 2, 1, 3, 7, 5};
+const Array<PointIndex> kCubeQuads = {0, 2, 3, 1, 4, 5, 7, 6, 0, 1, 5, 4, 2, 6, 7, 3, 0, 4, 6, 2, 1, 3, 7, 5};
 
 SurfaceMesh cube_triangles() {
   SurfaceMesh m = make_mesh(cube_points(), {});

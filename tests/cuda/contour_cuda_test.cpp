@@ -27,7 +27,7 @@ namespace {
     if (!cuda::available(&why)) GTEST_SKIP() << why;           \
   } while (0)
 
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+bool same_bits(const Array<float>& a, const Array<float>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 

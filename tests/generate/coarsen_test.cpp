@@ -96,7 +96,7 @@ TEST(Coarsen, MergesByKeyAndDropsCollapsedTriangles) {
   const SurfaceMesh c = generate::coarsen(m, {10, 11, 12, 11}, 13, &st);
   EXPECT_EQ(st.points_after, 3);
   EXPECT_EQ(st.triangles_after, 1);
-  EXPECT_EQ(c.connectivity, (std::vector<PointIndex>{0, 1, 2}));
+  EXPECT_EQ(c.connectivity, (Array<PointIndex>{0, 1, 2}));
   EXPECT_FLOAT_EQ(c.points[3], 2.f);          // mean of x = 1 and x = 3
   EXPECT_FLOAT_EQ(c.point_fields[0].values[1], 4.f);  // mean of 2 and 6
 }
@@ -145,7 +145,7 @@ TEST(Coarsen, RemoveFoldsFollowsItsRule) {
         kept = kept || winner;
       }
     }
-    std::vector<PointIndex> expected;
+    Array<PointIndex> expected;
     for (int t = 0; t < triangles; ++t)
       if (keep[t]) expected.insert(expected.end(), m.connectivity.begin() + 3 * t, m.connectivity.begin() + 3 * t + 3);
     const Id removed = generate::remove_folds(m);

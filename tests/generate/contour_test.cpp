@@ -396,8 +396,8 @@ TEST(Contour, OutputArraysGetTheBytesOfTheMeshsVectors) {
       opt.isovalues = {0.3, 0.62};
       opt.scalars = scalars;
       const SurfaceMesh ref = generate::contour(g, opt);
-      std::vector<float> xyz, scalar;
-      std::vector<PointIndex> ids;
+      Array<float> xyz, scalar;
+      Array<PointIndex> ids;
       opt.output_arrays = [&](Id n, Id m) {
         xyz.assign(static_cast<std::size_t>(3 * n), std::numeric_limits<float>::quiet_NaN());
         scalar.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::quiet_NaN());

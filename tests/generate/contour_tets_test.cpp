@@ -44,7 +44,7 @@ bool consistently_wound(const SurfaceMesh& m) {
 }
 
 // Edges of the tet mesh whose ends straddle the isovalue: the expected point count.
-Id straddling_edges(const UnstructuredGrid& g, const std::vector<float>& s, double v) {
+Id straddling_edges(const UnstructuredGrid& g, const Array<float>& s, double v) {
   std::vector<std::pair<std::uint64_t, std::uint64_t>> edges;
   for (Id t = 0; t < g.num_cells(); ++t)
     for (int a = 0; a < 4; ++a)
@@ -59,7 +59,7 @@ Id straddling_edges(const UnstructuredGrid& g, const std::vector<float>& s, doub
 // The 5-tet sphere grid with a second field, x + 2y, to check interpolation.
 UnstructuredGrid sphere_tets(Id n) {
   UnstructuredGrid g = generate::tetrahedralize5(generate::spherical_distance(n));
-  Field lin{"linear", 1, std::vector<float>(g.num_points())};
+  Field lin{"linear", 1, Array<float>(g.num_points(), 0.f)};
   for (Id p = 0; p < g.num_points(); ++p) lin.values[p] = g.points[3 * p] + 2 * g.points[3 * p + 1];
   g.point_fields.push_back(lin);
   return g;
@@ -117,7 +117,7 @@ TEST(ContourTets, ShuffledIdsAndCornerOrdersWeldTheSame) {
   std::shuffle(perm.begin(), perm.end(), rng);
   UnstructuredGrid h;
   h.points.resize(g.points.size());
-  Field f{"s", 1, std::vector<float>(np)};
+  Field f{"s", 1, Array<float>(np, 0.f)};
   for (Id p = 0; p < np; ++p) {
     std::copy_n(&g.points[3 * p], 3, &h.points[3 * perm[p]]);
     f.values[perm[p]] = g.point_fields[0].values[p];
@@ -176,7 +176,7 @@ TEST(ContourTets, RefusesWhatItCannotContour) {
   hexes.points.assign(24, 0.f);
   hexes.uniform_type = CellType::Hexahedron;
   hexes.connectivity = IndexArray::for_ids(8, 8);
-  hexes.point_fields.push_back({"s", 1, std::vector<float>(8)});
+  hexes.point_fields.push_back({"s", 1, Array<float>(8, 0.f)});
   EXPECT_THROW(generate::contour(hexes, iso(1.0)), InputError);
 }
 

@@ -55,7 +55,7 @@ TEST(Curvature, SignFollowsTheField) {
   const SurfaceMesh m = generate::contour(g, o);
   const Field* k = m.find_point_field("mean_curvature");
   ASSERT_NE(k, nullptr);
-  std::vector<float> vals = k->values;
+  std::vector<float> vals(k->values.begin(), k->values.end());
   std::sort(vals.begin(), vals.end());
   EXPECT_NEAR(vals[vals.size() / 2], -1 / 20.5, 0.02 / 20.5);
 }

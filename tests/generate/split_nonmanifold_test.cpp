@@ -18,7 +18,7 @@ namespace {
 
 // The surface of a tetrahedron on points a, b, c, d (outward when a, b, c
 // turn counter-clockwise seen from outside and d is behind them).
-std::vector<PointIndex> tetrahedron(PointIndex a, PointIndex b, PointIndex c, PointIndex d) {
+Array<PointIndex> tetrahedron(PointIndex a, PointIndex b, PointIndex c, PointIndex d) {
   return {a, c, b, a, b, d, b, c, d, c, a, d};
 }
 

@@ -119,7 +119,7 @@ UnstructuredGrid hex_box(Id a, Id b, Id c, unsigned seed) {
   if (seed) std::shuffle(perm.begin(), perm.end(), std::mt19937(seed));
   UnstructuredGrid g;
   g.points.resize(3 * n);
-  Field temp{"temperature", 1, std::vector<float>(n)};
+  Field temp{"temperature", 1, Array<float>(n, 0.f)};
   for (Id k = 0; k < nz; ++k)
     for (Id j = 0; j < ny; ++j)
       for (Id i = 0; i < nx; ++i) {

@@ -46,7 +46,7 @@ tinygltf::Model load(const std::string& path) {
 
 // The bytes an accessor designates, as T (tightly packed: no byteStride).
 template <class T>
-std::vector<T> accessor_values(const tinygltf::Model& m, int accessor, int components) {
+Array<T> accessor_values(const tinygltf::Model& m, int accessor, int components) {
   const tinygltf::Accessor& a = m.accessors.at(accessor);
   const tinygltf::BufferView& v = m.bufferViews.at(a.bufferView);
   EXPECT_EQ(v.byteStride, 0u);
@@ -54,13 +54,13 @@ std::vector<T> accessor_values(const tinygltf::Model& m, int accessor, int compo
   const auto& data = m.buffers.at(v.buffer).data;
   const std::size_t n = a.count * components;
   EXPECT_LE(v.byteOffset + a.byteOffset + n * sizeof(T), data.size());
-  std::vector<T> out(n);
+  Array<T> out(n);
   std::memcpy(out.data(), data.data() + v.byteOffset + a.byteOffset, n * sizeof(T));
   return out;
 }
 
 // Per-component min and max recomputed here, as doubles.
-void expect_bounds(const tinygltf::Accessor& a, const std::vector<float>& values, int components) {
+void expect_bounds(const tinygltf::Accessor& a, const Array<float>& values, int components) {
   ASSERT_EQ(a.minValues.size(), static_cast<std::size_t>(components));
   ASSERT_EQ(a.maxValues.size(), static_cast<std::size_t>(components));
   for (int c = 0; c < components; ++c) {
@@ -147,7 +147,7 @@ TEST(Gltf, PolygonsBecomeFans) {
   const tinygltf::Primitive& prim = m.meshes.at(0).primitives.at(0);
   EXPECT_EQ(prim.attributes.count("NORMAL"), 0u);
   EXPECT_EQ(accessor_values<float>(m, prim.attributes.at("_MEAN_CURVATURE"), 1), mesh.point_fields[0].values);
-  const std::vector<std::uint32_t> expected = {0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 6, 1, 6, 2};
+  const Array<std::uint32_t> expected = {0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 6, 1, 6, 2};
   EXPECT_EQ(accessor_values<std::uint32_t>(m, prim.indices, 1), expected);
 #endif
 }

@@ -172,10 +172,10 @@ TEST(GridIo, ReadsHandWrittenAsciiFiles) {
     EXPECT_EQ(g.cell_type(0), std::uint8_t(CellType::Tetra));
     EXPECT_EQ(g.connectivity[0], 3u);
     EXPECT_EQ(g.connectivity[3], 0u);
-    EXPECT_EQ(g.points, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}));
+    EXPECT_EQ(g.points, (Array<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}));
     ASSERT_EQ(g.point_fields.size(), 1u);
     EXPECT_EQ(g.point_fields[0].name, "s");
-    EXPECT_EQ(g.point_fields[0].values, (std::vector<float>{0.5f, 1.5f, 2.5f, 3.5f}));
+    EXPECT_EQ(g.point_fields[0].values, (Array<float>{0.5f, 1.5f, 2.5f, 3.5f}));
     std::filesystem::remove(path);
   }
 }
@@ -219,10 +219,10 @@ TEST(GridIo, ReadsSeveralAsciiPiecesWithIdsOffset) {
   EXPECT_EQ(g.points[3 * 6 + 2], 2.f);
   ASSERT_EQ(g.point_fields.size(), 1u);  // "only here" is not in every piece
   EXPECT_EQ(g.point_fields[0].name, "t");
-  EXPECT_EQ(g.point_fields[0].values, (std::vector<float>{1, 2, 3, 4, 5, 6, 7}));
+  EXPECT_EQ(g.point_fields[0].values, (Array<float>{1, 2, 3, 4, 5, 6, 7}));
   ASSERT_EQ(g.cell_fields.size(), 1u);
   EXPECT_EQ(g.cell_fields[0].components, 2);
-  EXPECT_EQ(g.cell_fields[0].values, (std::vector<float>{7, 8, 9, 10}));
+  EXPECT_EQ(g.cell_fields[0].values, (Array<float>{7, 8, 9, 10}));
   std::filesystem::remove(path);
 }
 
@@ -314,14 +314,14 @@ std::string binary_tet_vtu(const Encoding& e) {
 void expect_binary_tet(const UnstructuredGrid& g) {
   ASSERT_EQ(g.num_points(), 4);
   ASSERT_EQ(g.num_cells(), 1);
-  EXPECT_EQ(g.points, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  EXPECT_EQ(g.points, (Array<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}));
   EXPECT_EQ(g.cell_type(0), std::uint8_t(CellType::Tetra));
   for (std::size_t k = 0; k < 4; ++k) EXPECT_EQ(g.connectivity[k], k);
   ASSERT_EQ(g.point_fields.size(), 1u);
-  EXPECT_EQ(g.point_fields[0].values, (std::vector<float>{0.5f, -1.f, 2.f, 1e10f}));
+  EXPECT_EQ(g.point_fields[0].values, (Array<float>{0.5f, -1.f, 2.f, 1e10f}));
   ASSERT_EQ(g.cell_fields.size(), 1u);
   EXPECT_EQ(g.cell_fields[0].components, 2);
-  EXPECT_EQ(g.cell_fields[0].values, (std::vector<float>{65535.f, 3.f}));
+  EXPECT_EQ(g.cell_fields[0].values, (Array<float>{65535.f, 3.f}));
 }
 
 TEST(GridIo, ReadsBinaryVtuInEveryEncoding) {
@@ -370,9 +370,9 @@ TEST(GridIo, ReadsLegacy51AsciiWithAttributes) {
   EXPECT_EQ(g.point_fields[1].values[2], 1.f);
   EXPECT_EQ(g.point_fields[2].name, "a");
   EXPECT_EQ(g.point_fields[2].components, 2);
-  EXPECT_EQ(g.point_fields[2].values, (std::vector<float>{-1, 1, -2, 2, -3, 3, -4, 4, -5, 5}));
+  EXPECT_EQ(g.point_fields[2].values, (Array<float>{-1, 1, -2, 2, -3, 3, -4, 4, -5, 5}));
   ASSERT_EQ(g.cell_fields.size(), 1u);
-  EXPECT_EQ(g.cell_fields[0].values, (std::vector<float>{4, 5}));
+  EXPECT_EQ(g.cell_fields[0].values, (Array<float>{4, 5}));
   std::filesystem::remove(path);
 }
 
@@ -395,15 +395,15 @@ TEST(GridIo, ReadsLegacyBinaryBuiltByHand) {
   const UnstructuredGrid g = io::read_grid(path);
   ASSERT_EQ(g.num_points(), 4);
   ASSERT_EQ(g.num_cells(), 2);
-  EXPECT_EQ(g.points, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  EXPECT_EQ(g.points, (Array<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}));
   EXPECT_EQ(g.offsets, (std::vector<std::uint64_t>{0, 4, 7}));
   const std::vector<std::uint64_t> ids = {3, 2, 1, 0, 0, 1, 3};
   for (std::size_t k = 0; k < ids.size(); ++k) EXPECT_EQ(g.connectivity[k], ids[k]);
   ASSERT_EQ(g.point_fields.size(), 1u);
   EXPECT_EQ(g.point_fields[0].components, 2);
-  EXPECT_EQ(g.point_fields[0].values, (std::vector<float>{1, 2, 3, 4, 5, 6, 7, 8}));
+  EXPECT_EQ(g.point_fields[0].values, (Array<float>{1, 2, 3, 4, 5, 6, 7, 8}));
   ASSERT_EQ(g.cell_fields.size(), 1u);
-  EXPECT_EQ(g.cell_fields[0].values, (std::vector<float>{10, 255}));
+  EXPECT_EQ(g.cell_fields[0].values, (Array<float>{10, 255}));
   std::filesystem::remove(path);
 }
 

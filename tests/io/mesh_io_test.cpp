@@ -159,9 +159,9 @@ TEST(PlyTest, HandWrittenAscii) {
              "0 0 0 255 0 0 1 2 7 8\r\n1 0 0 0 0 0 1 0\r\n1 1 0 10 0 0 1 1 3\r\n0 1 0 20 0 0 1 0\r\n"
              "9 4 0 1 2 3\r\n9 3 0 2 3\r\n0.5\r\n");
   const SurfaceMesh r = io::read_mesh(dir.file("h.ply"));
-  EXPECT_EQ(r.points, (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}));
-  EXPECT_EQ(r.connectivity, (std::vector<PointIndex>{0, 1, 2, 3, 0, 2, 3}));
-  EXPECT_EQ(r.offsets, (std::vector<std::uint64_t>{0, 4, 7}));
+  EXPECT_EQ(r.points, (Array<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}));
+  EXPECT_EQ(r.connectivity, (Array<PointIndex>{0, 1, 2, 3, 0, 2, 3}));
+  EXPECT_EQ(r.offsets, (Array<std::uint64_t>{0, 4, 7}));
   expect_field(r, {"red", 1, {255, 0, 10, 20}});
   expect_field(r, {"Normals", 3, {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}});
 }
@@ -186,8 +186,8 @@ TEST(PlyTest, BinaryBigEndianWithShortIndices) {
     d += static_cast<char>(i);
   }
   const SurfaceMesh r = io::parse_ply(d, "mem.ply");
-  EXPECT_EQ(r.points, std::vector<float>(pts, pts + 9));
-  EXPECT_EQ(r.connectivity, (std::vector<PointIndex>{2, 1, 0}));
+  EXPECT_EQ(r.points, Array<float>(pts, pts + 9));
+  EXPECT_EQ(r.connectivity, (Array<PointIndex>{2, 1, 0}));
   EXPECT_TRUE(r.offsets.empty());
 }
 
@@ -250,7 +250,7 @@ TEST(ObjTest, FaceFormsAndRelativeIndices) {
       "f 1/1 2/2 3/1\nf 1/1/1 3/2/1 4/1/1\nf -4//1 -2//1 -1//1\nl 1 2\n";
   const SurfaceMesh r = io::parse_obj(text, "m.obj");
   EXPECT_EQ(r.points.size(), 12u);
-  EXPECT_EQ(r.connectivity, (std::vector<PointIndex>{0, 1, 2, 0, 2, 3, 0, 2, 3}));
+  EXPECT_EQ(r.connectivity, (Array<PointIndex>{0, 1, 2, 0, 2, 3, 0, 2, 3}));
   EXPECT_TRUE(r.offsets.empty());
   EXPECT_TRUE(r.point_fields.empty());  // not every corner names a normal
 }
@@ -330,8 +330,8 @@ TEST(StlTest, HandWrittenAscii) {
       "solid second\nfacet normal 0 0 0\nouter loop\nvertex 1 1 0\nvertex 1 0 0\nvertex 2 0 0\nendloop\nendfacet\n"
       "endsolid\n";
   const SurfaceMesh r = io::parse_stl(text, "s.stl");
-  EXPECT_EQ(r.points, (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0}));
-  EXPECT_EQ(r.connectivity, (std::vector<PointIndex>{0, 1, 2, 0, 2, 3, 2, 1, 4}));
+  EXPECT_EQ(r.points, (Array<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0}));
+  EXPECT_EQ(r.connectivity, (Array<PointIndex>{0, 1, 2, 0, 2, 3, 2, 1, 4}));
 }
 
 TEST(StlTest, BinaryWithSolidHeader) {
@@ -344,7 +344,7 @@ TEST(StlTest, BinaryWithSolidHeader) {
   d.append(2, '\0');
   const SurfaceMesh r = io::parse_stl(d, "b.stl");
   EXPECT_EQ(r.num_points(), 3);
-  EXPECT_EQ(r.connectivity, (std::vector<PointIndex>{0, 1, 2}));
+  EXPECT_EQ(r.connectivity, (Array<PointIndex>{0, 1, 2}));
 }
 
 TEST(StlTest, MalformedInputsThrow) {
@@ -420,8 +420,8 @@ TEST(VtpTest, HandWrittenAsciiAndBase64) {
       "</Piece>\n</PolyData>\n</VTKFile>\n";
   const SurfaceMesh r = io::parse_vtp(xml, "h.vtp");
   EXPECT_EQ(r.num_points(), 7);
-  EXPECT_EQ(r.connectivity, (std::vector<PointIndex>{0, 1, 2, 3, 0, 1, 3, 3, 1, 2, 6, 5, 4}));
-  EXPECT_EQ(r.offsets, (std::vector<std::uint64_t>{0, 4, 7, 10, 13}));
+  EXPECT_EQ(r.connectivity, (Array<PointIndex>{0, 1, 2, 3, 0, 1, 3, 3, 1, 2, 6, 5, 4}));
+  EXPECT_EQ(r.offsets, (Array<std::uint64_t>{0, 4, 7, 10, 13}));
   expect_field(r, {"a&b", 1, {1, 2, 3, 4, 5, 6, 7}});
   EXPECT_EQ(r.point_fields.size(), 1u);
 }
@@ -480,7 +480,7 @@ TEST(VtpTest, VtkInterop) {
   if (!have_vtk()) GTEST_SKIP() << "python3-vtk9 not importable";
   TempDir dir;
   SurfaceMesh m = polygon_mesh();
-  m.point_fields.push_back({"Normals", 3, std::vector<float>(3 * 8, 0.0f)});
+  m.point_fields.push_back({"Normals", 3, Array<float>(3 * 8, 0.0f)});
   for (int i = 0; i < 8; ++i) m.point_fields.back().values[3 * i + 2] = 1.0f;
   m.point_fields.push_back({"height", 1, {0, 1, 2, 3, 4, 5, 6, 7.5f}});
   m.point_fields.push_back({"vel", 2, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15}});
@@ -599,7 +599,7 @@ with open('vtk_truth.txt', 'w') as f:
     pts.insert(pts.end(), {float(x), float(y), float(z)});
     height.push_back(float(hv));
   }
-  std::vector<PointIndex> conn;
+  Array<PointIndex> conn;
   for (PointIndex id; truth >> id;) conn.push_back(id);
   ASSERT_EQ(conn.size(), 3u * nc);
   for (const char* name : {"vtk_ascii.vtp", "vtk_binary_zlib.vtp", "vtk_binary.vtp", "vtk_appended_zlib.vtp",
@@ -695,10 +695,10 @@ TEST(PvtpTest, PiecesWeldByGlobalIdsNotPositions) {
   io::write_vtp(b, dir.file("sq_1.vtp"), &ib);
   io::write_pvtp(dir.file("sq.pvtp"), a, {"sq_0.vtp", "sq_1.vtp"}, true);
   const SurfaceMesh m = io::read_mesh(dir.file("sq.pvtp"));
-  EXPECT_EQ(m.points, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}));
-  EXPECT_EQ(m.connectivity, (std::vector<PointIndex>{0, 1, 2, 1, 3, 2}));
+  EXPECT_EQ(m.points, (Array<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}));
+  EXPECT_EQ(m.connectivity, (Array<PointIndex>{0, 1, 2, 1, 3, 2}));
   ASSERT_EQ(m.point_fields.size(), 1u);  // the ids are not a field
-  EXPECT_EQ(m.point_fields[0].values, (std::vector<float>{10, 11, 12, 13}));
+  EXPECT_EQ(m.point_fields[0].values, (Array<float>{10, 11, 12, 13}));
   // Copies that disagree on a position, ids past the points held, a missing piece.
   SurfaceMesh moved = b;
   moved.points[0] = 0.5f;

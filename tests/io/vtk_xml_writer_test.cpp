@@ -24,11 +24,11 @@ TEST(VtkXmlWriter, EveryArrayReadsBackAtItsOffset) {
                                .string();
   // Past the writer's 65536-value chunks, so conversion crosses chunk ends.
   const std::uint64_t n = 200003;
-  std::vector<float> floats(3 * n);
+  Array<float> floats(3 * n);  // every value set below
   for (std::size_t i = 0; i < floats.size(); ++i) floats[i] = static_cast<float>(i) * 0.25f - 7.0f;
   std::vector<std::int32_t> stored(n);
   for (std::uint64_t i = 0; i < n; ++i) stored[i] = static_cast<std::int32_t>(i * 3) - 5;
-  const std::vector<float> none;
+  const Array<float> none;
 
   vtk_xml::AppendedArrays arrays;
   std::string x = vtk_xml::file_header("PolyData") + "  <PolyData>\n    <Piece>\n      <PointData>\n";

@@ -219,7 +219,7 @@ TEST(Weld, ThreePlansGroupAlike) {
   };
   for (auto plan : {keyreduce::WeldPlan::Dense, keyreduce::WeldPlan::Sort, keyreduce::WeldPlan::ByPosition}) {
     const auto spec = weld_spec<std::uint32_t>(plan, 3000, 12);
-    std::vector<float> points;
+    Array<float> points;
     std::vector<std::uint32_t> first;
     const auto g = keyreduce::weld(keys.data(), static_cast<Id>(keys.size()), spec, position, {&points, &first});
     if (plan != keyreduce::WeldPlan::ByPosition) {

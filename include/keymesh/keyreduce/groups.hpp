@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "keymesh/core/array.hpp"
 #include "keymesh/core/types.hpp"
 
 namespace keymesh::keyreduce {
@@ -30,7 +31,7 @@ enum class Order { Skip, Build };
 template <class K>
 struct Groups {
   std::vector<K> unique_keys;
-  std::vector<std::uint32_t> index_map;
+  Array<std::uint32_t> index_map;        // an output array (a mesh's connectivity)
   std::vector<Id> offsets;              // empty when built with Order::Skip
   std::vector<std::uint32_t> order;     // empty when built with Order::Skip
 

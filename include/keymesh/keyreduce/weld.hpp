@@ -39,7 +39,7 @@ struct WeldSpec {
 struct WeldExtras {
   // ByPosition: the welded points' coordinates (3 per group), so the caller
   // need not recompute them.
-  std::vector<float>* points = nullptr;
+  Array<float>* points = nullptr;
   // Every group's first pair (smallest pair index): the pair a caller takes
   // a group's values from when pairs of one key may round differently.
   std::vector<std::uint32_t>* first = nullptr;

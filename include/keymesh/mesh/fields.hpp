@@ -12,19 +12,20 @@
 namespace keymesh {
 
 // Output arrays come at their final size (parallel::resize_fresh: huge pages
-// asked for, first touch shared by the threads) and are written in place.
+// asked for, first touch shared by the threads), unwritten (Array), and are
+// written in place: the caller writes every new tuple.
 
-// Zeroed point fields for `points` new points, named and shaped like `like`.
+// Point fields for `points` new points, named and shaped like `like`.
 std::vector<Field> new_point_fields(const std::vector<Field>& like, Id points);
 
 // The output point fields of a generator that keeps the input points as
-// its first ones: each input field's tuples, then room (zeros) for the new
-// points up to `total` points.
+// its first ones: each input field's tuples, then room for the new points
+// up to `total` points.
 std::vector<Field> extend_point_fields(const std::vector<Field>& in, Id total);
 
 // The same for the coordinates (3 per point): `out` sized for `total`
 // points, the input's first.
-void extend_points(const std::vector<float>& in, Id total, std::vector<float>& out);
+void extend_points(const Array<float>& in, Id total, Array<float>& out);
 
 // out[i]'s tuple at `point` = the mean, summed in double, of in[i]'s tuples
 // at ids[0 .. n) (a face or cell centre).

@@ -1,10 +1,13 @@
 #pragma once
 // SurfaceMesh: points and polygonal cells (triangles unless offsets say
 // otherwise) with named point fields, structure-of-arrays like VTK's vtkPolyData.
+// The arrays are Arrays (core/array.hpp): resize(n) leaves new elements
+// unwritten, so a generator writes its output once.
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "keymesh/core/array.hpp"
 #include "keymesh/core/types.hpp"
 
 namespace keymesh {
@@ -13,7 +16,7 @@ namespace keymesh {
 struct Field {
   std::string name;
   int components = 1;
-  std::vector<float> values;
+  Array<float> values;
 };
 
 // The field named `name` in `fields`, or null.
@@ -24,11 +27,11 @@ inline const Field* find_field(const std::vector<Field>& fields, const std::stri
 }
 
 struct SurfaceMesh {
-  std::vector<float> points;                 // x,y,z per point
-  std::vector<PointIndex> connectivity;      // point ids of every cell, cell after cell
+  Array<float> points;                 // x,y,z per point
+  Array<PointIndex> connectivity;      // point ids of every cell, cell after cell
   // Cell c spans connectivity[offsets[c], offsets[c+1]). Empty means every
   // cell is a triangle (the common case: no offsets array is stored).
-  std::vector<std::uint64_t> offsets;
+  Array<std::uint64_t> offsets;
   std::vector<Field> point_fields;
   // One tuple per cell (e.g. a label map's boundary_labels). Written by the
   // .vtp writer as CellData; the other formats have no place for them.

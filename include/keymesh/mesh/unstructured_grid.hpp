@@ -73,7 +73,7 @@ class IndexArray {
 };
 
 struct UnstructuredGrid {
-  std::vector<float> points;  // x,y,z per point
+  Array<float> points;        // x,y,z per point
   IndexArray connectivity;    // corner point ids, cell after cell
   // Cell c spans connectivity[offsets[c], offsets[c+1]). Empty means every
   // cell has `uniform_type` and cell_type_size(uniform_type) corners (the

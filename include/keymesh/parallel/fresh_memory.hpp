@@ -3,13 +3,12 @@
 // threads. On the development VMs a first touch (a page fault, the kernel
 // zeroing the page) costs more than the writes that follow, and
 // std::vector::resize makes it in one thread while it zero-fills. Here the
-// kernel is asked for huge pages first (fewer faults), the threads fault the
-// pages in parallel with one write per page (the kernel zeroes each page it
-// maps, so writing the rest of the page would only repeat that), and only
-// then does resize zero-fill memory that is already mapped.
-#include <algorithm>
+// kernel is asked for huge pages first (fewer faults) and the threads fault
+// the pages in parallel with one write per page (the kernel zeroes each page
+// it maps, so writing the rest of the page would only repeat that). An
+// output Array (core/array.hpp) is then sized without a fill: its elements
+// are written once, by the generator.
 #include <cstddef>
-#include <functional>
 #include <memory>
 #include <type_traits>
 #include <vector>
@@ -40,13 +39,13 @@ inline void fault_in(void* data, std::size_t bytes, std::size_t from = 0) {
 }
 
 // Gives `v` room for n elements, its pages faulted in by the threads (no
-// element added: the resize that follows only zero-fills mapped memory).
-template <class T>
-void reserve_fresh(std::vector<T>& v, std::size_t n) {
+// element added).
+template <class T, class A>
+void reserve_fresh(std::vector<T, A>& v, std::size_t n) {
   if (n <= v.capacity()) return;
   v.reserve(n);
-  // Raw storage past the elements held: bytes may be written, and resize
-  // zero-fills them after.
+  // Raw storage past the elements held: bytes may be written (a resize
+  // sets them after).
   fault_in(v.data(), n * sizeof(T), v.size() * sizeof(T));
 }
 
@@ -61,41 +60,13 @@ std::unique_ptr<T[]> fresh_array(std::size_t n) {
   return a;
 }
 
-// Sizes `v` to n elements (zero-filled, as resize does).
-template <class T>
-void resize_fresh(std::vector<T>& v, std::size_t n) {
+// Sizes `v` to n elements, its new pages faulted in by the threads. The new
+// elements are those v.resize(n) makes: unwritten in an Array (the output
+// arrays, which their generator writes), zeros in a std::vector.
+template <class T, class A>
+void resize_fresh(std::vector<T, A>& v, std::size_t n) {
   reserve_fresh(v, n);
   v.resize(n);
 }
-
-// Several arrays sized together: each gets its room (reserve_fresh) when
-// added, and run() then sizes them all, one array per thread, the largest
-// first. std::vector's resize zero-fills its new elements in one thread,
-// at memory speed (66 MB for a 3.7 M-triangle contour); one after the other
-// those fills add up, side by side they cost the largest one.
-class FreshArrays {
- public:
-  // Room for n elements of v now (its data() stays valid: run() does not
-  // reallocate); the elements after run().
-  template <class T>
-  T* add(std::vector<T>& v, std::size_t n) {
-    reserve_fresh(v, n);
-    jobs_.push_back(Job{n * sizeof(T), [&v, n] { v.resize(n); }});
-    return v.data();
-  }
-
-  void run() {
-    std::sort(jobs_.begin(), jobs_.end(), [](const Job& a, const Job& b) { return a.bytes > b.bytes; });
-    for_each_dynamic(static_cast<Id>(jobs_.size()), [&](Id j) { jobs_[static_cast<std::size_t>(j)].resize(); }, 1);
-    jobs_.clear();
-  }
-
- private:
-  struct Job {
-    std::size_t bytes;
-    std::function<void()> resize;
-  };
-  std::vector<Job> jobs_;
-};
 
 }  // namespace keymesh::parallel

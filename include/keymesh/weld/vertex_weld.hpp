@@ -8,13 +8,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "keymesh/core/array.hpp"
 #include "keymesh/core/types.hpp"
 
 namespace keymesh::weld {
 
 struct WeldResult {
-  std::vector<float> points;                // x,y,z of every distinct point, in lexicographic order
-  std::vector<std::uint32_t> index_map;     // for every soup point, its welded point
+  Array<float> points;                      // x,y,z of every distinct point, in lexicographic order
+  Array<std::uint32_t> index_map;           // for every soup point, its welded point
   std::vector<std::uint32_t> first;         // for every welded point, its first soup point
 };
 
