@@ -47,8 +47,8 @@ void swap_x_z(SurfaceMesh& mesh) {
 
 // The output of a contour with positions and triangles (and the scalar)
 // only, in arrays the module allocates itself (ContourOptions::
-// output_arrays): uninitialised until the contour writes them, where a
-// SurfaceMesh's vectors are zero-filled first, in one thread.
+// output_arrays): uninitialised until the contour writes them, as a
+// SurfaceMesh's Arrays are now too.
 struct OwnArrays {
   Id points = 0, triangles = 0;
   std::unique_ptr<float[]> xyz, scalars;

@@ -101,8 +101,8 @@ TEST(SplitNonmanifold, TwoTetrahedraOnOneEdgeBecomeTwo) {
 
 // A bipyramid: apex `top`, `d` equator points from `first` on, apex
 // `bottom`; closed, every point one fan (the apexes of degree d).
-std::vector<PointIndex> bipyramid(PointIndex top, PointIndex bottom, PointIndex first, PointIndex d) {
-  std::vector<PointIndex> t;
+Array<PointIndex> bipyramid(PointIndex top, PointIndex bottom, PointIndex first, PointIndex d) {
+  Array<PointIndex> t;
   for (PointIndex k = 0; k < d; ++k) {
     const PointIndex a = first + k, b = first + (k + 1) % d;
     t.insert(t.end(), {top, a, b, bottom, b, a});
