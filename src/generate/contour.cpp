@@ -354,6 +354,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
       for (const auto& t : triangles) {
         for (const auto& f : t.faces) bytes += f.size * sizeof(FaceTriangle);
         for (const auto& e : t.entries) bytes += e.size * sizeof(std::uint16_t);
+        for (const auto& v : t.voxel_i) bytes += v.size * sizeof(std::uint32_t);
       }
       if (bytes > kKeepScratch) free_storage(coarse), free_storage(triangles);
     }
@@ -423,7 +424,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
       });
     st.fields += seconds_since(t0);
     t0 = Clock::now();
-    write_coarse_triangles(bits[iso], s, cb, triangles[iso], connectivity);
+    write_coarse_triangles(s, cb, triangles[iso], connectivity);
     st.generate += seconds_since(t0);
   }
   st.triangles_before_coarsening = fine_triangles;

@@ -305,13 +305,16 @@ class BrickFarBytes {
 
 // One isovalue's coarse triangles between their passes, kept by the caller
 // across isovalues and calls. By brick (contour_rows.hpp's VoxelBricks):
-// its cut voxels' table entries and its face triangles; by voxel row: its
-// range of face triangles, its triangle count, then its first triangle.
+// its cut voxels (position along the row, table entry) and its face
+// triangles; by voxel row: its cut voxels, its range of face triangles, its
+// triangle count, then its first triangle.
 struct CoarseTriangles {
   // Room for the brick's fine triangles (a bound on both its cut voxels
   // and its face triangles); only the elements written are touched.
+  std::vector<KeptArray<std::uint32_t>> voxel_i;  // each cut voxel's i, in walk order
   std::vector<KeptArray<std::uint16_t>> entries;  // CoarseVoxelTable::index of each cut voxel, in walk order
   std::vector<KeptArray<FaceTriangle>> faces;     // its rows' one after the other
+  std::vector<std::uint32_t> voxels;      // by voxel row: its cut voxels
   std::vector<std::uint32_t> face_first;  // by voxel row: its first record in its brick's
   std::vector<std::uint32_t> face_count;  // by voxel row
   std::vector<Id> first;                  // by voxel row: its triangles (tally), then its first (fold_and_count)
@@ -347,7 +350,8 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   const VoxelBricks bricks(s, 0, layers);
   const auto n_bricks = static_cast<std::size_t>(bricks.count());
-  if (ct.faces.size() < n_bricks) ct.faces.resize(n_bricks), ct.entries.resize(n_bricks);
+  if (ct.faces.size() < n_bricks) ct.faces.resize(n_bricks), ct.entries.resize(n_bricks), ct.voxel_i.resize(n_bricks);
+  ct.voxels.resize(static_cast<std::size_t>(voxel_rows));
   ct.face_first.resize(static_cast<std::size_t>(voxel_rows));
   ct.face_count.resize(static_cast<std::size_t>(voxel_rows));
   ct.first.resize(static_cast<std::size_t>(voxel_rows + 1));
@@ -360,6 +364,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
     FaceTriangle* const base = ct.faces[brick].room_for(static_cast<std::size_t>(room));
     FaceTriangle* f = base;
     std::uint16_t* entry = ct.entries[brick].room_for(static_cast<std::size_t>(room));
+    std::uint32_t* voxel_i = ct.voxel_i[brick].room_for(static_cast<std::size_t>(room));
     BrickFarBytes far(bits, s, cb, bricks, brick);
     for_each_brick_row(bits, s, bricks, brick, rc.brick_cases[brick].cases.data(), [&](Id j, Id k, auto&& walk) {
       // The far bytes of the voxel row's corner rows, by corner bits y | z
@@ -368,10 +373,12 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
                                 *const n3 = far.row(j + 1, k + 1);
       const Id vr = k * (s.ny - 1) + j;
       FaceTriangle* const row_faces = f;
+      const std::uint16_t* const row_entries = entry;
       std::uint32_t written = 0;  // triangles of the row so far
       walk([&, n0, n1, n2, n3](Id i, unsigned cube_case) {
         const std::uint16_t e = table.index(cube_case, BrickFarBytes::voxel(n0, n1, n2, n3, i));
         *entry++ = e;
+        *voxel_i++ = static_cast<std::uint32_t>(i);
         const CoarseVoxel v = table.entries[e];
         for (unsigned m = static_cast<unsigned>(v >> kCoarseFaceShift); m; m &= m - 1) {
           const int t = std::countr_zero(m);
@@ -381,6 +388,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
         }
         written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
       });
+      ct.voxels[vr] = static_cast<std::uint32_t>(entry - row_entries);
       ct.face_first[vr] = static_cast<std::uint32_t>(row_faces - base);
       ct.face_count[vr] = static_cast<std::uint32_t>(f - row_faces);
       ct.first[vr] = written;
@@ -422,9 +430,10 @@ inline void fold_and_count(const GridShape& s, Id first_triangle, CoarseTriangle
 
 // Step 6: the kept triangles of voxel rows (j, k), k in [0, nz - 1), with
 // coarse ids, written once at their final place in `connectivity` (the
-// rows' first triangles of fold_and_count), from the entries the tally kept.
-inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, const CoarseBits& cb,
-                                   const CoarseTriangles& ct, PointIndex* connectivity) {
+// rows' first triangles of fold_and_count), from the cut voxels the tally
+// kept (no walk over the inside bits, no second lookup).
+inline void write_coarse_triangles(const GridShape& s, const CoarseBits& cb, const CoarseTriangles& ct,
+                                   PointIndex* connectivity) {
   const VoxelBricks bricks(s, 0, s.nz - 1);
   const CoarseVoxel* table = coarse_voxel_table().entries.data();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
@@ -435,52 +444,55 @@ inline void write_coarse_triangles(const InsideBits& bits, const GridShape& s, c
     if (static_cast<Id>(id_scratch.size()) < 4 * s.nx) id_scratch.resize(static_cast<std::size_t>(4 * s.nx));
     std::uint32_t* lo[2] = {id_scratch.data(), id_scratch.data() + s.nx};
     std::uint32_t* hi[2] = {id_scratch.data() + 2 * s.nx, id_scratch.data() + 3 * s.nx};
-    const std::uint16_t* entries = ct.entries[brick].data();
-    for_each_brick_row(bits, s, bricks, brick, entries, [&](Id j, Id k, auto&& walk) {
-      if (j == bricks.j_begin(brick)) {  // a layer's first row: its lo rows
-        cb.row_ids(k * s.ny + j, lo[0]);
-        cb.row_ids((k + 1) * s.ny + j, lo[1]);
-      }
-      cb.row_ids(k * s.ny + j + 1, hi[0]);
-      cb.row_ids((k + 1) * s.ny + j + 1, hi[1]);
-      const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
-      const Id vr = k * (s.ny - 1) + j;
-      PointIndex* o = connectivity + 3 * ct.first[vr];
-      // Triangle corners c0 | c1 << 3 | c2 << 6 of voxel i as coarse ids:
-      // corner c is grid point i + (c & 1) of corner row c >> 1.
-      auto write = [&](Id i, unsigned c) {
-        auto id = [&](unsigned corner) { return row_ids[corner >> 1][i + (corner & 1u)]; };
-        o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
-        o += 3;
-      };
-      if (!ct.folded[vr]) {
-        walk([&](Id i, unsigned e) {
-          const CoarseVoxel v = table[e];
-          const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
-          for (int t = 0; t < count; ++t) write(i, static_cast<unsigned>(v >> (9 * t)) & 511u);
-        });
-      } else {
-        // A row with folds across faces (few): its dropped triangles, in
-        // the order of its face records, skipped.
-        const FaceTriangle* f = ct.faces_of(bricks, s.ny, vr);
-        const FaceTriangle* const f_end = f + ct.face_count[vr];
-        auto next_drop = [&] {
-          while (f < f_end && !f->folded) ++f;
-          return f < f_end ? f++->tri : ~std::uint32_t{0};
+    // The tally's cut voxels, in its order.
+    const std::uint16_t* entry = ct.entries[brick].data();
+    const std::uint32_t* voxel_i = ct.voxel_i[brick].data();
+    for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k) {
+      cb.row_ids(k * s.ny + bricks.j_begin(brick), lo[0]);
+      cb.row_ids((k + 1) * s.ny + bricks.j_begin(brick), lo[1]);
+      for (Id j = bricks.j_begin(brick); j < bricks.j_end(brick); ++j) {
+        cb.row_ids(k * s.ny + j + 1, hi[0]);
+        cb.row_ids((k + 1) * s.ny + j + 1, hi[1]);
+        const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
+        const Id vr = k * (s.ny - 1) + j;
+        PointIndex* o = connectivity + 3 * ct.first[vr];
+        // Triangle corners c0 | c1 << 3 | c2 << 6 of voxel i as coarse ids:
+        // corner c is grid point i + (c & 1) of corner row c >> 1.
+        auto write = [&](Id i, unsigned c) {
+          auto id = [&](unsigned corner) { return row_ids[corner >> 1][i + (corner & 1u)]; };
+          o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
+          o += 3;
         };
-        std::uint32_t drop = next_drop(), written = 0;
-        walk([&](Id i, unsigned e) {
-          const CoarseVoxel v = table[e];
-          const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
-          for (int t = 0; t < count; ++t, ++written) {
-            if (written == drop) drop = next_drop();
-            else write(i, static_cast<unsigned>(v >> (9 * t)) & 511u);
+        const std::uint32_t* const row_end = voxel_i + ct.voxels[vr];
+        if (!ct.folded[vr]) {
+          for (; voxel_i < row_end; ++voxel_i) {
+            const CoarseVoxel v = table[*entry++];
+            const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
+            for (int t = 0; t < count; ++t) write(*voxel_i, static_cast<unsigned>(v >> (9 * t)) & 511u);
           }
-        });
+        } else {
+          // A row with folds across faces (few): its dropped triangles, in
+          // the order of its face records, skipped.
+          const FaceTriangle* f = ct.faces_of(bricks, s.ny, vr);
+          const FaceTriangle* const f_end = f + ct.face_count[vr];
+          auto next_drop = [&] {
+            while (f < f_end && !f->folded) ++f;
+            return f < f_end ? f++->tri : ~std::uint32_t{0};
+          };
+          std::uint32_t drop = next_drop(), written = 0;
+          for (; voxel_i < row_end; ++voxel_i) {
+            const CoarseVoxel v = table[*entry++];
+            const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
+            for (int t = 0; t < count; ++t, ++written) {
+              if (written == drop) drop = next_drop();
+              else write(*voxel_i, static_cast<unsigned>(v >> (9 * t)) & 511u);
+            }
+          }
+        }
+        std::swap(lo[0], hi[0]);
+        std::swap(lo[1], hi[1]);
       }
-      std::swap(lo[0], hi[0]);
-      std::swap(lo[1], hi[1]);
-    });
+    }
   }, 1);
 }
 
