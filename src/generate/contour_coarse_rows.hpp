@@ -328,13 +328,12 @@ struct CoarseTriangles {
 
 // Calls row(j, k, walk) for each voxel row (j, k) of `brick` in the count
 // pass's order (contour_rows.hpp's VoxelBricks), where walk(voxel) calls
-// voxel(i, value) for each cut voxel i of the row, in increasing i, and
-// `value` is the next of the brick's values stored in that order (the
-// count pass's cube cases, the tally's table entries).
-template <class Stored, class Row>
+// voxel(i, cube_case) for each cut voxel i of the row, in increasing i,
+// with the cube case the count pass stored for it (`cases`, in that order).
+template <class Row>
 void for_each_brick_row(const InsideBits& bits, const GridShape& s, const VoxelBricks& bricks, Id brick,
-                        const Stored* stored, Row&& row) {
-  auto next_stored = [&](int, const CornerWords&) { return unsigned{*stored++}; };
+                        const std::uint8_t* cases, Row&& row) {
+  auto next_stored = [&](int, const CornerWords&) { return unsigned{*cases++}; };
   for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
     for (Id j = bricks.j_begin(brick); j < bricks.j_end(brick); ++j)
       row(j, k, [&](auto&& voxel) { for_each_cut_voxel(bits, s, j, k, next_stored, voxel); });
