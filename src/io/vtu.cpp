@@ -208,7 +208,7 @@ void merge_fields(std::vector<Field>& kept, bool& started, std::vector<Field>&& 
   kept = std::move(out);
 }
 
-// Calls f(std::vector<uint32_t or uint64_t>&), the storage of the array's width.
+// Calls f(Array<uint32_t or uint64_t>&), the storage of the array's width.
 template <class F>
 void with_storage(IndexArray& a, F&& f) {
   if (a.wide()) f(a.wide_values());

@@ -40,8 +40,9 @@ std::string cell_type_name(std::uint8_t vtk_type);
 class IndexArray {
  public:
   IndexArray() = default;
-  // An array of n zeros wide enough to hold ids < max_id_exclusive.
-  // (An output array: huge pages asked for, first touch shared by the threads.)
+  // An array of n ids wide enough to hold ids < max_id_exclusive, unwritten:
+  // the caller sets every one. (An output array: huge pages asked for, first
+  // touch shared by the threads, no zero fill; core/array.hpp.)
   static IndexArray for_ids(std::uint64_t max_id_exclusive, std::size_t n);
   bool wide() const { return wide_; }
   std::size_t size() const { return wide_ ? v64_.size() : v32_.size(); }
@@ -52,10 +53,10 @@ class IndexArray {
     else v32_[i] = static_cast<std::uint32_t>(v);
   }
   // Direct access to the storage of the chosen width.
-  std::vector<std::uint32_t>& narrow() { return v32_; }
-  const std::vector<std::uint32_t>& narrow() const { return v32_; }
-  std::vector<std::uint64_t>& wide_values() { return v64_; }
-  const std::vector<std::uint64_t>& wide_values() const { return v64_; }
+  Array<std::uint32_t>& narrow() { return v32_; }
+  const Array<std::uint32_t>& narrow() const { return v32_; }
+  Array<std::uint64_t>& wide_values() { return v64_; }
+  const Array<std::uint64_t>& wide_values() const { return v64_; }
   // Calls f(std::span<const T>) with T = uint32_t or uint64_t.
   template <class F>
   decltype(auto) visit(F&& f) const {
@@ -68,8 +69,8 @@ class IndexArray {
 
  private:
   bool wide_ = false;
-  std::vector<std::uint32_t> v32_;
-  std::vector<std::uint64_t> v64_;
+  Array<std::uint32_t> v32_;
+  Array<std::uint64_t> v64_;
 };
 
 struct UnstructuredGrid {
