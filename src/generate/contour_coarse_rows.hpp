@@ -436,23 +436,25 @@ inline void write_coarse_triangles(const GridShape& s, const CoarseBits& cb, con
   const VoxelBricks bricks(s, 0, s.nz - 1);
   const CoarseVoxel* table = coarse_voxel_table().entries.data();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
-    // Coarse ids by grid point of the rows (j, k), (j, k + 1) ("lo") and
-    // (j + 1, k), (j + 1, k + 1) ("hi"), by corner bits z: each row filled
-    // once as hi, then used again as lo by the next voxel row.
+    // Coarse ids by grid point of the brick's grid rows j in [j_begin,
+    // j_end] of two planes: plane k + 1's rows become plane k's for the
+    // next layer, so each row is filled once per brick.
+    const Id j_begin = bricks.j_begin(brick), rows_j = bricks.j_end(brick) - j_begin + 1;
     thread_local std::vector<std::uint32_t> id_scratch;
-    if (static_cast<Id>(id_scratch.size()) < 4 * s.nx) id_scratch.resize(static_cast<std::size_t>(4 * s.nx));
-    std::uint32_t* lo[2] = {id_scratch.data(), id_scratch.data() + s.nx};
-    std::uint32_t* hi[2] = {id_scratch.data() + 2 * s.nx, id_scratch.data() + 3 * s.nx};
+    if (static_cast<Id>(id_scratch.size()) < 2 * rows_j * s.nx)
+      id_scratch.resize(static_cast<std::size_t>(2 * rows_j * s.nx));
+    auto ids_of = [&](int plane, Id j) { return id_scratch.data() + (plane * rows_j + (j - j_begin)) * s.nx; };
     // The tally's cut voxels, in its order.
     const std::uint16_t* entry = ct.entries[brick].data();
     const std::uint32_t* voxel_i = ct.voxel_i[brick].data();
+    int lo = 0;  // the plane of layer k's lower grid rows
+    for (Id j = j_begin; j < j_begin + rows_j; ++j) cb.row_ids(bricks.k_begin(brick) * s.ny + j, ids_of(lo, j));
     for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k) {
-      cb.row_ids(k * s.ny + bricks.j_begin(brick), lo[0]);
-      cb.row_ids((k + 1) * s.ny + bricks.j_begin(brick), lo[1]);
-      for (Id j = bricks.j_begin(brick); j < bricks.j_end(brick); ++j) {
-        cb.row_ids(k * s.ny + j + 1, hi[0]);
-        cb.row_ids((k + 1) * s.ny + j + 1, hi[1]);
-        const std::uint32_t* row_ids[4] = {lo[0], hi[0], lo[1], hi[1]};
+      const int hi = lo ^ 1;
+      for (Id j = j_begin; j < j_begin + rows_j; ++j) cb.row_ids((k + 1) * s.ny + j, ids_of(hi, j));
+      for (Id j = j_begin; j < bricks.j_end(brick); ++j) {
+        // The voxel row's corner rows, by corner bits y | z << 1.
+        const std::uint32_t* row_ids[4] = {ids_of(lo, j), ids_of(lo, j + 1), ids_of(hi, j), ids_of(hi, j + 1)};
         const Id vr = k * (s.ny - 1) + j;
         PointIndex* o = connectivity + 3 * ct.first[vr];
         // Triangle corners c0 | c1 << 3 | c2 << 6 of voxel i as coarse ids:
@@ -488,9 +490,8 @@ inline void write_coarse_triangles(const GridShape& s, const CoarseBits& cb, con
             }
           }
         }
-        std::swap(lo[0], hi[0]);
-        std::swap(lo[1], hi[1]);
       }
+      lo = hi;
     }
   }, 1);
 }
