@@ -248,6 +248,42 @@ inline float as_stored(float v) {
   return v;
 }
 
+// Whether a cut edge's crossing is nearer its far end (its coarse point is
+// the far end): EdgeInterpolator::at's t, clamped, >= 0.5. For 8-bit
+// samples the answer for every pair of end samples, 64 K bits made by the
+// same expression once per isovalue, is looked up instead of a division per
+// cut edge.
+template <class T>
+class NearerFarEnd {
+ public:
+  explicit NearerFarEnd(double isovalue) : isovalue_(isovalue) {
+    if constexpr (kTabulated)
+      for (unsigned a = 0; a < 256; ++a)
+        for (unsigned b = 0; b < 256; ++b)
+          table_[(a << 8 | b) >> 6] |=
+              std::uint64_t{computed(static_cast<double>(static_cast<T>(a)), static_cast<double>(static_cast<T>(b)))}
+              << (b & 63u);
+  }
+
+  bool operator()(T v0, T v1) const {
+    if constexpr (kTabulated) {
+      const unsigned pair = static_cast<unsigned>(static_cast<std::uint8_t>(v0)) << 8 | static_cast<std::uint8_t>(v1);
+      return ((table_[pair >> 6] >> (pair & 63u)) & 1u) != 0;
+    } else {
+      return computed(static_cast<double>(v0), static_cast<double>(v1));
+    }
+  }
+
+ private:
+  static constexpr bool kTabulated = sizeof(T) == 1;
+  bool computed(double v0, double v1) const {
+    const double t = (isovalue_ - v0) / (v1 - v0);
+    return !std::isfinite(t) || t >= 0.5;
+  }
+  double isovalue_;
+  std::array<std::uint64_t, kTabulated ? 1024 : 0> table_{};
+};
+
 // A coarse point's values: the mean of its crossings' values, each made by
 // PointWriter as the fine point would be (position, scalar, gradient
 // normal, curvature), summed in double in the order given, as coarsen()
@@ -362,35 +398,11 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   Id coarse_points = 0, coarse_triangles = 0;
   for (Id iso = 0; iso < n_iso; ++iso) {
     auto t0 = Clock::now();
-    const double isovalue = opt.isovalues[iso];
-    // Whether a cut edge's crossing is nearer its far end: EdgeInterpolator::at's t, clamped, >= 0.5.
-    auto nearer_far_end = [isovalue](double v0, double v1) {
-      const double t = (isovalue - v0) / (v1 - v0);
-      return !std::isfinite(t) || t >= 0.5;
-    };
-    auto rank = [&](auto&& far_end) {
-      rank_coarse_points(bits[iso], s, rows[iso], coarse_points, [&](Id i, Id j, Id k, int axis) {
-        const Id p0 = i + j * s.nx + k * s.nxy;
-        return far_end(interp.samples[p0], interp.samples[p0 + s.stride[axis]]);
-      }, coarse[iso]);
-    };
-    if constexpr (sizeof(T) == 1) {
-      // 8-bit samples: the answer for every pair of end samples, 64 K bits
-      // made by the same expression, looked up instead of a division per
-      // cut edge.
-      std::array<std::uint64_t, 1024> far_end{};
-      for (unsigned a = 0; a < 256; ++a)
-        for (unsigned b = 0; b < 256; ++b)
-          far_end[(a << 8 | b) >> 6] |= std::uint64_t{nearer_far_end(static_cast<double>(static_cast<T>(a)),
-                                                                     static_cast<double>(static_cast<T>(b)))}
-                                        << (b & 63u);
-      rank([&](T v0, T v1) {
-        const unsigned pair = static_cast<unsigned>(static_cast<std::uint8_t>(v0)) << 8 | static_cast<std::uint8_t>(v1);
-        return ((far_end[pair >> 6] >> (pair & 63u)) & 1u) != 0;
-      });
-    } else {
-      rank([&](T v0, T v1) { return nearer_far_end(static_cast<double>(v0), static_cast<double>(v1)); });
-    }
+    const NearerFarEnd<T> far_end(opt.isovalues[iso]);
+    rank_coarse_points(bits[iso], s, rows[iso], coarse_points, [&](Id i, Id j, Id k, int axis) {
+      const Id p0 = i + j * s.nx + k * s.nxy;
+      return far_end(interp.samples[p0], interp.samples[p0 + s.stride[axis]]);
+    }, coarse[iso]);
     coarse_points += coarse[iso].count;
     st.weld += seconds_since(t0);
     t0 = Clock::now();
