@@ -7,6 +7,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/generate/split_nonmanifold.hpp"
+#include "keymesh/mesh/unused_points.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -145,6 +146,7 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
   });
   const Id folded = remove_folds(out);
   split_nonmanifold(out);
+  remove_unused_points(out);
   if (stats) *stats = CoarsenStats{n, out.num_points(), t_in, t_out - folded, folded};
   return out;
 }

@@ -15,6 +15,7 @@
 #include "keymesh/core/work_estimate.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/split_nonmanifold.hpp"
+#include "keymesh/mesh/unused_points.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -442,6 +443,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   st.triangles_before_coarsening = fine_triangles;
   t0 = Clock::now();
   split_nonmanifold(mesh);
+  remove_unused_points(mesh);
   st.coarsen += seconds_since(t0);
 }
 

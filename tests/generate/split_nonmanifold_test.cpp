@@ -280,6 +280,9 @@ TEST(SplitNonmanifold, CoarsenedNoiseIsAClosedManifold) {
   const SurfaceMesh& c = got[0];
   const auto t = analyze::check_topology(c);
   EXPECT_EQ(t.nonmanifold_vertices, 0);
+  // Points whose every triangle collapsed or folded (white noise makes
+  // many) are gone (mesh/unused_points.hpp).
+  EXPECT_EQ(t.unused_points, 0);
   // Edges crossed as often each way are manifold; the others (where
   // remove_folds kept one of a set of equal triangles facing one way: white
   // noise makes a few) keep their unpaired triangles: three or more

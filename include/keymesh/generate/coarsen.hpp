@@ -5,8 +5,10 @@
 // positions and fields ("Normals" renormalised), the index map rewrites the
 // triangles, and triangles left with fewer than three distinct points are
 // dropped. Folds are removed too (remove_folds): two triangles on the same
-// three points facing opposite ways cancel. Deterministic: each group
-// averages its points in increasing index.
+// three points facing opposite ways cancel. Then non-manifold points are
+// split (split_nonmanifold.hpp) and points left without a triangle removed
+// (mesh/unused_points.hpp). Deterministic: each group averages its points in
+// increasing index.
 #include <cstdint>
 #include <vector>
 

@@ -1,0 +1,19 @@
+#pragma once
+// Points no cell refers to, removed: what a coarsening leaves where every
+// triangle around a coarse point collapsed or folded away (a blob smaller
+// than a voxel, the tip of a thin part). A surface handed to the user
+// carries none (`keymesh check` counts them as unused points), as
+// vtkCleanPolyData, PyVista's clean() or trimesh's
+// remove_unreferenced_vertices would leave it.
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh {
+
+// Drops the points no cell refers to, with their point fields' tuples; the
+// others keep their order (new ids by a prefix sum over the used points) and
+// the cells are rewritten through it. Cells and cell fields are kept.
+// Returns the points removed; when none, nothing is touched but a scan of
+// the cells. Deterministic, the same at any thread count.
+Id remove_unused_points(SurfaceMesh& mesh);
+
+}  // namespace keymesh
