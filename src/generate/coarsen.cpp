@@ -145,8 +145,7 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
     for (int k = 0; k < 3; ++k) out.connectivity[3 * keep[t] + k] = map[C[3 * t + k]];
   });
   const Id folded = remove_folds(out);
-  split_nonmanifold(out);
-  remove_unused_points(out);
+  remove_points(out, split_nonmanifold(out).unused);
   if (stats) *stats = CoarsenStats{n, out.num_points(), t_in, t_out - folded, folded};
   return out;
 }

@@ -442,8 +442,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   }
   st.triangles_before_coarsening = fine_triangles;
   t0 = Clock::now();
-  split_nonmanifold(mesh);
-  remove_unused_points(mesh);
+  remove_points(mesh, split_nonmanifold(mesh).unused);
   st.coarsen += seconds_since(t0);
 }
 

@@ -310,21 +310,25 @@ struct CornersByPoint {
 // The points that are not one closed fan (one_closed_fan over their
 // spokes), then their corners gathered in one pass over the triangles, by
 // point and increasing corner: the few the rule looks at, in an order that
-// makes all after this deterministic.
-Flagged flag_points(const PointIndex* C, Id corners, Id n) {
+// makes all after this deterministic. `unused` gets the points without a
+// corner, ascending.
+Flagged flag_points(const PointIndex* C, Id corners, Id n, std::vector<PointIndex>& unused) {
   std::vector<PointIndex> odd;
   {
     const CornersByPoint by_point(C, corners, n);
     const int chunks = parallel::chunk_count(n, 1 << 14);
-    std::vector<std::vector<PointIndex>> found(static_cast<std::size_t>(std::max(chunks, 1)));
+    std::vector<std::vector<PointIndex>> found(static_cast<std::size_t>(std::max(chunks, 1))), lone(found.size());
     parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int chunk) {
       for (Id p = b; p < e; ++p) {
         const Id first = by_point.begin(p), d = by_point.end[p] - first;
-        if (d > 0 && !one_closed_fan(static_cast<PointIndex>(p), by_point.spokes + first, d))
+        if (d == 0)
+          lone[chunk].push_back(static_cast<PointIndex>(p));
+        else if (!one_closed_fan(static_cast<PointIndex>(p), by_point.spokes + first, d))
           found[chunk].push_back(static_cast<PointIndex>(p));
       }
     });
     for (const auto& points : found) odd.insert(odd.end(), points.begin(), points.end());
+    for (const auto& points : lone) unused.insert(unused.end(), points.begin(), points.end());
   }
   Flagged f;
   if (odd.empty()) return f;
@@ -470,13 +474,17 @@ Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& s
 NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
   if (!mesh.all_triangles()) throw InputError("split_nonmanifold: the mesh has polygons; only triangles are split");
   const Id corners = static_cast<Id>(mesh.connectivity.size()), n = mesh.num_points();
-  if (corners == 0) return {};
+  NonmanifoldSplit result;
+  if (corners == 0) {
+    result.unused.resize(static_cast<std::size_t>(n));
+    for (Id p = 0; p < n; ++p) result.unused[p] = static_cast<PointIndex>(p);
+    return result;
+  }
   if (corners > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("split_nonmanifold: more than 2^32 - 1 corners");
   PointIndex* C = mesh.connectivity.data();
-  Flagged f = flag_points(C, corners, n);
+  Flagged f = flag_points(C, corners, n, result.unused);
   std::vector<PointIndex> source;  // the original point each new id copies
-  NonmanifoldSplit result;
   // A split renames the corners around the points it splits, which can let
   // a rotation separate an edge it could not before: the points still
   // flagged are looked at again (a few rounds, each over them only).

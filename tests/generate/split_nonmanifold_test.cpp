@@ -10,6 +10,7 @@
 
 #include "keymesh/analyze/topology.hpp"
 #include "keymesh/generate/contour.hpp"
+#include "keymesh/mesh/unused_points.hpp"
 #include "keymesh/parallel/threads.hpp"
 
 using namespace keymesh;
@@ -50,11 +51,16 @@ TEST(SplitNonmanifold, TwoTetrahedraOnOnePointBecomeTwo) {
   m.point_fields.push_back({"s", 1, {0, 1, 2, 3, 4, 5, 6}});
   const SurfaceMesh before = m;
   ASSERT_EQ(analyze::check_topology(m).nonmanifold_vertices, 1);
+  m.points.insert(m.points.end(), {9, 9, 9});  // point 7, in no triangle
+  m.point_fields[0].values.push_back(7);
   const auto r = generate::split_nonmanifold(m);
   EXPECT_EQ(r.points_added, 1);
   EXPECT_EQ(r.edges_left, 0);
+  EXPECT_EQ(r.unused, std::vector<PointIndex>{7});  // left in place, the copy after it
+  remove_points(m, r.unused);
   const auto t = analyze::check_topology(m);
   EXPECT_TRUE(t.closed_manifold);
+  EXPECT_EQ(t.unused_points, 0);
   EXPECT_EQ(t.components, 2);
   EXPECT_EQ(t.euler_characteristic, 4);  // two spheres
   EXPECT_EQ(t.duplicate_points, 1);      // the copy sits where point 0 sits

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "keymesh/analyze/topology.hpp"
+#include "keymesh/core/error.hpp"
 #include "keymesh/parallel/threads.hpp"
 
 using namespace keymesh;
@@ -68,6 +69,23 @@ TEST(UnusedPoints, RandomMeshSameCornersAtAnyThreadCount) {
     EXPECT_EQ(c.points, got[0].points);
     EXPECT_EQ(c.point_fields[0].values, got[0].point_fields[0].values);
   }
+  // Told which points are unused (as split_nonmanifold tells coarsening),
+  // remove_points gives the same mesh without the scan.
+  std::vector<PointIndex> unused;
+  for (Id p = 0; p < n; ++p)
+    if (!used[p]) unused.push_back(static_cast<PointIndex>(p));
+  for (int threads : {1, 3}) {
+    parallel::set_thread_count(threads);
+    SurfaceMesh told = m;
+    remove_points(told, unused);
+    EXPECT_EQ(told.connectivity, got[0].connectivity);
+    EXPECT_EQ(told.points, got[0].points);
+    EXPECT_EQ(told.point_fields[0].values, got[0].point_fields[0].values);
+  }
+  parallel::set_thread_count(0);
+  SurfaceMesh wrong = m;
+  std::swap(unused[0], unused[1]);
+  EXPECT_THROW(remove_points(wrong, unused), InputError);
   const SurfaceMesh& c = got[0];
   EXPECT_EQ(c.num_points(), n - expected_unused);
   EXPECT_EQ(corner_values(c), before);

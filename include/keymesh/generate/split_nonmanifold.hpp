@@ -31,6 +31,8 @@
 // than the other (an open surface's border, or a fold's one-way repeats)
 // keep their unpaired triangles as boundary. Triangles, their order and the
 // points' order are kept; deterministic, the same at any thread count.
+#include <vector>
+
 #include "keymesh/mesh/surface_mesh.hpp"
 
 namespace keymesh::generate {
@@ -38,6 +40,9 @@ namespace keymesh::generate {
 struct NonmanifoldSplit {
   Id points_added = 0;  // the copies appended
   Id edges_left = 0;    // edges whose pairs no rotation separates
+  // The points no triangle refers to, ascending, found on the way and left
+  // in place (keymesh::remove_points takes them out without another scan).
+  std::vector<PointIndex> unused;
 };
 
 // Triangles only (InputError otherwise); a triangle that repeats a point id

@@ -5,6 +5,8 @@
 // carries none (`keymesh check` counts them as unused points), as
 // vtkCleanPolyData, PyVista's clean() or trimesh's
 // remove_unreferenced_vertices would leave it.
+#include <vector>
+
 #include "keymesh/mesh/surface_mesh.hpp"
 
 namespace keymesh {
@@ -15,5 +17,11 @@ namespace keymesh {
 // Returns the points removed; when none, nothing is touched but a scan of
 // the cells. Deterministic, the same at any thread count.
 Id remove_unused_points(SurfaceMesh& mesh);
+
+// The same for points the caller knows no cell refers to (`unused`,
+// ascending ids; split_nonmanifold finds them on its way), without the
+// scan: the corners are rewritten once. InputError for ids out of range or
+// out of order; a listed point a cell still refers to is the caller's bug.
+void remove_points(SurfaceMesh& mesh, const std::vector<PointIndex>& unused);
 
 }  // namespace keymesh
