@@ -33,10 +33,10 @@ TEST(UnusedPoints, HandMeshKeepsOrderAndFields) {
   m.point_fields.push_back({"s", 1, {0, 1, 2, 3, 4, 5}});
   m.point_fields.push_back({"v", 2, {0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5}});
   EXPECT_EQ(remove_unused_points(m), 2);
-  EXPECT_EQ(m.connectivity, (std::vector<PointIndex>{0, 1, 2, 2, 1, 3}));
-  EXPECT_EQ(m.points, (std::vector<float>{0, 0, 0, 2, 20, 200, 3, 30, 300, 5, 50, 500}));
-  EXPECT_EQ(m.point_fields[0].values, (std::vector<float>{0, 2, 3, 5}));
-  EXPECT_EQ(m.point_fields[1].values, (std::vector<float>{0, 0, 2, 2, 3, 3, 5, 5}));
+  EXPECT_EQ(m.connectivity, (Array<PointIndex>{0, 1, 2, 2, 1, 3}));
+  EXPECT_EQ(m.points, (Array<float>{0, 0, 0, 2, 20, 200, 3, 30, 300, 5, 50, 500}));
+  EXPECT_EQ(m.point_fields[0].values, (Array<float>{0, 2, 3, 5}));
+  EXPECT_EQ(m.point_fields[1].values, (Array<float>{0, 0, 2, 2, 3, 3, 5, 5}));
   EXPECT_EQ(remove_unused_points(m), 0);  // nothing left to remove
 }
 
