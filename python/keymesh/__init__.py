@@ -171,8 +171,9 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         coarsen: merge the points nearest to one grid point (the key of a
             crossing becomes the input point nearest to it on its edge),
             averaging positions and fields; collapsed triangles are dropped,
-            and points where the collapse pinched sheets together are split
-            into one point per fan (copies at the same position).
+            points where the collapse pinched sheets together are split
+            into one point per fan (copies at the same position), and points
+            left without a triangle are removed.
         curvature: add point_data["mean_curvature"] from the volume's
             gradient and Hessian: (|g|^2 tr H - g^T H g) / (2 |g|^3), 1/r on
             a sphere of a distance field (values growing outward).

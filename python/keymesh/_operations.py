@@ -108,7 +108,8 @@ def coarsen(mesh: Any, spacing: Sequence[float] = (1.0, 1.0, 1.0), origin: Seque
     share a key (positions and fields averaged), triangles left with fewer
     than three points are dropped and folds cancel; a point left with more
     than one fan of triangles is split into one point per fan (copies at
-    its position), and an edge with two triangles each way into two edges.
+    its position), and an edge with two triangles each way into two edges;
+    points left without a triangle are removed.
 
     For a mesh contoured on that lattice this is the key ``contour
     --coarsen`` uses (the edge's end point nearest to the crossing).

@@ -274,7 +274,8 @@ void add_contour_options(CLI::App& cmd, ContourCli& o) {
                "1/r on a sphere of the distance field); voxel grids only");
   cmd.add_flag("--coarsen", o.coarsen,
                "merge the points nearest to one grid point (key = nearest input point on the edge), "
-               "averaging positions and fields; drop collapsed triangles; split pinched points, one per fan");
+               "averaging positions and fields; drop collapsed triangles; split pinched points, one per fan; "
+               "remove points left without a triangle");
   o.raw_input.add_options(cmd);
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
