@@ -282,6 +282,13 @@ struct CornersByPoint {
           spilled[c].push_back(static_cast<std::uint32_t>(x));
       }
     });
+    // A point id past the last point can only be among the spilled corners
+    // (the owned ranges end at n): refused before any is counted.
+    for (const auto& list : spilled)
+      for (std::uint32_t x : list)
+        if (C[x] >= n)
+          throw InputError("split_nonmanifold: corner " + std::to_string(x) + " refers to point " +
+                           std::to_string(C[x]) + " of " + std::to_string(n));
     auto spilled_corners = [&](auto&& f) {
       parallel::for_each_chunk(chunks, chunks, [&](Id c, Id, int) {
         for (std::uint32_t x : spilled[c]) f(x, std::atomic_ref<std::uint32_t>(count[C[x]]));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -46,9 +47,14 @@ Id remove_unused_points(SurfaceMesh& mesh) {
   // each kept point's new id.
   std::vector<std::uint32_t> id;
   parallel::resize_fresh(id, static_cast<std::size_t>(n + 1));
+  std::atomic<bool> out_of_range{false};
   parallel::for_each(corners, [&](Id c) {
-    std::atomic_ref<std::uint32_t>(id[C[c]]).store(1, std::memory_order_relaxed);
+    if (C[c] < n)
+      std::atomic_ref<std::uint32_t>(id[C[c]]).store(1, std::memory_order_relaxed);
+    else
+      out_of_range.store(true, std::memory_order_relaxed);
   }, 1 << 14);
+  if (out_of_range) throw InputError("remove_unused_points: a cell refers to a point past the mesh's " + std::to_string(n));
   const Id kept = parallel::exclusive_scan(id.data(), id.data(), n + 1);
   if (kept < n) renumber(mesh, id, kept);
   return n - kept;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "keymesh/analyze/topology.hpp"
+#include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour.hpp"
 #include "keymesh/mesh/unused_points.hpp"
 #include "keymesh/parallel/threads.hpp"
@@ -102,6 +103,17 @@ TEST(SplitNonmanifold, TwoTetrahedraOnOneEdgeBecomeTwo) {
     for (std::size_t k = 0; k < 24; ++k)
       if (tris[k / 3].second && apart.connectivity[k] < 2) apart.connectivity[k] += 6;
     EXPECT_TRUE(renamed(apart, m)) << crossed;
+  }
+}
+
+// A corner referring to a point past the last is refused by name, in
+// either triangle order (the check sits where such a corner must go).
+TEST(SplitNonmanifold, RefusesPointsPastTheLast) {
+  for (bool last : {false, true}) {
+    SurfaceMesh m = points_at_random(4);
+    m.connectivity = tetrahedron(0, 1, 2, 3);
+    m.connectivity[last ? 11 : 0] = 9;
+    EXPECT_THROW(generate::split_nonmanifold(m), InputError) << last;
   }
 }
 

@@ -38,6 +38,10 @@ TEST(UnusedPoints, HandMeshKeepsOrderAndFields) {
   EXPECT_EQ(m.point_fields[0].values, (Array<float>{0, 2, 3, 5}));
   EXPECT_EQ(m.point_fields[1].values, (Array<float>{0, 0, 2, 2, 3, 3, 5, 5}));
   EXPECT_EQ(remove_unused_points(m), 0);  // nothing left to remove
+  SurfaceMesh bad = m;
+  bad.connectivity[4] = 4;  // past the last of 4 points
+  EXPECT_THROW(remove_unused_points(bad), InputError);
+  EXPECT_EQ(bad.num_points(), 4);
 }
 
 TEST(UnusedPoints, RandomMeshSameCornersAtAnyThreadCount) {

@@ -45,8 +45,9 @@ struct NonmanifoldSplit {
   std::vector<PointIndex> unused;
 };
 
-// Triangles only (InputError otherwise); a triangle that repeats a point id
-// keeps its corners there in one fan.
+// Triangles only (InputError otherwise, and for a corner referring to a
+// point past the last); a triangle that repeats a point id keeps its
+// corners there in one fan.
 NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh);
 
 }  // namespace keymesh::generate
