@@ -58,8 +58,6 @@ GridShape shape_of(const ImageGrid& g) {
 // the thread count.
 constexpr Id kSlabsPerBlock = 4;
 
-// The most scratch (inside bits) a thread keeps between contours, in bytes.
-constexpr std::size_t kKeepScratch = std::size_t{256} << 20;
 
 // One isovalue's triangle soup as edge keys, appended to `keys` with
 // `key_offset` added (the isovalue's index times 3N). Appends to `blocks`
@@ -393,7 +391,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
         for (const auto& e : t.entries) bytes += e.size * sizeof(std::uint16_t);
         for (const auto& v : t.voxel_i) bytes += v.size * sizeof(std::uint32_t);
       }
-      if (bytes > kKeepScratch) free_storage(coarse), free_storage(triangles);
+      if (bytes > kKeepScratchBytes) free_storage(coarse), free_storage(triangles);
     }
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
@@ -529,7 +527,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
 
   // Scratch kept by the calling thread across calls (a session contouring
   // one volume after another, e.g. from Python, reuses mapped memory instead
-  // of faulting in fresh pages), released when it grows past kKeepScratch.
+  // of faulting in fresh pages), released when it grows past kKeepScratchBytes.
   thread_local std::vector<InsideBits> bits;
   thread_local std::vector<RowCounts> rows;
   bits.resize(static_cast<std::size_t>(n_iso));
@@ -540,7 +538,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
       for (const auto& b : bits) bytes += b.words.capacity() * sizeof(std::uint64_t);
       for (const auto& r : rows)
         for (const auto& c : r.brick_cases) bytes += c.cases.size;
-      if (bytes > kKeepScratch) std::vector<InsideBits>().swap(bits), std::vector<RowCounts>().swap(rows);
+      if (bytes > kKeepScratchBytes) std::vector<InsideBits>().swap(bits), std::vector<RowCounts>().swap(rows);
     }
   } release;
   std::vector<Id> blocks;  // slab blocks of the triangles, for averaging

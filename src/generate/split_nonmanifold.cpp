@@ -236,12 +236,11 @@ struct Flagged {
 // only with more atomics.
 // Kept by the calling thread between calls (a session splitting one mesh
 // after another reuses mapped pages instead of faulting in fresh ones),
-// unless past kKeepBytes.
+// unless past kKeepScratchBytes.
 struct CornersByPoint {
   std::uint32_t* end;  // point p's spokes: [p ? end[p - 1] : 0, end[p])
   Spokes* spokes;      // kSpokesRead more than the corners: one_closed_fan reads 8 at once
 
-  static constexpr std::size_t kKeepBytes = std::size_t{256} << 20;
   struct Scratch {
     KeptArray<std::uint32_t> end;
     KeptArray<Spokes> spokes;
@@ -252,7 +251,7 @@ struct CornersByPoint {
   }
   ~CornersByPoint() {
     Scratch& s = scratch();
-    if (s.end.size * sizeof(std::uint32_t) + s.spokes.size * sizeof(Spokes) > kKeepBytes) s = {};
+    if (s.end.size * sizeof(std::uint32_t) + s.spokes.size * sizeof(Spokes) > kKeepScratchBytes) s = {};
   }
 
   CornersByPoint(const PointIndex* C, Id corners, Id n)

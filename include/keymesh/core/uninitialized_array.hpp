@@ -17,6 +17,11 @@ std::unique_ptr<T[]> uninitialized_array(std::size_t n) {
   return a;
 }
 
+// Scratch a thread keeps between calls (a session contouring one volume
+// after another reuses mapped pages instead of faulting in fresh ones) is
+// given back once it holds more than this.
+inline constexpr std::size_t kKeepScratchBytes = std::size_t{256} << 20;
+
 // An uninitialized_array kept between calls (a session's scratch): grown to
 // the size asked for, never shrunk; its contents are dropped when it grows.
 template <class T>
