@@ -40,6 +40,7 @@ CASES = [
     ("head-nii", f"contour {HEAD} -o {{out}}.vtp --iso 90.5 --iso 40.5 --normals gradient"),
     ("head-nrrd-stream", "contour {in:head.nrrd} -o {out}.ply --iso 90.5 --memory-limit 4M"),
     ("head-nii-positions", "contour " + HEAD + " -o {out}.ply --iso 90.5 --iso 40.5 --no-scalars"),
+    ("head-nii-coarsen-positions", "contour " + HEAD + " -o {out}.ply --iso 90.5 --iso 40.5 --coarsen --no-scalars"),
     ("tets", "tetrahedralize {in:s24.vti} -o {out}.vtu"),
     ("tets24", "tetrahedralize {in:s24.vti} -o {out}.vtu --scheme 24"),
     ("hexes5", "tetrahedralize {in:hexes.vtk} -o {out}.vtu"),

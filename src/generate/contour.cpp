@@ -27,6 +27,7 @@
 #include "keymesh/keyreduce/weld.hpp"
 #include "contour_coarse_rows.hpp"
 #include "contour_rows.hpp"
+#include "grid_lines.hpp"
 #include "voxel_bits.hpp"
 
 namespace keymesh::generate {
@@ -285,14 +286,19 @@ class NearerFarEnd {
 
 // A coarse point's values: the mean of its crossings' values, each made by
 // PointWriter as the fine point would be (position, scalar, gradient
-// normal, curvature), summed in double in the order given, as coarsen()
-// averages a group; gradient normals renormalised, as coarsen() does.
+// normal, curvature), summed in double from +0 in edge-key order, as
+// coarsen() averages a group; gradient normals renormalised, as coarsen()
+// does. A grid row's coarse points at a time (CoarseRow): each crossing is
+// computed once and added to its point's running sums, kept for the row in
+// the thread's scratch (the crossings come code by code, which is key order
+// for every point).
 template <class T>
 struct CoarsePointWriter {
   PointWriter<T> out;  // the mesh's arrays, at coarse ids
+  GridLines lines;
   int at_scalar = 3, at_normal = 3, at_curvature = 3, values = 3;
 
-  explicit CoarsePointWriter(const PointWriter<T>& arrays) : out(arrays) {
+  explicit CoarsePointWriter(const PointWriter<T>& arrays) : out(arrays), lines(arrays.s) {
     values = at_scalar + (out.out.scalar ? 1 : 0);
     at_normal = values;
     values += out.out.gradient_normal ? 3 : 0;
@@ -300,59 +306,104 @@ struct CoarsePointWriter {
     values += out.out.curvature ? 1 : 0;
   }
 
-  // Positions, with or without the scalar (the usual calls): the same sums
-  // as operator()'s, kept in registers. A crossing's two coordinates off
-  // its edge's axis are the point's own: computed once a point, by
-  // position()'s expression (hence the same floats), and per crossing only
-  // the one along its axis.
+  // Step 3 for one isovalue: its every coarse point written at its id.
+  void write_points(const InsideBits& bits, const CoarseBits& cb, Id iso) const {
+    if (!out.positions_and_scalar_only())
+      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) { all_fields(row, iso); });
+    else if (out.out.scalar)
+      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) { positions<true>(row, iso); });
+    else
+      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) { positions<false>(row, iso); });
+  }
+
+ private:
+  // Running sums of a row's points, `per_point` doubles each, by i; in
+  // the calling thread's scratch. Only the coarse points' are zeroed (+0,
+  // as a KEY-REDUCE's sum starts) and read.
+  static double* row_sums(const CoarseRow& row, Id nx, int per_point) {
+    thread_local std::vector<double> sums;
+    if (static_cast<Id>(sums.size()) < per_point * nx) sums.resize(static_cast<std::size_t>(per_point * nx));
+    double* const sum = sums.data();
+    row.for_each_point([&](Id i, std::uint32_t) { std::fill_n(sum + per_point * i, per_point, 0.0); });
+    return sum;
+  }
+
+  // The point on crossing x of axis A: EdgeInterpolator::at, its first
+  // grid point's index from x.
+  template <int A>
+  [[gnu::always_inline]] static typename EdgeInterpolator<T>::Point crossing(const EdgeInterpolator<T>& interp,
+                                                                            const CoarseCrossing& x, Id iso) {
+    const GridShape& s = interp.s;
+    return interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, A, iso);
+  }
+
+  // Positions, with or without the scalar (the usual calls): the sums x, y,
+  // z (and the scalar) of all_fields', without a small array per crossing,
+  // and a count. A crossing's two coordinates off its axis are its point's
+  // own grid coordinates (GridLines, position()'s floats); only the one
+  // along its axis is computed.
   template <bool Scalar>
-  void positions(std::uint32_t id, Id i, Id j, Id k, const std::uint8_t* codes, int n, Id iso) const {
-    const GridShape& s = out.s;
-    auto coordinate = [&](int a, double u) { return static_cast<float>(s.origin[a] + s.spacing[a] * u); };
-    const float grid[3] = {coordinate(0, static_cast<double>(i)), coordinate(1, static_cast<double>(j)),
-                           coordinate(2, static_cast<double>(k + s.k_offset))};
-    double sx = 0, sy = 0, sz = 0, sv = 0;
-    for (int c = 0; c < n; ++c) {
-      const CoarseCrossing x = crossing_at(i, j, k, codes[c]);
-      const auto p = out.interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, x.axis, iso);
-      float xyz[3] = {grid[0], grid[1], grid[2]};
-      const int a = p.axis;
-      xyz[a] = coordinate(a, static_cast<double>(p.ijk[a] + (a == 2 ? s.k_offset : 0)) + p.t);
-      sx += as_stored(xyz[0]), sy += as_stored(xyz[1]), sz += as_stored(xyz[2]);
-      if constexpr (Scalar) sv += as_stored(out.interp.scalar(p));
-    }
-    const double count = static_cast<double>(n);
-    float* o = out.out.xyz + 3 * std::size_t{id};
-    o[0] = static_cast<float>(sx / count), o[1] = static_cast<float>(sy / count), o[2] = static_cast<float>(sz / count);
-    if constexpr (Scalar) out.out.scalar[id] = static_cast<float>(sv / count);
+  void positions(const CoarseRow& row, Id iso) const {
+    constexpr int kPerPoint = 6;  // x, y, z, scalar, count, unused: three aligned pairs
+    double* const sum = row_sums(row, out.s.nx, kPerPoint);
+    // Local copies, which the stores into the sums cannot alias (the
+    // grid's doubles and the samples' pointer would be loaded again
+    // after every store otherwise).
+    const EdgeInterpolator<T> interp = out.interp;
+    const GridShape& s = interp.s;
+    const float* const gx = lines.line[0].data();
+    const float gy = lines.line[1][row.j], gz = lines.line[2][row.k];
+    row.for_each_crossing([&](Id i, const CoarseCrossing& x, auto axis) {
+      constexpr int a = decltype(axis)::value;
+      const auto p = crossing<a>(interp, x, iso);
+      float xyz[3] = {gx[i], gy, gz};
+      xyz[a] = grid_coordinate(s, a, p.ijk[a], p.t);
+      double* const acc = sum + kPerPoint * i;
+      acc[0] += as_stored(xyz[0]), acc[1] += as_stored(xyz[1]), acc[2] += as_stored(xyz[2]);
+      if constexpr (Scalar) acc[3] += as_stored(interp.scalar(p));
+      acc[4] += 1;
+    });
+    float* const xyz = out.out.xyz;
+    float* const scalar = out.out.scalar;
+    row.for_each_point([&](Id i, std::uint32_t id) {
+      const double* const acc = sum + kPerPoint * i;
+      float* const o = xyz + 3 * std::size_t{id};
+      o[0] = static_cast<float>(acc[0] / acc[4]), o[1] = static_cast<float>(acc[1] / acc[4]);
+      o[2] = static_cast<float>(acc[2] / acc[4]);
+      if constexpr (Scalar) scalar[id] = static_cast<float>(acc[3] / acc[4]);
+    });
   }
 
   // Every field (gradient normals, curvature: the calls positions() does
   // not take), each crossing's made by PointWriter into a small array.
-  void operator()(std::uint32_t id, Id i, Id j, Id k, const std::uint8_t* codes, int n, Id iso) const {
-    const GridShape& s = out.s;
-    double sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    PointWriter<T> w = out;
+  void all_fields(const CoarseRow& row, Id iso) const {
+    constexpr int kPerPoint = 9;  // up to 8 values, then the count
+    double* const sum = row_sums(row, out.s.nx, kPerPoint);
+    PointWriter<T> fine_writer = out;
     float fine[8];
-    w.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
-                        out.out.gradient_normal ? fine + at_normal : nullptr,
-                        out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
-    for (int c = 0; c < n; ++c) {
-      const CoarseCrossing x = crossing_at(i, j, k, codes[c]);
-      w(0, out.interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, x.axis, iso), iso);
-      for (int v = 0; v < values; ++v) sum[v] += fine[v];
-    }
-    float mean[8];
-    for (int v = 0; v < values; ++v) mean[v] = static_cast<float>(sum[v] / static_cast<double>(n));
-    for (int a = 0; a < 3; ++a) out.out.xyz[3 * id + a] = mean[a];
-    if (out.out.scalar) out.out.scalar[id] = mean[at_scalar];
-    if (out.out.gradient_normal) {
-      float* v = mean + at_normal;
-      const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-      if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
-      for (int a = 0; a < 3; ++a) out.out.gradient_normal[3 * id + a] = v[a];
-    }
-    if (out.out.curvature) out.out.curvature[id] = mean[at_curvature];
+    fine_writer.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
+                                  out.out.gradient_normal ? fine + at_normal : nullptr,
+                                  out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
+    row.for_each_crossing([&](Id i, const CoarseCrossing& x, auto axis) {
+      fine_writer(0, crossing<decltype(axis)::value>(out.interp, x, iso), iso);
+      double* const acc = sum + kPerPoint * i;
+      for (int v = 0; v < values; ++v) acc[v] += fine[v];
+      acc[8] += 1;
+    });
+    row.for_each_point([&](Id i, std::uint32_t id) {
+      const double* const acc = sum + kPerPoint * i;
+      float mean[8];
+      for (int v = 0; v < values; ++v) mean[v] = static_cast<float>(acc[v] / acc[8]);
+      for (int a = 0; a < 3; ++a) out.out.xyz[3 * std::size_t{id} + a] = mean[a];
+      if (out.out.scalar) out.out.scalar[id] = mean[at_scalar];
+      if (out.out.gradient_normal) {
+        float* v = mean + at_normal;
+        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
+        for (int a = 0; a < 3; ++a) out.out.gradient_normal[3 * std::size_t{id} + a] = v[a];
+      }
+      if (out.out.curvature) out.out.curvature[id] = mean[at_curvature];
+    });
   }
 };
 
@@ -420,19 +471,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
     t0 = Clock::now();
-    using Codes = const std::uint8_t*;
-    if (!write.out.positions_and_scalar_only())
-      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, Id i, Id j, Id k, Codes x, int n) {
-        write(id, i, j, k, x, n, iso);
-      });
-    else if (write.out.out.scalar)
-      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, Id i, Id j, Id k, Codes x, int n) {
-        write.template positions<true>(id, i, j, k, x, n, iso);
-      });
-    else
-      for_each_coarse_point(bits[iso], s, cb, [&](std::uint32_t id, Id i, Id j, Id k, Codes x, int n) {
-        write.template positions<false>(id, i, j, k, x, n, iso);
-      });
+    write.write_points(bits[iso], cb, iso);
     st.fields += seconds_since(t0);
     t0 = Clock::now();
     write_coarse_triangles(s, cb, triangles[iso], connectivity);
@@ -460,34 +499,6 @@ void check_output_size(const ContourOptions& opt, Id points, Id triangles) {
     throw LimitError("contour: " + std::to_string(triangles) +
                      " triangles exceed the supported 1431655765 (2^32 - 1 corners)");
 }
-
-// Every grid line's coordinate as the float EdgeInterpolator::position()
-// rounds it to: a point on an edge along `axis` has the grid coordinates of
-// the edge's first point but along `axis`, where position() adds t, so two
-// of its three floats are looked up here instead of computed (the same
-// double expression, hence the same bits, once per line instead of once
-// per point).
-struct GridLines {
-  const GridShape& s;
-  std::vector<float> line[3];
-
-  explicit GridLines(const GridShape& shape) : s(shape) {
-    const Id n[3] = {s.nx, s.ny, s.nz}, offset[3] = {0, 0, s.k_offset};
-    for (int a = 0; a < 3; ++a) {
-      line[a].resize(static_cast<std::size_t>(n[a]));
-      for (Id c = 0; c < n[a]; ++c)
-        line[a][c] = static_cast<float>(s.origin[a] + s.spacing[a] * static_cast<double>(c + offset[a]));
-    }
-  }
-
-  template <class Point>
-  void position(const Point& p, float* xyz) const {
-    for (int a = 0; a < 3; ++a) xyz[a] = line[a][p.ijk[a]];
-    const int a = p.axis;
-    const double u = static_cast<double>(p.ijk[a] + (a == 2 ? s.k_offset : 0)) + p.t;
-    xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u);
-  }
-};
 
 // The structured plan's output arrays, for `points` points and `triangles`
 // triangles, and the writer filling them; `connectivity` is set to the

@@ -17,9 +17,11 @@
 //              x edge before it and of the y and z edges arriving from the
 //              rows below (word operations on the far and cut bits); rows
 //              count them, prefix sums give every 64-point word its first id;
-//   3. points  every coarse point sums its at most six crossings in the
-//              order of their edge keys (the order a KEY-REDUCE over the
-//              fine points would merge them in) and writes the mean;
+//   3. points  row by row, every crossing computed once and added to its
+//              coarse point's running sums, code by code (CoarseRow), so
+//              that each point sums its at most six crossings in the order
+//              of their edge keys (the order a KEY-REDUCE over the fine
+//              points would merge them in); then each point's mean written;
 //   4. tally   each cut voxel's coarse triangles looked up by its cube case
 //              and far bits (coarse_cases.hpp: repeated corners and folds
 //              within the voxel already decided) and the entry kept; every
@@ -42,6 +44,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "coarse_cases.hpp"
@@ -190,50 +193,93 @@ struct CoarseCrossing {
   int axis;
 };
 
-// A coarse point's crossings as codes, in edge-key order (keys 3 p + axis
+// A coarse point's crossings by code, in edge-key order (keys 3 p + axis
 // grow with p = i + j nx + k nxy): 0 the z edge from the plane below, 1 the
 // y edge from the row below, 2 the x edge from the point before, then 3, 4,
 // 5 the point's own x, y, z edges. The crossing of code c at point (i, j, k).
-inline CoarseCrossing crossing_at(Id i, Id j, Id k, int code) {
+constexpr CoarseCrossing crossing_at(Id i, Id j, Id k, int code) {
   constexpr int kAxis[6] = {2, 1, 0, 0, 1, 2};
   const int a = kAxis[code];
   const Id back = code < 3 ? 1 : 0;
   return {i - (a == 0 ? back : 0), j - (a == 1 ? back : 0), k - (a == 2 ? back : 0), a};
 }
 
-// Step 3: calls f(id, i, j, k, codes, n) for every coarse point (i, j, k) of
-// the isovalue, its n (1 to 6) crossings' codes (crossing_at) in the order
-// of their edge keys.
+// The coarse points of grid row (j, k) and their crossings, read off the
+// row's bits word by word: the coarse points, their first ids, the cut
+// bits (RowCuts) and the far bits around the row (CoarseBits::around).
+// Each crossing of the grid belongs to exactly one (point, code) of one
+// row.
+struct CoarseRow {
+  Id j, k;
+  const std::uint64_t* points;  // the row's coarse-point words
+  const std::uint32_t* first;   // the id of each word's first coarse point
+  RowCuts cuts;
+  CoarseBits::Around far;
+
+  // Calls f(i, crossing, std::integral_constant<int, axis>) for every
+  // crossing of the row's points, i its point, code after code: all of
+  // code 0's, then code 1's, ... so that each point meets its crossings in
+  // edge-key order, the order in which a KEY-REDUCE over the fine points
+  // merges them. By code rather than by point: each loop is one kind of
+  // edge (a fixed axis and fixed sample offsets), with no per-point list of
+  // codes to build and walk.
+  template <class F>
+  [[gnu::always_inline]] void for_each_crossing(F&& f) const {
+    if (far.z_below) by_code<0>(f);
+    if (far.y_below) by_code<1>(f);
+    by_code<2>(f), by_code<3>(f);
+    if (cuts.next_y) by_code<4>(f);
+    if (cuts.next_z) by_code<5>(f);
+  }
+
+  // Calls f(i, id) for every coarse point i of the row, in increasing i.
+  template <class F>
+  [[gnu::always_inline]] void for_each_point(F&& f) const {
+    for (Id q = 0; q < cuts.data_words; ++q) {
+      std::uint32_t id = first[q];
+      for (std::uint64_t m = points[q]; m; m &= m - 1) f(64 * q + std::countr_zero(m), id++);
+    }
+  }
+
+ private:
+  // Word q of the points that have crossing `Code` (the far bits are a
+  // subset of the cut bits: cut ^ far are the near ends).
+  template <int Code>
+  [[gnu::always_inline]] std::uint64_t with_code(Id q) const {
+    if constexpr (Code == 0) return far.z_below[q];
+    if constexpr (Code == 1) return far.y_below[q];
+    if constexpr (Code == 2) return (far.x[q] << 1) | (q > 0 ? far.x[q - 1] >> 63 : 0);
+    if constexpr (Code == 3) {
+      const std::uint64_t a = cuts.in[q];
+      const std::uint64_t x = a ^ ((a >> 1) | (cuts.in[q + 1] << 63));
+      return (q == cuts.last_x_word ? x & cuts.last_x_mask : x) ^ far.x[q];
+    }
+    if constexpr (Code == 4) return cuts.in[q] ^ cuts.next_y[q] ^ far.y[q];
+    if constexpr (Code == 5) return cuts.in[q] ^ cuts.next_z[q] ^ far.z[q];
+  }
+
+  template <int Code, class F>
+  [[gnu::always_inline]] void by_code(F& f) const {
+    constexpr int axis = crossing_at(0, 0, 0, Code).axis;
+    for (Id q = 0; q < cuts.data_words; ++q)
+      for (std::uint64_t m = with_code<Code>(q); m; m &= m - 1) {
+        const Id i = 64 * q + std::countr_zero(m);
+        f(i, crossing_at(i, j, k, Code), std::integral_constant<int, axis>{});
+      }
+  }
+};
+
+// Step 3: calls f(row) for every grid row (CoarseRow) that holds coarse
+// points of the isovalue.
 template <class F>
-void for_each_coarse_point(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
+void for_each_coarse_row(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
   const Id wpr = cb.words_per_row, last_plane = s.nz - 1;
   for_each_row_in_bricks(s, [&](Id r) {
     if (!cb.live[r]) return;
+    const std::uint64_t* const points = cb.points.data() + r * wpr;
+    if (std::all_of(points, points + wpr, [](std::uint64_t w) { return w == 0; })) return;
     const Id j = r % s.ny, k = r / s.ny;
-    const RowCuts cuts(bits, s, j, k, last_plane);
-    const auto [fx, fy, fz, fy_below, fz_below] = cb.around(r, j, k, s.ny);
-    for (Id q = 0; q < cuts.data_words; ++q) {
-      std::uint64_t c = cb.points.data()[r * wpr + q];
-      if (!c) continue;
-      const RowCuts::Words w = cuts.word(q);
-      const std::uint64_t fx_before = (fx[q] << 1) | (q > 0 ? fx[q - 1] >> 63 : 0);
-      std::uint32_t id = cb.first.data()[r * wpr + q];
-      while (c) {
-        const int b = std::countr_zero(c);
-        c &= c - 1;
-        const Id i = 64 * q + b;
-        std::uint8_t x[6];
-        int n = 0;
-        // Each written, then kept by its bit (no branch on a coin toss).
-        x[n] = 0, n += fz_below ? static_cast<int>((fz_below[q] >> b) & 1) : 0;
-        x[n] = 1, n += fy_below ? static_cast<int>((fy_below[q] >> b) & 1) : 0;
-        x[n] = 2, n += static_cast<int>((fx_before >> b) & 1);
-        x[n] = 3, n += static_cast<int>(((w.x ^ fx[q]) >> b) & 1);
-        x[n] = 4, n += static_cast<int>(((w.y ^ fy[q]) >> b) & 1);
-        x[n] = 5, n += static_cast<int>(((w.z ^ fz[q]) >> b) & 1);
-        f(id++, i, j, k, x, n);
-      }
-    }
+    f(CoarseRow{j, k, points, cb.first.data() + r * wpr, RowCuts(bits, s, j, k, last_plane), cb.around(r, j, k, s.ny)});
   });
 }
 

@@ -10,6 +10,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 
 #include "keymesh/analyze/quality.hpp"
 #include "keymesh/analyze/topology.hpp"
@@ -214,6 +215,69 @@ TEST(Coarsen, InThePassEqualsAfterTheContourOnBytes) {
       ASSERT_GT(rows.num_cells(), 0);
       EXPECT_EQ(rows.points, sort.points) << static_cast<int>(type) << " threads " << threads;
       EXPECT_EQ(rows.connectivity, sort.connectivity) << static_cast<int>(type) << " threads " << threads;
+    }
+  }
+  parallel::set_thread_count(0);
+}
+
+// The coarse points' pass (every coarse point the mean of its crossings,
+// summed in edge-key order) against coarsen() over the fine mesh, for each
+// set of fields it writes: positions alone, with the scalar, with gradient
+// normals, with curvature. Rows of 150 samples span three 64-point words, so
+// a crossing merged into the first point of a word from the x edge before
+// it (in the previous word) is there; several isovalues; float and double
+// samples; an origin and spacings that are not whole numbers (one
+// negative); 1 and 2 threads.
+TEST(Coarsen, InThePassEqualsAfterTheContourForEveryField) {
+  struct Fields {
+    bool scalars, curvature;
+    generate::ContourNormals normals;
+  };
+  const Fields fields[] = {{false, false, generate::ContourNormals::None},
+                           {true, false, generate::ContourNormals::None},
+                           {true, false, generate::ContourNormals::Gradient},
+                           {false, true, generate::ContourNormals::None},
+                           {true, true, generate::ContourNormals::Gradient}};
+  for (const ScalarType type : {ScalarType::Float32, ScalarType::Float64}) {
+    ImageGrid g;
+    g.allocate({150, 21, 13}, type);
+    g.origin = {-3.25, 0.1, 7.0};
+    g.spacing = {0.3, -1.7, 0.45};
+    std::mt19937 rng(type == ScalarType::Float32 ? 11 : 12);
+    for (Id p = 0; p < g.num_points(); ++p) {
+      const Id i = p % 150, j = p / 150 % 21, k = p / (150 * 21);
+      const double v = std::sin(0.21 * i) * std::cos(0.4 * j) + 0.5 * std::sin(0.6 * k) +
+                       0.2 * std::uniform_real_distribution<double>(-1, 1)(rng);
+      if (type == ScalarType::Float32) reinterpret_cast<float*>(g.data())[p] = static_cast<float>(v);
+      else reinterpret_cast<double*>(g.data())[p] = v;
+    }
+    for (const Fields& f : fields) {
+      generate::ContourOptions o;
+      o.isovalues = {0.1, -0.45, 0.6};
+      o.coarsen = true;
+      o.scalars = f.scalars;
+      o.curvature = f.curvature;
+      o.normals = f.normals;
+      o.weld = generate::ContourWeld::KeyReduceSort;
+      const SurfaceMesh sort = generate::contour(g, o);
+      ASSERT_GT(sort.num_cells(), 1000);
+      o.weld = generate::ContourWeld::KeyReduce;
+      for (int threads : {1, 2}) {
+        parallel::set_thread_count(threads);
+        const SurfaceMesh rows = generate::contour(g, o);
+        const std::string what = std::to_string(static_cast<int>(type)) + " scalars " + std::to_string(f.scalars) +
+                                 " curvature " + std::to_string(f.curvature) + " threads " + std::to_string(threads);
+        EXPECT_EQ(std::memcmp(rows.points.data(), sort.points.data(), sort.points.size() * sizeof(float)), 0) << what;
+        EXPECT_EQ(rows.points.size(), sort.points.size()) << what;
+        EXPECT_EQ(rows.connectivity, sort.connectivity) << what;
+        ASSERT_EQ(rows.point_fields.size(), sort.point_fields.size()) << what;
+        for (std::size_t n = 0; n < rows.point_fields.size(); ++n) {
+          ASSERT_EQ(rows.point_fields[n].values.size(), sort.point_fields[n].values.size()) << what;
+          EXPECT_EQ(std::memcmp(rows.point_fields[n].values.data(), sort.point_fields[n].values.data(),
+                                rows.point_fields[n].values.size() * sizeof(float)), 0)
+              << what << " " << rows.point_fields[n].name;
+        }
+      }
     }
   }
   parallel::set_thread_count(0);
