@@ -318,14 +318,13 @@ struct CoarsePointWriter {
 
  private:
   // Running sums of a row's points, `per_point` doubles each, by i; in
-  // the calling thread's scratch. Only the coarse points' are zeroed (+0,
-  // as a KEY-REDUCE's sum starts) and read.
-  static double* row_sums(const CoarseRow& row, Id nx, int per_point) {
+  // the calling thread's scratch, all +0 (as a KEY-REDUCE's sum starts):
+  // each writer sets the sums it read back to +0 as it writes the means,
+  // so no pass zeroes them.
+  static double* zeroed_sums(Id nx, int per_point) {
     thread_local std::vector<double> sums;
-    if (static_cast<Id>(sums.size()) < per_point * nx) sums.resize(static_cast<std::size_t>(per_point * nx));
-    double* const sum = sums.data();
-    row.for_each_point([&](Id i, std::uint32_t) { std::fill_n(sum + per_point * i, per_point, 0.0); });
-    return sum;
+    if (static_cast<Id>(sums.size()) < per_point * nx) sums.resize(static_cast<std::size_t>(per_point * nx), 0.0);
+    return sums.data();
   }
 
   // The point on crossing x of axis A: EdgeInterpolator::at, its first
@@ -344,8 +343,9 @@ struct CoarsePointWriter {
   // along its axis is computed.
   template <bool Scalar>
   void positions(const CoarseRow& row, Id iso) const {
-    constexpr int kPerPoint = 6;  // x, y, z, scalar, count, unused: three aligned pairs
-    double* const sum = row_sums(row, out.s.nx, kPerPoint);
+    // x, y, z, then the scalar (or not) and the count: aligned pairs.
+    constexpr int kPerPoint = Scalar ? 6 : 4, kCount = Scalar ? 4 : 3;
+    double* const sum = zeroed_sums(out.s.nx, kPerPoint);
     // Local copies, which the stores into the sums cannot alias (the
     // grid's doubles and the samples' pointer would be loaded again
     // after every store otherwise).
@@ -358,19 +358,24 @@ struct CoarsePointWriter {
       const auto p = crossing<a>(interp, x, iso);
       float xyz[3] = {gx[i], gy, gz};
       xyz[a] = grid_coordinate(s, a, p.ijk[a], p.t);
+      // Every value made before the first store: 8-bit samples may alias
+      // anything stored, and would be read again for the scalar.
+      [[maybe_unused]] float v = 0;
+      if constexpr (Scalar) v = interp.scalar(p);
       double* const acc = sum + kPerPoint * i;
       acc[0] += as_stored(xyz[0]), acc[1] += as_stored(xyz[1]), acc[2] += as_stored(xyz[2]);
-      if constexpr (Scalar) acc[3] += as_stored(interp.scalar(p));
-      acc[4] += 1;
+      if constexpr (Scalar) acc[3] += as_stored(v);
+      acc[kCount] += 1;
     });
     float* const xyz = out.out.xyz;
     float* const scalar = out.out.scalar;
     row.for_each_point([&](Id i, std::uint32_t id) {
-      const double* const acc = sum + kPerPoint * i;
+      double* const acc = sum + kPerPoint * i;
+      const double n = acc[kCount];
       float* const o = xyz + 3 * std::size_t{id};
-      o[0] = static_cast<float>(acc[0] / acc[4]), o[1] = static_cast<float>(acc[1] / acc[4]);
-      o[2] = static_cast<float>(acc[2] / acc[4]);
-      if constexpr (Scalar) scalar[id] = static_cast<float>(acc[3] / acc[4]);
+      o[0] = static_cast<float>(acc[0] / n), o[1] = static_cast<float>(acc[1] / n), o[2] = static_cast<float>(acc[2] / n);
+      if constexpr (Scalar) scalar[id] = static_cast<float>(acc[3] / n);
+      std::fill_n(acc, kPerPoint, 0.0);
     });
   }
 
@@ -378,7 +383,7 @@ struct CoarsePointWriter {
   // not take), each crossing's made by PointWriter into a small array.
   void all_fields(const CoarseRow& row, Id iso) const {
     constexpr int kPerPoint = 9;  // up to 8 values, then the count
-    double* const sum = row_sums(row, out.s.nx, kPerPoint);
+    double* const sum = zeroed_sums(out.s.nx, kPerPoint);
     PointWriter<T> fine_writer = out;
     float fine[8];
     fine_writer.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
@@ -391,9 +396,10 @@ struct CoarsePointWriter {
       acc[8] += 1;
     });
     row.for_each_point([&](Id i, std::uint32_t id) {
-      const double* const acc = sum + kPerPoint * i;
+      double* const acc = sum + kPerPoint * i;
       float mean[8];
       for (int v = 0; v < values; ++v) mean[v] = static_cast<float>(acc[v] / acc[8]);
+      std::fill_n(acc, kPerPoint, 0.0);
       for (int a = 0; a < 3; ++a) out.out.xyz[3 * std::size_t{id} + a] = mean[a];
       if (out.out.scalar) out.out.scalar[id] = mean[at_scalar];
       if (out.out.gradient_normal) {

@@ -122,7 +122,9 @@ struct EdgeInterpolator {
     const double v0 = static_cast<double>(samples[p.p0]);
     const double v1 = static_cast<double>(samples[p.p0 + s.stride[p.axis]]);
     const double v = v0 + p.t * (v1 - v0);
-    return static_cast<float>(std::isfinite(v) ? v : p.iso);
+    // Integer samples give a finite v (t finite in (0, 1], see at()).
+    if constexpr (std::is_integral_v<T>) return static_cast<float>(v);
+    else return static_cast<float>(std::isfinite(v) ? v : p.iso);
   }
 
   // Central-difference gradient at grid point `id` = (i, j, k), one-sided at the border.
