@@ -44,6 +44,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <span>
 #include <type_traits>
 #include <vector>
 
@@ -215,6 +216,11 @@ struct CoarseRow {
   const std::uint32_t* first;   // the id of each word's first coarse point
   RowCuts cuts;
   CoarseBits::Around far;
+  // The words holding coarse points, increasing (a crossing's word is its
+  // point's): a sparse surface's rows have a point or two in a word of
+  // several, and each code's loop visits only these.
+  const Id* words;
+  Id word_count;
 
   // Calls f(i, crossing, std::integral_constant<int, axis>) for every
   // crossing of the row's points, i its point, code after code: all of
@@ -235,7 +241,7 @@ struct CoarseRow {
   // Calls f(i, id) for every coarse point i of the row, in increasing i.
   template <class F>
   [[gnu::always_inline]] void for_each_point(F&& f) const {
-    for (Id q = 0; q < cuts.data_words; ++q) {
+    for (const Id q : std::span(words, static_cast<std::size_t>(word_count))) {
       std::uint32_t id = first[q];
       for (std::uint64_t m = points[q]; m; m &= m - 1) f(64 * q + std::countr_zero(m), id++);
     }
@@ -261,7 +267,7 @@ struct CoarseRow {
   template <int Code, class F>
   [[gnu::always_inline]] void by_code(F& f) const {
     constexpr int axis = crossing_at(0, 0, 0, Code).axis;
-    for (Id q = 0; q < cuts.data_words; ++q)
+    for (const Id q : std::span(words, static_cast<std::size_t>(word_count)))
       for (std::uint64_t m = with_code<Code>(q); m; m &= m - 1) {
         const Id i = 64 * q + std::countr_zero(m);
         f(i, crossing_at(i, j, k, Code), std::integral_constant<int, axis>{});
@@ -277,9 +283,17 @@ void for_each_coarse_row(const InsideBits& bits, const GridShape& s, const Coars
   for_each_row_in_bricks(s, [&](Id r) {
     if (!cb.live[r]) return;
     const std::uint64_t* const points = cb.points.data() + r * wpr;
-    if (std::all_of(points, points + wpr, [](std::uint64_t w) { return w == 0; })) return;
+    thread_local std::vector<Id> words;
+    words.resize(static_cast<std::size_t>(wpr));
+    Id count = 0;
+    for (Id q = 0; q < wpr; ++q) {
+      words[count] = q;
+      count += points[q] != 0;
+    }
+    if (!count) return;
     const Id j = r % s.ny, k = r / s.ny;
-    f(CoarseRow{j, k, points, cb.first.data() + r * wpr, RowCuts(bits, s, j, k, last_plane), cb.around(r, j, k, s.ny)});
+    f(CoarseRow{j, k, points, cb.first.data() + r * wpr, RowCuts(bits, s, j, k, last_plane), cb.around(r, j, k, s.ny),
+                words.data(), count});
   });
 }
 
