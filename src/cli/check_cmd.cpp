@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "command.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/output_transaction.hpp"
 #include "keymesh/analyze/report_fields.hpp"
 #include "keymesh/io/mesh_io.hpp"
@@ -18,7 +19,7 @@ struct CheckCli {
 
 void add_check_options(CLI::App& cmd, CheckCli& o) {
   cmd.description("topology of a surface mesh: boundary and non-manifold edges, duplicates, Euler characteristic");
-  cmd.add_option("mesh", o.input, "surface mesh (.vtp .ply .obj .stl)")->required();
+  cmd.add_option("mesh", o.input, "surface mesh (" + io::extensions_of(io::DataKind::Surface, false) + ")")->required();
   cmd.add_flag("--expect-closed", o.expect_closed, "exit 1 unless the mesh is a closed 2-manifold");
   add_common_options(cmd, o.common);
 }

@@ -111,6 +111,8 @@ bool is_mesh_path(const std::string& path) {
   return format && format->kind == io::DataKind::Surface;
 }
 
+std::string volume_inputs() { return io::extensions_of(io::DataKind::Volume, false) + ", " + io::folder_formats(); }
+
 namespace {
 // /dev/null given as both -o and --report is fine: a device is written in place.
 bool is_device(const std::string& path) {

@@ -88,6 +88,10 @@ long long file_size(const std::string& path);
 // (io/formats.hpp), read or written.
 bool is_mesh_path(const std::string& path);
 
+// The volumes a command without raw options (--dims) reads, for its help:
+// the table's volume extensions and folder formats.
+std::string volume_inputs();
+
 // Refuses (exit 2, one line) a command whose input, -o/--output and --report
 // name the same file in any pair: compared by device and inode, and for
 // outputs that do not exist yet by resolved directory and name. Looks for

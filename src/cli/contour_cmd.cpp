@@ -13,6 +13,7 @@
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/generate/contour_stream.hpp"
 #include "keymesh/generate/contour_tets.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/plane_source.hpp"
@@ -251,12 +252,13 @@ int run_contour(const ContourCli& o) {
 
 void add_contour_options(CLI::App& cmd, ContourCli& o) {
   cmd.add_option("input", o.input,
-                 "volume: .vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or Zarr folder, or raw with --dims; "
-                 "or a tetrahedral grid: .vtu, .vtk (UNSTRUCTURED_GRID)")
+                 "volume: " + io::accepted_volumes(false) + "; or a tetrahedral grid: " +
+                     io::extensions_of(io::DataKind::Grid, false, ", ") + " (UNSTRUCTURED_GRID)")
       ->required();
   cmd.add_option("--array", o.array, "tet grids: the point field to contour (default: the first scalar field)");
   cmd.add_option("-o,--output", o.output,
-                 "output mesh (.vtp .ply .obj .stl .glb; under mpirun also .pvtp: one piece per rank)")
+                 "output mesh (" + io::extensions_of(io::DataKind::Surface, true) + "; under mpirun also " +
+                     io::pieces_index_extensions() + ": one piece per rank)")
       ->required();
   cmd.add_option("--iso", o.isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
   cmd.add_option("--weld", o.weld,
@@ -279,8 +281,8 @@ void add_contour_options(CLI::App& cmd, ContourCli& o) {
   o.raw_input.add_options(cmd);
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
-                 "the output is byte-identical (averaged normals: within float rounding); raw (--dims), "
-                 ".nrrd/.nhdr or .nii with uncompressed samples")
+                 "the output is byte-identical (averaged normals: within float rounding); " +
+                     io::accepted_plane_sources())
       ->check(size_validator());
   cmd.add_flag("--gather", o.gather,
                "under mpirun: gather the whole mesh on rank 0 into one file (the default unless OUT is .pvtp, "

@@ -50,7 +50,7 @@ void add_convert_options(CLI::App& cmd, ConvertCli& o) {
   cmd.add_option("input", o.input,
                  "unstructured grid (" + io::extensions_of(DataKind::Grid, false) + "), surface mesh (" +
                      io::extensions_of(DataKind::Surface, false) + ") or volume (" +
-                     io::extensions_of(DataKind::Volume, false) + ", " + io::folder_formats() + ")")
+                     volume_inputs() + ")")
       ->required();
   cmd.add_option("-o,--output", o.output,
                  "output file of the same kind (volumes: " + io::extensions_of(DataKind::Volume, true) + ")")

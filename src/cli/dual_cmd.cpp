@@ -5,6 +5,7 @@
 #include "command.hpp"
 #include "keymesh/generate/dual.hpp"
 #include "keymesh/generate/report_fields.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/mesh_io.hpp"
 
 namespace keymesh::cli {
@@ -18,15 +19,19 @@ struct DualCli {
 
 void add_dual_options(CLI::App& cmd, DualCli& o) {
   cmd.description("the dual of a polygon surface: a polygon per point through the centroids of its cells");
-  cmd.add_option("input", o.input, "polygon surface (.vtp .ply .obj .stl)")->required();
-  cmd.add_option("-o,--output", o.output, "output polygons (.vtp .obj .ply)")->required();
+  cmd.add_option("input", o.input, "polygon surface (" + io::extensions_of(io::DataKind::Surface, false) + ")")
+      ->required();
+  cmd.add_option("-o,--output", o.output, "output polygons (" + io::polygon_extensions(true) + ")")->required();
   add_common_options(cmd, o.common);
 }
 
 int run_dual(const DualCli& o, CommandRun& run) {
-  if (!is_mesh_path(o.output) || o.output.size() < 4 ||
-      o.output.compare(o.output.size() - 4, 4, ".stl") == 0) {
-    std::fprintf(stderr, "keymesh dual: %s: write polygons as .vtp, .obj or .ply\n", o.output.c_str());
+  // The dual's cells are polygons: a format that splits them into triangles
+  // (the table's triangles_only) would lose them.
+  const io::Format* out = io::format_by_name(o.output);
+  if (!out || out->kind != io::DataKind::Surface || !out->writable() || out->triangles_only) {
+    std::fprintf(stderr, "keymesh dual: %s: write polygons as %s (%s hold triangles only)\n", o.output.c_str(),
+                 io::polygon_extensions(true).c_str(), io::polygon_extensions(false).c_str());
     return 2;
   }
   const SurfaceMesh m = run.stage("read", [&] { return io::read_mesh(o.input); });

@@ -1,6 +1,7 @@
 // keymesh generate sphere --size N -o FILE: the paper's Spherical Distance field.
 #include "command.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::cli {
@@ -18,7 +19,7 @@ void add_generate_options(CLI::App& cmd, GenerateOptions& o) {
   cmd.description("write a built-in dataset: `sphere` (Spherical Distance field, float32, size^3)");
   cmd.add_option("dataset", o.dataset, "dataset name")->required()->check(CLI::IsMember({"sphere"}));
   cmd.add_option("--size,-n", o.size, "points along each axis")->check(CLI::Range(2LL, 1LL << 20));
-  cmd.add_option("-o,--output", o.output, "output volume (.vti, .nrrd or .raw)")->required();
+  cmd.add_option("-o,--output", o.output, "output volume (" + io::accepted_volumes(true) + ")")->required();
   add_common_options(cmd, o.common);
 }
 

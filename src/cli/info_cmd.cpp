@@ -5,6 +5,7 @@
 #include <map>
 
 #include "command.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/volume_io.hpp"
@@ -19,7 +20,11 @@ struct InfoCli {
 };
 
 void add_info_options(CLI::App& cmd, InfoCli& o) {
-  cmd.add_option("file", o.input, "volume or mesh file")->required();
+  cmd.add_option("file", o.input,
+                 "volume (" + volume_inputs() + "), surface mesh (" +
+                     io::extensions_of(io::DataKind::Surface, false) + ") or unstructured grid (" +
+                     io::extensions_of(io::DataKind::Grid, false) + ")")
+      ->required();
   cmd.add_option("--report", o.report_path, "write the same facts as JSON");
 }
 

@@ -11,6 +11,7 @@
 #include "keymesh/generate/labels.hpp"
 #include "keymesh/generate/labels_stream.hpp"
 #include "keymesh/generate/report_fields.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/plane_source.hpp"
 #include "keymesh/io/volume_io.hpp"
@@ -139,11 +140,11 @@ namespace {
 void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   cmd.description("surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys");
   cmd.add_option("input", o.input,
-                 "integer volume (uint8 int8 uint16 int16 int32): .vti .nrrd .nhdr .nii .nii.gz .den, a DICOM or "
-                 "Zarr folder, or raw with --dims")
+                 "integer volume (uint8 int8 uint16 int16 int32): " + io::accepted_volumes(false))
       ->required();
   cmd.add_option("-o,--output", o.output,
-                 "output mesh: .vtp keeps the cell fields boundary_labels (and label); .ply .obj .stl drop them")
+                 "output mesh (" + io::extensions_of(io::DataKind::Surface, true) +
+                     "): .vtp keeps the cell fields boundary_labels (and label), the others drop them")
       ->required();
   cmd.add_option("--method", o.method,
                  "surfacenets (a point per cell of mixed labels, a quad per edge between two labels, every "
@@ -170,8 +171,8 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
                  "label indices (e.g. 256M); the surfaces are merged by key, then smoothed and written whole "
-                 "(not streamed: the output mesh); byte-identical to one in-memory run; raw (--dims), "
-                 ".nrrd/.nhdr, .nii (gzip too), DICOM, Zarr; under mpirun -np P each rank streams its own rows")
+                 "(not streamed: the output mesh); byte-identical to one in-memory run; " +
+                     io::accepted_plane_sources() + "; under mpirun -np P each rank streams its own rows")
       ->check(size_validator());
   add_common_options(cmd, o.common);
 }

@@ -8,6 +8,7 @@
 #include "keymesh/generate/contour_tets.hpp"
 #include "keymesh/generate/dual.hpp"
 #include "keymesh/generate/subdivide.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/volume_io.hpp"
@@ -73,9 +74,14 @@ int run_pipeline(const PipelineCli& o) {
 }
 
 void add_pipeline_options(CLI::App& cmd, PipelineCli& o) {
-  cmd.add_option("input", o.input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or tet grid (.vtu .vtk)")
+  cmd.add_option("input", o.input,
+                 "volume (" + volume_inputs() + ") or tet grid (" +
+                     io::extensions_of(io::DataKind::Grid, false) + ")")
       ->required();
-  cmd.add_option("-o,--output", o.output, "output surface (.vtp .ply .obj; .stl without --dual)")->required();
+  cmd.add_option("-o,--output", o.output,
+                 "output surface (" + io::extensions_of(io::DataKind::Surface, true) + "; with --dual " +
+                     io::polygon_extensions(false) + " split the polygons into triangles)")
+      ->required();
   cmd.add_option("--iso", o.isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
   cmd.add_flag("--coarsen", o.coarsen, "merge points by nearest grid point during the contour");
   cmd.add_flag("--curvature", o.curvature, "mean curvature from the volume (voxel grids), carried along");

@@ -4,6 +4,7 @@
 
 #include "command.hpp"
 #include "keymesh/analyze/report_fields.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/mesh_io.hpp"
 
 namespace keymesh::cli {
@@ -17,7 +18,7 @@ struct QualityCli {
 
 void add_quality_options(CLI::App& cmd, QualityCli& o) {
   cmd.description("triangle quality Q = 4 sqrt(3) area / sum of squared edge lengths: min, median, mean, histogram");
-  cmd.add_option("mesh", o.input, "triangle mesh (.vtp .ply .obj .stl)")->required();
+  cmd.add_option("mesh", o.input, "triangle mesh (" + io::extensions_of(io::DataKind::Surface, false) + ")")->required();
   add_common_options(cmd, o.common);
 }
 

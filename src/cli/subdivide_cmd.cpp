@@ -5,6 +5,7 @@
 
 #include "command.hpp"
 #include "keymesh/generate/subdivide.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
 
@@ -25,7 +26,10 @@ struct SubdivideCli {
 
 void add_subdivide_options(CLI::App& cmd, SubdivideCli& o) {
   cmd.description("split triangles 1->4 or tetrahedra 1->8, new points keyed by the parent edge");
-  cmd.add_option("input", o.input, "triangle surface (.vtp .ply .obj .stl) or tet grid (.vtu .vtk)")->required();
+  cmd.add_option("input", o.input,
+                 "triangle surface (" + io::extensions_of(io::DataKind::Surface, false) + ") or tet grid (" +
+                     io::extensions_of(io::DataKind::Grid, false) + ")")
+      ->required();
   cmd.add_option("-o,--output", o.output, "output of the same kind")->required();
   cmd.add_option("--levels,-k", o.levels, "subdivision levels")->check(CLI::Range(0, 8));
   cmd.add_option("--scheme", o.scheme,
@@ -45,7 +49,10 @@ int run_subdivide(const SubdivideCli& o, CommandRun& run) {
   const bool grid_in = io::is_grid_file(o.input);
   if (grid_in ? is_mesh_path(o.output) : !is_mesh_path(o.output)) {
     std::fprintf(stderr, "keymesh subdivide: %s: a %s subdivides into a %s\n", o.output.c_str(),
-                 grid_in ? "tet grid" : "surface", grid_in ? "grid (.vtu .vtk)" : "surface (.vtp .ply .obj .stl)");
+                 grid_in ? "tet grid" : "surface",
+                 (grid_in ? "grid (" + io::extensions_of(io::DataKind::Grid, true) + ")"
+                          : "surface (" + io::extensions_of(io::DataKind::Surface, true) + ")")
+                     .c_str());
     return 2;
   }
   if (grid_in && opt.scheme == generate::SubdivideScheme::Bezier) {

@@ -5,6 +5,7 @@
 
 #include "command.hpp"
 #include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/volume_io.hpp"
 
@@ -20,10 +21,14 @@ struct TetrahedralizeCli {
 };
 
 void add_tetrahedralize_options(CLI::App& cmd, TetrahedralizeCli& o) {
-  cmd.description("split the voxels of a volume (or the hexahedra of a .vtu/.vtk) into tetrahedra");
-  cmd.add_option("input", o.input, "volume (.vti .nrrd .nhdr .nii .nii.gz .den, DICOM/Zarr folder) or hexahedral grid (.vtu .vtk)")
+  cmd.description("split the voxels of a volume (or the hexahedra of a " +
+                  io::extensions_of(io::DataKind::Grid, false, "/") + ") into tetrahedra");
+  cmd.add_option("input", o.input,
+                 "volume (" + volume_inputs() + ") or hexahedral grid (" +
+                     io::extensions_of(io::DataKind::Grid, false) + ")")
       ->required();
-  cmd.add_option("-o,--output", o.output, "output tetrahedral grid (.vtu or .vtk)")->required();
+  cmd.add_option("-o,--output", o.output, "output tetrahedral grid (" + io::extensions_of(io::DataKind::Grid, true) + ")")
+      ->required();
   cmd.add_option("--scheme", o.scheme,
                  "5: five tets per hexahedron, alternating so neighbouring faces match (the minimal split); "
                  "24: face-centred, 24 tets per hexahedron from its centre and its face centres")

@@ -30,11 +30,13 @@ ImageGrid read_zarr(const std::string& folder) { return read_all_planes(*open_za
 constexpr Format kFormats[] = {
     {"PLY", {".ply"}, K::Surface, SurfaceReader{read_ply}, SurfaceWriter{write_ply}},
     {"OBJ", {".obj"}, K::Surface, SurfaceReader{read_obj}, SurfaceWriter{write_obj}},
-    {"STL", {".stl"}, K::Surface, SurfaceReader{read_stl}, SurfaceWriter{write_stl}},
+    {.name = "STL", .extensions = {".stl"}, .kind = K::Surface, .read = SurfaceReader{read_stl},
+     .write = SurfaceWriter{write_stl}, .triangles_only = true},
     {"VTK XML PolyData", {".vtp"}, K::Surface, SurfaceReader{read_vtp}, SurfaceWriter{write_vtp}},
     {.name = "ParaView parallel PolyData", .extensions = {".pvtp"}, .kind = K::Surface,
      .read = SurfaceReader{read_pvtp}, .write_pieces_index = write_pvtp},
-    {"glTF binary", {".glb"}, K::Surface, {}, SurfaceWriter{write_gltf_binary}},
+    {.name = "glTF binary", .extensions = {".glb"}, .kind = K::Surface, .write = SurfaceWriter{write_gltf_binary},
+     .triangles_only = true},
     {"VTK XML UnstructuredGrid", {".vtu"}, K::Grid, GridReader{read_vtu}, GridWriter{write_vtu}},
     {"legacy VTK", {".vtk"}, K::Grid, GridReader{read_legacy_vtk}, GridWriter{write_legacy_vtk}},
     {.name = "VTK XML ImageData", .extensions = {".vti"}, .kind = K::Volume, .read = VolumeReader{read_vti},
@@ -134,6 +136,15 @@ std::string folder_formats() {
   for (const Format& f : kFormats)
     if (f.is_folder()) names.emplace_back(f.name);
   return std::string("a ").append(or_list(names)).append(" folder");
+}
+
+std::string polygon_extensions(bool kept, std::string_view separator) {
+  return joined(extensions_where([&](const Format& f) { return has(f, K::Surface, true) && f.triangles_only != kept; }),
+                separator);
+}
+
+std::string pieces_index_extensions(std::string_view separator) {
+  return joined(extensions_where([](const Format& f) { return f.write_pieces_index != nullptr; }), separator);
 }
 
 std::string accepted_surfaces() {

@@ -36,7 +36,9 @@ def dual_counts():
     mesh_mib = (os.path.getsize(src) + os.path.getsize(out)) / 2 ** 20
     assert r["peak_rss_mib"] > 0.5 * mesh_mib, (r["peak_rss_mib"], mesh_mib)
     run("check", out, "--expect-closed", "-q")
-    run("dual", src, "-o", os.path.join(D, "d.stl"), expect=2)
+    for triangles_only in ("d.stl", "d.glb"):  # formats that would split the polygons into triangles
+        p = run("dual", src, "-o", os.path.join(D, triangles_only), expect=2)
+        assert "write polygons as" in p.stderr and not os.path.exists(os.path.join(D, triangles_only))
 
 
 def pipeline_chain():
@@ -60,7 +62,7 @@ def curvature_on_tets_refused():
 
 
 check("contour --coarsen: report keys, fewer triangles, better quality", coarsen_report)
-check("dual: F* = V, V* = F, closed; .stl refused", dual_counts)
+check("dual: F* = V, V* = F, closed; .stl and .glb refused", dual_counts)
 check("pipeline: coarsen, curvature, Bezier subdivision and dual in one run", pipeline_chain)
 check("--curvature on a tet grid is a usage error", curvature_on_tets_refused)
 finish()

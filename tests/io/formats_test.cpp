@@ -6,6 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -137,4 +140,30 @@ TEST(FormatTable, MessagesAreTheDocumentedOnes) {
         "cannot be read plane by plane (" + accepted_plane_sources() + " can;"})
     EXPECT_NE(doc.find(documented), std::string::npos) << documented;
   EXPECT_EQ(accepted_grids(), ".vtu or .vtk");  // the two grid formats keymesh reads and writes
+}
+
+// triangles_only says what the writer does: a quad written in a format the
+// table marks so comes back as two triangles, in the others as one quad
+// (checked on every surface format keymesh both writes and reads back).
+TEST(FormatTable, TrianglesOnlyIsWhatTheWriterDoes) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("keymesh_formats_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  SurfaceMesh quad;
+  quad.points = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  quad.connectivity = {0, 1, 2, 3};
+  quad.offsets = {0, 4};
+  int checked = 0;
+  for (const Format& f : formats()) {
+    if (f.kind != DataKind::Surface || !f.writable() || !f.readable()) continue;
+    const std::string path = (dir / ("quad" + std::string(f.extensions[0]))).string();
+    write_mesh(quad, path);
+    const SurfaceMesh back = read_mesh(path);
+    EXPECT_EQ(back.num_cells(), f.triangles_only ? 2 : 1) << f.name;
+    ++checked;
+  }
+  EXPECT_GE(checked, 4);  // PLY, OBJ, STL, VTP
+  EXPECT_NE(polygon_extensions(false).find(".stl"), std::string::npos);
+  EXPECT_EQ(polygon_extensions(true).find(".stl"), std::string::npos);
+  fs::remove_all(dir);
 }

@@ -57,6 +57,9 @@ struct Format {
   // appended data": a .vti's samples must be stored by offset).
   std::string_view streams_if = {};
   PiecesIndexWriter write_pieces_index = nullptr;
+  // A surface writer that splits polygons into triangles (STL, glTF): not
+  // an output for polygons (the dual's).
+  bool triangles_only = false;
 
   bool readable() const { return read.index() != 0 || headerless; }
   bool writable() const { return write.index() != 0; }
@@ -126,6 +129,11 @@ Fn function_for(const std::string& path) {
 std::string extensions_of(DataKind kind, bool written, std::string_view separator = " ");
 // "a DICOM or Zarr folder".
 std::string folder_formats();
+// The surface formats written with their polygons kept (.ply .obj .vtp),
+// or with polygons split into triangles (triangles_only: .stl .glb).
+std::string polygon_extensions(bool kept, std::string_view separator = " ");
+// The formats an index of distributed pieces is written in (".pvtp").
+std::string pieces_index_extensions(std::string_view separator = " ");
 
 // What unknown-format messages say is accepted, from the table:
 // surfaces ".ply, .obj, .stl, .vtp; .pvtp to read; .glb to write", grids
