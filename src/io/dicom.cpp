@@ -8,15 +8,20 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <iterator>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
+#include "child_process.hpp"
 #include "keymesh/io/input_file.hpp"
 #include "volume_formats.hpp"
 
@@ -28,6 +33,10 @@ const gdcm::Tag kSeriesUid(0x0020, 0x000e), kPosition(0x0020, 0x0032), kOrientat
     kPixelSpacing(0x0028, 0x0030), kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kSamples(0x0028, 0x0002),
     kBitsAllocated(0x0028, 0x0100), kSigned(0x0028, 0x0103), kFrames(0x0028, 0x0008), kSlope(0x0028, 0x1053),
     kIntercept(0x0028, 0x1052);
+// Every tag the scan reads.
+const gdcm::Tag kScanTags[] = {kSeriesUid, kPosition, kOrientation, kPixelSpacing, kRows, kColumns,
+                               kSamples, kBitsAllocated, kSigned, kFrames, kSlope, kIntercept};
+constexpr std::size_t kScanTagCount = std::size(kScanTags);
 
 // A decimal-string (DS/IS) value of `count` numbers separated by '\'; empty
 // when absent or malformed (the callers say which).
@@ -84,21 +93,63 @@ struct SeriesFormat {
   std::string orientation, spacing;  // as the first file spells them ("" when absent)
 };
 
+// One file's tags as GDCM's scanner read them (kScanTags order); none when
+// the file is no DICOM file.
+struct ScannedTags {
+  bool dicom = false;
+  std::array<std::optional<std::string>, kScanTagCount> values;
+};
+
+// The scanner's reading of one file, in a child process (io/child_process.hpp:
+// GDCM asserts on malformed headers), passed back as bytes: a DICOM flag,
+// then per tag a presence flag, a 4-byte length and the value.
+ScannedTags scan_file(const std::string& folder, const std::string& file) {
+  const std::string bytes = run_in_child(
+      [&] {
+        gdcm::Scanner scanner;
+        for (const gdcm::Tag& t : kScanTags) scanner.AddTag(t);
+        if (!scanner.Scan({file})) throw InputError(folder + ": cannot scan the DICOM files");
+        std::string out(1, scanner.IsKey(file.c_str()) ? '\1' : '\0');
+        for (const gdcm::Tag& t : kScanTags) {
+          const char* v = scanner.GetValue(file.c_str(), t);
+          const std::uint32_t size = v ? static_cast<std::uint32_t>(std::strlen(v)) : 0;
+          out.push_back(v ? '\1' : '\0');
+          out.append(reinterpret_cast<const char*>(&size), sizeof size);
+          if (v) out.append(v, size);
+        }
+        return out;
+      },
+      folder + ": " + name_of(file) + ": GDCM");
+  ScannedTags tags;
+  std::size_t at = 1;
+  tags.dicom = !bytes.empty() && bytes[0] == '\1';
+  for (auto& value : tags.values) {
+    std::uint32_t size = 0;
+    std::memcpy(&size, bytes.data() + at + 1, sizeof size);
+    if (bytes[at] == '\1') value = bytes.substr(at + 1 + sizeof size, size);
+    at += 1 + sizeof size + size;
+  }
+  return tags;
+}
+
 // The tags of every file as GDCM's scanner read them, and errors that name
 // the folder and the file.
 class SeriesScan {
  public:
   SeriesScan(const std::string& folder, const std::vector<std::string>& files) : folder_(folder) {
-    for (const gdcm::Tag& t : {kSeriesUid, kPosition, kOrientation, kPixelSpacing, kRows, kColumns, kSamples,
-                               kBitsAllocated, kSigned, kFrames, kSlope, kIntercept})
-      scanner_.AddTag(t);
-    if (!scanner_.Scan(files)) throw InputError(folder + ": cannot scan the DICOM files");
+    for (const std::string& f : files) tags_[f] = scan_file(folder, f);
   }
 
   InputError fail(const std::string& file, const std::string& what) const {
     return InputError(folder_ + ": " + name_of(file) + ": " + what);
   }
-  const char* value(const std::string& file, const gdcm::Tag& t) const { return scanner_.GetValue(file.c_str(), t); }
+  const char* value(const std::string& file, const gdcm::Tag& t) const {
+    const auto it = tags_.find(file);
+    if (it == tags_.end()) return nullptr;
+    for (std::size_t k = 0; k < kScanTagCount; ++k)
+      if (kScanTags[k] == t) return it->second.values[k] ? it->second.values[k]->c_str() : nullptr;
+    return nullptr;
+  }
   // An integer tag; `fallback` when absent (an error when fallback < 0).
   long integer(const std::string& file, const gdcm::Tag& t, const char* what, long fallback) const {
     const char* v = value(file, t);
@@ -114,7 +165,7 @@ class SeriesScan {
   // One file's slice header. The first file (`first`) sets `format`; every
   // other must match it and the first slice `ref`.
   Slice slice(const std::string& f, bool first, SeriesFormat& format, const Slice* ref, std::size_t files) const {
-    if (!scanner_.IsKey(f.c_str())) throw fail(f, "not a DICOM file (every file of the folder must be a slice)");
+    if (!tags_.at(f).dicom) throw fail(f, "not a DICOM file (every file of the folder must be a slice)");
     const long samples = integer(f, kSamples, "SamplesPerPixel", 1);
     if (samples != 1) throw fail(f, "SamplesPerPixel " + std::to_string(samples) + " (only one-sample grey images)");
     if (integer(f, kFrames, "NumberOfFrames", 1) != 1)
@@ -194,7 +245,7 @@ class SeriesScan {
   }
 
   std::string folder_;
-  gdcm::Scanner scanner_;
+  std::map<std::string, ScannedTags> tags_;
 };
 
 // The slices' normal: the cross product of the orientation's row and column
@@ -286,30 +337,13 @@ class DicomPlanes : public PlaneSource {
 
   void read_planes(Id first, Id count, std::byte* out) override {
     const std::size_t plane = static_cast<std::size_t>(head_.dims[0] * head_.dims[1]);
-    std::vector<char> stored(plane * scalar_size(stored_));
     for (Id k = 0; k < count; ++k) {
       const Slice& s = slices_[static_cast<std::size_t>(first + k)];
-      gdcm::ImageReader reader;
-      reader.SetFileName(s.file.c_str());
-      // GDCM reads a file cut inside its pixel data without failing and
-      // only warns; the warning is caught so that no slice of garbage passes.
-      gdcm_warnings_.str("");
-      gdcm::Trace::SetWarningStream(gdcm_warnings_);
-      gdcm::Trace::WarningOn();
-      const bool read = reader.Read();
-      gdcm::Trace::WarningOff();
-      gdcm::Trace::SetWarningStream(std::cerr);
-      if (!read) throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
-      if (gdcm_warnings_.str().find("Incomplete Pixel Data") != std::string::npos)
-        throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data ends early (a truncated file)");
-      const gdcm::Image& image = reader.GetImage();
-      const gdcm::PixelFormat& pf = image.GetPixelFormat();
-      if (image.GetColumns() != head_.dims[0] || image.GetRows() != head_.dims[1] || pf.GetSamplesPerPixel() != 1 ||
-          pf.GetBitsAllocated() != 8 * scalar_size(stored_) || image.GetBufferLength() != stored.size())
-        throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data of " + std::to_string(image.GetBufferLength()) +
-                         " bytes, the header declares " + std::to_string(stored.size()));
-      if (!image.GetBuffer(stored.data()))
-        throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot decode its pixel data");
+      // In a child process: GDCM asserts on some malformed files (io/child_process.hpp).
+      const std::string stored = run_in_child([&] { return decode_slice(s); }, folder_ + ": " + name_of(s.file) + ": GDCM");
+      if (stored.size() != plane * scalar_size(stored_))
+        throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM decoded " + std::to_string(stored.size()) +
+                         " bytes, the header declares " + std::to_string(plane * scalar_size(stored_)));
       std::byte* dst = out + static_cast<std::size_t>(k) * plane * scalar_size(head_.type);
       if (scaled_)
         detail::scale_samples(stored_, reinterpret_cast<const std::byte*>(stored.data()), dst, plane, s.slope,
@@ -320,9 +354,37 @@ class DicomPlanes : public PlaneSource {
   }
 
  private:
+  // One slice's stored samples, decoded by GDCM's ImageReader; the size is
+  // checked against the header before the samples are allocated.
+  std::string decode_slice(const Slice& s) const {
+    const std::size_t bytes = static_cast<std::size_t>(head_.dims[0] * head_.dims[1]) * scalar_size(stored_);
+    gdcm::ImageReader reader;
+    reader.SetFileName(s.file.c_str());
+    // GDCM reads a file cut inside its pixel data without failing and
+    // only warns; the warning is caught so that no slice of garbage passes.
+    std::ostringstream warnings;
+    gdcm::Trace::SetWarningStream(warnings);
+    gdcm::Trace::WarningOn();
+    const bool read = reader.Read();
+    gdcm::Trace::WarningOff();
+    gdcm::Trace::SetWarningStream(std::cerr);
+    if (!read) throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
+    if (warnings.str().find("Incomplete Pixel Data") != std::string::npos)
+      throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data ends early (a truncated file)");
+    const gdcm::Image& image = reader.GetImage();
+    const gdcm::PixelFormat& pf = image.GetPixelFormat();
+    if (image.GetColumns() != head_.dims[0] || image.GetRows() != head_.dims[1] || pf.GetSamplesPerPixel() != 1 ||
+        pf.GetBitsAllocated() != 8 * scalar_size(stored_) || image.GetBufferLength() != bytes)
+      throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data of " + std::to_string(image.GetBufferLength()) +
+                       " bytes, the header declares " + std::to_string(bytes));
+    std::string stored(bytes, '\0');
+    if (!image.GetBuffer(stored.data()))
+      throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot decode its pixel data");
+    return stored;
+  }
+
   std::string folder_;
   std::vector<Slice> slices_;
-  std::ostringstream gdcm_warnings_;
   ScalarType stored_ = ScalarType::UInt16;
   bool scaled_ = false;
   ImageGrid head_;

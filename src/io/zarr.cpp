@@ -92,11 +92,13 @@ class ZarrPlanes : public PlaneSource {
     const Id nx = head_.dims[0], ny = head_.dims[1];
     const Id cz = chunks_[n - 3], cy = chunks_[n - 2], cx = chunks_[n - 1];
     const std::size_t size = scalar_size(head_.type);
-    std::vector<std::byte> chunk(static_cast<std::size_t>(chunk_bytes_));
+    // Sized by the first chunk stored on disk: absent chunks are filled in
+    // place, so an array of fill_value allocates no chunk at all.
+    std::vector<std::byte> chunk;
     for (Id iz = first / cz; iz * cz < first + count; ++iz)
       for (Id iy = 0; iy * cy < ny; ++iy)
         for (Id ix = 0; ix * cx < nx; ++ix) {
-          decode_chunk({iz, iy, ix}, chunk);
+          const bool stored = decode_chunk({iz, iy, ix}, chunk);
           const Id z0 = std::max(first, iz * cz), z1 = std::min(first + count, (iz + 1) * cz);
           const Id y1 = std::min(ny, (iy + 1) * cy), x1 = std::min(nx, (ix + 1) * cx);
           const std::size_t run = static_cast<std::size_t>(x1 - ix * cx) * size;
@@ -104,7 +106,9 @@ class ZarrPlanes : public PlaneSource {
             for (Id y = iy * cy; y < y1; ++y) {
               const std::size_t src = static_cast<std::size_t>(((z - iz * cz) * cy + (y - iy * cy)) * cx) * size;
               const std::size_t dst = static_cast<std::size_t>(((z - first) * ny + y) * nx + ix * cx) * size;
-              std::memcpy(out + dst, chunk.data() + src, run);
+              if (stored) std::memcpy(out + dst, chunk.data() + src, run);
+              else
+                for (std::size_t i = 0; i < run; i += size) std::memcpy(out + dst + i, fill_.data(), size);
             }
         }
     if (swap_) {
@@ -297,25 +301,32 @@ class ZarrPlanes : public PlaneSource {
   }
 
   // The chunk (z, y, x) of the last three axes (index 0 on the others),
-  // decoded into `out` (chunk_bytes_), or filled when its file is absent.
-  void decode_chunk(std::array<Id, 3> index, std::vector<std::byte>& out) const {
+  // decoded into `out` (resized to chunk_bytes_); false, `out` untouched,
+  // when its file is absent (the chunk holds fill_value). The chunk's bytes
+  // on disk must be able to hold it before `out` is sized: a file of a few
+  // bytes cannot make the reader allocate a chunk of a gigabyte.
+  bool decode_chunk(std::array<Id, 3> index, std::vector<std::byte>& out) const {
     std::string key;
     for (std::size_t a = 0; a + 3 < shape_.size(); ++a) key += std::string("0") + separator_;
     key += std::to_string(index[0]) + separator_ + std::to_string(index[1]) + separator_ + std::to_string(index[2]);
     const fs::path file = fs::path(array_) / key;
-    if (!path_exists(file)) {
-      for (std::size_t i = 0; i < out.size(); i += fill_.size()) std::memcpy(out.data() + i, fill_.data(), fill_.size());
-      return;
-    }
+    if (!path_exists(file)) return false;
     const std::string data = mesh_bytes::read_whole_file(file.string());
     auto bad = [&](const std::string& what) { return InputError(folder_ + ": chunk " + key + ": " + what); };
     switch (codec_) {
       case Codec::None:
-        if (data.size() != out.size())
-          throw bad("holds " + std::to_string(data.size()) + " bytes, the chunk shape needs " + std::to_string(out.size()));
+        if (data.size() != chunk_bytes_)
+          throw bad("holds " + std::to_string(data.size()) + " bytes, the chunk shape needs " +
+                    std::to_string(chunk_bytes_));
+        out.resize(chunk_bytes_);
         std::memcpy(out.data(), data.data(), out.size());
-        return;
+        return true;
       case Codec::Zlib: {
+        // zlib cannot expand more than ~1032:1 (as the NIfTI and NRRD readers assume).
+        if (chunk_bytes_ / 1032 > data.size() + 64)
+          throw bad(std::to_string(data.size()) + " bytes of zlib/gzip data cannot inflate to the " +
+                    std::to_string(chunk_bytes_) + " bytes the chunk shape needs");
+        out.resize(chunk_bytes_);
         z_stream s{};
         if (inflateInit2(&s, 15 + 32) != Z_OK) throw bad("zlib cannot start");  // 32: zlib or gzip header
         s.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
@@ -330,19 +341,21 @@ class ZarrPlanes : public PlaneSource {
                         ? "inflates to " + std::string(rc == Z_BUF_ERROR && got == out.size() ? "more than " : "") +
                               std::to_string(got) + " bytes, the chunk shape needs " + std::to_string(out.size())
                         : "corrupt zlib/gzip data");
-        return;
+        return true;
       }
       case Codec::Blosc: {
         std::size_t nbytes = 0;
         if (blosc_cbuffer_validate(data.data(), data.size(), &nbytes) != 0) throw bad("corrupt blosc data");
-        if (nbytes != out.size())
+        if (nbytes != chunk_bytes_)
           throw bad("blosc data holds " + std::to_string(nbytes) + " bytes, the chunk shape needs " +
-                    std::to_string(out.size()));
+                    std::to_string(chunk_bytes_));
+        out.resize(chunk_bytes_);
         if (blosc_decompress_ctx(data.data(), out.data(), out.size(), 1) != static_cast<int>(out.size()))
           throw bad("corrupt blosc data");
-        return;
+        return true;
       }
     }
+    return false;  // not reached: every codec returns
   }
 
   std::string folder_, array_;

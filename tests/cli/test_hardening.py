@@ -26,7 +26,7 @@ import sys
 import zlib
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import KEYMESH, check, finish, report, run, tempdir  # noqa: E402
+from kmtest import KEYMESH, SOURCE_DIR, check, finish, report, run, tempdir  # noqa: E402
 
 D = tempdir()
 # Sanitizer builds reserve terabytes of shadow memory: no address-space limit there.
@@ -724,4 +724,56 @@ check("issue 19: --memory-limit -5, --type float16: exit 2 from the validators",
 check("issue 19: operation errors name the input file", every_error_names_the_input)
 check("issue 19: the PLY writer never repeats a property", ply_properties_never_repeat)
 check("issue 19: contour's output estimated from its row counts, refused past --max-memory", contour_output_estimated)
+
+
+# ---- what the DICOM and Zarr fuzz targets found (tests/fuzz/regressions) -------------------
+
+def zarray(folder, **change):
+    meta = {"zarr_format": 2, "shape": [2, 2, 2], "chunks": [2, 2, 2], "dtype": "|u1", "compressor": None,
+            "fill_value": 7, "order": "C", "filters": None}
+    meta.update(change)
+    os.makedirs(os.path.join(D, folder), exist_ok=True)
+    write(os.path.join(folder, ".zarray"), json.dumps(meta))
+    return os.path.join(D, folder)
+
+
+def zarr_chunks_sized_by_their_bytes():
+    """A chunk shape of 1 GiB over a 2 x 2 x 2 array: absent chunks are
+    fill_value without a chunk allocated (it took 1 GiB: out of memory under
+    the 1 GiB address-space limit); a chunk file of a few bytes is refused
+    before its decoded size is allocated."""
+    big = [1024, 1024, 1024]
+    rc, out, err = km("info", zarray("fill.zarr", chunks=big))
+    assert rc == 0 and "range 7 .. 7" in out, (rc, out, err)
+    for codec, data in ((None, b"\0" * 8), ({"id": "zlib", "level": 1}, zlib.compress(b"\0" * 4096))):
+        folder = zarray(f"tiny_{codec is None}.zarr", chunks=big, compressor=codec)
+        write(os.path.join(os.path.basename(folder), "0.0.0"), data)
+        expect_refused(["info", folder], folder, "chunk 0.0.0")
+
+
+def unpacked(regression, leaf):
+    """A folder input of tests/fuzz/regressions (packed as folder_input.hpp
+    reads it: "KMFILE:<name>\\n<bytes>" records joined by newlines)."""
+    with open(os.path.join(SOURCE_DIR, "tests", "fuzz", "regressions", regression), "rb") as f:
+        records = f.read().split(b"\nKMFILE:")
+    folder = os.path.join(D, leaf)
+    os.makedirs(folder, exist_ok=True)
+    for record in records:
+        name, _, body = record.removeprefix(b"KMFILE:").partition(b"\n")
+        write(os.path.join(leaf, name.decode()), body)
+    return folder
+
+
+def dicom_library_aborts_reported():
+    """A series whose second slice has a damaged meta header: Debian's GDCM
+    fails an assert() on it (abort, exit 134, before the reader ran GDCM in a
+    child process); now exit 1 and one line naming the folder and the slice."""
+    folder = unpacked("dicom/gdcm_assert_in_meta_header", "gdcm_assert")
+    for args in (["info", folder], ["contour", folder, "--iso", "1", "-o", os.path.join(D, "ga.vtp")]):
+        expect_refused(args, folder, "s1: GDCM failed")
+
+
+check("fuzzed Zarr: chunks far larger than the array cost no memory until bytes on disk hold them",
+      zarr_chunks_sized_by_their_bytes)
+check("fuzzed DICOM: a file GDCM aborts on is refused by name, no crash", dicom_library_aborts_reported)
 finish()
