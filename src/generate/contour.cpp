@@ -382,17 +382,19 @@ struct CoarsePointWriter {
   // Every field (gradient normals, curvature: the calls positions() does
   // not take), each crossing's made by PointWriter into a small array.
   void all_fields(const CoarseRow& row, Id iso) const {
-    constexpr int kPerPoint = 9;  // up to 8 values, then the count
+    constexpr int kPerPoint = 10;  // up to 8 values, the count, unused: aligned pairs
     double* const sum = zeroed_sums(out.s.nx, kPerPoint);
     PointWriter<T> fine_writer = out;
-    float fine[8];
+    // All eight summed, a fixed count the compiler unrolls: those no field
+    // writes stay 0 and are never read back.
+    float fine[8] = {};
     fine_writer.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
                                   out.out.gradient_normal ? fine + at_normal : nullptr,
                                   out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
     row.for_each_crossing([&](Id i, const CoarseCrossing& x, auto axis) {
       fine_writer(0, crossing<decltype(axis)::value>(out.interp, x, iso), iso);
       double* const acc = sum + kPerPoint * i;
-      for (int v = 0; v < values; ++v) acc[v] += fine[v];
+      for (int v = 0; v < 8; ++v) acc[v] += fine[v];
       acc[8] += 1;
     });
     row.for_each_point([&](Id i, std::uint32_t id) {
