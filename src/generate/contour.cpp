@@ -15,7 +15,6 @@
 #include "keymesh/core/work_estimate.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/split_nonmanifold.hpp"
-#include "keymesh/mesh/unused_points.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -25,6 +24,7 @@
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/keyreduce/weld.hpp"
+#include "coarse_fans.hpp"
 #include "contour_coarse_rows.hpp"
 #include "contour_rows.hpp"
 #include "grid_lines.hpp"
@@ -454,14 +454,15 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     }
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
+  CoarseFans fans;
+  std::vector<PointIndex> suspects;  // every isovalue's, ascending
   for (Id iso = 0; iso < n_iso; ++iso) {
     auto t0 = Clock::now();
     const NearerFarEnd<T> far_end(opt.isovalues[iso]);
-    rank_coarse_points(bits[iso], s, rows[iso], coarse_points, [&](Id i, Id j, Id k, int axis) {
+    mark_coarse_points(bits[iso], s, rows[iso], [&](Id i, Id j, Id k, int axis) {
       const Id p0 = i + j * s.nx + k * s.nxy;
       return far_end(interp.samples[p0], interp.samples[p0 + s.stride[axis]]);
     }, coarse[iso]);
-    coarse_points += coarse[iso].count;
     st.weld += seconds_since(t0);
     t0 = Clock::now();
     tally_coarse_triangles(bits[iso], s, rows[iso], coarse[iso], triangles[iso]);
@@ -469,7 +470,14 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     t0 = Clock::now();
     fold_and_count(s, coarse_triangles, triangles[iso]);
     coarse_triangles += triangles[iso].count;
+    check_coarse_fans(s, triangles[iso], coarse[iso], fans);
     st.coarsen += seconds_since(t0);
+    t0 = Clock::now();
+    number_coarse_points(s, coarse_points, coarse[iso]);
+    coarse_points += coarse[iso].count;
+    const std::vector<PointIndex> ids = suspect_ids(fans, coarse[iso]);
+    suspects.insert(suspects.end(), ids.begin(), ids.end());
+    st.weld += seconds_since(t0);
   }
   auto t0 = Clock::now();
   PointIndex* connectivity = nullptr;
@@ -487,7 +495,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   }
   st.triangles_before_coarsening = fine_triangles;
   t0 = Clock::now();
-  remove_points(mesh, split_nonmanifold(mesh).unused);
+  split_nonmanifold(mesh, suspects);
   st.coarsen += seconds_since(t0);
 }
 

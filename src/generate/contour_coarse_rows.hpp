@@ -12,33 +12,40 @@
 // grid's points:
 //   1. far     every grid row marks its cut edges whose crossing is nearer
 //              the far end (t >= 0.5), one bit per edge and axis;
-//   2. rank    a grid point is a coarse point when a cut edge's crossing is
-//              nearest to it: its own edges' near ends, the far ends of the
-//              x edge before it and of the y and z edges arriving from the
-//              rows below (word operations on the far and cut bits); rows
-//              count them, prefix sums give every 64-point word its first id;
-//   3. points  row by row, every crossing computed once and added to its
-//              coarse point's running sums, code by code (CoarseRow), so
-//              that each point sums its at most six crossings in the order
-//              of their edge keys (the order a KEY-REDUCE over the fine
-//              points would merge them in); then each point's mean written;
-//   4. tally   each cut voxel's coarse triangles looked up by its cube case
+//   2. mark    a grid point is a candidate coarse point when a cut edge's
+//              crossing is nearest to it: its own edges' near ends, the far
+//              ends of the x edge before it and of the y and z edges
+//              arriving from the rows below (word operations on the far and
+//              cut bits);
+//   3. tally   each cut voxel's coarse triangles looked up by its cube case
 //              and far bits (coarse_cases.hpp: repeated corners and folds
 //              within the voxel already decided) and the entry kept; every
 //              voxel row counts its triangles and records its face
 //              triangles;
-//   5. folds   across the faces between voxels decided (coarse_folds.hpp),
+//   4. folds   across the faces between voxels decided (coarse_folds.hpp),
 //              then each voxel row's kept triangles counted and prefix
 //              sums give its first: the caller allocates the triangles'
 //              array once, at its final size;
-//   6. write   each voxel row's kept triangles written once, at their final
+//   5. fans    every candidate's fan read from its eight voxels' entries
+//              (coarse_fans.hpp): candidates left without a triangle (all
+//              their crossings' triangles collapsed) are dropped, and those
+//              that may not be one closed fan listed for the split;
+//   6. number  rows count their coarse points, prefix sums give every
+//              64-point word its first id;
+//   7. points  row by row, every crossing computed once and added to its
+//              coarse point's running sums, code by code (CoarseRow), so
+//              that each point sums its at most six crossings in the order
+//              of their edge keys (the order a KEY-REDUCE over the fine
+//              points would merge them in); then each point's mean written;
+//   8. write   each voxel row's kept triangles written once, at their final
 //              place, with coarse ids (from the kept entries: no second
 //              lookup).
-// The caller runs steps 1, 2, 4 and 5 for every isovalue, allocates the
-// outputs, then runs 3 and 6. The fine points are never written. The bytes are those of coarsen() over
-// the fine mesh (generate/coarsen.hpp): tests hold them equal. The caller
-// then splits non-manifold points and edges (split_nonmanifold.hpp), as
-// coarsen() does.
+// The caller runs steps 1 to 6 for every isovalue, allocates the outputs,
+// then runs 7 and 8. The fine points are never written. The bytes are those
+// of coarsen() over the fine mesh (generate/coarsen.hpp): tests hold them
+// equal. The caller then splits non-manifold points and edges
+// (split_nonmanifold.hpp) among the listed suspects, as coarsen() does
+// among all points.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -119,12 +126,12 @@ void for_each_row_in_bricks(const GridShape& s, F&& f) {
 }
 
 // Steps 1 and 2 for one isovalue: far bits (far(i, j, k, axis) says whether
-// the crossing on that cut edge has t >= 0.5), coarse points and their ids,
-// starting at `first_id`. `rc` (the rows' counts) says which rows have cut
-// edges: only those and the rows above them are visited.
+// the crossing on that cut edge has t >= 0.5) and the candidate coarse
+// points (numbered by number_coarse_points, once check_coarse_fans has
+// taken out those left without a triangle). `rc` (the rows' counts) says
+// which rows have cut edges: only those and the rows above them are visited.
 template <class Far>
-void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCounts& rc, Id first_id, Far&& far,
-                        CoarseBits& cb) {
+void mark_coarse_points(const InsideBits& bits, const GridShape& s, const RowCounts& rc, Far&& far, CoarseBits& cb) {
   const Id wpr = bits.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
   cb.words_per_row = wpr;
   cb.far.room_for(static_cast<std::size_t>(3 * wpr * rows));
@@ -157,16 +164,13 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
       }
     }
   });
-  std::vector<Id> row_first(static_cast<std::size_t>(rows + 1), 0);
   for_each_row_in_bricks(s, [&](Id r) {
     if (!cb.live[r]) return;
     const Id j = r % s.ny, k = r / s.ny;
     const RowCuts cuts(bits, s, j, k, last_plane);
     const auto [fx, fy, fz, fy_below, fz_below] = cb.around(r, j, k, s.ny);
     std::uint64_t* out = cb.points.data() + r * wpr;
-    std::uint32_t* first = cb.first.data() + r * wpr;
     std::uint64_t carry = 0;  // far x edge of the previous word's last point
-    std::uint32_t count = 0;
     for (Id q = 0; q < wpr; ++q) {
       const RowCuts::Words w = cuts.word(q);
       // Far bits are a subset of the cut bits: cut ^ far are the near ends.
@@ -175,16 +179,29 @@ void rank_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
       if (fy_below) c |= fy_below[q];
       if (fz_below) c |= fz_below[q];
       out[q] = c;
-      first[q] = count;
-      count += static_cast<std::uint32_t>(std::popcount(c));
     }
+  });
+}
+
+// Numbers the coarse points (cb.points' bits) in key order, starting at
+// `first_id`: rows count them, prefix sums give every 64-point word its
+// first id. Sets cb.count.
+inline void number_coarse_points(const GridShape& s, Id first_id, CoarseBits& cb) {
+  const Id rows = s.ny * s.nz, wpr = cb.words_per_row;
+  std::vector<Id> row_first(static_cast<std::size_t>(rows + 1), 0);
+  auto row_words = [&](Id r) { return cb.points.data() + r * wpr; };
+  parallel::for_each(rows, [&](Id r) {
+    if (!cb.live[r]) return;
+    Id count = 0;
+    for (Id q = 0; q < wpr; ++q) count += std::popcount(row_words(r)[q]);
     row_first[r] = count;
   });
   cb.count = parallel::exclusive_scan(row_first.data(), row_first.data(), rows + 1);
   parallel::for_each(rows, [&](Id r) {
     if (!cb.live[r]) return;
-    const auto base = static_cast<std::uint32_t>(first_id + row_first[r]);
-    for (Id q = 0; q < wpr; ++q) cb.first.data()[r * wpr + q] += base;
+    auto id = static_cast<std::uint32_t>(first_id + row_first[r]);
+    std::uint32_t* first = cb.first.data() + r * wpr;
+    for (Id q = 0; q < wpr; ++q) first[q] = id, id += static_cast<std::uint32_t>(std::popcount(row_words(r)[q]));
   });
 }
 
@@ -275,7 +292,7 @@ struct CoarseRow {
   }
 };
 
-// Step 3: calls f(row) for every grid row (CoarseRow) that holds coarse
+// Step 7: calls f(row) for every grid row (CoarseRow) that holds coarse
 // points of the isovalue.
 template <class F>
 void for_each_coarse_row(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
@@ -375,6 +392,7 @@ struct CoarseTriangles {
   std::vector<KeptArray<std::uint16_t>> entries;  // CoarseVoxelTable::index of each cut voxel, in walk order
   std::vector<KeptArray<FaceTriangle>> faces;     // its rows' one after the other
   std::vector<std::uint32_t> voxels;      // by voxel row: its cut voxels
+  std::vector<std::uint32_t> entry_first; // by voxel row: its first cut voxel in its brick's arrays
   std::vector<std::uint32_t> face_first;  // by voxel row: its first record in its brick's
   std::vector<std::uint32_t> face_count;  // by voxel row
   std::vector<Id> first;                  // by voxel row: its triangles (tally), then its first (fold_and_count)
@@ -399,7 +417,7 @@ void for_each_brick_row(const InsideBits& bits, const GridShape& s, const VoxelB
       row(j, k, [&](auto&& voxel) { for_each_cut_voxel(bits, s, j, k, next_stored, voxel); });
 }
 
-// Step 4: each cut voxel's table entry looked up by its cube case and far
+// Step 3: each cut voxel's table entry looked up by its cube case and far
 // bits (coarse_cases.hpp) and kept; every voxel row's coarse triangles
 // counted (those with two equal corners dropped and the folds within each
 // voxel decided: the table's) and its face triangles recorded, before any
@@ -411,6 +429,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   const auto n_bricks = static_cast<std::size_t>(bricks.count());
   if (ct.faces.size() < n_bricks) ct.faces.resize(n_bricks), ct.entries.resize(n_bricks), ct.voxel_i.resize(n_bricks);
   ct.voxels.resize(static_cast<std::size_t>(voxel_rows));
+  ct.entry_first.resize(static_cast<std::size_t>(voxel_rows));
   ct.face_first.resize(static_cast<std::size_t>(voxel_rows));
   ct.face_count.resize(static_cast<std::size_t>(voxel_rows));
   ct.first.resize(static_cast<std::size_t>(voxel_rows + 1));
@@ -448,6 +467,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
         written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
       });
       ct.voxels[vr] = static_cast<std::uint32_t>(entry - row_entries);
+      ct.entry_first[vr] = static_cast<std::uint32_t>(row_entries - ct.entries[brick].data());
       ct.face_first[vr] = static_cast<std::uint32_t>(row_faces - base);
       ct.face_count[vr] = static_cast<std::uint32_t>(f - row_faces);
       ct.first[vr] = written;
@@ -455,7 +475,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   }, 1);
 }
 
-// Step 5: the folds across the faces between voxels decided (each row the
+// Step 4: the folds across the faces between voxels decided (each row the
 // faces it owns, coarse_folds.hpp), then each voxel row's kept triangles
 // counted and its first triangle found by a prefix sum, starting at
 // `first_triangle`. Sets ct.count.
@@ -487,7 +507,7 @@ inline void fold_and_count(const GridShape& s, Id first_triangle, CoarseTriangle
   if (first_triangle) parallel::for_each(voxel_rows + 1, [&](Id vr) { ct.first[vr] += first_triangle; });
 }
 
-// Step 6: the kept triangles of voxel rows (j, k), k in [0, nz - 1), with
+// Step 8: the kept triangles of voxel rows (j, k), k in [0, nz - 1), with
 // coarse ids, written once at their final place in `connectivity` (the
 // rows' first triangles of fold_and_count), from the cut voxels the tally
 // kept (no walk over the inside bits, no second lookup).

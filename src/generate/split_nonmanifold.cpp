@@ -119,9 +119,11 @@ bool one_closed_fan(PointIndex v, const Spokes* s, Id d) {
 
 // The same for corners given by index (the few points looked at again).
 bool one_closed_fan(const PointIndex* C, PointIndex v, const std::uint32_t* list, Id d) {
-  constexpr Id kMax = 64;
-  if (d > kMax) return false;
-  Spokes s[kMax] = {};
+  constexpr Id kOnStack = 64;
+  Spokes on_stack[kOnStack] = {};
+  std::vector<Spokes> on_heap;
+  if (d + kSpokesRead > kOnStack) on_heap.resize(static_cast<std::size_t>(d + kSpokesRead));
+  Spokes* s = on_heap.empty() ? on_stack : on_heap.data();
   for (Id j = 0; j < d; ++j) s[j] = {C[next_corner(list[j])], C[prev_corner(list[j])]};
   return one_closed_fan(v, s, d);
 }
@@ -313,11 +315,60 @@ struct CornersByPoint {
   Id begin(Id p) const { return p == 0 ? 0 : end[p - 1]; }
 };
 
+// Corners as point << 32 | corner, sorted and grouped by point (corners
+// increasing); with `only_odd`, the points that are one closed fan left out.
+Flagged grouped(const PointIndex* C, std::vector<std::uint64_t> by_point, bool only_odd) {
+  std::sort(by_point.begin(), by_point.end());
+  Flagged out;
+  std::vector<std::uint32_t> list;
+  for (std::size_t i = 0; i < by_point.size();) {
+    const PointIndex p = static_cast<PointIndex>(by_point[i] >> 32);
+    list.clear();
+    for (; i < by_point.size() && (by_point[i] >> 32) == p; ++i) list.push_back(static_cast<std::uint32_t>(by_point[i]));
+    const Id d = static_cast<Id>(list.size());
+    if (!only_odd || !one_closed_fan(C, p, list.data(), d)) out.add(p, list.data(), d);
+  }
+  return out;
+}
+
+// The corners of `points` (ascending), gathered in one pass over the
+// triangles, by point and increasing corner: the few the rule looks at, in
+// an order that makes all after this deterministic. With `only_odd`, the
+// points that are one closed fan after all are left out.
+Flagged corners_of(const PointIndex* C, Id corners, Id n, const std::vector<PointIndex>& points, bool only_odd) {
+  if (points.empty()) return {};
+  std::vector<std::uint64_t> is_listed(static_cast<std::size_t>(n / 64 + 1), 0);
+  for (PointIndex p : points) is_listed[p / 64] |= std::uint64_t{1} << (p % 64);
+  const Id triangles = corners / 3;
+  const int chunks = parallel::chunk_count(triangles, 1 << 15);
+  std::vector<std::vector<std::uint64_t>> at(static_cast<std::size_t>(std::max(chunks, 1)));  // point << 32 | corner
+  std::vector<std::uint8_t> past_last(at.size(), 0);
+  const std::uint64_t* listed = is_listed.data();
+  auto is = [listed](PointIndex p) { return (listed[p / 64] >> (p % 64)) & 1u; };
+  parallel::for_each_chunk(triangles, chunks, [&](Id b, Id e, int chunk) {
+    // A triangle at a time: one test for its three corners (nearly every
+    // triangle has none of the few listed points).
+    for (Id t = b; t < e; ++t) {
+      const PointIndex* x = C + 3 * t;
+      if (std::max({x[0], x[1], x[2]}) >= n) {
+        past_last[chunk] = 1;
+        return;
+      }
+      if (is(x[0]) | is(x[1]) | is(x[2]))
+        for (int k = 0; k < 3; ++k)
+          if (is(x[k])) at[chunk].push_back((std::uint64_t{x[k]} << 32) | static_cast<std::uint64_t>(3 * t + k));
+    }
+  });
+  if (std::find(past_last.begin(), past_last.end(), 1) != past_last.end())
+    throw InputError("split_nonmanifold: a corner refers to a point past the last");
+  std::vector<std::uint64_t> all;
+  for (const auto& a : at) all.insert(all.end(), a.begin(), a.end());
+  return grouped(C, std::move(all), only_odd);
+}
+
 // The points that are not one closed fan (one_closed_fan over their
-// spokes), then their corners gathered in one pass over the triangles, by
-// point and increasing corner: the few the rule looks at, in an order that
-// makes all after this deterministic. `unused` gets the points without a
-// corner, ascending.
+// spokes), with their corners (corners_of). `unused` gets the points
+// without a corner, ascending.
 Flagged flag_points(const PointIndex* C, Id corners, Id n, std::vector<PointIndex>& unused) {
   std::vector<PointIndex> odd;
   {
@@ -336,27 +387,7 @@ Flagged flag_points(const PointIndex* C, Id corners, Id n, std::vector<PointInde
     for (const auto& points : found) odd.insert(odd.end(), points.begin(), points.end());
     for (const auto& points : lone) unused.insert(unused.end(), points.begin(), points.end());
   }
-  Flagged f;
-  if (odd.empty()) return f;
-  std::vector<std::uint64_t> is_odd(static_cast<std::size_t>(n / 64 + 1), 0);
-  for (PointIndex p : odd) is_odd[p / 64] |= std::uint64_t{1} << (p % 64);
-  const int chunks = parallel::chunk_count(corners, 1 << 16);
-  std::vector<std::vector<std::uint64_t>> at(static_cast<std::size_t>(std::max(chunks, 1)));  // point << 32 | corner
-  parallel::for_each_chunk(corners, chunks, [&](Id b, Id e, int chunk) {
-    for (Id x = b; x < e; ++x)
-      if ((is_odd[C[x] / 64] >> (C[x] % 64)) & 1) at[chunk].push_back((std::uint64_t{C[x]} << 32) | std::uint64_t(x));
-  });
-  std::vector<std::uint64_t> all;
-  for (const auto& a : at) all.insert(all.end(), a.begin(), a.end());
-  std::sort(all.begin(), all.end());
-  std::vector<std::uint32_t> list;
-  for (std::size_t i = 0; i < all.size();) {
-    const PointIndex p = static_cast<PointIndex>(all[i] >> 32);
-    list.clear();
-    for (; i < all.size() && (all[i] >> 32) == p; ++i) list.push_back(static_cast<std::uint32_t>(all[i]));
-    f.add(p, list.data(), static_cast<Id>(list.size()));
-  }
-  return f;
+  return corners_of(C, corners, n, odd, false);
 }
 
 // The corners of `f` regrouped by the ids they hold now; the points that
@@ -365,17 +396,7 @@ Flagged reflag(const PointIndex* C, const Flagged& f) {
   std::vector<std::uint64_t> by_point(f.corners.size());
   for (std::size_t i = 0; i < f.corners.size(); ++i)
     by_point[i] = (std::uint64_t{C[f.corners[i]]} << 32) | f.corners[i];
-  std::sort(by_point.begin(), by_point.end());
-  Flagged out;
-  std::vector<std::uint32_t> list;
-  for (std::size_t i = 0; i < by_point.size();) {
-    const PointIndex p = static_cast<PointIndex>(by_point[i] >> 32);
-    list.clear();
-    for (; i < by_point.size() && (by_point[i] >> 32) == p; ++i) list.push_back(static_cast<std::uint32_t>(by_point[i]));
-    const Id d = static_cast<Id>(list.size());
-    if (!one_closed_fan(C, p, list.data(), d)) out.add(p, list.data(), d);
-  }
-  return out;
+  return grouped(C, std::move(by_point), true);
 }
 
 // Every flagged point's fans under the current rotations, recomputed for
@@ -453,6 +474,13 @@ Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& s
   const FanRule fans{C, multi, rotation, {}, {}, {}};
   FanCache cache(fans, f, &multi);
   std::sort(multi.begin(), multi.end());
+  // Both ends of such an edge are flagged when every point that is not one
+  // closed fan is (a caller's list of suspects may lack one: its edges are
+  // then left as they are rather than looked up where they are not).
+  auto flagged = [&](PointIndex p) { return std::binary_search(f.point.begin(), f.point.end(), p); };
+  std::erase_if(multi, [&](std::uint64_t key) {
+    return !flagged(static_cast<PointIndex>(key >> 32)) || !flagged(static_cast<PointIndex>(key & 0xffffffffu));
+  });
   rotation.assign(multi.size(), 0);
   const Id left = rotate_pairings(cache, rotation);
   std::vector<std::pair<std::uint32_t, PointIndex>> moves;  // corner, new id
@@ -477,19 +505,12 @@ Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& s
 
 }  // namespace
 
-NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
-  if (!mesh.all_triangles()) throw InputError("split_nonmanifold: the mesh has polygons; only triangles are split");
-  const Id corners = static_cast<Id>(mesh.connectivity.size()), n = mesh.num_points();
-  NonmanifoldSplit result;
-  if (corners == 0) {
-    result.unused.resize(static_cast<std::size_t>(n));
-    for (Id p = 0; p < n; ++p) result.unused[p] = static_cast<PointIndex>(p);
-    return result;
-  }
-  if (corners > Id{std::numeric_limits<std::uint32_t>::max()})
-    throw LimitError("split_nonmanifold: more than 2^32 - 1 corners");
+namespace {
+
+// The rule over the flagged points, then the copies appended.
+void split_flagged(SurfaceMesh& mesh, Flagged f, NonmanifoldSplit& result) {
+  const Id n = mesh.num_points();
   PointIndex* C = mesh.connectivity.data();
-  Flagged f = flag_points(C, corners, n, result.unused);
   std::vector<PointIndex> source;  // the original point each new id copies
   // A split renames the corners around the points it splits, which can let
   // a rotation separate an edge it could not before: the points still
@@ -514,6 +535,39 @@ NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
     for (Field& field : mesh.point_fields) append_copies(field.values, field.components);
   }
   result.points_added = added;
+}
+
+// Refuses what the rule cannot take; the corner count.
+Id checked_corners(const SurfaceMesh& mesh) {
+  if (!mesh.all_triangles()) throw InputError("split_nonmanifold: the mesh has polygons; only triangles are split");
+  const Id corners = static_cast<Id>(mesh.connectivity.size());
+  if (corners > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("split_nonmanifold: more than 2^32 - 1 corners");
+  return corners;
+}
+
+}  // namespace
+
+NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
+  const Id corners = checked_corners(mesh), n = mesh.num_points();
+  NonmanifoldSplit result;
+  if (corners == 0) {
+    result.unused.resize(static_cast<std::size_t>(n));
+    for (Id p = 0; p < n; ++p) result.unused[p] = static_cast<PointIndex>(p);
+    return result;
+  }
+  Flagged f = flag_points(mesh.connectivity.data(), corners, n, result.unused);
+  split_flagged(mesh, std::move(f), result);
+  return result;
+}
+
+NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const std::vector<PointIndex>& suspects) {
+  const Id corners = checked_corners(mesh), n = mesh.num_points();
+  if (!std::is_sorted(suspects.begin(), suspects.end()) ||
+      (!suspects.empty() && Id{suspects.back()} >= n))
+    throw InputError("split_nonmanifold: the suspects must be ascending ids of the mesh's points");
+  NonmanifoldSplit result;
+  split_flagged(mesh, corners_of(mesh.connectivity.data(), corners, n, suspects, true), result);
   return result;
 }
 

@@ -117,6 +117,45 @@ TEST(SplitNonmanifold, RefusesPointsPastTheLast) {
   }
 }
 
+// Told where to look: with every point as a suspect, or only those the
+// whole-mesh form finds not one closed fan, the same bytes as that form;
+// a list lacking one leaves it unsplit (no crash); an unsorted list, or one
+// past the last point, is refused by name.
+TEST(SplitNonmanifold, SuspectsGivenSplitAsFound) {
+  SurfaceMesh m = points_at_random(10);
+  m.connectivity = tetrahedron(0, 1, 2, 3);
+  for (const auto& more : {tetrahedron(0, 4, 5, 6), tetrahedron(1, 0, 7, 8), tetrahedron(9, 5, 4, 2)})
+    m.connectivity.insert(m.connectivity.end(), more.begin(), more.end());
+  m.point_fields.push_back({"s", 1, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9}});
+  const auto before = analyze::check_topology(m);
+  ASSERT_GT(before.nonmanifold_vertices + before.nonmanifold_edges, 0);
+  SurfaceMesh whole = m;
+  const auto expected = generate::split_nonmanifold(whole);
+  ASSERT_GT(expected.points_added, 0);
+  // The odd points: those whose fans the whole-mesh form changed, or whose
+  // copies it made (their corners moved to new ids).
+  std::set<PointIndex> odd;
+  for (std::size_t k = 0; k < m.connectivity.size(); ++k)
+    if (whole.connectivity[k] != m.connectivity[k]) odd.insert(m.connectivity[k]);
+  std::vector<PointIndex> all(10);
+  for (PointIndex p = 0; p < 10; ++p) all[p] = p;
+  for (const auto& suspects : {all, std::vector<PointIndex>(odd.begin(), odd.end())}) {
+    SurfaceMesh told = m;
+    const auto r = generate::split_nonmanifold(told, suspects);
+    EXPECT_EQ(r.points_added, expected.points_added);
+    EXPECT_EQ(r.edges_left, expected.edges_left);
+    EXPECT_EQ(told.connectivity, whole.connectivity);
+    EXPECT_EQ(told.points, whole.points);
+    EXPECT_EQ(told.point_fields[0].values, whole.point_fields[0].values);
+  }
+  SurfaceMesh partial = m;
+  const auto r = generate::split_nonmanifold(partial, {*odd.begin()});
+  EXPECT_LE(r.points_added, expected.points_added);
+  SurfaceMesh refused = m;
+  EXPECT_THROW(generate::split_nonmanifold(refused, {3, 1}), InputError);
+  EXPECT_THROW(generate::split_nonmanifold(refused, {1, 10}), InputError);
+}
+
 // A bipyramid: apex `top`, `d` equator points from `first` on, apex
 // `bottom`; closed, every point one fan (the apexes of degree d).
 Array<PointIndex> bipyramid(PointIndex top, PointIndex bottom, PointIndex first, PointIndex d) {

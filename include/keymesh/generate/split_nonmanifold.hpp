@@ -50,4 +50,13 @@ struct NonmanifoldSplit {
 // corners there in one fan.
 NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh);
 
+// The same, told where to look: `suspects` (ascending ids) hold every point
+// that is not one closed fan, and may hold more (each is checked against its
+// triangles again); every point has a triangle and every corner refers to a
+// point of the mesh, as the caller knows (the contour's coarse pass finds
+// the suspects from its voxels, generate/coarse_fans.hpp, and numbers no
+// point without a triangle). `unused` stays empty. The same result as the
+// form above on such a mesh, without grouping every corner by point.
+NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const std::vector<PointIndex>& suspects);
+
 }  // namespace keymesh::generate

@@ -1,0 +1,219 @@
+#pragma once
+// Which coarse points have no triangle, and which may not be one closed fan,
+// found from the voxels around each point before any triangle is written
+// (contour_coarse_rows.hpp, between the folds and the numbering).
+//
+// A coarse point's triangles all come from the eight voxels it is a corner
+// of (a coarse triangle joins three corners of its voxel), and each voxel's
+// share of the point's fan is a lookup by its table entry and the corner
+// (coarse_fan_table.hpp). The eight shares, moved to the point's
+// neighbourhood (the 27 grid points around it, 13 being itself), make one
+// closed fan when: no share is tangled, no neighbour is left or arrived at
+// twice, the neighbours left are those arrived at, there are three or more,
+// and the chains join into one cycle. That is exactly when the point's link
+// edges form one cycle, except that a fan passing twice through one voxel
+// is called tangled: such points are suspects, a few more than
+// split_nonmanifold needs to look at (it checks each against the triangles
+// again). A point with no share at all has no triangle: it is not numbered,
+// so the output has no unused point and nothing is renumbered afterwards.
+// Voxels that lost triangles to a fold across a face (few) have their share
+// worked out from what is left.
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "coarse_fan_table.hpp"
+#include "contour_coarse_rows.hpp"
+
+namespace keymesh::generate {
+
+// The shares of one point's fan, added voxel by voxel.
+class FanShares {
+ public:
+  [[gnu::always_inline]] void add(FanShare share) {
+    sum_ += share & kShareSets, union_ |= share;
+    const auto first = static_cast<unsigned>((share >> kShareFirst) & 31u);
+    by_first_[first] = share;  // a share without a chain: the point's own slot, never read
+    start_ = share & kNeighbourBits ? first : start_;
+  }
+
+  bool empty() const { return (union_ & kShareSets) == 0; }
+
+  bool one_closed_fan() const {
+    const std::uint64_t sets = union_ & kShareSets, leaving = sets & kNeighbourBits, arriving = sets >> 26;
+    // No neighbour left or arrived at twice, those left are those arrived
+    // at (a tangled share arrives nowhere), three or more.
+    if (sum_ != sets || leaving != arriving || std::popcount(leaving) < 3) return false;
+    // Each chain's last neighbour is another chain's first (a neighbour
+    // arrived at is left, by exactly one chain, which did not arrive there):
+    // one cycle when the walk from a chain's first comes back having left
+    // every neighbour.
+    unsigned at = start_;
+    std::uint64_t left = 0;
+    for (int chains = 0; chains < 8; ++chains) {
+      const FanShare chain = by_first_[at];
+      left |= chain & kNeighbourBits;
+      at = static_cast<unsigned>(chain >> kShareLast) & 31u;
+      if (at == start_) break;
+    }
+    return at == start_ && left == leaving;
+  }
+
+ private:
+  std::uint64_t sum_ = 0, union_ = 0;
+  unsigned start_ = kFanCentre;
+  FanShare by_first_[32];  // by a 5-bit index: 27 neighbours and room
+};
+
+// A coarse candidate the check could not clear: grid row r, point i.
+struct FanSuspect {
+  Id row;
+  Id i;
+};
+
+// Every brick's suspects, in its rows' order (kept by the caller).
+struct CoarseFans {
+  std::vector<std::vector<FanSuspect>> suspects;
+};
+
+// The table entries of a window of voxel rows around one brick's point
+// rows, by voxel i + 1 (slots 0 and nx hold entry 0, no triangle, so that a
+// point's voxels i - 1 and i are read without a test at the row's ends),
+// and, for rows that lost triangles to a fold across a face, which (bit t
+// of drops[i + 1]: the voxel's triangle t). In the calling thread's scratch.
+class FanWindow {
+ public:
+  FanWindow(const GridShape& s, const CoarseTriangles& ct, const VoxelBricks& bricks, Id brick)
+      : nx_(s.nx), ny_(s.ny), layers_(s.nz - 1), j0_(bricks.j_begin(brick) - 1), k0_(bricks.k_begin(brick) - 1),
+        rows_j_(bricks.j_end(brick) - j0_), rows_k_(bricks.k_end(brick) - k0_) {
+    thread_local std::vector<std::uint16_t> entry_scratch;
+    thread_local std::vector<std::uint8_t> drop_scratch;
+    const auto slots = static_cast<std::size_t>((rows_j_ * rows_k_ + 1) * (nx_ + 1));
+    if (entry_scratch.size() < slots) entry_scratch.resize(slots), drop_scratch.resize(slots);
+    entries_ = entry_scratch.data(), drops_ = drop_scratch.data();
+    folded_.assign(static_cast<std::size_t>(rows_j_ * rows_k_ + 1), 0);
+    std::memset(entries_ + none() * (nx_ + 1), 0, sizeof(std::uint16_t) * static_cast<std::size_t>(nx_ + 1));
+    const CoarseFanTable& table = coarse_fan_table();
+    table.prepare(0);
+    const CoarseVoxel* voxels = coarse_voxel_table().entries.data();
+    for (Id k = std::max<Id>(k0_, 0); k < k0_ + rows_k_; ++k)
+      for (Id j = std::max<Id>(j0_, 0); j < j0_ + rows_j_; ++j) {
+        const Id slot = (k - k0_) * rows_j_ + (j - j0_), vr = k * (ny_ - 1) + j, b = bricks.brick_of(j, k);
+        std::uint16_t* row = entries_ + slot * (nx_ + 1);
+        std::memset(row, 0, sizeof(std::uint16_t) * static_cast<std::size_t>(nx_ + 1));  // entry 0: no triangle
+        const std::uint16_t* entry = ct.entries[b].data() + ct.entry_first[vr];
+        const std::uint32_t* voxel_i = ct.voxel_i[b].data() + ct.entry_first[vr];
+        for (std::uint32_t v = 0; v < ct.voxels[vr]; ++v) row[voxel_i[v] + 1] = entry[v], table.prepare(entry[v]);
+        if (!ct.folded[vr]) continue;
+        // The dropped face triangles, by voxel: the records follow the
+        // row's triangle order, as the voxels do.
+        folded_[slot] = 1;
+        std::uint8_t* drops = drops_ + slot * (nx_ + 1);
+        std::memset(drops, 0, static_cast<std::size_t>(nx_ + 1));
+        const FaceTriangle* f = ct.faces_of(bricks, ny_, vr);
+        const FaceTriangle* const f_end = f + ct.face_count[vr];
+        std::uint32_t before = 0;  // the row's triangles before voxel v's
+        for (std::uint32_t v = 0; v < ct.voxels[vr] && f < f_end; ++v) {
+          const auto count = static_cast<std::uint32_t>((voxels[entry[v]] >> kCoarseCountShift) & 7u);
+          for (; f < f_end && f->tri < before + count; ++f)
+            if (f->folded) drops[voxel_i[v] + 1] |= static_cast<std::uint8_t>(1u << (f->tri - before));
+          before += count;
+        }
+      }
+  }
+
+  // The rows of voxel row (j, k): entries and drops (null when none).
+  const std::uint16_t* entries(Id j, Id k) const { return entries_ + slot(j, k) * (nx_ + 1); }
+  const std::uint8_t* drops(Id j, Id k) const {
+    const Id at = slot(j, k);
+    return folded_[at] ? drops_ + at * (nx_ + 1) : nullptr;
+  }
+
+ private:
+  Id none() const { return rows_j_ * rows_k_; }
+  Id slot(Id j, Id k) const {
+    return j < 0 || k < 0 || j >= ny_ - 1 || k >= layers_ ? none() : (k - k0_) * rows_j_ + (j - j0_);
+  }
+
+  Id nx_, ny_, layers_, j0_, k0_, rows_j_, rows_k_;
+  std::uint16_t* entries_;
+  std::uint8_t* drops_;
+  std::vector<std::uint8_t> folded_;
+};
+
+// Checks every coarse candidate of cb.points (rank_coarse_points' bits)
+// from its voxels' table entries: clears the bits of those without a
+// triangle and lists, by brick, those that may not be one closed fan. Each
+// brick checks the points of its grid rows (and of the grid's last row and
+// plane, for the bricks along them), so each point once.
+inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, CoarseBits& cb, CoarseFans& fans) {
+  const Id layers = s.nz - 1, wpr = cb.words_per_row;
+  const VoxelBricks bricks(s, 0, layers);
+  fans.suspects.resize(static_cast<std::size_t>(bricks.count()));
+  const CoarseFanTable& table = coarse_fan_table();
+  const CoarseVoxel* voxels = coarse_voxel_table().entries.data();
+  parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
+    std::vector<FanSuspect>& suspects = fans.suspects[static_cast<std::size_t>(brick)];
+    suspects.clear();
+    const FanWindow window(s, ct, bricks, brick);
+    const Id j_end = bricks.j_end(brick) == s.ny - 1 ? s.ny : bricks.j_end(brick);
+    const Id k_end = bricks.k_end(brick) == layers ? s.nz : bricks.k_end(brick);
+    for (Id k = bricks.k_begin(brick); k < k_end; ++k)
+      for (Id j = bricks.j_begin(brick); j < j_end; ++j) {
+        const Id r = k * s.ny + j;
+        if (!cb.live[r]) continue;
+        // Voxel rows (j - 1 + dy, k - 1 + dz) at index dy | dz << 1.
+        const std::uint16_t* rows[4] = {window.entries(j - 1, k - 1), window.entries(j, k - 1),
+                                        window.entries(j - 1, k), window.entries(j, k)};
+        const std::uint8_t* drops[4] = {window.drops(j - 1, k - 1), window.drops(j, k - 1), window.drops(j - 1, k),
+                                        window.drops(j, k)};
+        const bool any_drops = drops[0] || drops[1] || drops[2] || drops[3];
+        std::uint64_t* words = cb.points.data() + r * wpr;
+        // The point is corner c = 7 - o of its voxel o = dx | dy << 1 | dz << 2.
+        auto fan_of = [&](Id i) {
+          FanShares fan;
+          if (!any_drops) {
+            [&]<unsigned... o>(std::integer_sequence<unsigned, o...>) {
+              (fan.add(table.share(rows[o >> 1][i + (o & 1u)], 7u - o)), ...);
+            }(std::make_integer_sequence<unsigned, 8>{});
+            return fan;
+          }
+          for (unsigned o = 0; o < 8; ++o) {
+            const unsigned c = 7u - o;
+            const std::uint16_t e = rows[o >> 1][i + (o & 1u)];
+            const std::uint8_t dropped = drops[o >> 1] ? drops[o >> 1][i + (o & 1u)] : 0;
+            CornerChain left[8];  // what the folds left of the voxel's shares
+            if (dropped) corner_chains(voxels[e], dropped, left);
+            fan.add(dropped ? fan_share(left[c], c) : table.share(e, c));
+          }
+          return fan;
+        };
+        for (Id q = 0; q < wpr; ++q)
+          for (std::uint64_t m = words[q]; m; m &= m - 1) {
+            const Id i = 64 * q + std::countr_zero(m);
+            const FanShares fan = fan_of(i);
+            if (fan.empty()) words[q] &= ~(std::uint64_t{1} << (i % 64));
+            else if (!fan.one_closed_fan()) suspects.push_back({r, i});
+          }
+      }
+  }, 1);
+}
+
+// The suspects' coarse ids (after number_coarse_points), ascending.
+inline std::vector<PointIndex> suspect_ids(const CoarseFans& fans, const CoarseBits& cb) {
+  std::vector<PointIndex> ids;
+  for (const auto& brick : fans.suspects)
+    for (const FanSuspect& p : brick) {
+      const Id w = p.row * cb.words_per_row + p.i / 64;
+      const std::uint64_t below = (std::uint64_t{1} << (p.i % 64)) - 1;
+      ids.push_back(static_cast<PointIndex>(cb.first.data()[w] + std::popcount(cb.points.data()[w] & below)));
+    }
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+}  // namespace keymesh::generate
