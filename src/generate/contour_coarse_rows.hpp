@@ -240,7 +240,8 @@ struct CoarseRow {
   Id word_count;
 
   // Calls f(i, crossing, std::integral_constant<int, axis>) for every
-  // crossing of the row's points, i its point, code after code: all of
+  // crossing of the row's points (not of a candidate check_coarse_fans
+  // dropped for want of a triangle), i its point, code after code: all of
   // code 0's, then code 1's, ... so that each point meets its crossings in
   // edge-key order, the order in which a KEY-REDUCE over the fine points
   // merges them. By code rather than by point: each loop is one kind of
@@ -285,7 +286,7 @@ struct CoarseRow {
   [[gnu::always_inline]] void by_code(F& f) const {
     constexpr int axis = crossing_at(0, 0, 0, Code).axis;
     for (const Id q : std::span(words, static_cast<std::size_t>(word_count)))
-      for (std::uint64_t m = with_code<Code>(q); m; m &= m - 1) {
+      for (std::uint64_t m = with_code<Code>(q) & points[q]; m; m &= m - 1) {
         const Id i = 64 * q + std::countr_zero(m);
         f(i, crossing_at(i, j, k, Code), std::integral_constant<int, axis>{});
       }

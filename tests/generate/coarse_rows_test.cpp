@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <mutex>
 #include <random>
@@ -57,9 +58,17 @@ TEST(CoarseRows, EveryCrossingOnceToItsNearestEndInKeyOrder) {
     RowCounts rc;
     count_rows(bits, s, 0, s.nz - 1, 0, 0, rc);
     CoarseBits cb;
-    rank_coarse_points(bits, s, rc, 0, [&](Id i, Id j, Id k, int axis) { return far_end(i + j * s.nx + k * s.nxy, axis); },
+    mark_coarse_points(bits, s, rc, [&](Id i, Id j, Id k, int axis) { return far_end(i + j * s.nx + k * s.nxy, axis); },
                        cb);
-    ASSERT_EQ(cb.count, static_cast<Id>(expected.size()));
+    // A candidate taken out (as check_coarse_fans takes out those left
+    // without a triangle): neither it nor its crossings are met.
+    const Id out = std::next(expected.begin(), static_cast<std::ptrdiff_t>(expected.size() / 2))->first;
+    const Id out_row = out / s.nx, out_i = out % s.nx;
+    cb.points.data()[out_row * cb.words_per_row + out_i / 64] &= ~(std::uint64_t{1} << (out_i % 64));
+    number_coarse_points(s, 0, cb);
+    std::map<Id, std::vector<Id>> kept = expected;
+    kept.erase(out);
+    ASSERT_EQ(cb.count, static_cast<Id>(kept.size()));
     std::map<Id, std::vector<Id>> met;  // point -> edge keys, in the order the walk gave them
     std::map<Id, std::uint32_t> ids;
     std::mutex m;
@@ -72,8 +81,8 @@ TEST(CoarseRows, EveryCrossingOnceToItsNearestEndInKeyOrder) {
       });
       row.for_each_point([&](Id i, std::uint32_t id) { EXPECT_TRUE(ids.emplace(base + i, id).second); });
     });
-    EXPECT_EQ(met, expected) << "threads " << threads;
-    ASSERT_EQ(ids.size(), expected.size());
+    EXPECT_EQ(met, kept) << "threads " << threads;
+    ASSERT_EQ(ids.size(), kept.size());
     std::uint32_t rank = 0;
     for (const auto& [point, id] : ids) EXPECT_EQ(id, rank++) << "point " << point;
   }
