@@ -28,6 +28,7 @@
 
 #include "coarse_fan_table.hpp"
 #include "contour_coarse_rows.hpp"
+#include "keymesh/generate/split_nonmanifold.hpp"
 
 namespace keymesh::generate {
 
@@ -214,6 +215,34 @@ inline std::vector<PointIndex> suspect_ids(const CoarseFans& fans, const CoarseB
     }
   std::sort(ids.begin(), ids.end());
   return ids;
+}
+
+// The triangles of the voxel rows around the suspects (a point's triangles
+// come from the four voxel rows around its grid row), one range a voxel
+// row, appended to `ranges` (merge_ranges sorts and joins them).
+inline void suspect_triangles(const GridShape& s, const CoarseFans& fans, const CoarseTriangles& ct,
+                              std::vector<TriangleRange>& ranges) {
+  for (const auto& brick : fans.suspects)
+    for (const FanSuspect& p : brick) {
+      const Id j = p.row % s.ny, k = p.row / s.ny;
+      for (Id vk = std::max<Id>(k - 1, 0); vk <= std::min(k, s.nz - 2); ++vk)
+        for (Id vj = std::max<Id>(j - 1, 0); vj <= std::min(j, s.ny - 2); ++vj) {
+          const Id vr = vk * (s.ny - 1) + vj;
+          ranges.push_back({ct.first[vr], ct.first[vr + 1]});
+        }
+    }
+}
+
+// Sorted, overlapping and touching ranges joined, empty ones dropped.
+inline void merge_ranges(std::vector<TriangleRange>& ranges) {
+  std::sort(ranges.begin(), ranges.end(), [](const TriangleRange& a, const TriangleRange& b) { return a.begin < b.begin; });
+  std::size_t out = 0;
+  for (const TriangleRange& r : ranges) {
+    if (r.end <= r.begin) continue;
+    if (out > 0 && r.begin <= ranges[out - 1].end) ranges[out - 1].end = std::max(ranges[out - 1].end, r.end);
+    else ranges[out++] = r;
+  }
+  ranges.resize(out);
 }
 
 }  // namespace keymesh::generate

@@ -455,7 +455,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   } release;
   Id coarse_points = 0, coarse_triangles = 0;
   CoarseFans fans;
-  std::vector<PointIndex> suspects;  // every isovalue's, ascending
+  NonmanifoldSuspects suspects;  // every isovalue's, ascending
   for (Id iso = 0; iso < n_iso; ++iso) {
     auto t0 = Clock::now();
     const NearerFarEnd<T> far_end(opt.isovalues[iso]);
@@ -476,7 +476,8 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     number_coarse_points(s, coarse_points, coarse[iso]);
     coarse_points += coarse[iso].count;
     const std::vector<PointIndex> ids = suspect_ids(fans, coarse[iso]);
-    suspects.insert(suspects.end(), ids.begin(), ids.end());
+    suspects.points.insert(suspects.points.end(), ids.begin(), ids.end());
+    suspect_triangles(s, fans, triangles[iso], suspects.triangles);
     st.weld += seconds_since(t0);
   }
   auto t0 = Clock::now();
@@ -495,6 +496,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   }
   st.triangles_before_coarsening = fine_triangles;
   t0 = Clock::now();
+  merge_ranges(suspects.triangles);
   split_nonmanifold(mesh, suspects);
   st.coarsen += seconds_since(t0);
 }

@@ -335,29 +335,35 @@ Flagged grouped(const PointIndex* C, std::vector<std::uint64_t> by_point, bool o
 // triangles, by point and increasing corner: the few the rule looks at, in
 // an order that makes all after this deterministic. With `only_odd`, the
 // points that are one closed fan after all are left out.
-Flagged corners_of(const PointIndex* C, Id corners, Id n, const std::vector<PointIndex>& points, bool only_odd) {
+Flagged corners_of(const PointIndex* C, Id n, const std::vector<PointIndex>& points,
+                   const std::vector<TriangleRange>& where, bool only_odd) {
   if (points.empty()) return {};
   std::vector<std::uint64_t> is_listed(static_cast<std::size_t>(n / 64 + 1), 0);
   for (PointIndex p : points) is_listed[p / 64] |= std::uint64_t{1} << (p % 64);
-  const Id triangles = corners / 3;
-  const int chunks = parallel::chunk_count(triangles, 1 << 15);
+  // The ranges cut into pieces of about 2^15 triangles, the pieces shared
+  // among the threads.
+  std::vector<TriangleRange> pieces;
+  for (const TriangleRange& r : where)
+    for (Id b = r.begin; b < r.end; b += Id{1} << 15) pieces.push_back({b, std::min(r.end, b + (Id{1} << 15))});
+  const int chunks = parallel::chunk_count(static_cast<Id>(pieces.size()), 1);
   std::vector<std::vector<std::uint64_t>> at(static_cast<std::size_t>(std::max(chunks, 1)));  // point << 32 | corner
   std::vector<std::uint8_t> past_last(at.size(), 0);
   const std::uint64_t* listed = is_listed.data();
   auto is = [listed](PointIndex p) { return (listed[p / 64] >> (p % 64)) & 1u; };
-  parallel::for_each_chunk(triangles, chunks, [&](Id b, Id e, int chunk) {
+  parallel::for_each_chunk(static_cast<Id>(pieces.size()), chunks, [&](Id piece_begin, Id piece_end, int chunk) {
     // A triangle at a time: one test for its three corners (nearly every
     // triangle has none of the few listed points).
-    for (Id t = b; t < e; ++t) {
-      const PointIndex* x = C + 3 * t;
-      if (std::max({x[0], x[1], x[2]}) >= n) {
-        past_last[chunk] = 1;
-        return;
+    for (Id piece = piece_begin; piece < piece_end; ++piece)
+      for (Id t = pieces[piece].begin; t < pieces[piece].end; ++t) {
+        const PointIndex* x = C + 3 * t;
+        if (std::max({x[0], x[1], x[2]}) >= n) {
+          past_last[chunk] = 1;
+          return;
+        }
+        if (is(x[0]) | is(x[1]) | is(x[2]))
+          for (int k = 0; k < 3; ++k)
+            if (is(x[k])) at[chunk].push_back((std::uint64_t{x[k]} << 32) | static_cast<std::uint64_t>(3 * t + k));
       }
-      if (is(x[0]) | is(x[1]) | is(x[2]))
-        for (int k = 0; k < 3; ++k)
-          if (is(x[k])) at[chunk].push_back((std::uint64_t{x[k]} << 32) | static_cast<std::uint64_t>(3 * t + k));
-    }
   });
   if (std::find(past_last.begin(), past_last.end(), 1) != past_last.end())
     throw InputError("split_nonmanifold: a corner refers to a point past the last");
@@ -387,7 +393,7 @@ Flagged flag_points(const PointIndex* C, Id corners, Id n, std::vector<PointInde
     for (const auto& points : found) odd.insert(odd.end(), points.begin(), points.end());
     for (const auto& points : lone) unused.insert(unused.end(), points.begin(), points.end());
   }
-  return corners_of(C, corners, n, odd, false);
+  return corners_of(C, n, odd, {{0, corners / 3}}, false);
 }
 
 // The corners of `f` regrouped by the ids they hold now; the points that
@@ -561,13 +567,18 @@ NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh) {
   return result;
 }
 
-NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const std::vector<PointIndex>& suspects) {
+NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const NonmanifoldSuspects& suspects) {
   const Id corners = checked_corners(mesh), n = mesh.num_points();
-  if (!std::is_sorted(suspects.begin(), suspects.end()) ||
-      (!suspects.empty() && Id{suspects.back()} >= n))
+  const std::vector<PointIndex>& points = suspects.points;
+  if (!std::is_sorted(points.begin(), points.end()) || (!points.empty() && Id{points.back()} >= n))
     throw InputError("split_nonmanifold: the suspects must be ascending ids of the mesh's points");
+  std::vector<TriangleRange> where = suspects.triangles;
+  if (where.empty()) where.push_back({0, corners / 3});
+  for (std::size_t r = 0; r < where.size(); ++r)
+    if (where[r].begin < (r ? where[r - 1].end : 0) || where[r].end < where[r].begin || where[r].end > corners / 3)
+      throw InputError("split_nonmanifold: the suspects' triangle ranges must be ascending, disjoint ranges of the mesh's");
   NonmanifoldSplit result;
-  split_flagged(mesh, corners_of(mesh.connectivity.data(), corners, n, suspects, true), result);
+  split_flagged(mesh, corners_of(mesh.connectivity.data(), n, points, where, true), result);
   return result;
 }
 

@@ -139,7 +139,10 @@ TEST(SplitNonmanifold, SuspectsGivenSplitAsFound) {
     if (whole.connectivity[k] != m.connectivity[k]) odd.insert(m.connectivity[k]);
   std::vector<PointIndex> all(10);
   for (PointIndex p = 0; p < 10; ++p) all[p] = p;
-  for (const auto& suspects : {all, std::vector<PointIndex>(odd.begin(), odd.end())}) {
+  // The four tetrahedra's triangles in two ranges: 0-7 and 8-15.
+  const std::vector<generate::TriangleRange> halves{{0, 8}, {8, 16}};
+  for (const auto& suspects : {generate::NonmanifoldSuspects{all, {}},
+                               generate::NonmanifoldSuspects{std::vector<PointIndex>(odd.begin(), odd.end()), halves}}) {
     SurfaceMesh told = m;
     const auto r = generate::split_nonmanifold(told, suspects);
     EXPECT_EQ(r.points_added, expected.points_added);
@@ -149,11 +152,13 @@ TEST(SplitNonmanifold, SuspectsGivenSplitAsFound) {
     EXPECT_EQ(told.point_fields[0].values, whole.point_fields[0].values);
   }
   SurfaceMesh partial = m;
-  const auto r = generate::split_nonmanifold(partial, {*odd.begin()});
+  const auto r = generate::split_nonmanifold(partial, {{*odd.begin()}, {}});
   EXPECT_LE(r.points_added, expected.points_added);
   SurfaceMesh refused = m;
-  EXPECT_THROW(generate::split_nonmanifold(refused, {3, 1}), InputError);
-  EXPECT_THROW(generate::split_nonmanifold(refused, {1, 10}), InputError);
+  EXPECT_THROW(generate::split_nonmanifold(refused, {{3, 1}, {}}), InputError);
+  EXPECT_THROW(generate::split_nonmanifold(refused, {{1, 10}, {}}), InputError);
+  EXPECT_THROW(generate::split_nonmanifold(refused, {{1}, {{8, 16}, {0, 8}}}), InputError);
+  EXPECT_THROW(generate::split_nonmanifold(refused, {{1}, {{0, 17}}}), InputError);
 }
 
 // A bipyramid: apex `top`, `d` equator points from `first` on, apex

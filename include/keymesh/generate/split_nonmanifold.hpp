@@ -50,13 +50,27 @@ struct NonmanifoldSplit {
 // corners there in one fan.
 NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh);
 
-// The same, told where to look: `suspects` (ascending ids) hold every point
-// that is not one closed fan, and may hold more (each is checked against its
-// triangles again); every point has a triangle and every corner refers to a
-// point of the mesh, as the caller knows (the contour's coarse pass finds
-// the suspects from its voxels, generate/coarse_fans.hpp, and numbers no
-// point without a triangle). `unused` stays empty. The same result as the
-// form above on such a mesh, without grouping every corner by point.
-NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const std::vector<PointIndex>& suspects);
+// Where to look, as a caller that made the mesh may know it.
+struct TriangleRange {
+  Id begin = 0, end = 0;  // triangles [begin, end)
+};
+struct NonmanifoldSuspects {
+  // Ascending ids: every point that is not one closed fan, and maybe more
+  // (each is checked against its triangles again).
+  std::vector<PointIndex> points;
+  // Ascending, disjoint: ranges holding every triangle at those points;
+  // empty: all triangles.
+  std::vector<TriangleRange> triangles;
+};
+
+// The same, told where to look: every point has a triangle and every corner
+// refers to a point of the mesh, as the caller knows (the contour's coarse
+// pass finds the suspects from its voxels, generate/coarse_fans.hpp, and
+// numbers no point without a triangle; the suspects' triangles are in the
+// voxel rows around them). `unused` stays empty. The same result as the
+// form above on such a mesh, without grouping every corner by point; a point
+// missing from the suspects (or a triangle from the ranges) is left as it
+// is. Lists out of order are refused (InputError).
+NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const NonmanifoldSuspects& suspects);
 
 }  // namespace keymesh::generate
