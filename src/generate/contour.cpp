@@ -459,10 +459,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   for (Id iso = 0; iso < n_iso; ++iso) {
     auto t0 = Clock::now();
     const NearerFarEnd<T> far_end(opt.isovalues[iso]);
-    mark_coarse_points(bits[iso], s, rows[iso], [&](Id i, Id j, Id k, int axis) {
-      const Id p0 = i + j * s.nx + k * s.nxy;
-      return far_end(interp.samples[p0], interp.samples[p0 + s.stride[axis]]);
-    }, coarse[iso]);
+    mark_coarse_points(bits[iso], s, rows[iso], interp.samples, far_end, coarse[iso]);
     st.weld += seconds_since(t0);
     t0 = Clock::now();
     tally_coarse_triangles(bits[iso], s, rows[iso], coarse[iso], triangles[iso]);

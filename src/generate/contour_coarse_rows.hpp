@@ -125,13 +125,15 @@ void for_each_row_in_bricks(const GridShape& s, F&& f) {
   }, 1);
 }
 
-// Steps 1 and 2 for one isovalue: far bits (far(i, j, k, axis) says whether
-// the crossing on that cut edge has t >= 0.5) and the candidate coarse
-// points (numbered by number_coarse_points, once check_coarse_fans has
-// taken out those left without a triangle). `rc` (the rows' counts) says
-// which rows have cut edges: only those and the rows above them are visited.
-template <class Far>
-void mark_coarse_points(const InsideBits& bits, const GridShape& s, const RowCounts& rc, Far&& far, CoarseBits& cb) {
+// Steps 1 and 2 for one isovalue: far bits (nearer_far(v0, v1) says whether
+// the crossing on a cut edge with end samples v0, v1 has t >= 0.5) and the
+// candidate coarse points (numbered by number_coarse_points, once
+// check_coarse_fans has taken out those left without a triangle). `rc`
+// (the rows' counts) says which rows have cut edges: only those and the
+// rows above them are visited.
+template <class T, class NearerFar>
+void mark_coarse_points(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const T* samples,
+                        const NearerFar& nearer_far, CoarseBits& cb) {
   const Id wpr = bits.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
   cb.words_per_row = wpr;
   cb.far.room_for(static_cast<std::size_t>(3 * wpr * rows));
@@ -149,16 +151,23 @@ void mark_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
     const Id j = r % s.ny, k = r / s.ny;
     std::uint64_t* f = cb.far.data() + 3 * r * wpr;
     const RowCuts cuts(bits, s, j, k, last_plane);
+    // The row's samples and those one step along each axis, held in
+    // registers (through a functor of (i, j, k, axis) every edge recomputed
+    // its point and reloaded the arrays).
+    const T* const row = samples + j * s.nx + k * s.nxy;
+    const T* const along[3] = {row + s.stride[0], row + s.stride[1], row + s.stride[2]};
     // A word's far bits gathered in registers, one axis at a time, without
     // a branch on the outcome (a coin toss on a real surface).
     for (Id q = 0; q < wpr; ++q) {
       const RowCuts::Words w = cuts.word(q);
       const std::uint64_t cut[3] = {w.x, w.y, w.z};
+      const T* const here = row + 64 * q;
       for (int a = 0; a < 3; ++a) {
+        const T* const there = along[a] + 64 * q;
         std::uint64_t out = 0;
         for (std::uint64_t m = cut[a]; m; m &= m - 1) {
           const int b = std::countr_zero(m);
-          out |= static_cast<std::uint64_t>(far(64 * q + b, j, k, a)) << b;
+          out |= static_cast<std::uint64_t>(nearer_far(here[b], there[b])) << b;
         }
         f[a * wpr + q] = out;
       }

@@ -58,8 +58,10 @@ TEST(CoarseRows, EveryCrossingOnceToItsNearestEndInKeyOrder) {
     RowCounts rc;
     count_rows(bits, s, 0, s.nz - 1, 0, 0, rc);
     CoarseBits cb;
-    mark_coarse_points(bits, s, rc, [&](Id i, Id j, Id k, int axis) { return far_end(i + j * s.nx + k * s.nxy, axis); },
-                       cb);
+    mark_coarse_points(bits, s, rc, v.data(), [&](float v0, float v1) {
+      const double t = (iso - v0) / (v1 - v0);
+      return !std::isfinite(t) || t >= 0.5;
+    }, cb);
     // A candidate taken out (as check_coarse_fans takes out those left
     // without a triangle): neither it nor its crossings are met.
     const Id out = std::next(expected.begin(), static_cast<std::ptrdiff_t>(expected.size() / 2))->first;
