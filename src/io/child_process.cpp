@@ -1,6 +1,7 @@
 #include "child_process.hpp"
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -43,13 +44,41 @@ std::string read_all(int fd) {
   return out;
 }
 
-[[noreturn]] void run_child(const std::function<std::string()>& work, int fd) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+#else
+constexpr bool kSanitized = false;
+#endif
+
+// Lowers RLIMIT_AS to the address space mapped now plus `budget`.
+void limit_memory(std::size_t budget) {
+  if (budget == 0 || kSanitized) return;
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  unsigned long long pages = 0;
+  const bool read = f && std::fscanf(f, "%llu", &pages) == 1;
+  if (f) std::fclose(f);
+  if (!read) return;
+  const rlim_t limit = static_cast<rlim_t>(pages) * static_cast<rlim_t>(::sysconf(_SC_PAGESIZE)) + budget;
+  struct rlimit current {};
+  if (::getrlimit(RLIMIT_AS, &current) != 0 || (current.rlim_cur != RLIM_INFINITY && current.rlim_cur <= limit)) return;
+  current.rlim_cur = limit;
+  ::setrlimit(RLIMIT_AS, &current);
+}
+
+[[noreturn]] void run_child(const std::function<std::string()>& work, int fd, std::size_t memory_budget) {
   // The defaults: a fault in the library ends the child (the parent reports
   // it), not a handler the parent installed (a sanitizer's, a fuzzer's).
   for (int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
   // The library's own last words (an assert's message) would be a second
   // line on stderr: the parent's error says what failed.
   if (const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC); null >= 0) ::dup2(null, STDERR_FILENO);
+  limit_memory(memory_budget);
   Outcome outcome = Outcome::Result;
   std::string payload;
   try {
@@ -58,7 +87,7 @@ std::string read_all(int fd) {
     outcome = Outcome::Limit, payload = e.what();
   } catch (const InputError& e) {
     outcome = Outcome::Input, payload = e.what();
-  } catch (const std::bad_alloc&) {
+  } catch (const std::bad_alloc&) {  // past the budget, or out of memory
     outcome = Outcome::Memory, payload.clear();
   } catch (const std::exception& e) {
     outcome = Outcome::Other, payload = e.what();
@@ -76,7 +105,8 @@ std::string describe(int status) {
 
 }  // namespace
 
-std::string run_in_child(const std::function<std::string()>& work, const std::string& what) {
+std::string run_in_child(const std::function<std::string()>& work, const std::string& what,
+                         std::size_t memory_budget) {
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) throw InputError(what + ": cannot make a pipe: " + std::strerror(errno));
   std::fflush(nullptr);  // nothing buffered is written twice
@@ -88,7 +118,7 @@ std::string run_in_child(const std::function<std::string()>& work, const std::st
   }
   if (pid == 0) {
     ::close(fds[0]);
-    run_child(work, fds[1]);
+    run_child(work, fds[1], memory_budget);
   }
   ::close(fds[1]);
   std::string got = read_all(fds[0]);
@@ -104,7 +134,10 @@ std::string run_in_child(const std::function<std::string()>& work, const std::st
     case Outcome::Result: return got;
     case Outcome::Input: throw InputError(got);
     case Outcome::Limit: throw LimitError(got);
-    case Outcome::Memory: throw std::bad_alloc();
+    case Outcome::Memory:
+      if (memory_budget == 0) throw std::bad_alloc();
+      throw InputError(what + " needed more than " + std::to_string(memory_budget >> 20) +
+                       " MiB for it: a malformed file");
     case Outcome::Other: break;
   }
   throw std::runtime_error(got);

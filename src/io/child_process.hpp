@@ -11,11 +11,19 @@
 // The child's stderr is /dev/null (an assert's message would be a second
 // line on stderr) and it exits with _exit: no destructors, no atexit
 // handlers, no leak check of what the library left behind.
+#include <cstddef>
 #include <functional>
 #include <string>
 
 namespace keymesh::io {
 
-std::string run_in_child(const std::function<std::string()>& work, const std::string& what);
+//
+// `memory_budget` bytes (0: no bound) bound what the child may map beyond
+// the address space it starts with (RLIMIT_AS, in builds without a
+// sanitizer, whose shadow memory needs terabytes of it): GDCM allocates
+// what a header's length field declares, over 1 GiB for a 1 KB file the
+// fuzz target made; past the budget the child fails, the parent reports it.
+std::string run_in_child(const std::function<std::string()>& work, const std::string& what,
+                         std::size_t memory_budget = 0);
 
 }  // namespace keymesh::io

@@ -100,6 +100,16 @@ struct ScannedTags {
   std::array<std::optional<std::string>, kScanTagCount> values;
 };
 
+// What GDCM may allocate for a file in its child process (run_in_child's
+// budget): far more than any well-formed slice needs (its bytes, the
+// decoded plane, the codec's buffers), far less than a length field can
+// declare (4 GiB).
+std::size_t gdcm_memory_budget(const std::string& file, std::size_t plane_bytes) {
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(file, ec);
+  return (std::size_t{256} << 20) + 4 * (ec ? 0 : static_cast<std::size_t>(size)) + 4 * plane_bytes;
+}
+
 // The scanner's reading of one file, in a child process (io/child_process.hpp:
 // GDCM asserts on malformed headers), passed back as bytes: a DICOM flag,
 // then per tag a presence flag, a 4-byte length and the value.
@@ -119,7 +129,7 @@ ScannedTags scan_file(const std::string& folder, const std::string& file) {
         }
         return out;
       },
-      folder + ": " + name_of(file) + ": GDCM");
+      folder + ": " + name_of(file) + ": GDCM", gdcm_memory_budget(file, 0));
   ScannedTags tags;
   std::size_t at = 1;
   tags.dicom = !bytes.empty() && bytes[0] == '\1';
@@ -340,7 +350,8 @@ class DicomPlanes : public PlaneSource {
     for (Id k = 0; k < count; ++k) {
       const Slice& s = slices_[static_cast<std::size_t>(first + k)];
       // In a child process: GDCM asserts on some malformed files (io/child_process.hpp).
-      const std::string stored = run_in_child([&] { return decode_slice(s); }, folder_ + ": " + name_of(s.file) + ": GDCM");
+      const std::string stored = run_in_child([&] { return decode_slice(s); }, folder_ + ": " + name_of(s.file) + ": GDCM",
+                                              gdcm_memory_budget(s.file, plane * scalar_size(stored_)));
       if (stored.size() != plane * scalar_size(stored_))
         throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM decoded " + std::to_string(stored.size()) +
                          " bytes, the header declares " + std::to_string(plane * scalar_size(stored_)));

@@ -773,7 +773,22 @@ def dicom_library_aborts_reported():
         expect_refused(args, folder, "s1: GDCM failed")
 
 
+def dicom_library_memory_bounded():
+    """A 6 KB JPEG-LS slice whose damaged length field GDCM allocates: its
+    child process peaked at 1.1 GB; now it has a budget (256 MiB + 4 x the
+    file and the plane) and the file is refused by name."""
+    folder = unpacked("dicom/gdcm_allocates_a_length_field", "gdcm_memory")
+    expect_refused(["info", folder], folder)
+    if SANITIZED:  # no RLIMIT_AS under a sanitizer: the budget is off there
+        return
+    probe = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], capture_output=True); "
+             "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+    p = subprocess.run([sys.executable, "-c", probe, KEYMESH, "info", folder], capture_output=True, text=True)
+    assert int(p.stdout) < 400 << 10, f"keymesh info {folder}: a process peaked at {int(p.stdout) >> 10} MiB"
+
+
 check("fuzzed Zarr: chunks far larger than the array cost no memory until bytes on disk hold them",
       zarr_chunks_sized_by_their_bytes)
 check("fuzzed DICOM: a file GDCM aborts on is refused by name, no crash", dicom_library_aborts_reported)
+check("fuzzed DICOM: GDCM's allocations bounded in its child process", dicom_library_memory_bounded)
 finish()
