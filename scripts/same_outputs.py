@@ -65,7 +65,28 @@ CASES = [
     ("mpi-contour", "mpirun:2 contour {in:s96.vti} -o {out}.vtp --iso 46.3 --normals gradient"),
     ("mpi-contour-3", f"mpirun:3 contour {HEAD} -o {{out}}.ply --iso 90.5 --balance"),
     ("contour-glb", f"contour {HEAD} -o {{out}}.glb --iso 90.5 --normals average"),
+    ("dicom", "contour {in:series} -o {out}.vtp --iso 46.3 --normals gradient"),
+    ("dicom-stream", "contour {in:series} -o {out}.ply --iso 46.3 --memory-limit 40K"),
+    ("zarr", "contour {in:s48.zarr} -o {out}.vtp --iso 20.3 --normals gradient"),
+    ("zarr-stream", "contour {in:s48.zarr} -o {out}.ply --iso 20.3 --memory-limit 40K"),
 ]
+
+# A DICOM series (tests/dicom_series.py, pydicom) and a Zarr array (zlib
+# chunks, one left to fill_value) of a 48^3 distance field: Debian's
+# python3, which has pydicom and zarr.
+FOLDER_INPUTS = """
+import os, sys
+import numpy as np, numcodecs, zarr
+sys.path.insert(0, os.path.join(sys.argv[1], "tests"))
+from dicom_series import write_dicom_series
+z, y, x = np.mgrid[0:48, 0:48, 0:48]
+field = np.sqrt((x - 24.0) ** 2 + (y - 24.0) ** 2 + (z - 24.0) ** 2)
+write_dicom_series(os.path.join(sys.argv[2], "series"), (field * 2).astype(np.int16), slope=0.5, intercept=0)
+a = zarr.open(os.path.join(sys.argv[2], "s48.zarr"), mode="w", shape=field.shape, chunks=(10, 16, 20), dtype="<f4",
+              compressor=numcodecs.Zlib(level=1), fill_value=30)
+a[:] = field.astype(np.float32)
+os.remove(os.path.join(sys.argv[2], "s48.zarr", "0.0.0"))
+"""
 
 
 MPIRUN = shutil.which("mpirun")
@@ -136,6 +157,8 @@ def compare_outputs(a, tmp):
     run(a.before, ["convert", HEAD, "-o", os.path.join(inputs, "head.nrrd"), "-q"])
     write_hex_grid(os.path.join(inputs, "hexes.vtk"))
     run(a.before, ["generate", "sphere", "--size", "24", "-o", os.path.join(inputs, "s24.vti"), "-q"])
+    subprocess.run(["/usr/bin/python3", "-c", FOLDER_INPUTS, os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                    inputs], check=True)
     produced = {}  # (case, build) -> output file, for cases whose output is a later case's input
     differ = []
     compared = 0

@@ -2,11 +2,13 @@
 built with AddressSanitizer + UndefinedBehaviorSanitizer (build-fuzz: the clang build that also makes the fuzzers)
 runs the hostile-input, contour and formats (DICOM, Zarr, glTF) CLI tests,
 then reads every file of the fuzz seed corpus and of tests/fuzz/regressions
-with `keymesh info`: each must end with exit 0 or 1 and no sanitizer report.
+with `keymesh info` (the DICOM and Zarr inputs unpacked into their folders):
+each must end with exit 0 or 1 and no sanitizer report.
 `make sanitize` is the whole suite under ASan/UBSan and TSan.
 
 Usage: sanitized_cli.py build-fuzz/keymesh (with ASAN_OPTIONS set)."""
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -32,18 +34,60 @@ for script in ("cli/test_hardening.py", "cli/test_contour_cli.py", "cli/test_for
 
 EXTENSIONS = {"den": ".den", "legacy_vtk": ".vtk", "nifti": ".nii", "nrrd": ".nrrd", "obj": ".obj", "ply": ".ply",
               "stl": ".stl", "vti": ".vti", "vtp": ".vtp", "vtu": ".vtu"}  # raw: headerless, nothing to parse
+# Folder formats: inputs pack a folder (tests/fuzz/folder_input.hpp), unpacked here into one of this name.
+FOLDERS = {"dicom": "series", "zarr": "in.zarr"}
+SAFE_NAME = re.compile(r"^[A-Za-z0-9._-]+(/[A-Za-z0-9._-]+){0,3}$")
+
+
+def unpack_folder(data, root):
+    """The folder a packed fuzz input holds, as folder_input.hpp makes it;
+    returns the path to read (the "@open" sub-folder when one is named)."""
+    if os.path.exists(root):
+        shutil.rmtree(root)
+    os.makedirs(root)
+    start = data.find(b"KMFILE:")
+    if start < 0:
+        return root
+    target = root
+    records = data[start + len(b"KMFILE:"):].split(b"\nKMFILE:")
+    for record in records[:64]:
+        name, newline, body = record.partition(b"\n")
+        name = name.decode("latin-1")
+        if not newline:
+            break
+        safe = len(name) <= 64 and SAFE_NAME.match(name) and not any(p in (".", "..") for p in name.split("/"))
+        if name == "@open":
+            if SAFE_NAME.match(body.decode("latin-1")) and len(body) <= 64:
+                target = os.path.join(root, body.decode("latin-1"))
+            continue
+        path = os.path.join(root, name)
+        if not safe or os.path.isdir(path):
+            continue
+        try:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            with open(path, "wb") as f:
+                f.write(body)
+        except OSError:  # a part of the path is a file already
+            continue
+    return target
+
+
 replayed = 0
 with tempfile.TemporaryDirectory(prefix="keymesh-sanitized-") as tmp:
     for root in (os.path.join(HERE, "fuzz", "corpus"), os.path.join(HERE, "fuzz", "regressions")):
         for folder, _, files in sorted(os.walk(root)):
             ext = EXTENSIONS.get(os.path.basename(folder))
-            if not ext:
+            leaf = FOLDERS.get(os.path.basename(folder))
+            if not ext and not leaf:
                 continue
             for name in sorted(files):
                 src = os.path.join(folder, name)
                 # `info` picks the reader by extension: give the file its format's.
                 path = src
-                if not (src.endswith(ext) or src.endswith(ext + ".gz")):
+                if leaf:
+                    with open(src, "rb") as f:
+                        path = unpack_folder(f.read(), os.path.join(tmp, "folder", leaf))
+                elif not (src.endswith(ext) or src.endswith(ext + ".gz")):
                     path = os.path.join(tmp, "input" + ext)
                     shutil.copyfile(src, path)
                 p = subprocess.run([KEYMESH, "info", path], env=env, stdin=subprocess.DEVNULL, capture_output=True,

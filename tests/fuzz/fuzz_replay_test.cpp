@@ -14,6 +14,7 @@
 #include "fuzz/fuzz_target.hpp"
 // Every target registers itself under its name (see fuzz_target.hpp).
 #include "fuzz/den_fuzz.cpp"
+#include "fuzz/dicom_fuzz.cpp"
 #include "fuzz/legacy_vtk_fuzz.cpp"
 #include "fuzz/nifti_fuzz.cpp"
 #include "fuzz/nrrd_fuzz.cpp"
@@ -24,6 +25,7 @@
 #include "fuzz/vti_fuzz.cpp"
 #include "fuzz/vtp_fuzz.cpp"
 #include "fuzz/vtu_fuzz.cpp"
+#include "fuzz/zarr_fuzz.cpp"
 
 namespace {
 

@@ -2,7 +2,9 @@
 """Writes the seed corpus of the fuzz targets: tests/fuzz/corpus/<target>/.
 
 Small valid files of every variant each reader supports (hand-built here;
-VTK's writers add theirs when python3-vtk9 is importable). Re-run after
+VTK's writers add theirs when python3-vtk9 is importable; DICOM series from
+the tests' pydicom writer and python3-pydicom's own test files, Zarr arrays
+from python3-zarr, each folder packed as tests/fuzz/folder_input.hpp reads). Re-run after
 adding a variant: `/usr/bin/python3 tests/fuzz/make_corpus.py`.
 """
 import base64
@@ -155,6 +157,105 @@ def meshes():
         "CELL_TYPES 1\n10\n" % pts)
 
 
+# ---- folders: DICOM series, Zarr arrays (packed: tests/fuzz/folder_input.hpp) ----
+def pack_folder(folder, open_sub=None):
+    """The files of `folder` (relative names, sorted) as KMFILE records,
+    joined by newlines (a file's bytes end where "\\nKMFILE:" starts)."""
+    records = []
+    for root, _, files in sorted(os.walk(folder)):
+        for name in sorted(files):
+            path = os.path.join(root, name)
+            rel = os.path.relpath(path, folder).replace(os.sep, "/")
+            with open(path, "rb") as f:
+                records.append(b"KMFILE:" + rel.encode() + b"\n" + f.read())
+    if open_sub:
+        records.append(b"KMFILE:@open\n" + open_sub.encode())
+    return b"\n".join(records)
+
+
+def dicom():
+    """A series written by the DICOM tests' own writer (tests/dicom_series.py,
+    pydicom) and single slices from python3-pydicom's test files."""
+    try:
+        import numpy as np
+        import pydicom
+        from pydicom.uid import RLELossless
+    except ImportError:
+        return
+    sys.path.insert(0, os.path.dirname(HERE))
+    from dicom_series import write_dicom_series
+    volume = (np.arange(3 * 4 * 5, dtype=np.int16).reshape(3, 4, 5) * 37 - 900)
+    tmp = tempfile.mkdtemp(prefix="keymesh-corpus-")
+    names = ["s0", "s1", "s2"]
+    series = os.path.join(tmp, "ct")
+    write_dicom_series(series, volume, names=names)
+    put("dicom", "series_int16_scaled", pack_folder(series))
+    oblique = os.path.join(tmp, "oblique")
+    s = 0.5 ** 0.5
+    write_dicom_series(oblique, volume[:2], orientation=(s, s, 0, 0, 0, -1), step=1.25, slope=1, intercept=0,
+                       names=names[:2])
+    put("dicom", "series_oblique_unscaled", pack_folder(oblique))
+    rle = os.path.join(tmp, "rle")
+    write_dicom_series(rle, volume[:2], names=names[:2])
+    for name in names[:2]:
+        ds = pydicom.dcmread(os.path.join(rle, name))
+        ds.compress(RLELossless)
+        ds.save_as(os.path.join(rle, name))
+    put("dicom", "series_rle", pack_folder(rle))
+    # One-slice series in other transfer syntaxes (explicit big endian, RLE,
+    # JPEG-LS, JPEG 2000): python3-pydicom's test data, as Debian ships it.
+    data = os.path.join(os.path.dirname(pydicom.__file__), "data", "test_files")
+    for name in ("MR_small_bigendian.dcm", "MR_small_RLE.dcm", "MR_small_jpeg_ls_lossless.dcm",
+                 "MR_small_jp2klossless.dcm"):
+        path = os.path.join(data, name)
+        if os.path.exists(path):
+            with open(path, "rb") as f:
+                put("dicom", "pydicom_" + name[:-4], b"KMFILE:" + name.encode() + b"\n" + f.read())
+
+
+def zarr_arrays():
+    """Arrays written with python3-zarr as the Zarr tests write theirs
+    (tests/cli/test_formats_cli.py): every codec, byte orders, absent chunks,
+    '/' separators, an OME-Zarr image read whole and by level."""
+    try:
+        import json
+        import numcodecs
+        import numpy as np
+        import zarr
+    except ImportError:
+        return
+    tmp = tempfile.mkdtemp(prefix="keymesh-corpus-")
+    volume = np.arange(3 * 4 * 5, dtype=np.float64).reshape(3, 4, 5)
+    jobs = (("none_f4", "<f4", None, "."), ("zlib_i2_big", ">i2", numcodecs.Zlib(level=5), "."),
+            ("gzip_u2_nested", "<u2", numcodecs.GZip(level=5), "/"),
+            ("blosc_lz4_u1", "|u1", numcodecs.Blosc(cname="lz4", clevel=5, shuffle=numcodecs.Blosc.SHUFFLE), "."),
+            ("blosc_zstd_f8", ">f8", numcodecs.Blosc(cname="zstd", clevel=3, shuffle=numcodecs.Blosc.BITSHUFFLE), "."))
+    for name, dtype, codec, sep in jobs:
+        path = os.path.join(tmp, name + ".zarr")
+        z = zarr.open(path, mode="w", shape=volume.shape, chunks=(2, 3, 4), dtype=dtype, compressor=codec,
+                      fill_value=7, dimension_separator=sep)
+        z[:] = volume.astype(dtype)
+        absent = os.path.join(path, "1/1/1" if sep == "/" else "1.1.1")
+        if os.path.exists(absent):  # one chunk left to fill_value
+            os.remove(absent)
+        put("zarr", name, pack_folder(path))
+    image = os.path.join(tmp, "image.ome.zarr")
+    os.makedirs(image)
+    with open(os.path.join(image, ".zgroup"), "w") as f:
+        json.dump({"zarr_format": 2}, f)
+    for level, data in (("0", volume[None]), ("1", volume[None, ::2, ::2, ::2])):
+        z = zarr.open(os.path.join(image, level), mode="w", shape=data.shape, chunks=(1, 2, 3, 3), dtype="<f4")
+        z[:] = data
+    axes = [{"name": "c", "type": "channel"}] + [{"name": n, "type": "space"} for n in "zyx"]
+    datasets = [{"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1, 2.0, 0.5, 0.25]},
+                                                            {"type": "translation", "translation": [0, 3, 2, 1]}]},
+                {"path": "1", "coordinateTransformations": [{"type": "scale", "scale": [1, 4.0, 1.0, 0.5]}]}]
+    with open(os.path.join(image, ".zattrs"), "w") as f:
+        json.dump({"multiscales": [{"version": "0.4", "axes": axes, "datasets": datasets}]}, f)
+    put("zarr", "ome_image", pack_folder(image))
+    put("zarr", "ome_level_1", pack_folder(image, open_sub="1"))
+
+
 def vtk_written():
     """Files from VTK's own writers in every mode (when python3-vtk9 is importable)."""
     try:
@@ -212,6 +313,8 @@ def vtk_written():
 if __name__ == "__main__":
     volumes()
     meshes()
+    dicom()
+    zarr_arrays()
     vtk_written()
     for t in sorted(os.listdir(CORPUS)):
         print(t, len(os.listdir(os.path.join(CORPUS, t))))
