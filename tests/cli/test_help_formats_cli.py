@@ -14,6 +14,7 @@ import os
 import re
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from kmtest import KEYMESH, check, finish, tempdir  # noqa: E402
@@ -76,8 +77,9 @@ def candidate_extensions():
 def reads(command, path, extra=()):
     """Whether `command` tries to read `path` (its refusal is about the
     file's content, not about the format)."""
+    out = os.path.join(D, "out_" + command + "_" + os.path.basename(path.rstrip("/")))  # one per probe
     for alternative in COMMANDS[command]:
-        args = [a.replace("OUT", os.path.join(D, "out")) for a in alternative]
+        args = [a.replace("OUT", out) for a in alternative]
         p = km(command, path, *args, *extra)
         if p.returncode == 0:  # an empty mesh (an empty .obj is one)
             return True
@@ -100,9 +102,12 @@ def inputs_named_in_help():
     extensions = candidate_extensions()
     assert {".ply", ".vtp", ".nrrd", ".vtu"} <= set(extensions), extensions
     folders = {"DICOM": empty("series/"), "Zarr": empty("array.zarr/")}
+    probes = {e: empty("probe" + e) for e in extensions}
+    with ThreadPoolExecutor(4) as pool:  # some 200 short runs
+        answers = {(c, e): pool.submit(reads, c, path) for c in COMMANDS for e, path in probes.items()}
     for command in COMMANDS:
         text = help_line(command, {"check": "mesh", "quality": "mesh", "info": "file"}.get(command, "input"))
-        read = [e for e in extensions if reads(command, empty("probe" + e))]
+        read = [e for e in extensions if answers[(command, e)].result()]
         assert read, f"keymesh {command} reads no extension at all"
         missing = [e for e in read if e not in EXT.findall(text.lower())]
         assert not missing, f"keymesh {command} reads {missing} but its help does not say so: {text}"
