@@ -161,6 +161,8 @@ class SeriesScan {
     return nullptr;
   }
   // An integer tag; `fallback` when absent (an error when fallback < 0).
+  // Within 32 bits, as DICOM's IS and US values are: "1e300" passes
+  // strtod and floor, and its cast to long would be undefined (UBSan).
   long integer(const std::string& file, const gdcm::Tag& t, const char* what, long fallback) const {
     const char* v = value(file, t);
     if (!v) {
@@ -168,7 +170,8 @@ class SeriesScan {
       throw fail(file, std::string("no ") + what);
     }
     auto n = numbers(v, 1);
-    if (!n || (*n)[0] != std::floor((*n)[0])) throw fail(file, std::string("bad ") + what + " '" + v + "'");
+    if (!n || (*n)[0] != std::floor((*n)[0]) || std::abs((*n)[0]) > 4294967295.0)
+      throw fail(file, std::string("bad ") + what + " '" + v + "'");
     return static_cast<long>((*n)[0]);
   }
 

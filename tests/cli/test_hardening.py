@@ -787,8 +787,16 @@ def dicom_library_memory_bounded():
     assert int(p.stdout) < 400 << 10, f"keymesh info {folder}: a process peaked at {int(p.stdout) >> 10} MiB"
 
 
+def dicom_integers_within_32_bits():
+    """NumberOfFrames '1e300' (an IS value strtod reads): its cast to long
+    was undefined behaviour (UBSan in sanitize-quick); refused by name."""
+    folder = unpacked("dicom/number_of_frames_1e300", "frames_1e300")
+    expect_refused(["info", folder], folder, "bad NumberOfFrames '1e300")
+
+
 check("fuzzed Zarr: chunks far larger than the array cost no memory until bytes on disk hold them",
       zarr_chunks_sized_by_their_bytes)
 check("fuzzed DICOM: a file GDCM aborts on is refused by name, no crash", dicom_library_aborts_reported)
 check("fuzzed DICOM: GDCM's allocations bounded in its child process", dicom_library_memory_bounded)
+check("DICOM integer tags past 32 bits refused by name, no undefined cast", dicom_integers_within_32_bits)
 finish()
