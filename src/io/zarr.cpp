@@ -29,13 +29,22 @@ using nlohmann::json;
 
 // A decoded chunk larger than this is refused: it would be allocated whole.
 constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;
+// Zarr and OME metadata nest a few levels; nlohmann's dump() (the messages
+// quote a bad value) recurses per level: "filters" nested 100,000 deep
+// overflowed the stack (exit 139).
+constexpr int kMaxJsonDepth = 64;
 
 json read_json(const std::string& file, const std::string& folder) {
   const std::string text = mesh_bytes::read_whole_file(file);
+  const std::string name = fs::path(file).filename().string();
   try {
-    return json::parse(text);
+    return json::parse(text, [&](int depth, json::parse_event_t, json&) {
+      if (depth > kMaxJsonDepth)
+        throw InputError(folder + ": " + name + " nests deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+      return true;
+    });
   } catch (const json::exception& e) {
-    throw InputError(folder + ": " + fs::path(file).filename().string() + " is not valid JSON (" + e.what() + ")");
+    throw InputError(folder + ": " + name + " is not valid JSON (" + e.what() + ")");
   }
 }
 

@@ -751,6 +751,21 @@ def zarr_chunks_sized_by_their_bytes():
         expect_refused(["info", folder], folder, "chunk 0.0.0")
 
 
+def zarr_metadata_depth_bounded():
+    """.zarray "filters" nested 100,000 deep: quoting it in the refusal
+    (nlohmann's recursive dump) overflowed the stack, exit 139; .zattrs too."""
+    deep = "[" * 100000 + "]" * 100000
+    folder = zarray("deep.zarr")
+    with open(os.path.join(folder, ".zarray")) as f:
+        text = f.read().replace('"filters": null', '"filters": ' + deep)
+    write(os.path.join("deep.zarr", ".zarray"), text)
+    expect_refused(["info", folder], folder, ".zarray nests deeper than 64 levels")
+    image = os.path.join(D, "deep_ome")
+    os.makedirs(image, exist_ok=True)
+    write(os.path.join("deep_ome", ".zattrs"), '{"multiscales": ' + deep + "}")
+    expect_refused(["info", image], image, ".zattrs nests deeper than 64 levels")
+
+
 def unpacked(regression, leaf):
     """A folder input of tests/fuzz/regressions (packed as folder_input.hpp
     reads it: "KMFILE:<name>\\n<bytes>" records joined by newlines)."""
@@ -796,6 +811,7 @@ def dicom_integers_within_32_bits():
 
 check("fuzzed Zarr: chunks far larger than the array cost no memory until bytes on disk hold them",
       zarr_chunks_sized_by_their_bytes)
+check("Zarr metadata nested 100,000 deep refused by name, no stack overflow", zarr_metadata_depth_bounded)
 check("fuzzed DICOM: a file GDCM aborts on is refused by name, no crash", dicom_library_aborts_reported)
 check("fuzzed DICOM: GDCM's allocations bounded in its child process", dicom_library_memory_bounded)
 check("DICOM integer tags past 32 bits refused by name, no undefined cast", dicom_integers_within_32_bits)
