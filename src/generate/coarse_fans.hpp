@@ -146,7 +146,7 @@ class FanWindow {
   std::vector<std::uint8_t> folded_;
 };
 
-// Checks every coarse candidate of cb.points (rank_coarse_points' bits)
+// Checks every coarse candidate of cb.points (mark_coarse_points' bits)
 // from its voxels' table entries: clears the bits of those without a
 // triangle and lists, by brick, those that may not be one closed fan. Each
 // brick checks the points of its grid rows (and of the grid's last row and
