@@ -306,7 +306,8 @@ struct CoarsePointWriter {
     values += out.out.curvature ? 1 : 0;
   }
 
-  // Step 3 for one isovalue: its every coarse point written at its id.
+  // Step 7 (contour_coarse_rows.hpp) for one isovalue: its every coarse point
+  // written at its id.
   void write_points(const InsideBits& bits, const CoarseBits& cb, Id iso) const {
     if (!out.positions_and_scalar_only())
       for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) { all_fields(row, iso); });
