@@ -19,7 +19,6 @@
 // Voxels that lost triangles to a fold across a face (few) have their share
 // worked out from what is left.
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cstdint>
 #include <cstring>
