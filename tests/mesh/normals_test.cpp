@@ -1,8 +1,12 @@
 // mesh/normals: the one face normal and KEY-REDUCE point normals.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numeric>
+#include <random>
+#include <vector>
 
 #include "keymesh/mesh/normals.hpp"
 #include "keymesh/parallel/threads.hpp"
@@ -65,6 +69,71 @@ TEST(Normals, SumsEqualASerialScatterInTriangleOrderAtAnyThreadCount) {
     ASSERT_EQ(sums.size(), serial.size());
     for (std::size_t p = 0; p < sums.size(); ++p) {
       EXPECT_EQ(std::memcmp(&sums[p], &serial[p], sizeof(Vec3f)), 0) << "point " << p << " threads " << threads;
+    }
+  }
+  parallel::set_thread_count(0);
+}
+
+// The serial scatter the sums are defined by: every triangle's normal added
+// to its three points in triangle order, from +0.
+std::vector<Vec3f> serial_sums(const SurfaceMesh& m) {
+  std::vector<Vec3f> serial(static_cast<std::size_t>(m.num_points()), Vec3f{0, 0, 0});
+  for (Id t = 0; t < m.num_cells(); ++t) {
+    const Vec3f f = triangle_normal(m.points.data(), m.connectivity.data(), t);
+    for (int k = 0; k < 3; ++k) serial[m.connectivity[3 * t + k]] = add(serial[m.connectivity[3 * t + k]], f);
+  }
+  return serial;
+}
+
+TEST(Normals, ChunkedSumsKeepTheSerialOrderOnLargeMeshesInAnyTriangleOrder) {
+  // A grid of quads, two triangles each, in row order (a contour's
+  // locality: points shared across the chunks' cuts), then the same
+  // triangles shuffled (most corners set aside), with unused points,
+  // degenerate triangles naming a point twice, and zero-area ones whose
+  // normals hold -0 components (+0 + -0 is +0: the sum must start from +0).
+  const int n = 180;
+  SurfaceMesh m;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      m.points.insert(m.points.end(), {float(i) + 0.3f * std::sin(0.37f * float(i * j)), float(j),
+                                       0.5f * std::cos(0.11f * float(i + 3 * j))});
+  m.points.insert(m.points.end(), {7, 7, 7, 8, 8, 8});  // unused
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const auto a = PointIndex(j * n + i), b = a + 1, c = a + PointIndex(n), d = c + 1;
+      m.connectivity.insert(m.connectivity.end(), {a, b, d, a, d, c});
+      if ((i + j) % 97 == 0) m.connectivity.insert(m.connectivity.end(), {a, b, a});
+      if ((i * j) % 89 == 1) m.connectivity.insert(m.connectivity.end(), {b, b, b});
+    }
+  ASSERT_GT(m.num_cells(), 60000);
+  for (int shuffled = 0; shuffled < 2; ++shuffled) {
+    if (shuffled) {
+      std::vector<Id> order(static_cast<std::size_t>(m.num_cells()));
+      std::iota(order.begin(), order.end(), Id{0});
+      std::shuffle(order.begin(), order.end(), std::mt19937(5));
+      Array<PointIndex> c(m.connectivity.size());
+      for (std::size_t t = 0; t < order.size(); ++t)
+        std::copy_n(m.connectivity.begin() + 3 * order[t], 3, c.begin() + 3 * static_cast<Id>(t));
+      m.connectivity = std::move(c);
+    }
+    const std::vector<Vec3f> serial = serial_sums(m);
+    for (int threads : {1, 2, 3, 4}) {
+      parallel::set_thread_count(threads);
+      const std::vector<Vec3f> sums = point_normal_sums(m);
+      ASSERT_EQ(sums.size(), serial.size());
+      std::size_t differ = 0;
+      for (std::size_t p = 0; p < sums.size(); ++p) differ += std::memcmp(&sums[p], &serial[p], sizeof(Vec3f)) != 0;
+      EXPECT_EQ(differ, 0u) << "threads " << threads << " shuffled " << shuffled;
+      SurfaceMesh averaged = m;
+      average_normals(averaged);
+      const Field* f = averaged.find_point_field("Normals");
+      ASSERT_NE(f, nullptr);
+      differ = 0;
+      for (std::size_t p = 0; p < sums.size(); ++p) {
+        const Vec3f u = unit(serial[p]);
+        differ += std::memcmp(&u, f->values.data() + 3 * p, sizeof(Vec3f)) != 0;
+      }
+      EXPECT_EQ(differ, 0u) << "average_normals, threads " << threads << " shuffled " << shuffled;
     }
   }
   parallel::set_thread_count(0);

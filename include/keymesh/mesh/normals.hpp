@@ -35,8 +35,13 @@ void sum_face_normals(const keyreduce::Groups<K>& corners, const Vec3f* face, Ve
   }, 1024);
 }
 
-// Each point's sum of the normals of its triangles (the merge without the
-// transform); a point no triangle uses gets zero.
+// out[p] = point p's sum, from zero, of the normals of its triangles in
+// increasing corner order (the merge without the transform: the bytes of a
+// serial scatter over the triangles); a point no triangle uses gets zero.
+// out holds num_points() elements. Triangles only (InputError otherwise).
+void sum_point_normals(const SurfaceMesh& mesh, Vec3f* out);
+
+// The same, returned.
 std::vector<Vec3f> point_normal_sums(const SurfaceMesh& mesh);
 
 // The transform over an array: v[i] = unit(v[i]).
