@@ -7,6 +7,14 @@
 namespace keymesh::io {
 
 namespace {
+// A mesh or grid format given where a volume is read: said by kind,
+// rather than "unknown volume format".
+[[noreturn]] void refuse_non_volume(const std::string& path, const Format& f) {
+  throw InputError(path + ": " + std::string(f.name) +
+                   (f.kind == DataKind::Surface ? " is a surface mesh format" : " is an unstructured grid format") +
+                   ", not a volume (expected " + accepted_volumes(false) + ")");
+}
+
 ImageGrid read_volume_unchecked(const std::string& path, const RawOptions* raw) {
   // Options describe raw samples whatever the file is called.
   if (raw) return read_raw(path, *raw);
@@ -15,6 +23,7 @@ ImageGrid read_volume_unchecked(const std::string& path, const RawOptions* raw) 
     throw InputError(path + ": a " + std::string(f->extensions[0]) +
                      " volume needs --dims X Y Z and --type (and --spacing, --endian if not 1 / little)");
   if (const VolumeReader read = f ? function_of<VolumeReader>(*f) : nullptr) return read(path);
+  if (f && f->kind != DataKind::Volume) refuse_non_volume(path, *f);
   refuse_format(path, DataKind::Volume, false);
 }
 }  // namespace

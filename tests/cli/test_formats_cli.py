@@ -444,6 +444,22 @@ def glb_from_contour_and_convert():
     assert np.array_equal(pos2, pos)
 
 
+def info_says_what_a_file_holds():
+    # A legacy .vtk holding a surface (POLYDATA), or no VTK header at all, is
+    # refused by the grid reader, which says so; a command that reads only
+    # volumes says the format's kind. Never "unknown volume format".
+    poly = os.path.join(D, "poly.vtk")
+    with open(poly, "w") as f:
+        f.write("# vtk DataFile Version 3.0\nsurface\nASCII\nDATASET POLYDATA\nPOINTS 0 float\nPOLYGONS 0 0\n")
+    empty = os.path.join(D, "zero.vtk")
+    open(empty, "w").close()
+    for path, words in ((poly, "POLYDATA"), (empty, "not a legacy VTK file")):
+        p = run("info", path, expect=1)
+        assert path in p.stderr and words in p.stderr and "unknown volume format" not in p.stderr, p.stderr
+    p = run("labels", poly, "-o", os.path.join(D, "labels.vtp"), expect=1)
+    assert "unstructured grid format, not a volume" in p.stderr, p.stderr
+
+
 if have("pydicom"):
     check("DICOM series reads back equal: slope/intercept, spacing, origin", dicom_reads_back_equal)
     check("DICOM series contours byte-identical to the same array in .nrrd, streamed too", dicom_contours_like_nrrd)
@@ -457,5 +473,6 @@ if have("zarr") and have("numcodecs"):
 check("Zarr chunks written by hand with numpy + zlib read back equal", zarr_written_by_hand)
 check("Zarr refusals name the problem", zarr_refused_by_name)
 check(".vti (raw appended) and .nii.gz stream byte-identical; a cut .nii.gz fails by name", vti_and_nii_gz_streamed)
+check("info on a POLYDATA or empty .vtk says what it holds; labels says it is not a volume", info_says_what_a_file_holds)
 check(".glb from contour and convert: container, accessors, arrays equal to the .ply's", glb_from_contour_and_convert)
 finish()

@@ -36,7 +36,8 @@ COMMANDS = {
     "info": [[]],
 }
 # What a command says of an input it has no reader for (or not with these arguments).
-NOT_READ = ("unknown", "cannot be read plane by plane", "needs --dims", "keeps the kind", "subdivides into")
+NOT_READ = ("unknown", "cannot be read plane by plane", "needs --dims", "keeps the kind", "subdivides into",
+            "not a volume")
 
 
 def km(*args):

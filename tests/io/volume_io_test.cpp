@@ -860,6 +860,13 @@ TEST_F(VolumeIo, DispatchRefusesUnknownAndMissingFiles) {
   expect_refused_read(path("dir.nrrd"), "");
 }
 
+// A mesh or grid file where a volume is read is refused by its kind, not as
+// an unknown format.
+TEST_F(VolumeIo, DispatchSaysAMeshOrGridIsNotAVolume) {
+  expect_refused_read(file("surface.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\n"),
+                      "legacy VTK is an unstructured grid format, not a volume (expected .vti");
+  expect_refused_read(file("mesh.ply", "ply\n"), "PLY is a surface mesh format, not a volume");
+}
 
 // ---- plane by plane (the streamed and distributed contours' reader) --------------
 
