@@ -36,6 +36,7 @@ CASES = [
     ("sphere-stream", "contour {in:s96.nrrd} -o {out}.vtp --iso 46.3 --normals gradient --curvature --memory-limit 1M"),
     ("brain-den", f"contour {BRAIN} -o {{out}}.vtp --iso 37.3 --normals average"),
     ("brain-den-coarsen", f"contour {BRAIN} -o {{out}}.ply --iso 37.3 --coarsen"),
+    ("brain-den-coarsen-sort", f"contour {BRAIN} -o {{out}}.ply --iso 37.3 --coarsen --weld keyreduce-sort"),
     ("head-nii-coarsen-isos", f"contour {HEAD} -o {{out}}.vtp --iso 90.5 --iso 40.5 --coarsen --normals gradient --curvature"),
     ("head-nii", f"contour {HEAD} -o {{out}}.vtp --iso 90.5 --iso 40.5 --normals gradient"),
     ("head-nrrd-stream", "contour {in:head.nrrd} -o {out}.ply --iso 90.5 --memory-limit 4M"),

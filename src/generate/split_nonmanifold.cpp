@@ -120,11 +120,12 @@ bool one_closed_fan(PointIndex v, const Spokes* s, Id d) {
 // The same for corners given by index (the few points looked at again).
 bool one_closed_fan(const PointIndex* C, PointIndex v, const std::uint32_t* list, Id d) {
   constexpr Id kOnStack = 64;
-  Spokes on_stack[kOnStack] = {};
+  Spokes on_stack[kOnStack];
   std::vector<Spokes> on_heap;
   if (d + kSpokesRead > kOnStack) on_heap.resize(static_cast<std::size_t>(d + kSpokesRead));
   Spokes* s = on_heap.empty() ? on_stack : on_heap.data();
   for (Id j = 0; j < d; ++j) s[j] = {C[next_corner(list[j])], C[prev_corner(list[j])]};
+  for (Id j = d; j < d + kSpokesRead; ++j) s[j] = {};  // read, never matched
   return one_closed_fan(v, s, d);
 }
 
@@ -148,7 +149,7 @@ struct FanRule {
 
   // Scratch, kept between calls (the rule runs on one thread).
   mutable std::vector<std::uint64_t> ent;
-  mutable std::vector<std::uint32_t> leaving, arriving;
+  mutable std::vector<std::uint32_t> sorted_leaving, sorted_arriving;
 
   std::uint32_t rotation_of(std::uint64_t key) const {
     if (rotation.empty()) return 0;
@@ -157,17 +158,9 @@ struct FanRule {
   }
 
   // `found` (when given) collects, from the smaller end, the edges with as
-  // many triangles each way and at least two of each.
-  void operator()(PointIndex v, const std::uint32_t* list, Id d, std::vector<std::uint32_t>& labels,
+  // many triangles each way and at least two of each (in no set order).
+  void operator()(PointIndex v, const std::uint32_t* list, Id d, std::uint32_t* labels,
                   std::vector<std::uint64_t>* found) const {
-    ent.clear();  // other end << 32 | arriving << 31 | local index
-    for (Id j = 0; j < d; ++j) {
-      ent.push_back((std::uint64_t{C[next_corner(list[j])]} << 32) | static_cast<std::uint64_t>(j));
-      ent.push_back((std::uint64_t{C[prev_corner(list[j])]} << 32) | (std::uint64_t{1} << 31) |
-                    static_cast<std::uint64_t>(j));
-    }
-    std::sort(ent.begin(), ent.end());
-    labels.resize(static_cast<std::size_t>(d));
     for (Id j = 0; j < d; ++j) labels[j] = static_cast<std::uint32_t>(j);
     auto find = [&](std::uint32_t x) {
       while (labels[x] != x) x = labels[x] = labels[labels[x]];
@@ -177,29 +170,101 @@ struct FanRule {
       a = find(a), b = find(b);
       if (a != b) labels[std::max(a, b)] = std::min(a, b);  // the root is the smallest index
     };
-    for (std::size_t g = 0; g < ent.size();) {
-      const PointIndex w = static_cast<PointIndex>(ent[g] >> 32);
-      leaving.clear(), arriving.clear();
-      std::size_t h = g;
-      for (; h < ent.size() && (ent[h] >> 32) == w; ++h)
-        ((ent[h] >> 31) & 1 ? arriving : leaving).push_back(static_cast<std::uint32_t>(ent[h] & 0x7fffffffu));
-      g = h;
+    // The corners whose edges join v and w, leaving and arriving, in
+    // increasing local index: the labels do not depend on the order the
+    // other ends come in (each root is its fan's smallest index).
+    auto pair_up = [&](PointIndex w, const std::uint32_t* leaving, std::size_t n_leaving, const std::uint32_t* arriving,
+                       std::size_t n_arriving) {
       if (w == v) {  // a triangle repeating v: its corners at v stay together
-        for (std::uint32_t j : arriving) unite(j, leaving.empty() ? j : leaving.front());
-        for (std::uint32_t j : leaving) unite(j, leaving.front());
-        continue;
+        for (std::size_t i = 0; i < n_arriving; ++i) unite(arriving[i], n_leaving ? leaving[0] : arriving[i]);
+        for (std::size_t i = 0; i < n_leaving; ++i) unite(leaving[i], leaving[0]);
+        return;
       }
       // Seen from the smaller end, "up" runs from the smaller id to the larger.
-      const auto& up = v < w ? leaving : arriving;
-      const auto& down = v < w ? arriving : leaving;
-      const std::size_t pairs = std::min(up.size(), down.size());
-      const bool balanced = up.size() == down.size() && pairs >= 2;
+      const std::uint32_t* up = v < w ? leaving : arriving;
+      const std::uint32_t* down = v < w ? arriving : leaving;
+      const std::size_t n_up = v < w ? n_leaving : n_arriving, n_down = v < w ? n_arriving : n_leaving;
+      const std::size_t pairs = std::min(n_up, n_down);
+      const bool balanced = n_up == n_down && pairs >= 2;
       const std::uint64_t key = edge_key(v, w);
       const std::size_t rot = balanced ? rotation_of(key) : 0;
       if (balanced && found && v < w) found->push_back(key);
-      for (std::size_t i = 0; i < pairs; ++i) unite(up[i], down[(i + rot) % down.size()]);
-    }
+      for (std::size_t i = 0; i < pairs; ++i) unite(up[i], down[(i + rot) % n_down]);
+    };
+    if (d <= kCornersMatched)
+      each_other_end_matched(list, d, pair_up);
+    else
+      each_other_end_sorted(list, d, pair_up);
     for (Id j = 0; j < d; ++j) labels[j] = find(static_cast<std::uint32_t>(j));
+  }
+
+ private:
+  // Up to 64 corners (nearly every point), the corners of each other end
+  // are found by comparing it with all the corners' ends at once, as bit
+  // masks (the corners in increasing order, no sort).
+  static constexpr Id kCornersMatched = 64;
+  struct Ends {
+    alignas(16) PointIndex at[kCornersMatched + 4];
+    // Bit j set when end j is w (ends past d are zero: the caller masks them).
+    std::uint64_t matching(PointIndex w, Id d) const {
+      std::uint64_t m = 0;
+#if defined(__SSE2__)
+      const __m128i wide = _mm_set1_epi32(static_cast<int>(w));
+      for (Id k = 0; k < d; k += 4) {
+        const __m128i four = _mm_load_si128(reinterpret_cast<const __m128i*>(at + k));
+        m |= std::uint64_t{static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(four, wide))))} << k;
+      }
+#else
+      for (Id k = 0; k < d; ++k) m |= std::uint64_t{at[k] == w} << k;
+#endif
+      return m;
+    }
+  };
+  template <class F>
+  void each_other_end_matched(const std::uint32_t* list, Id d, F&& pair_up) const {
+    Ends to, from;
+    for (Id j = 0; j < d; ++j) to.at[j] = C[next_corner(list[j])], from.at[j] = C[prev_corner(list[j])];
+    for (Id j = d; j < d + 4; ++j) to.at[j] = from.at[j] = 0;
+    const std::uint64_t all = d == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << d) - 1;
+    std::uint64_t open_leaving = all, open_arriving = all;
+    std::uint32_t leaving[kCornersMatched], arriving[kCornersMatched];
+    auto listed = [](std::uint64_t m, std::uint32_t* out) {
+      std::size_t n = 0;
+      for (; m; m &= m - 1) out[n++] = static_cast<std::uint32_t>(std::countr_zero(m));
+      return n;
+    };
+    while (open_leaving | open_arriving) {
+      const PointIndex w =
+          open_leaving ? to.at[std::countr_zero(open_leaving)] : from.at[std::countr_zero(open_arriving)];
+      const std::uint64_t l = to.matching(w, d) & all, a = from.matching(w, d) & all;
+      open_leaving &= ~l, open_arriving &= ~a;
+      if (std::has_single_bit(l) && std::has_single_bit(a)) {  // nearly every edge: one pair
+        leaving[0] = static_cast<std::uint32_t>(std::countr_zero(l));
+        arriving[0] = static_cast<std::uint32_t>(std::countr_zero(a));
+        pair_up(w, leaving, 1, arriving, 1);
+        continue;
+      }
+      const std::size_t n_leaving = listed(l, leaving);
+      pair_up(w, leaving, n_leaving, arriving, listed(a, arriving));
+    }
+  }
+  // More: by a sort of (other end, arriving, local index).
+  template <class F>
+  void each_other_end_sorted(const std::uint32_t* list, Id d, F&& pair_up) const {
+    ent.clear();
+    for (Id j = 0; j < d; ++j) {
+      ent.push_back((std::uint64_t{C[next_corner(list[j])]} << 32) | static_cast<std::uint64_t>(j));
+      ent.push_back((std::uint64_t{C[prev_corner(list[j])]} << 32) | (std::uint64_t{1} << 31) |
+                    static_cast<std::uint64_t>(j));
+    }
+    std::sort(ent.begin(), ent.end());
+    for (std::size_t g = 0; g < ent.size();) {
+      const PointIndex w = static_cast<PointIndex>(ent[g] >> 32);
+      sorted_leaving.clear(), sorted_arriving.clear();
+      for (; g < ent.size() && (ent[g] >> 32) == w; ++g)
+        ((ent[g] >> 31) & 1 ? sorted_arriving : sorted_leaving).push_back(static_cast<std::uint32_t>(ent[g] & 0x7fffffffu));
+      pair_up(w, sorted_leaving.data(), sorted_leaving.size(), sorted_arriving.data(), sorted_arriving.size());
+    }
   }
 };
 
@@ -315,38 +380,35 @@ struct CornersByPoint {
   Id begin(Id p) const { return p == 0 ? 0 : end[p - 1]; }
 };
 
-// Corners as point << 32 | corner, sorted and grouped by point (corners
-// increasing); with `only_odd`, the points that are one closed fan left out.
-Flagged grouped(const PointIndex* C, std::vector<std::uint64_t> by_point, bool only_odd) {
-  std::sort(by_point.begin(), by_point.end());
-  Flagged out;
-  std::vector<std::uint32_t> list;
-  for (std::size_t i = 0; i < by_point.size();) {
-    const PointIndex p = static_cast<PointIndex>(by_point[i] >> 32);
-    list.clear();
-    for (; i < by_point.size() && (by_point[i] >> 32) == p; ++i) list.push_back(static_cast<std::uint32_t>(by_point[i]));
-    const Id d = static_cast<Id>(list.size());
-    if (!only_odd || !one_closed_fan(C, p, list.data(), d)) out.add(p, list.data(), d);
-  }
-  return out;
-}
-
 // The corners of `points` (ascending), gathered in one pass over the
 // triangles, by point and increasing corner: the few the rule looks at, in
 // an order that makes all after this deterministic. With `only_odd`, the
 // points that are one closed fan after all are left out.
+// Grouped by counting: each listed point's rank among them comes from a bit
+// per point and the listed points before each 64-point word, and the
+// corners are found in increasing order, so that placing them in that order
+// keeps them increasing within each point (a sort of them cost more than
+// the pass over the triangles).
 Flagged corners_of(const PointIndex* C, Id n, const std::vector<PointIndex>& points,
                    const std::vector<TriangleRange>& where, bool only_odd) {
   if (points.empty()) return {};
-  std::vector<std::uint64_t> is_listed(static_cast<std::size_t>(n / 64 + 1), 0);
+  const auto words = static_cast<std::size_t>(n / 64 + 1);
+  std::vector<std::uint64_t> is_listed(words, 0);
   for (PointIndex p : points) is_listed[p / 64] |= std::uint64_t{1} << (p % 64);
+  std::vector<std::uint32_t> rank_before(words);
+  std::vector<PointIndex> listed_points;  // by rank (a point listed twice once)
+  for (std::size_t w = 0; w < words; ++w) {
+    rank_before[w] = static_cast<std::uint32_t>(listed_points.size());
+    for (std::uint64_t m = is_listed[w]; m; m &= m - 1)
+      listed_points.push_back(static_cast<PointIndex>(64 * w + static_cast<std::size_t>(std::countr_zero(m))));
+  }
   // The ranges cut into pieces of about 2^15 triangles, the pieces shared
-  // among the threads.
+  // among the threads (each chunk's in increasing order).
   std::vector<TriangleRange> pieces;
   for (const TriangleRange& r : where)
     for (Id b = r.begin; b < r.end; b += Id{1} << 15) pieces.push_back({b, std::min(r.end, b + (Id{1} << 15))});
   const int chunks = parallel::chunk_count(static_cast<Id>(pieces.size()), 1);
-  std::vector<std::vector<std::uint64_t>> at(static_cast<std::size_t>(std::max(chunks, 1)));  // point << 32 | corner
+  std::vector<std::vector<std::uint64_t>> at(static_cast<std::size_t>(std::max(chunks, 1)));  // rank << 32 | corner
   std::vector<std::uint8_t> past_last(at.size(), 0);
   const std::uint64_t* listed = is_listed.data();
   auto is = [listed](PointIndex p) { return (listed[p / 64] >> (p % 64)) & 1u; };
@@ -362,14 +424,33 @@ Flagged corners_of(const PointIndex* C, Id n, const std::vector<PointIndex>& poi
         }
         if (is(x[0]) | is(x[1]) | is(x[2]))
           for (int k = 0; k < 3; ++k)
-            if (is(x[k])) at[chunk].push_back((std::uint64_t{x[k]} << 32) | static_cast<std::uint64_t>(3 * t + k));
+            if (is(x[k])) {
+              const PointIndex p = x[k];
+              const std::uint64_t below = listed[p / 64] & ((std::uint64_t{1} << (p % 64)) - 1);
+              const std::uint64_t rank = rank_before[p / 64] + static_cast<std::uint64_t>(std::popcount(below));
+              at[chunk].push_back(rank << 32 | static_cast<std::uint64_t>(3 * t + k));
+            }
       }
   });
   if (std::find(past_last.begin(), past_last.end(), 1) != past_last.end())
     throw InputError("split_nonmanifold: a corner refers to a point past the last");
-  std::vector<std::uint64_t> all;
-  for (const auto& a : at) all.insert(all.end(), a.begin(), a.end());
-  return grouped(C, std::move(all), only_odd);
+  std::vector<std::uint32_t> first(listed_points.size() + 1, 0);
+  for (const auto& a : at)
+    for (std::uint64_t e : a) ++first[(e >> 32) + 1];
+  for (std::size_t k = 0; k < listed_points.size(); ++k) first[k + 1] += first[k];
+  std::vector<std::uint32_t> corners(first.back());
+  {
+    std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
+    for (const auto& a : at)
+      for (std::uint64_t e : a) corners[next[e >> 32]++] = static_cast<std::uint32_t>(e);
+  }
+  Flagged out;
+  for (std::size_t k = 0; k < listed_points.size(); ++k) {
+    const std::uint32_t* list = corners.data() + first[k];
+    const Id d = first[k + 1] - first[k];
+    if (d > 0 && (!only_odd || !one_closed_fan(C, listed_points[k], list, d))) out.add(listed_points[k], list, d);
+  }
+  return out;
 }
 
 // The points that are not one closed fan (one_closed_fan over their
@@ -396,13 +477,14 @@ Flagged flag_points(const PointIndex* C, Id corners, Id n, std::vector<PointInde
   return corners_of(C, n, odd, {{0, corners / 3}}, false);
 }
 
-// The corners of `f` regrouped by the ids they hold now; the points that
-// are still not one closed fan.
-Flagged reflag(const PointIndex* C, const Flagged& f) {
-  std::vector<std::uint64_t> by_point(f.corners.size());
-  for (std::size_t i = 0; i < f.corners.size(); ++i)
-    by_point[i] = (std::uint64_t{C[f.corners[i]]} << 32) | f.corners[i];
-  return grouped(C, std::move(by_point), true);
+// The groups of corners that `regrouped` lists, those still not one closed
+// fan under the ids the corners hold now.
+Flagged still_odd(const PointIndex* C, const Flagged& regrouped) {
+  Flagged out;
+  for (std::size_t k = 0; k < regrouped.size(); ++k)
+    if (!one_closed_fan(C, regrouped.point[k], regrouped.list(k), regrouped.degree(k)))
+      out.add(regrouped.point[k], regrouped.list(k), regrouped.degree(k));
+  return out;
 }
 
 // Every flagged point's fans under the current rotations, recomputed for
@@ -410,16 +492,17 @@ Flagged reflag(const PointIndex* C, const Flagged& f) {
 struct FanCache {
   const FanRule& fans;
   const Flagged& f;
-  std::vector<std::vector<std::uint32_t>> labels;
+  std::vector<std::uint32_t> labels_;  // point k's from f.first[k], like its corners
 
   FanCache(const FanRule& rule, const Flagged& flagged, std::vector<std::uint64_t>* found)
-      : fans(rule), f(flagged), labels(flagged.size()) {
-    for (std::size_t k = 0; k < f.size(); ++k) fans(f.point[k], f.list(k), f.degree(k), labels[k], found);
+      : fans(rule), f(flagged), labels_(flagged.corners.size()) {
+    for (std::size_t k = 0; k < f.size(); ++k) fans(f.point[k], f.list(k), f.degree(k), labels(k), found);
   }
+  std::uint32_t* labels(std::size_t k) { return labels_.data() + f.first[k]; }
   void refresh(std::uint64_t key) {
     for (PointIndex p : {static_cast<PointIndex>(key >> 32), static_cast<PointIndex>(key & 0xffffffffu)}) {
       const std::size_t k = f.at(p);
-      fans(p, f.list(k), f.degree(k), labels[k], nullptr);
+      fans(p, f.list(k), f.degree(k), labels(k), nullptr);
     }
   }
 
@@ -431,7 +514,7 @@ struct FanCache {
     FanRule::half_edges(fans.C, f.list(b), f.degree(b), lo, false, up_hi);
     ends.resize(up_lo.size());
     for (std::size_t i = 0; i < up_lo.size(); ++i)
-      ends[i] = (std::uint64_t{labels[a][up_lo[i]]} << 32) | labels[b][up_hi[i]];
+      ends[i] = (std::uint64_t{labels(a)[up_lo[i]]} << 32) | labels(b)[up_hi[i]];
     std::sort(ends.begin(), ends.end());
     return std::adjacent_find(ends.begin(), ends.end()) != ends.end();
   }
@@ -473,8 +556,11 @@ Id rotate_pairings(FanCache& cache, std::vector<std::uint32_t>& rotation) {
 // One pass of the rule over the flagged points: the pairings rotated, then
 // every fan but a point's first given a new id (appended to `source`: the
 // original point it copies). All is decided before a corner is rewritten,
-// since the rule reads the other points' ids. Returns the edges left joined.
-Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& source) {
+// since the rule reads the other points' ids. Returns the edges left joined;
+// `regrouped` gets the flagged corners grouped by the ids they hold after
+// (ascending ids: the points kept their first fans, in order, and the
+// copies' ids come after every id there was).
+Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& source, Flagged& regrouped) {
   std::vector<std::uint64_t> multi;
   std::vector<std::uint32_t> rotation;
   const FanRule fans{C, multi, rotation, {}, {}, {}};
@@ -491,21 +577,32 @@ Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& s
   const Id left = rotate_pairings(cache, rotation);
   std::vector<std::pair<std::uint32_t, PointIndex>> moves;  // corner, new id
   std::vector<PointIndex> id_of_root;
+  Flagged copies;
+  regrouped = {};
+  std::vector<std::uint32_t> group;
   for (std::size_t k = 0; k < f.size(); ++k) {
-    const std::vector<std::uint32_t>& labels = cache.labels[k];
-    id_of_root.assign(labels.size(), f.point[k]);
+    const std::uint32_t* labels = cache.labels(k);
+    const auto d = static_cast<std::size_t>(f.degree(k));
+    id_of_root.assign(d, f.point[k]);
     const PointIndex original = Id{f.point[k]} < n ? f.point[k] : source[f.point[k] - n];
-    for (std::size_t j = 1; j < labels.size(); ++j)
-      if (labels[j] == j) {
+    for (std::size_t r = 0; r < d; ++r) {
+      if (labels[r] != r) continue;
+      if (r > 0) {
         if (n + static_cast<Id>(source.size()) >= Id{std::numeric_limits<PointIndex>::max()})
           throw LimitError("split_nonmanifold: more than 2^32 - 1 points");
-        id_of_root[j] = static_cast<PointIndex>(n + static_cast<Id>(source.size()));
+        id_of_root[r] = static_cast<PointIndex>(n + static_cast<Id>(source.size()));
         source.push_back(original);
       }
-    for (std::size_t j = 1; j < labels.size(); ++j)
+      group.clear();
+      for (std::size_t j = r; j < d; ++j)
+        if (labels[j] == r) group.push_back(f.list(k)[j]);
+      (r ? copies : regrouped).add(id_of_root[r], group.data(), static_cast<Id>(group.size()));
+    }
+    for (std::size_t j = 1; j < d; ++j)
       if (labels[j] != 0) moves.emplace_back(f.list(k)[j], id_of_root[labels[j]]);
   }
   for (const auto& [corner, id] : moves) C[corner] = id;
+  for (std::size_t k = 0; k < copies.size(); ++k) regrouped.add(copies.point[k], copies.list(k), copies.degree(k));
   return left;
 }
 
@@ -523,9 +620,10 @@ void split_flagged(SurfaceMesh& mesh, Flagged f, NonmanifoldSplit& result) {
   // flagged are looked at again (a few rounds, each over them only).
   for (int round = 0; round < 4 && f.size() > 0; ++round) {
     const std::size_t added_before = source.size();
-    result.edges_left = split_round(C, n, f, source);
+    Flagged regrouped;
+    result.edges_left = split_round(C, n, f, source, regrouped);
     if (source.size() == added_before || result.edges_left == 0) break;
-    f = reflag(C, f);
+    f = still_odd(C, regrouped);
   }
   const Id added = static_cast<Id>(source.size());
   // Grown to their exact size (resize() would double the capacity).
