@@ -172,27 +172,45 @@ Array<PointIndex> bipyramid(PointIndex top, PointIndex bottom, PointIndex first,
   return t;
 }
 
-// A point of every degree from 3 to 20 (the fan check has a path up to 8
-// corners and another above): one bipyramid's apex is one fan; two
+// A point of every degree from 3 to 20, and of 64 to 81 (the fan check has
+// a path up to 8 corners and another above; the rule compares ends up to 64
+// corners and sorts them above): one bipyramid's apex is one fan; two
 // bipyramids sharing their top apex make it a point of two fans (degree
-// d1 + d2), split into exactly one copy.
+// d1 + d2), split into exactly one copy: the two bipyramids apart, renamed.
+// Also with the triangles shuffled, so that no corner's ends come in order.
 TEST(SplitNonmanifold, FansOfEveryDegree) {
-  for (PointIndex d1 = 3; d1 <= 12; ++d1) {
+  std::mt19937 rng(13);
+  for (PointIndex d1 : {3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 32, 40}) {
     SurfaceMesh one = points_at_random(d1 + 2);
     one.connectivity = bipyramid(0, 1, 2, d1);
     ASSERT_TRUE(analyze::check_topology(one).closed_manifold);
     EXPECT_EQ(generate::split_nonmanifold(one).points_added, 0) << d1;
-    for (PointIndex d2 : {PointIndex{3}, PointIndex{5}, PointIndex{8}}) {
-      SurfaceMesh two = points_at_random(d1 + d2 + 3);
-      two.connectivity = bipyramid(0, 1, 2, d1);
-      const auto second = bipyramid(0, 2 + d1, 3 + d1, d2);
-      two.connectivity.insert(two.connectivity.end(), second.begin(), second.end());
-      const auto r = generate::split_nonmanifold(two);
-      EXPECT_EQ(r.points_added, 1) << d1 << " " << d2;
-      const auto t = analyze::check_topology(two);
-      EXPECT_TRUE(t.closed_manifold) << d1 << " " << d2;
-      EXPECT_EQ(t.components, 2) << d1 << " " << d2;
-    }
+    for (PointIndex d2 : d1 < 32 ? std::vector<PointIndex>{3, 5, 8} : std::vector<PointIndex>{32, 41})
+      for (bool shuffle : {false, true}) {
+        SurfaceMesh two = points_at_random(d1 + d2 + 3);
+        two.connectivity = bipyramid(0, 1, 2, d1);
+        SurfaceMesh apart = two;
+        const auto second = bipyramid(0, 2 + d1, 3 + d1, d2);
+        two.connectivity.insert(two.connectivity.end(), second.begin(), second.end());
+        const auto second_apart = bipyramid(d1 + d2 + 3, 2 + d1, 3 + d1, d2);
+        apart.connectivity.insert(apart.connectivity.end(), second_apart.begin(), second_apart.end());
+        if (shuffle) {
+          std::vector<std::size_t> order(static_cast<std::size_t>(two.num_cells()));
+          for (std::size_t t = 0; t < order.size(); ++t) order[t] = t;
+          std::shuffle(order.begin(), order.end(), rng);
+          for (SurfaceMesh* m : {&two, &apart}) {
+            const Array<PointIndex> c = m->connectivity;
+            for (std::size_t t = 0; t < order.size(); ++t)
+              for (int k = 0; k < 3; ++k) m->connectivity[3 * t + k] = c[3 * order[t] + k];
+          }
+        }
+        const auto r = generate::split_nonmanifold(two);
+        EXPECT_EQ(r.points_added, 1) << d1 << " " << d2 << " " << shuffle;
+        EXPECT_TRUE(renamed(apart, two)) << d1 << " " << d2 << " " << shuffle;
+        const auto t = analyze::check_topology(two);
+        EXPECT_TRUE(t.closed_manifold) << d1 << " " << d2 << " " << shuffle;
+        EXPECT_EQ(t.components, 2) << d1 << " " << d2 << " " << shuffle;
+      }
   }
 }
 
