@@ -83,18 +83,22 @@ struct CoarseFans {
 // The table entries of a window of voxel rows around one brick's point
 // rows, by voxel i + 1 (slots 0 and nx hold entry 0, no triangle, so that a
 // point's voxels i - 1 and i are read without a test at the row's ends),
-// and, for rows that lost triangles to a fold across a face, which (bit t
-// of drops[i + 1]: the voxel's triangle t). In the calling thread's scratch.
+// and, for rows that lost triangles to a fold across a face, the shares of
+// each voxel that lost some, worked out once from what is left (a voxel is
+// read by the eight points at its corners). In the calling thread's scratch.
 class FanWindow {
  public:
   FanWindow(const GridShape& s, const CoarseTriangles& ct, const VoxelBricks& bricks, Id brick)
       : nx_(s.nx), ny_(s.ny), layers_(s.nz - 1), j0_(bricks.j_begin(brick) - 1), k0_(bricks.k_begin(brick) - 1),
         rows_j_(bricks.j_end(brick) - j0_), rows_k_(bricks.k_end(brick) - k0_) {
     thread_local std::vector<std::uint16_t> entry_scratch;
-    thread_local std::vector<std::uint8_t> drop_scratch;
+    thread_local std::vector<std::uint32_t> dropped_scratch;
+    thread_local std::vector<FanShare> share_scratch;
     const auto slots = static_cast<std::size_t>((rows_j_ * rows_k_ + 1) * (nx_ + 1));
-    if (entry_scratch.size() < slots) entry_scratch.resize(slots), drop_scratch.resize(slots);
-    entries_ = entry_scratch.data(), drops_ = drop_scratch.data();
+    if (entry_scratch.size() < slots) entry_scratch.resize(slots), dropped_scratch.resize(slots);
+    entries_ = entry_scratch.data(), dropped_ = dropped_scratch.data();
+    share_scratch.clear();
+    shares_ = &share_scratch;
     folded_.assign(static_cast<std::size_t>(rows_j_ * rows_k_ + 1), 0);
     std::memset(entries_ + none() * (nx_ + 1), 0, sizeof(std::uint16_t) * static_cast<std::size_t>(nx_ + 1));
     const CoarseFanTable& table = coarse_fan_table();
@@ -112,26 +116,35 @@ class FanWindow {
         // The dropped face triangles, by voxel: the records follow the
         // row's triangle order, as the voxels do.
         folded_[slot] = 1;
-        std::uint8_t* drops = drops_ + slot * (nx_ + 1);
-        std::memset(drops, 0, static_cast<std::size_t>(nx_ + 1));
+        std::uint32_t* dropped = dropped_ + slot * (nx_ + 1);
+        std::memset(dropped, 0, sizeof(std::uint32_t) * static_cast<std::size_t>(nx_ + 1));
         const FaceTriangle* f = ct.faces_of(bricks, ny_, vr);
         const FaceTriangle* const f_end = f + ct.face_count[vr];
         std::uint32_t before = 0;  // the row's triangles before voxel v's
         for (std::uint32_t v = 0; v < ct.voxels[vr] && f < f_end; ++v) {
           const auto count = static_cast<std::uint32_t>((voxels[entry[v]] >> kCoarseCountShift) & 7u);
+          unsigned lost = 0;  // bit t: the voxel's triangle t
           for (; f < f_end && f->tri < before + count; ++f)
-            if (f->folded) drops[voxel_i[v] + 1] |= static_cast<std::uint8_t>(1u << (f->tri - before));
+            if (f->folded) lost |= 1u << (f->tri - before);
           before += count;
+          if (!lost) continue;
+          CornerChain left[8];
+          corner_chains(voxels[entry[v]], lost, left);
+          for (unsigned c = 0; c < 8; ++c) shares_->push_back(fan_share(left[c], c));
+          dropped[voxel_i[v] + 1] = static_cast<std::uint32_t>(shares_->size() / 8);
         }
       }
   }
 
-  // The rows of voxel row (j, k): entries and drops (null when none).
+  // The rows of voxel row (j, k): entries, and which voxels lost triangles
+  // (null when none did; else 0, or 1 + the voxel's index for dropped_share).
   const std::uint16_t* entries(Id j, Id k) const { return entries_ + slot(j, k) * (nx_ + 1); }
-  const std::uint8_t* drops(Id j, Id k) const {
+  const std::uint32_t* dropped(Id j, Id k) const {
     const Id at = slot(j, k);
-    return folded_[at] ? drops_ + at * (nx_ + 1) : nullptr;
+    return folded_[at] ? dropped_ + at * (nx_ + 1) : nullptr;
   }
+  // A voxel that lost triangles: its share at corner c.
+  FanShare dropped_share(std::uint32_t at, unsigned c) const { return (*shares_)[8 * (at - 1) + c]; }
 
  private:
   Id none() const { return rows_j_ * rows_k_; }
@@ -141,7 +154,8 @@ class FanWindow {
 
   Id nx_, ny_, layers_, j0_, k0_, rows_j_, rows_k_;
   std::uint16_t* entries_;
-  std::uint8_t* drops_;
+  std::uint32_t* dropped_;
+  std::vector<FanShare>* shares_;
   std::vector<std::uint8_t> folded_;
 };
 
@@ -155,7 +169,6 @@ inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, Coa
   const VoxelBricks bricks(s, 0, layers);
   fans.suspects.resize(static_cast<std::size_t>(bricks.count()));
   const CoarseFanTable& table = coarse_fan_table();
-  const CoarseVoxel* voxels = coarse_voxel_table().entries.data();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
     std::vector<FanSuspect>& suspects = fans.suspects[static_cast<std::size_t>(brick)];
     suspects.clear();
@@ -169,27 +182,22 @@ inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, Coa
         // Voxel rows (j - 1 + dy, k - 1 + dz) at index dy | dz << 1.
         const std::uint16_t* rows[4] = {window.entries(j - 1, k - 1), window.entries(j, k - 1),
                                         window.entries(j - 1, k), window.entries(j, k)};
-        const std::uint8_t* drops[4] = {window.drops(j - 1, k - 1), window.drops(j, k - 1), window.drops(j - 1, k),
-                                        window.drops(j, k)};
-        const bool any_drops = drops[0] || drops[1] || drops[2] || drops[3];
+        const std::uint32_t* dropped[4] = {window.dropped(j - 1, k - 1), window.dropped(j, k - 1),
+                                           window.dropped(j - 1, k), window.dropped(j, k)};
+        const bool any_dropped = dropped[0] || dropped[1] || dropped[2] || dropped[3];
         std::uint64_t* words = cb.points.data() + r * wpr;
         // The point is corner c = 7 - o of its voxel o = dx | dy << 1 | dz << 2.
         auto fan_of = [&](Id i) {
           FanShares fan;
-          if (!any_drops) {
-            [&]<unsigned... o>(std::integer_sequence<unsigned, o...>) {
-              (fan.add(table.share(rows[o >> 1][i + (o & 1u)], 7u - o)), ...);
-            }(std::make_integer_sequence<unsigned, 8>{});
+          auto at = [&](unsigned o) { return dropped[o >> 1] ? dropped[o >> 1][i + (o & 1u)] : 0u; };
+          if (any_dropped && (at(0) | at(1) | at(2) | at(3) | at(4) | at(5) | at(6) | at(7))) {
+            for (unsigned o = 0; o < 8; ++o)
+              fan.add(at(o) ? window.dropped_share(at(o), 7u - o) : table.share(rows[o >> 1][i + (o & 1u)], 7u - o));
             return fan;
           }
-          for (unsigned o = 0; o < 8; ++o) {
-            const unsigned c = 7u - o;
-            const std::uint16_t e = rows[o >> 1][i + (o & 1u)];
-            const std::uint8_t dropped = drops[o >> 1] ? drops[o >> 1][i + (o & 1u)] : 0;
-            CornerChain left[8];  // what the folds left of the voxel's shares
-            if (dropped) corner_chains(voxels[e], dropped, left);
-            fan.add(dropped ? fan_share(left[c], c) : table.share(e, c));
-          }
+          [&]<unsigned... o>(std::integer_sequence<unsigned, o...>) {
+            (fan.add(table.share(rows[o >> 1][i + (o & 1u)], 7u - o)), ...);
+          }(std::make_integer_sequence<unsigned, 8>{});
           return fan;
         };
         for (Id q = 0; q < wpr; ++q)
