@@ -18,20 +18,21 @@
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/fresh_memory.hpp"
 #include "keymesh/parallel/scan.hpp"
+#include "split_fans.hpp"
 
 namespace keymesh::generate {
 
 namespace {
+
+using split_rule::CornerEnds;
+using split_rule::FanRule;
+using split_rule::half_edges;
 
 // The corners after and before corner c in its triangle: at c's point, the
 // point there is the end of the edge leaving it and the start of the edge
 // arriving at it.
 std::uint32_t next_corner(std::uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
 std::uint32_t prev_corner(std::uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
-
-std::uint64_t edge_key(PointIndex a, PointIndex b) {
-  return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
-}
 
 // The spokes of a corner of point v: the point its triangle's edge leaving
 // v ends at, and the point the edge arriving at v starts from.
@@ -129,145 +130,6 @@ bool one_closed_fan(const PointIndex* C, PointIndex v, const std::uint32_t* list
   return one_closed_fan(v, s, d);
 }
 
-// A point's fans under the pairing rule (see the header): its corners
-// (`list`, d of them, increasing) united through paired edges; labels[j] is
-// the smallest local index of corner j's fan.
-struct FanRule {
-  const PointIndex* C;
-  const std::vector<std::uint64_t>& multi;      // edges with two pairs or more, by key
-  const std::vector<std::uint32_t>& rotation;   // their pairings' rotations (empty: none yet)
-
-  // The local indices of v's corners whose edge leaves v for w (`leaving`)
-  // or arrives from w, in increasing corner index: the same triangles in the
-  // same order as seen from w, with the directions swapped.
-  static void half_edges(const PointIndex* C, const std::uint32_t* list, Id d, PointIndex w, bool leaving,
-                         std::vector<std::uint32_t>& out) {
-    out.clear();
-    for (Id j = 0; j < d; ++j)
-      if (C[leaving ? next_corner(list[j]) : prev_corner(list[j])] == w) out.push_back(static_cast<std::uint32_t>(j));
-  }
-
-  // Scratch, kept between calls (the rule runs on one thread).
-  mutable std::vector<std::uint64_t> ent;
-  mutable std::vector<std::uint32_t> sorted_leaving, sorted_arriving;
-
-  std::uint32_t rotation_of(std::uint64_t key) const {
-    if (rotation.empty()) return 0;
-    const auto it = std::lower_bound(multi.begin(), multi.end(), key);
-    return it != multi.end() && *it == key ? rotation[it - multi.begin()] : 0;
-  }
-
-  // `found` (when given) collects, from the smaller end, the edges with as
-  // many triangles each way and at least two of each (in no set order).
-  void operator()(PointIndex v, const std::uint32_t* list, Id d, std::uint32_t* labels,
-                  std::vector<std::uint64_t>* found) const {
-    for (Id j = 0; j < d; ++j) labels[j] = static_cast<std::uint32_t>(j);
-    auto find = [&](std::uint32_t x) {
-      while (labels[x] != x) x = labels[x] = labels[labels[x]];
-      return x;
-    };
-    auto unite = [&](std::uint32_t a, std::uint32_t b) {
-      a = find(a), b = find(b);
-      if (a != b) labels[std::max(a, b)] = std::min(a, b);  // the root is the smallest index
-    };
-    // The corners whose edges join v and w, leaving and arriving, in
-    // increasing local index: the labels do not depend on the order the
-    // other ends come in (each root is its fan's smallest index).
-    auto pair_up = [&](PointIndex w, const std::uint32_t* leaving, std::size_t n_leaving, const std::uint32_t* arriving,
-                       std::size_t n_arriving) {
-      if (w == v) {  // a triangle repeating v: its corners at v stay together
-        for (std::size_t i = 0; i < n_arriving; ++i) unite(arriving[i], n_leaving ? leaving[0] : arriving[i]);
-        for (std::size_t i = 0; i < n_leaving; ++i) unite(leaving[i], leaving[0]);
-        return;
-      }
-      // Seen from the smaller end, "up" runs from the smaller id to the larger.
-      const std::uint32_t* up = v < w ? leaving : arriving;
-      const std::uint32_t* down = v < w ? arriving : leaving;
-      const std::size_t n_up = v < w ? n_leaving : n_arriving, n_down = v < w ? n_arriving : n_leaving;
-      const std::size_t pairs = std::min(n_up, n_down);
-      const bool balanced = n_up == n_down && pairs >= 2;
-      const std::uint64_t key = edge_key(v, w);
-      const std::size_t rot = balanced ? rotation_of(key) : 0;
-      if (balanced && found && v < w) found->push_back(key);
-      for (std::size_t i = 0; i < pairs; ++i) unite(up[i], down[(i + rot) % n_down]);
-    };
-    if (d <= kCornersMatched)
-      each_other_end_matched(list, d, pair_up);
-    else
-      each_other_end_sorted(list, d, pair_up);
-    for (Id j = 0; j < d; ++j) labels[j] = find(static_cast<std::uint32_t>(j));
-  }
-
- private:
-  // Up to 64 corners (nearly every point), the corners of each other end
-  // are found by comparing it with all the corners' ends at once, as bit
-  // masks (the corners in increasing order, no sort).
-  static constexpr Id kCornersMatched = 64;
-  struct Ends {
-    alignas(16) PointIndex at[kCornersMatched + 4];
-    // Bit j set when end j is w (ends past d are zero: the caller masks them).
-    std::uint64_t matching(PointIndex w, Id d) const {
-      std::uint64_t m = 0;
-#if defined(__SSE2__)
-      const __m128i wide = _mm_set1_epi32(static_cast<int>(w));
-      for (Id k = 0; k < d; k += 4) {
-        const __m128i four = _mm_load_si128(reinterpret_cast<const __m128i*>(at + k));
-        m |= std::uint64_t{static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(four, wide))))} << k;
-      }
-#else
-      for (Id k = 0; k < d; ++k) m |= std::uint64_t{at[k] == w} << k;
-#endif
-      return m;
-    }
-  };
-  template <class F>
-  void each_other_end_matched(const std::uint32_t* list, Id d, F&& pair_up) const {
-    Ends to, from;
-    for (Id j = 0; j < d; ++j) to.at[j] = C[next_corner(list[j])], from.at[j] = C[prev_corner(list[j])];
-    for (Id j = d; j < d + 4; ++j) to.at[j] = from.at[j] = 0;
-    const std::uint64_t all = d == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << d) - 1;
-    std::uint64_t open_leaving = all, open_arriving = all;
-    std::uint32_t leaving[kCornersMatched], arriving[kCornersMatched];
-    auto listed = [](std::uint64_t m, std::uint32_t* out) {
-      std::size_t n = 0;
-      for (; m; m &= m - 1) out[n++] = static_cast<std::uint32_t>(std::countr_zero(m));
-      return n;
-    };
-    while (open_leaving | open_arriving) {
-      const PointIndex w =
-          open_leaving ? to.at[std::countr_zero(open_leaving)] : from.at[std::countr_zero(open_arriving)];
-      const std::uint64_t l = to.matching(w, d) & all, a = from.matching(w, d) & all;
-      open_leaving &= ~l, open_arriving &= ~a;
-      if (std::has_single_bit(l) && std::has_single_bit(a)) {  // nearly every edge: one pair
-        leaving[0] = static_cast<std::uint32_t>(std::countr_zero(l));
-        arriving[0] = static_cast<std::uint32_t>(std::countr_zero(a));
-        pair_up(w, leaving, 1, arriving, 1);
-        continue;
-      }
-      const std::size_t n_leaving = listed(l, leaving);
-      pair_up(w, leaving, n_leaving, arriving, listed(a, arriving));
-    }
-  }
-  // More: by a sort of (other end, arriving, local index).
-  template <class F>
-  void each_other_end_sorted(const std::uint32_t* list, Id d, F&& pair_up) const {
-    ent.clear();
-    for (Id j = 0; j < d; ++j) {
-      ent.push_back((std::uint64_t{C[next_corner(list[j])]} << 32) | static_cast<std::uint64_t>(j));
-      ent.push_back((std::uint64_t{C[prev_corner(list[j])]} << 32) | (std::uint64_t{1} << 31) |
-                    static_cast<std::uint64_t>(j));
-    }
-    std::sort(ent.begin(), ent.end());
-    for (std::size_t g = 0; g < ent.size();) {
-      const PointIndex w = static_cast<PointIndex>(ent[g] >> 32);
-      sorted_leaving.clear(), sorted_arriving.clear();
-      for (; g < ent.size() && (ent[g] >> 32) == w; ++g)
-        ((ent[g] >> 31) & 1 ? sorted_arriving : sorted_leaving).push_back(static_cast<std::uint32_t>(ent[g] & 0x7fffffffu));
-      pair_up(w, sorted_leaving.data(), sorted_leaving.size(), sorted_arriving.data(), sorted_arriving.size());
-    }
-  }
-};
-
 // The points that are not one closed fan, by increasing id, with their
 // corners (increasing): the few the rule looks at.
 struct Flagged {
@@ -275,9 +137,19 @@ struct Flagged {
   std::vector<std::uint32_t> first{0};  // point k's corners: corners[first[k] .. first[k + 1])
   std::vector<std::uint32_t> corners;
 
+  // The ends of each corner's leaving and arriving edges (read_ends), as
+  // the rule reads them: the ids the triangles hold when read.
+  std::vector<PointIndex> to, from;
+
   std::size_t size() const { return point.size(); }
   const std::uint32_t* list(std::size_t k) const { return corners.data() + first[k]; }
   Id degree(std::size_t k) const { return first[k + 1] - first[k]; }
+  CornerEnds ends(std::size_t k) const { return {to.data() + first[k], from.data() + first[k], degree(k)}; }
+  void read_ends(const PointIndex* C) {
+    to.assign(corners.size() + split_rule::kEndsReadPast, 0);
+    from.assign(corners.size() + split_rule::kEndsReadPast, 0);
+    for (std::size_t i = 0; i < corners.size(); ++i) to[i] = C[next_corner(corners[i])], from[i] = C[prev_corner(corners[i])];
+  }
   std::size_t at(PointIndex p) const {
     return static_cast<std::size_t>(std::lower_bound(point.begin(), point.end(), p) - point.begin());
   }
@@ -488,21 +360,27 @@ Flagged still_odd(const PointIndex* C, const Flagged& regrouped) {
 }
 
 // Every flagged point's fans under the current rotations, recomputed for
-// the two ends of an edge whose rotation changes.
+// the two ends of an edge whose rotation changes. The first time, the
+// points are shared among the threads (each point's fans are its own).
 struct FanCache {
   const FanRule& fans;
   const Flagged& f;
   std::vector<std::uint32_t> labels_;  // point k's from f.first[k], like its corners
 
-  FanCache(const FanRule& rule, const Flagged& flagged, std::vector<std::uint64_t>* found)
+  FanCache(const FanRule& rule, const Flagged& flagged, std::vector<std::uint64_t>& found)
       : fans(rule), f(flagged), labels_(flagged.corners.size()) {
-    for (std::size_t k = 0; k < f.size(); ++k) fans(f.point[k], f.list(k), f.degree(k), labels(k), found);
+    const int chunks = parallel::chunk_count(static_cast<Id>(f.size()), 512);
+    std::vector<std::vector<std::uint64_t>> found_by(static_cast<std::size_t>(std::max(chunks, 1)));
+    parallel::for_each_chunk(static_cast<Id>(f.size()), chunks, [&](Id b, Id e, int c) {
+      for (Id k = b; k < e; ++k) fans(f.point[k], f.ends(k), labels(k), &found_by[c]);
+    });
+    for (const auto& keys : found_by) found.insert(found.end(), keys.begin(), keys.end());
   }
   std::uint32_t* labels(std::size_t k) { return labels_.data() + f.first[k]; }
   void refresh(std::uint64_t key) {
     for (PointIndex p : {static_cast<PointIndex>(key >> 32), static_cast<PointIndex>(key & 0xffffffffu)}) {
       const std::size_t k = f.at(p);
-      fans(p, f.list(k), f.degree(k), labels(k), nullptr);
+      fans(p, f.ends(k), labels(k), nullptr);
     }
   }
 
@@ -510,8 +388,8 @@ struct FanCache {
   bool joins_twice(std::uint64_t key) {
     const PointIndex lo = static_cast<PointIndex>(key >> 32), hi = static_cast<PointIndex>(key & 0xffffffffu);
     const std::size_t a = f.at(lo), b = f.at(hi);
-    FanRule::half_edges(fans.C, f.list(a), f.degree(a), hi, true, up_lo);
-    FanRule::half_edges(fans.C, f.list(b), f.degree(b), lo, false, up_hi);
+    half_edges(f.ends(a).to, f.degree(a), hi, up_lo);
+    half_edges(f.ends(b).from, f.degree(b), lo, up_hi);
     ends.resize(up_lo.size());
     for (std::size_t i = 0; i < up_lo.size(); ++i)
       ends[i] = (std::uint64_t{labels(a)[up_lo[i]]} << 32) | labels(b)[up_hi[i]];
@@ -534,8 +412,7 @@ Id rotate_pairings(FanCache& cache, std::vector<std::uint32_t>& rotation) {
     for (std::size_t e = 0; e < multi.size(); ++e) {
       if (!cache.joins_twice(multi[e])) continue;
       const std::size_t a = cache.f.at(static_cast<PointIndex>(multi[e] >> 32));
-      FanRule::half_edges(cache.fans.C, cache.f.list(a), cache.f.degree(a),
-                          static_cast<PointIndex>(multi[e] & 0xffffffffu), true, up);
+      half_edges(cache.f.ends(a).to, cache.f.degree(a), static_cast<PointIndex>(multi[e] & 0xffffffffu), up);
       const std::uint32_t pairs = static_cast<std::uint32_t>(up.size()), was = rotation[e];
       for (std::uint32_t r = 1; r < pairs; ++r) {
         rotation[e] = (was + r) % pairs;
@@ -560,11 +437,12 @@ Id rotate_pairings(FanCache& cache, std::vector<std::uint32_t>& rotation) {
 // `regrouped` gets the flagged corners grouped by the ids they hold after
 // (ascending ids: the points kept their first fans, in order, and the
 // copies' ids come after every id there was).
-Id split_round(PointIndex* C, Id n, const Flagged& f, std::vector<PointIndex>& source, Flagged& regrouped) {
+Id split_round(PointIndex* C, Id n, Flagged& f, std::vector<PointIndex>& source, Flagged& regrouped) {
   std::vector<std::uint64_t> multi;
   std::vector<std::uint32_t> rotation;
-  const FanRule fans{C, multi, rotation, {}, {}, {}};
-  FanCache cache(fans, f, &multi);
+  const FanRule fans{multi, rotation};
+  f.read_ends(C);
+  FanCache cache(fans, f, multi);
   std::sort(multi.begin(), multi.end());
   // Both ends of such an edge are flagged when every point that is not one
   // closed fan is (a caller's list of suspects may lack one: its edges are
