@@ -423,6 +423,8 @@ PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, co
                                   std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys,
                                   PointIndex*& connectivity);
 
+void check_output_size(const ContourOptions& opt, Id points, Id triangles);
+
 // Coarsening in the structured plan's pass (contour_coarse_rows.hpp): for
 // every isovalue, rank the coarse points and count the coarse triangles
 // kept (folds removed in that pass by remove_folds' rule), so that the
@@ -432,7 +434,7 @@ PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, co
 // the triangles with coarse ids, each once at its final place.
 template <class T>
 void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const std::vector<RowCounts>& rows,
-                  Id fine_triangles, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
+                  Id fine_points, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
                   const GridShape& s, const ContourOptions& opt, ContourStats& st) {
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
   // Scratch kept by the calling thread, like the inside bits: every
@@ -454,7 +456,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
       if (bytes > kKeepScratchBytes) free_storage(coarse), free_storage(triangles);
     }
   } release;
-  Id coarse_points = 0, coarse_triangles = 0;
+  Id coarse_points = 0, coarse_triangles = 0, fine_triangles = 0;
   CoarseFans fans;
   NonmanifoldSuspects suspects;  // every isovalue's, ascending
   for (Id iso = 0; iso < n_iso; ++iso) {
@@ -464,6 +466,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     st.weld += seconds_since(t0);
     t0 = Clock::now();
     tally_coarse_triangles(bits[iso], s, rows[iso], coarse[iso], triangles[iso]);
+    fine_triangles += triangles[iso].fine_triangles;
     st.generate += seconds_since(t0);
     t0 = Clock::now();
     fold_and_count(s, coarse_triangles, triangles[iso]);
@@ -478,6 +481,10 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     suspect_triangles(s, fans, triangles[iso], suspects.triangles);
     st.weld += seconds_since(t0);
   }
+  // The fine mesh's counts bound the coarsened one's (refused by name before
+  // the outputs are allocated, as the plain contour's are).
+  st.soup_points = 3 * fine_triangles;
+  check_output_size(opt, fine_points, fine_triangles);
   auto t0 = Clock::now();
   PointIndex* connectivity = nullptr;
   const CoarsePointWriter<T> write{structured_outputs(mesh, coarse_points, coarse_triangles, grid, interp, s, opt,
@@ -576,24 +583,31 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
     classify(samples, s, InsideTest<T>(opt.isovalues[iso]), bits[iso]);
     st.classify += seconds_since(t0);
     t0 = Clock::now();
-    count_rows(bits[iso], s, kb, ke, points, triangles, rows[iso]);
     const RowCounts& rc = rows[iso];
+    if (opt.coarsen) {
+      // The coarse pass walks the voxels itself (tally_coarse_triangles).
+      count_grid_rows(bits[iso], s, kb, ke, points, rows[iso]);
+      points = rc.point_first.back();
+      st.weld += seconds_since(t0);
+      continue;
+    }
+    count_rows(bits[iso], s, kb, ke, points, triangles, rows[iso]);
     for (Id k = 0; k < ke - kb; k += kSlabsPerBlock) blocks.push_back(3 * rc.triangle_first[k * (s.ny - 1)]);
     points = rc.point_first.back();
     triangles = rc.triangle_first.back();
     st.weld += seconds_since(t0);
   }
-  blocks.push_back(3 * triangles);
-  st.soup_points = 3 * triangles;
-  check_output_size(opt, points, triangles);
 
   SurfaceMesh mesh;
   progress::report("triangles", 0.4);
   if (opt.coarsen) {
-    coarsen_rows(mesh, bits, rows, triangles, grid, interp, s, opt, st);
+    coarsen_rows(mesh, bits, rows, points, grid, interp, s, opt, st);
     finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, nullptr, 0, st);
     return mesh;
   }
+  blocks.push_back(3 * triangles);
+  st.soup_points = 3 * triangles;
+  check_output_size(opt, points, triangles);
   auto t0 = Clock::now();
   progress::report("points", 0.5);
   PointIndex* connectivity = nullptr;

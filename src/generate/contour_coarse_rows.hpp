@@ -396,8 +396,9 @@ class BrickFarBytes {
 // triangles; by voxel row: its cut voxels, its range of face triangles, its
 // triangle count, then its first triangle.
 struct CoarseTriangles {
-  // Room for the brick's fine triangles (a bound on both its cut voxels
-  // and its face triangles); only the elements written are touched.
+  // Room for the brick's cut voxels (a bound from its rows' cut edges) and
+  // face triangles (grown when a voxel might not fit); only the elements
+  // written are touched.
   std::vector<KeptArray<std::uint32_t>> voxel_i;  // each cut voxel's i, in walk order
   std::vector<KeptArray<std::uint16_t>> entries;  // CoarseVoxelTable::index of each cut voxel, in walk order
   std::vector<KeptArray<FaceTriangle>> faces;     // its rows' one after the other
@@ -407,31 +408,23 @@ struct CoarseTriangles {
   std::vector<std::uint32_t> face_count;  // by voxel row
   std::vector<Id> first;                  // by voxel row: its triangles (tally), then its first (fold_and_count)
   std::vector<std::uint8_t> folded;       // by voxel row: fold_across_faces dropped some of its triangles
+  std::vector<Id> fine;                   // by brick: its voxels' fine triangles (marching cubes')
   Id count = 0;                           // triangles kept
+  Id fine_triangles = 0;                  // the isovalue's fine triangles (what coarsening started from)
 
   FaceTriangle* faces_of(const VoxelBricks& bricks, Id ny, Id vr) const {
     return faces[bricks.brick_of(vr % (ny - 1), vr / (ny - 1))].elements.get() + face_first[vr];
   }
 };
 
-// Calls row(j, k, walk) for each voxel row (j, k) of `brick` in the count
-// pass's order (contour_rows.hpp's VoxelBricks), where walk(voxel) calls
-// voxel(i, cube_case) for each cut voxel i of the row, in increasing i,
-// with the cube case the count pass stored for it (`cases`, in that order).
-template <class Row>
-void for_each_brick_row(const InsideBits& bits, const GridShape& s, const VoxelBricks& bricks, Id brick,
-                        const std::uint8_t* cases, Row&& row) {
-  auto next_stored = [&](int, const CornerWords&) { return unsigned{*cases++}; };
-  for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
-    for (Id j = bricks.j_begin(brick); j < bricks.j_end(brick); ++j)
-      row(j, k, [&](auto&& voxel) { for_each_cut_voxel(bits, s, j, k, next_stored, voxel); });
-}
-
-// Step 3: each cut voxel's table entry looked up by its cube case and far
-// bits (coarse_cases.hpp) and kept; every voxel row's coarse triangles
-// counted (those with two equal corners dropped and the folds within each
-// voxel decided: the table's) and its face triangles recorded, before any
-// triangle is written.
+// Step 3: each cut voxel's cube case and table entry (by its case and far
+// bits, coarse_cases.hpp) found and the entry kept; every voxel row's
+// coarse triangles counted (those with two equal corners dropped and the
+// folds within each voxel decided: the table's) and its face triangles
+// recorded, before any triangle is written. The one walk over the cut
+// voxels before the write (the plain contour's count pass is not run: only
+// its grid rows' counts, count_grid_rows); it also counts the fine
+// triangles, which bound the output and are reported.
 inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, const RowCounts& rc,
                                    const CoarseBits& cb, CoarseTriangles& ct) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
@@ -443,46 +436,83 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   ct.face_first.resize(static_cast<std::size_t>(voxel_rows));
   ct.face_count.resize(static_cast<std::size_t>(voxel_rows));
   ct.first.resize(static_cast<std::size_t>(voxel_rows + 1));
+  ct.fine.assign(n_bricks, 0);
   const CoarseVoxelTable& table = coarse_voxel_table();
+  const auto& cubes = marching_cubes_table();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
-    Id room = 0;  // the brick's fine triangles
-    for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
-      room += rc.triangle_first[k * (s.ny - 1) + bricks.j_end(brick)] -
-              rc.triangle_first[k * (s.ny - 1) + bricks.j_begin(brick)];
-    FaceTriangle* const base = ct.faces[brick].room_for(static_cast<std::size_t>(room));
+    const Id kb = bricks.k_begin(brick), ke = bricks.k_end(brick), jb = bricks.j_begin(brick), je = bricks.j_end(brick);
+    // Rows whose four grid rows have no cut edge have no cut voxel.
+    auto has_cuts = [&](Id j, Id k) {
+      const Id r = k * s.ny + j;
+      return cb.cut[r] || cb.cut[r + 1] || cb.cut[r + s.ny] || cb.cut[r + s.ny + 1];
+    };
+    // Room for the brick's cut voxels: a voxel row's, at most two for
+    // every three cut edges of its four grid rows (a cut voxel has three
+    // or more cut edges, each shared by two voxels of the row at most).
+    auto cut_edges = [&](Id r) { return rc.point_first[r + 1] - rc.point_first[r]; };
+    Id voxels = 0;
+    for (Id k = kb; k < ke; ++k)
+      for (Id j = jb; j < je; ++j) {
+        const Id r = k * s.ny + j;
+        voxels += std::min(s.nx - 1, 2 * (cut_edges(r) + cut_edges(r + 1) + cut_edges(r + s.ny) +
+                                          cut_edges(r + s.ny + 1)) / 3);
+      }
+    std::uint16_t* entry = ct.entries[brick].room_for(static_cast<std::size_t>(voxels));
+    std::uint32_t* voxel_i = ct.voxel_i[brick].room_for(static_cast<std::size_t>(voxels));
+    // Face triangles: room for one every four voxels of the bound at first
+    // (fewer than one a cut voxel on real surfaces), grown (doubled, copied)
+    // when a voxel's five might not fit, and kept for later calls.
+    KeptArray<FaceTriangle>& faces = ct.faces[brick];
+    std::size_t room = std::max<std::size_t>(faces.size, static_cast<std::size_t>(voxels / 4) + 64);
+    FaceTriangle* base = faces.room_for(room);
     FaceTriangle* f = base;
-    std::uint16_t* entry = ct.entries[brick].room_for(static_cast<std::size_t>(room));
-    std::uint32_t* voxel_i = ct.voxel_i[brick].room_for(static_cast<std::size_t>(room));
+    Id fine = 0;
     BrickFarBytes far(bits, s, cb, bricks, brick);
-    for_each_brick_row(bits, s, bricks, brick, rc.brick_cases[brick].cases.data(), [&](Id j, Id k, auto&& walk) {
-      // The far bytes of the voxel row's corner rows, by corner bits y | z
-      // << 1, held by value (the stores below are of bytes, which may alias).
-      const std::uint8_t *const n0 = far.row(j, k), *const n1 = far.row(j + 1, k), *const n2 = far.row(j, k + 1),
-                                *const n3 = far.row(j + 1, k + 1);
-      const Id vr = k * (s.ny - 1) + j;
-      FaceTriangle* const row_faces = f;
-      const std::uint16_t* const row_entries = entry;
-      std::uint32_t written = 0;  // triangles of the row so far
-      walk([&, n0, n1, n2, n3](Id i, unsigned cube_case) {
-        const std::uint16_t e = table.index(cube_case, BrickFarBytes::voxel(n0, n1, n2, n3, i));
-        *entry++ = e;
-        *voxel_i++ = static_cast<std::uint32_t>(i);
-        const CoarseVoxel v = table.entries[e];
-        for (unsigned m = static_cast<unsigned>(v >> kCoarseFaceShift); m; m &= m - 1) {
-          const int t = std::countr_zero(m);
-          const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
-          *f++ = {written + static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(i),
-                  static_cast<std::uint8_t>(table.face_code[c] & 0x7fu), 0};
+    for (Id k = kb; k < ke; ++k)
+      for (Id j = jb; j < je; ++j) {
+        const Id vr = k * (s.ny - 1) + j;
+        const std::uint16_t* const row_entries = entry;
+        const std::size_t row_faces = static_cast<std::size_t>(f - base);
+        std::uint32_t written = 0;  // triangles of the row so far
+        if (has_cuts(j, k)) {
+          // The far bytes of the voxel row's corner rows, by corner bits y
+          // | z << 1, held by value (the stores below are of bytes, which
+          // may alias).
+          const std::uint8_t *const n0 = far.row(j, k), *const n1 = far.row(j + 1, k),
+                                    *const n2 = far.row(j, k + 1), *const n3 = far.row(j + 1, k + 1);
+          for_each_cut_voxel(bits, s, j, k, [&, n0, n1, n2, n3](Id i, unsigned cube_case) {
+            fine += cubes.triangle_count[cube_case];
+            const std::uint16_t e = table.index(cube_case, BrickFarBytes::voxel(n0, n1, n2, n3, i));
+            *entry++ = e;
+            *voxel_i++ = static_cast<std::uint32_t>(i);
+            const CoarseVoxel v = table.entries[e];
+            if (static_cast<std::size_t>(f - base) + 5 > room) {
+              const std::size_t used = static_cast<std::size_t>(f - base);
+              KeptArray<FaceTriangle> bigger;
+              room *= 2;
+              std::memcpy(bigger.room_for(room), base, used * sizeof(FaceTriangle));
+              faces = std::move(bigger);
+              base = faces.data(), f = base + used;
+            }
+            for (unsigned m = static_cast<unsigned>(v >> kCoarseFaceShift); m; m &= m - 1) {
+              const int t = std::countr_zero(m);
+              const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
+              *f++ = {written + static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(i),
+                      static_cast<std::uint8_t>(table.face_code[c] & 0x7fu), 0};
+            }
+            written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
+          });
         }
-        written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
-      });
-      ct.voxels[vr] = static_cast<std::uint32_t>(entry - row_entries);
-      ct.entry_first[vr] = static_cast<std::uint32_t>(row_entries - ct.entries[brick].data());
-      ct.face_first[vr] = static_cast<std::uint32_t>(row_faces - base);
-      ct.face_count[vr] = static_cast<std::uint32_t>(f - row_faces);
-      ct.first[vr] = written;
-    });
+        ct.voxels[vr] = static_cast<std::uint32_t>(entry - row_entries);
+        ct.entry_first[vr] = static_cast<std::uint32_t>(row_entries - ct.entries[brick].data());
+        ct.face_first[vr] = static_cast<std::uint32_t>(row_faces);
+        ct.face_count[vr] = static_cast<std::uint32_t>(static_cast<std::size_t>(f - base) - row_faces);
+        ct.first[vr] = written;
+      }
+    ct.fine[static_cast<std::size_t>(brick)] = fine;
   }, 1);
+  ct.fine_triangles = 0;
+  for (const Id n : ct.fine) ct.fine_triangles += n;
 }
 
 // Step 4: the folds across the faces between voxels decided (each row the

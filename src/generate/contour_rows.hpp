@@ -166,26 +166,39 @@ struct RowCounts {
   std::vector<BrickCases> brick_cases;  // every brick's, as the count pass found them
 };
 
+// Step 1 for the grid rows of planes [kb, ke] alone: their cut edges
+// counted and scanned into rc.point_first, ids starting at `first_point`.
+// count_rows adds the voxel rows; the coarse pass (contour_coarse_rows.hpp)
+// walks the voxels itself, once.
+inline void count_grid_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, Id first_point, RowCounts& rc) {
+  const Id grid_rows = s.ny * (ke - kb + 1);
+  rc.point_first.assign(static_cast<std::size_t>(grid_rows + 1), 0);
+  parallel::for_each_dynamic(grid_rows, [&](Id r) {
+    rc.point_first[r] = RowCuts(bits, s, r % s.ny, kb + r / s.ny, ke).count();
+  }, 8);
+  parallel::exclusive_scan(rc.point_first.data(), rc.point_first.data(), grid_rows + 1);
+  if (first_point)  // a later isovalue: ids follow the earlier ones'
+    parallel::for_each(grid_rows + 1, [&](Id r) { rc.point_first[r] += first_point; });
+}
+
 // Counts rows of planes [kb, ke] (voxel layers [kb, ke)) and scans them, ids
 // starting at `first_point` and `first_triangle`.
 inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, Id first_point, Id first_triangle,
                        RowCounts& rc) {
   const auto& table = marching_cubes_table();
-  const Id grid_rows = s.ny * (ke - kb + 1);
   const Id voxel_rows = (s.ny - 1) * (ke - kb);
-  rc.point_first.assign(static_cast<std::size_t>(grid_rows + 1), 0);
+  count_grid_rows(bits, s, kb, ke, first_point, rc);
   rc.triangle_first.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
-  parallel::for_each_dynamic(grid_rows, [&](Id r) {
-    rc.point_first[r] = RowCuts(bits, s, r % s.ny, kb + r / s.ny, ke).count();
-  }, 8);
   // Triangles per voxel row, brick by brick; each brick's cut voxels kept
   // (its vector's storage too, for the next isovalue or call).
   const VoxelBricks bricks(s, kb, ke);
   rc.brick_cases.resize(static_cast<std::size_t>(bricks.count()));
   parallel::for_each_dynamic(bricks.count(), [&](Id b) {
-    // Room for the brick's cases, from its grid rows' cut edges (counts
-    // still: the scan comes after).
-    auto cut_edges = [&](Id j, Id k) { return rc.point_first[(k - kb) * s.ny + j]; };
+    // Room for the brick's cases, from its grid rows' cut edges.
+    auto cut_edges = [&](Id j, Id k) {
+      const Id r = (k - kb) * s.ny + j;
+      return rc.point_first[r + 1] - rc.point_first[r];
+    };
     Id room = 0;
     for (Id k = bricks.k_begin(b); k < bricks.k_end(b); ++k)
       for (Id j = bricks.j_begin(b); j < bricks.j_end(b); ++j)
@@ -202,12 +215,9 @@ inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke,
         rc.triangle_first[(k - kb) * (s.ny - 1) + j] = t;
       }
   }, 1);
-  parallel::exclusive_scan(rc.point_first.data(), rc.point_first.data(), grid_rows + 1);
   parallel::exclusive_scan(rc.triangle_first.data(), rc.triangle_first.data(), voxel_rows + 1);
-  if (first_point || first_triangle) {  // a later isovalue: ids follow the earlier ones'
-    parallel::for_each(grid_rows + 1, [&](Id r) { rc.point_first[r] += first_point; });
+  if (first_triangle)
     parallel::for_each(voxel_rows + 1, [&](Id r) { rc.triangle_first[r] += first_triangle; });
-  }
 }
 
 // Writes the triangles of voxel rows (j, k), k in [kb, ke), with final point
