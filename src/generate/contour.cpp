@@ -27,6 +27,7 @@
 #include "coarse_fans.hpp"
 #include "contour_coarse_rows.hpp"
 #include "contour_rows.hpp"
+#include "derivative_rows.hpp"
 #include "grid_lines.hpp"
 #include "voxel_bits.hpp"
 
@@ -146,6 +147,14 @@ struct PointArrays {
   std::uint64_t* coarse = nullptr;  // coarse key: the edge's end nearest the crossing
 };
 
+// The derivatives at a cut edge's two ends (g at its first grid point and
+// at its far end; h, derivatives_at's second derivatives, only when
+// curvature is asked for), as its point's fields need them.
+struct EdgeEnds {
+  const double* g[2] = {};
+  const double* h[2] = {};
+};
+
 template <class T>
 struct PointWriter {
   const EdgeInterpolator<T>& interp;
@@ -159,18 +168,80 @@ struct PointWriter {
   bool positions_and_scalar_only() const {
     return out.xyz && !out.gradient_normal && !out.curvature && !out.key && !out.coarse;
   }
+  bool needs_derivatives() const { return out.gradient_normal || out.curvature; }
 
+  // Every field of the point, the derivatives at its edge's ends computed
+  // here (the soup plans: their points come in key order across the whole
+  // grid, with no rows to keep).
   void operator()(Id id, const typename EdgeInterpolator<T>::Point& p, Id iso_index) const {
     if (out.xyz) interp.position(p, out.xyz + 3 * id);
+    double d[2][9];
+    EdgeEnds ends;
+    if (needs_derivatives()) {
+      Id ijk1[3] = {p.ijk[0], p.ijk[1], p.ijk[2]};
+      ++ijk1[p.axis];
+      if (out.curvature) {
+        interp.derivatives_at(p.p0, p.ijk, d[0], d[0] + 3);
+        interp.derivatives_at(interp.far_end(p), ijk1, d[1], d[1] + 3);
+        ends.h[0] = d[0] + 3, ends.h[1] = d[1] + 3;
+      } else {
+        interp.gradient_at(p.p0, p.ijk, d[0]);
+        interp.gradient_at(interp.far_end(p), ijk1, d[1]);
+      }
+      ends.g[0] = d[0], ends.g[1] = d[1];
+    }
+    fields(id, p, iso_index, ends);
+  }
+
+  // Every field but the position, from the derivatives at the edge's ends
+  // (derivatives_at's gradient is gradient_at's: the same bits either way).
+  void fields(Id id, const typename EdgeInterpolator<T>::Point& p, Id iso_index, const EdgeEnds& ends) const {
     if (out.scalar) out.scalar[id] = interp.scalar(p);
-    if (out.gradient_normal) interp.gradient_normal(p, out.gradient_normal + 3 * id);
-    if (out.curvature) out.curvature[id] = interp.mean_curvature(p);
+    if (out.gradient_normal) interp.gradient_normal(p, ends.g[0], ends.g[1], out.gradient_normal + 3 * id);
+    if (out.curvature) out.curvature[id] = interp.mean_curvature(p, ends.g[0], ends.h[0], ends.g[1], ends.h[1]);
     if (out.key)
       out.key[id] = static_cast<std::uint64_t>(iso_index) * total_per_iso + 3 * static_cast<std::uint64_t>(p.p0) +
                     static_cast<std::uint64_t>(p.axis) + key_shift;
     if (out.coarse)
       out.coarse[id] = static_cast<std::uint64_t>(iso_index) * points_per_iso + point_shift +
                        static_cast<std::uint64_t>(p.p0 + (p.t >= 0.5 ? s.stride[p.axis] : 0));
+  }
+};
+
+// The structured pass's point writer when gradient normals or curvature are
+// asked for: PointWriter's fields, the derivatives at each edge's ends
+// taken from the thread's DerivativeRows (computed once per grid point),
+// the position from GridLines. write_rows copies it for each task, whose
+// thread's rows it then holds: the row being written and the rows its y
+// and z edges end in.
+template <class T, bool Hessian>
+struct RowPointWriter {
+  using Rows = DerivativeRows<T, Hessian>;
+  const PointWriter<T>& write;
+  const GridLines& lines;
+  Id iso;
+  std::uint64_t pass;
+  Rows* rows = nullptr;
+  Id j = -1, k = -1;
+  typename Rows::Row here{}, next_y{}, next_z{};
+
+  [[gnu::always_inline]] void operator()(Id id, Id i, Id j_, Id k_, int axis) {
+    const EdgeInterpolator<T>& interp = write.interp;
+    const GridShape& s = interp.s;
+    if (j_ != j || k_ != k) {
+      if (!rows) rows = &Rows::of_this_thread(interp, pass);
+      j = j_, k = k_;
+      here = rows->row(j, k);
+      if (j + 1 < s.ny) next_y = rows->row(j + 1, k);
+      if (k + 1 < s.nz) next_z = rows->row(j, k + 1);
+    }
+    const auto p = interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso);
+    lines.position(p, write.out.xyz + 3 * id);
+    const double* const d0 = here.at(i);
+    const double* const d1 = axis == 0 ? here.at(i + 1) : (axis == 1 ? next_y : next_z).at(i);
+    EdgeEnds ends{{d0, d1}, {}};
+    if constexpr (Hessian) ends.h[0] = d0 + 3, ends.h[1] = d1 + 3;
+    write.fields(id, p, iso, ends);
   }
 };
 
@@ -284,37 +355,41 @@ class NearerFarEnd {
   std::array<std::uint64_t, kTabulated ? 1024 : 0> table_{};
 };
 
-// A coarse point's values: the mean of its crossings' values, each made by
-// PointWriter as the fine point would be (position, scalar, gradient
-// normal, curvature), summed in double from +0 in edge-key order, as
-// coarsen() averages a group; gradient normals renormalised, as coarsen()
-// does. A grid row's coarse points at a time (CoarseRow): each crossing is
-// computed once and added to its point's running sums, kept for the row in
-// the thread's scratch (the crossings come code by code, which is key order
-// for every point).
+// A coarse point's values: the mean of its crossings' values, each made as
+// PointWriter makes the fine point (position, scalar, gradient normal,
+// curvature), summed in double from +0 in edge-key order, as coarsen()
+// averages a group; gradient normals renormalised, as coarsen() does. A
+// grid row's coarse points at a time (CoarseRow): each crossing is computed
+// once and added to its point's running sums, kept for the row in the
+// thread's scratch (the crossings come code by code, which is key order for
+// every point).
 template <class T>
 struct CoarsePointWriter {
   PointWriter<T> out;  // the mesh's arrays, at coarse ids
   GridLines lines;
-  int at_scalar = 3, at_normal = 3, at_curvature = 3, values = 3;
+  std::uint64_t pass = new_derivative_pass();
 
-  explicit CoarsePointWriter(const PointWriter<T>& arrays) : out(arrays), lines(arrays.s) {
-    values = at_scalar + (out.out.scalar ? 1 : 0);
-    at_normal = values;
-    values += out.out.gradient_normal ? 3 : 0;
-    at_curvature = values;
-    values += out.out.curvature ? 1 : 0;
-  }
+  explicit CoarsePointWriter(const PointWriter<T>& arrays) : out(arrays), lines(arrays.s) {}
 
   // Step 7 (contour_coarse_rows.hpp) for one isovalue: its every coarse point
   // written at its id.
   void write_points(const InsideBits& bits, const CoarseBits& cb, Id iso) const {
-    if (!out.positions_and_scalar_only())
-      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) { all_fields(row, iso); });
-    else if (out.out.scalar)
-      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) { positions<true>(row, iso); });
-    else
-      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) { positions<false>(row, iso); });
+    auto rows = [&](auto scalar, auto normal, auto curvature) {
+      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) {
+        fields<decltype(scalar)::value, decltype(normal)::value, decltype(curvature)::value>(row, iso);
+      });
+    };
+    // The fields asked for, as template arguments.
+    auto with_curvature = [&](auto scalar, auto normal) {
+      if (out.out.curvature) rows(scalar, normal, std::true_type{});
+      else rows(scalar, normal, std::false_type{});
+    };
+    auto with_normal = [&](auto scalar) {
+      if (out.out.gradient_normal) with_curvature(scalar, std::true_type{});
+      else with_curvature(scalar, std::false_type{});
+    };
+    if (out.out.scalar) with_normal(std::true_type{});
+    else with_normal(std::false_type{});
   }
 
  private:
@@ -337,15 +412,19 @@ struct CoarsePointWriter {
     return interp.at(x.i + x.j * s.nx + x.k * s.nxy, x.i, x.j, x.k, A, iso);
   }
 
-  // Positions, with or without the scalar (the usual calls): the sums x, y,
-  // z (and the scalar) of all_fields', without a small array per crossing,
-  // and a count. A crossing's two coordinates off its axis are its point's
-  // own grid coordinates (GridLines, position()'s floats); only the one
-  // along its axis is computed.
-  template <bool Scalar>
-  void positions(const CoarseRow& row, Id iso) const {
-    // x, y, z, then the scalar (or not) and the count: aligned pairs.
-    constexpr int kPerPoint = Scalar ? 6 : 4, kCount = Scalar ? 4 : 3;
+  // The fields asked for, each a sum (x, y, z, then the scalar, the
+  // normal, the curvature) and a count, with no small array per crossing.
+  // A crossing's two coordinates off its axis are its point's own grid
+  // coordinates (GridLines, position()'s floats); only the one along its
+  // axis is computed. The derivatives at a crossing's ends come from the
+  // thread's DerivativeRows: a coarse point is one end of each of its
+  // crossings, and a grid point ends the crossings of up to three rows.
+  template <bool Scalar, bool Normal, bool Curvature>
+  void fields(const CoarseRow& row, Id iso) const {
+    constexpr int kScalar = 3, kNormal = kScalar + Scalar, kCurvature = kNormal + 3 * Normal;
+    constexpr int kCount = kCurvature + Curvature, kPerPoint = (kCount + 2) / 2 * 2;  // aligned pairs
+    constexpr bool kDerivatives = Normal || Curvature;
+    using Rows = DerivativeRows<T, Curvature>;
     double* const sum = zeroed_sums(out.s.nx, kPerPoint);
     // Local copies, which the stores into the sums cannot alias (the
     // grid's doubles and the samples' pointer would be loaded again
@@ -354,64 +433,69 @@ struct CoarsePointWriter {
     const GridShape& s = interp.s;
     const float* const gx = lines.line[0].data();
     const float gy = lines.line[1][row.j], gz = lines.line[2][row.k];
+    // The derivative rows a crossing of the row ends in: the row's own,
+    // and those above and below it along y and z (where it has crossings).
+    [[maybe_unused]] typename Rows::Row here{}, below_y{}, above_y{}, below_z{}, above_z{};
+    if constexpr (kDerivatives) {
+      Rows& rows = Rows::of_this_thread(interp, pass);
+      here = rows.row(row.j, row.k);
+      if (row.far.y_below) below_y = rows.row(row.j - 1, row.k);
+      if (row.cuts.next_y) above_y = rows.row(row.j + 1, row.k);
+      if (row.far.z_below) below_z = rows.row(row.j, row.k - 1);
+      if (row.cuts.next_z) above_z = rows.row(row.j, row.k + 1);
+    }
     row.for_each_crossing([&](Id i, const CoarseCrossing& x, auto axis) {
       constexpr int a = decltype(axis)::value;
       const auto p = crossing<a>(interp, x, iso);
       float xyz[3] = {gx[i], gy, gz};
       xyz[a] = grid_coordinate(s, a, p.ijk[a], p.t);
       // Every value made before the first store: 8-bit samples may alias
-      // anything stored, and would be read again for the scalar.
-      [[maybe_unused]] float v = 0;
+      // anything stored, and would be read again.
+      [[maybe_unused]] float v = 0, n[3] = {}, c = 0;
       if constexpr (Scalar) v = interp.scalar(p);
+      if constexpr (kDerivatives) {
+        // The crossing's first grid point and far end: along x both in the
+        // row; along y (z) the edge comes from the row below or leaves for
+        // the row above.
+        const double *d0, *d1;
+        if constexpr (a == 0) {
+          d0 = here.at(x.i), d1 = here.at(x.i + 1);
+        } else {
+          const bool from_below = a == 1 ? x.j != row.j : x.k != row.k;
+          const auto& below = a == 1 ? below_y : below_z;
+          const auto& above = a == 1 ? above_y : above_z;
+          d0 = (from_below ? below : here).at(x.i);
+          d1 = (from_below ? here : above).at(x.i);
+        }
+        if constexpr (Normal) interp.gradient_normal(p, d0, d1, n);
+        if constexpr (Curvature) c = interp.mean_curvature(p, d0, d0 + 3, d1, d1 + 3);
+      }
       double* const acc = sum + kPerPoint * i;
       acc[0] += as_stored(xyz[0]), acc[1] += as_stored(xyz[1]), acc[2] += as_stored(xyz[2]);
-      if constexpr (Scalar) acc[3] += as_stored(v);
+      if constexpr (Scalar) acc[kScalar] += as_stored(v);
+      if constexpr (Normal)
+        acc[kNormal] += as_stored(n[0]), acc[kNormal + 1] += as_stored(n[1]), acc[kNormal + 2] += as_stored(n[2]);
+      if constexpr (Curvature) acc[kCurvature] += as_stored(c);
       acc[kCount] += 1;
     });
     float* const xyz = out.out.xyz;
-    float* const scalar = out.out.scalar;
     row.for_each_point([&](Id i, std::uint32_t id) {
       double* const acc = sum + kPerPoint * i;
-      const double n = acc[kCount];
+      const double count = acc[kCount];
       float* const o = xyz + 3 * std::size_t{id};
-      o[0] = static_cast<float>(acc[0] / n), o[1] = static_cast<float>(acc[1] / n), o[2] = static_cast<float>(acc[2] / n);
-      if constexpr (Scalar) scalar[id] = static_cast<float>(acc[3] / n);
-      std::fill_n(acc, kPerPoint, 0.0);
-    });
-  }
-
-  // Every field (gradient normals, curvature: the calls positions() does
-  // not take), each crossing's made by PointWriter into a small array.
-  void all_fields(const CoarseRow& row, Id iso) const {
-    constexpr int kPerPoint = 10;  // up to 8 values, the count, unused: aligned pairs
-    double* const sum = zeroed_sums(out.s.nx, kPerPoint);
-    PointWriter<T> fine_writer = out;
-    // All eight summed, a fixed count the compiler unrolls: those no field
-    // writes stay 0 and are never read back.
-    float fine[8] = {};
-    fine_writer.out = PointArrays{fine, out.out.scalar ? fine + at_scalar : nullptr,
-                                  out.out.gradient_normal ? fine + at_normal : nullptr,
-                                  out.out.curvature ? fine + at_curvature : nullptr, nullptr, nullptr};
-    row.for_each_crossing([&](Id i, const CoarseCrossing& x, auto axis) {
-      fine_writer(0, crossing<decltype(axis)::value>(out.interp, x, iso), iso);
-      double* const acc = sum + kPerPoint * i;
-      for (int v = 0; v < 8; ++v) acc[v] += fine[v];
-      acc[8] += 1;
-    });
-    row.for_each_point([&](Id i, std::uint32_t id) {
-      double* const acc = sum + kPerPoint * i;
-      float mean[8];
-      for (int v = 0; v < values; ++v) mean[v] = static_cast<float>(acc[v] / acc[8]);
-      std::fill_n(acc, kPerPoint, 0.0);
-      for (int a = 0; a < 3; ++a) out.out.xyz[3 * std::size_t{id} + a] = mean[a];
-      if (out.out.scalar) out.out.scalar[id] = mean[at_scalar];
-      if (out.out.gradient_normal) {
-        float* v = mean + at_normal;
+      o[0] = static_cast<float>(acc[0] / count), o[1] = static_cast<float>(acc[1] / count),
+      o[2] = static_cast<float>(acc[2] / count);
+      if constexpr (Scalar) out.out.scalar[id] = static_cast<float>(acc[kScalar] / count);
+      if constexpr (Normal) {
+        // Renormalised in float, as coarsen() does its mean.
+        float v[3];
+        for (int a = 0; a < 3; ++a) v[a] = static_cast<float>(acc[kNormal + a] / count);
         const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
         for (int a = 0; a < 3; ++a) out.out.gradient_normal[3 * std::size_t{id} + a] = v[a];
       }
-      if (out.out.curvature) out.out.curvature[id] = mean[at_curvature];
+      if constexpr (Curvature) out.out.curvature[id] = static_cast<float>(acc[kCurvature] / count);
+      std::fill_n(acc, kPerPoint, 0.0);
     });
   }
 };
@@ -547,6 +631,43 @@ PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, co
   return prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true);
 }
 
+// The structured plan's pass over the rows of every isovalue (write_rows):
+// the triangles, and the points with the writer that fits the fields asked
+// for. Positions, with or without the scalar (the usual calls), get a
+// writer of their own, inlined into the pass: position() by grid lines, and
+// PointWriter's scalar(), so the same bytes; gradient normals and curvature
+// take the derivatives at grid points from DerivativeRows (RowPointWriter).
+template <class T>
+void write_triangles_and_points(const std::vector<InsideBits>& bits, const std::vector<RowCounts>& rows,
+                                const GridShape& s, Id kb, Id ke, const EdgeInterpolator<T>& interp,
+                                const PointWriter<T>& write, PointIndex* connectivity) {
+  const Id n_iso = static_cast<Id>(bits.size());
+  auto pass = [&](auto&& write_point) {
+    for (Id iso = 0; iso < n_iso; ++iso)
+      write_rows(bits[iso], s, kb, ke, rows[iso], connectivity, [&](Id id, Id i, Id j, Id k, int axis) {
+        write_point(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
+      });
+  };
+  const GridLines lines(s);
+  auto inlined = [&](auto with_scalar) {
+    pass([&](Id id, const typename EdgeInterpolator<T>::Point& p, Id) {
+      lines.position(p, write.out.xyz + 3 * id);
+      if constexpr (decltype(with_scalar)::value) write.out.scalar[id] = interp.scalar(p);
+    });
+  };
+  auto by_rows = [&](auto hessian) {
+    const std::uint64_t pass_id = new_derivative_pass();
+    for (Id iso = 0; iso < n_iso; ++iso)
+      write_rows(bits[iso], s, kb, ke, rows[iso], connectivity,
+                 RowPointWriter<T, decltype(hessian)::value>{write, lines, iso, pass_id});
+  };
+  if (write.out.curvature) by_rows(std::true_type{});
+  else if (write.needs_derivatives()) by_rows(std::false_type{});
+  else if (!write.positions_and_scalar_only()) pass(write);
+  else if (write.out.scalar) inlined(std::true_type{});
+  else inlined(std::false_type{});
+}
+
 // The structured plan (contour_rows.hpp): classify every isovalue, count and
 // scan rows, then write points and triangles at their final ids. No soup.
 template <class T>
@@ -614,25 +735,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
   const PointWriter<T> write =
       structured_outputs(mesh, points, triangles, grid, interp, s, opt, point_keys, nearest_keys, connectivity);
   // Triangles and points in one pass over the rows (st.generate holds both).
-  // Positions, with or without the scalar (the usual calls), get a writer
-  // of their own, inlined into the pass: position() by grid lines, and
-  // PointWriter's scalar(), so the same bytes.
-  auto pass = [&](auto&& write_point) {
-    for (Id iso = 0; iso < n_iso; ++iso)
-      write_rows(bits[iso], s, kb, ke, rows[iso], connectivity, [&](Id id, Id i, Id j, Id k, int axis) {
-        write_point(id, interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso), iso);
-      });
-  };
-  const GridLines lines(s);
-  auto inlined = [&](auto with_scalar) {
-    pass([&](Id id, const typename EdgeInterpolator<T>::Point& p, Id) {
-      lines.position(p, write.out.xyz + 3 * id);
-      if constexpr (decltype(with_scalar)::value) write.out.scalar[id] = interp.scalar(p);
-    });
-  };
-  if (!write.positions_and_scalar_only()) pass(write);
-  else if (write.out.scalar) inlined(std::true_type{});
-  else inlined(std::false_type{});
+  write_triangles_and_points(bits, rows, s, kb, ke, interp, write, connectivity);
   st.generate += seconds_since(t0);
   finish_contour<std::uint32_t>(mesh, opt, nullptr, blocks, nullptr, 0, st);
   return mesh;

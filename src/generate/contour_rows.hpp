@@ -232,16 +232,18 @@ inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke,
 // top plane). The points of a grid row are emitted while its ids are
 // filled, by the one brick that owns the row (its planes but the top one,
 // unless the top is plane ke; its rows but the last, unless that is row
-// ny - 1), so no row is read again for its points.
+// ny - 1), so no row is read again for its points. Each task calls its own
+// copy of `emit`, which may thus keep what it learns about the task's rows.
 template <class Emit>
 void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc,
-                PointIndex* connectivity, Emit&& emit) {
+                PointIndex* connectivity, const Emit& emit_points) {
   const auto& table = marching_cubes_table();
   const VoxelBricks bricks(s, kb, ke);
   constexpr Id kRun = VoxelBricks::kRun;
   parallel::for_each_dynamic(bricks.count(), [&](Id task) {
     const Id k_begin = bricks.k_begin(task), k_end = bricks.k_end(task);
     const Id j_begin = bricks.j_begin(task), j_end = bricks.j_end(task);
+    Emit emit = emit_points;
     // The cases of the brick's cut voxels, in the order it visits them.
     const std::uint8_t* cases = rc.brick_cases[task].cases.data();
     auto stored_case = [&](int, const CornerWords&) { return unsigned{*cases++}; };

@@ -59,6 +59,10 @@ struct EdgeInterpolator {
   const double* isovalues;
   Id keys_per_iso;  // 3N
 
+  // Whole-number samples of 32 bits or less: a difference (or a sum of a
+  // few) of their doubles is exact, hence equal to the integers' converted.
+  static constexpr bool kSmallIntegers = std::is_integral_v<T> && sizeof(T) <= 4;
+
   struct Point {
     Id p0;       // the edge's first grid point
     Id ijk[3];   // its grid coordinates
@@ -129,20 +133,89 @@ struct EdgeInterpolator {
 
   // Central-difference gradient at grid point `id` = (i, j, k), one-sided at the border.
   KEYMESH_HD void gradient_at(Id id, const Id ijk[3], double g[3]) const {
-    const Id dims[3] = {s.nx, s.ny, s.nz};
-    for (int a = 0; a < 3; ++a) {
-      const bool has_lo = ijk[a] > 0, has_hi = ijk[a] + 1 < dims[a];
-      const Id lo = has_lo ? id - s.stride[a] : id;
-      const Id hi = has_hi ? id + s.stride[a] : id;
-      const double span = static_cast<double>(int(has_lo) + int(has_hi)) * s.spacing[a];
-      const double dv = static_cast<double>(samples[hi]) - static_cast<double>(samples[lo]);
-      g[a] = span > 0 && std::isfinite(dv) ? dv / span : 0.0;
-    }
+    if (interior(ijk)) interior_gradient(id, g);
+    else border_gradient(id, ijk, g);
   }
 
   // Gradient and Hessian (xx, yy, zz, xy, xz, yz) at grid point `id`, by
   // central differences with indices clamped at the border.
   KEYMESH_HD void derivatives_at(Id id, const Id ijk[3], double g[3], double h[6]) const {
+    if (interior(ijk)) interior_derivatives(id, g, h);
+    else border_derivatives(id, ijk, g, h);
+  }
+
+  // Whether grid point (i, j, k) has both neighbours along every axis
+  // (almost every point): its derivatives need no border test.
+  KEYMESH_HD bool interior(const Id ijk[3]) const {
+    return ijk[0] > 0 && ijk[0] + 1 < s.nx && ijk[1] > 0 && ijk[1] + 1 < s.ny && ijk[2] > 0 && ijk[2] + 1 < s.nz;
+  }
+
+  // gradient_at of an interior point: the spans border_gradient computes
+  // for two neighbours, without its tests.
+  KEYMESH_HD void interior_gradient(Id id, double g[3]) const {
+    for (int a = 0; a < 3; ++a) g[a] = slope(id - s.stride[a], id + s.stride[a], 2.0 * s.spacing[a]);
+  }
+
+  KEYMESH_HD void border_gradient(Id id, const Id ijk[3], double g[3]) const {
+    const Id dims[3] = {s.nx, s.ny, s.nz};
+    for (int a = 0; a < 3; ++a) {
+      const bool has_lo = ijk[a] > 0, has_hi = ijk[a] + 1 < dims[a];
+      const Id lo = has_lo ? id - s.stride[a] : id;
+      const Id hi = has_hi ? id + s.stride[a] : id;
+      g[a] = slope(lo, hi, static_cast<double>(int(has_lo) + int(has_hi)) * s.spacing[a]);
+    }
+  }
+
+  // (samples[hi] - samples[lo]) / span, 0 where that is no finite slope.
+  KEYMESH_HD double slope(Id lo, Id hi, double span) const {
+    double dv;
+    if constexpr (kSmallIntegers)
+      dv = static_cast<double>(static_cast<std::int64_t>(samples[hi]) - static_cast<std::int64_t>(samples[lo]));
+    else
+      dv = static_cast<double>(samples[hi]) - static_cast<double>(samples[lo]);
+    return span > 0 && (std::is_integral_v<T> || std::isfinite(dv)) ? dv / span : 0.0;
+  }
+
+  // derivatives_at of an interior point: every neighbour there, no index
+  // to clamp. For samples of 32 bits or less, whole numbers: the sums of
+  // border_derivatives are exact in double (below 2^53), so they are made
+  // in integers and converted once.
+  KEYMESH_HD void interior_derivatives(Id id, double g[3], double h[6]) const {
+    interior_gradient(id, g);
+    const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+    if constexpr (kSmallIntegers) {
+      auto v = [&](Id q) { return static_cast<std::int64_t>(samples[q]); };
+      const std::int64_t f0 = v(id);
+      for (int a = 0; a < 3; ++a) {
+        const Id d = s.stride[a];
+        h[a] = static_cast<double>(v(id + d) - 2 * f0 + v(id - d)) / (s.spacing[a] * s.spacing[a]);
+      }
+      for (int k = 0; k < 3; ++k) {
+        const int a = pairs[k][0], b = pairs[k][1];
+        const Id da = s.stride[a], db = s.stride[b];
+        h[3 + k] = static_cast<double>(v(id + da + db) - v(id + da - db) - v(id - da + db) + v(id - da - db)) /
+                   (4 * s.spacing[a] * s.spacing[b]);
+      }
+    } else {
+      const double f0 = static_cast<double>(samples[id]);
+      auto v = [&](Id q) {
+        const double x = static_cast<double>(samples[q]);
+        return std::isfinite(x) ? x : f0;
+      };
+      for (int a = 0; a < 3; ++a) {
+        const Id d = s.stride[a];
+        h[a] = (v(id + d) - 2 * f0 + v(id - d)) / (s.spacing[a] * s.spacing[a]);
+      }
+      for (int k = 0; k < 3; ++k) {
+        const int a = pairs[k][0], b = pairs[k][1];
+        const Id da = s.stride[a], db = s.stride[b];
+        h[3 + k] = (v(id + da + db) - v(id + da - db) - v(id - da + db) + v(id - da - db)) /
+                   (4 * s.spacing[a] * s.spacing[b]);
+      }
+    }
+  }
+
+  KEYMESH_HD void border_derivatives(Id id, const Id ijk[3], double g[3], double h[6]) const {
     const Id dims[3] = {s.nx, s.ny, s.nz};
     auto at = [&](int da, int db, int a, int b) {
       Id q = id;
@@ -157,7 +230,7 @@ struct EdgeInterpolator {
       return std::isfinite(v) ? v : static_cast<double>(samples[id]);
     };
     const double f0 = static_cast<double>(samples[id]);
-    gradient_at(id, ijk, g);
+    border_gradient(id, ijk, g);
     for (int a = 0; a < 3; ++a) h[a] = (at(1, 0, a, a) - 2 * f0 + at(-1, 0, a, a)) / (s.spacing[a] * s.spacing[a]);
     const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
     for (int k = 0; k < 3; ++k) {
@@ -167,13 +240,24 @@ struct EdgeInterpolator {
     }
   }
 
+  // The grid point at the edge's far end (its first is p.p0).
+  KEYMESH_HD Id far_end(const Point& p) const { return p.p0 + s.stride[p.axis]; }
+
   // Mean curvature at the point: (|g|^2 tr H - g^T H g) / (2 |g|^3).
   KEYMESH_HD float mean_curvature(const Point& p) const {
     double g0[3], g1[3], h0[6], h1[6];
     Id ijk1[3] = {p.ijk[0], p.ijk[1], p.ijk[2]};
     ++ijk1[p.axis];
     derivatives_at(p.p0, p.ijk, g0, h0);
-    derivatives_at(p.p0 + s.stride[p.axis], ijk1, g1, h1);
+    derivatives_at(far_end(p), ijk1, g1, h1);
+    return mean_curvature(p, g0, h0, g1, h1);
+  }
+
+  // The same from the derivatives_at of the edge's two ends (g0, h0 at
+  // p.p0, g1, h1 at far_end(p)), which the structured plan computes once
+  // per grid point for all the edges that end there.
+  KEYMESH_HD float mean_curvature(const Point& p, const double* g0, const double* h0, const double* g1,
+                                  const double* h1) const {
     double g[3], h[6];
     for (int a = 0; a < 3; ++a) g[a] = g0[a] + p.t * (g1[a] - g0[a]);
     for (int a = 0; a < 6; ++a) h[a] = h0[a] + p.t * (h1[a] - h0[a]);
@@ -192,7 +276,13 @@ struct EdgeInterpolator {
     Id ijk1[3] = {p.ijk[0], p.ijk[1], p.ijk[2]};
     ++ijk1[p.axis];
     gradient_at(p.p0, p.ijk, g0);
-    gradient_at(p.p0 + s.stride[p.axis], ijk1, g1);
+    gradient_at(far_end(p), ijk1, g1);
+    gradient_normal(p, g0, g1, n);
+  }
+
+  // The same from the gradient_at of the edge's two ends (g0 at p.p0, g1
+  // at far_end(p)).
+  KEYMESH_HD void gradient_normal(const Point& p, const double* g0, const double* g1, float* n) const {
     double g[3], len2 = 0;
     for (int a = 0; a < 3; ++a) {
       g[a] = -(g0[a] + p.t * (g1[a] - g0[a]));

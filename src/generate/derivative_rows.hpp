@@ -1,0 +1,117 @@
+#pragma once
+// The central-difference derivatives at grid points (EdgeInterpolator's
+// gradient_at, or derivatives_at when curvature is asked for), each computed
+// once for all the cut edges that end at the point instead of once per edge
+// end. A grid point ends up to six cut edges: ch2better at iso 90.5 has
+// 3.71 M edge ends on 2.07 M distinct grid points, and on the coarse path a
+// coarse point is one end of each of its crossings.
+//
+// A thread's cache of grid rows, direct-mapped: row (j, k) lives in slot
+// (k mod 3, j mod 18) with the tag (j, k), and each point of a slot has a
+// bit saying whether its derivatives were computed. The structured passes
+// walk bricks of 16 rows by a few planes and read the rows around the row
+// they write (j - 1 .. j + 1, k - 1 .. k + 1); those rows never share a
+// slot, and a brick's rows of the plane above, filled while the plane below
+// is written, are still there when their turn comes. The values are those
+// gradient_at / derivatives_at return (the same function, the same bits),
+// whichever edge asked first.
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <vector>
+
+#include "keymesh/core/types.hpp"
+#include "keymesh/core/uninitialized_array.hpp"
+#include "keymesh/generate/contour_kernels.hpp"
+
+namespace keymesh::generate {
+
+// A number no other pass over a grid's points has: a thread's
+// DerivativeRows drops what it holds when it meets a new one (other
+// samples, or another grid).
+inline std::uint64_t new_derivative_pass() {
+  static std::atomic<std::uint64_t> passes{0};
+  return passes.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
+template <class T, bool Hessian>
+class DerivativeRows {
+ public:
+  // Per grid point: the gradient, then (with Hessian) derivatives_at's six
+  // second derivatives.
+  static constexpr int kValues = Hessian ? 9 : 3;
+
+  // One grid row's slot: at(i) is the derivatives at point (i, j, k).
+  class Row {
+   public:
+    Row() = default;
+    Row(const EdgeInterpolator<T>* interp, std::uint64_t* computed, double* values, Id j, Id k)
+        : interp_(interp), computed_(computed), values_(values), first_(j * interp->s.nx + k * interp->s.nxy), j_(j),
+          k_(k) {}
+
+    [[gnu::always_inline]] const double* at(Id i) const {
+      double* const v = values_ + kValues * i;
+      std::uint64_t& word = computed_[i >> 6];
+      const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+      if (!(word & bit)) {
+        word |= bit;
+        const Id ijk[3] = {i, j_, k_};
+        if constexpr (Hessian) interp_->derivatives_at(first_ + i, ijk, v, v + 3);
+        else interp_->gradient_at(first_ + i, ijk, v);
+      }
+      return v;
+    }
+
+   private:
+    const EdgeInterpolator<T>* interp_ = nullptr;
+    std::uint64_t* computed_ = nullptr;
+    double* values_ = nullptr;
+    Id first_ = 0, j_ = 0, k_ = 0;
+  };
+
+  // The calling thread's cache, for `interp` (the same samples and grid
+  // throughout pass `pass`; its rows computed through this copy) in pass
+  // `pass`.
+  static DerivativeRows& of_this_thread(const EdgeInterpolator<T>& interp, std::uint64_t pass) {
+    thread_local DerivativeRows rows;
+    if (rows.pass_ != pass) rows.start(interp, pass);
+    rows.interp_ = &interp;
+    return rows;
+  }
+
+  // Row (j, k) of the grid.
+  Row row(Id j, Id k) {
+    const std::size_t slot = static_cast<std::size_t>((k % kPlanes) * kRows + j % kRows);
+    std::uint64_t* const computed = computed_.data() + slot * words_;
+    if (tag_[slot].j != j || tag_[slot].k != k) {
+      tag_[slot] = {j, k};
+      std::fill_n(computed, words_, 0);
+    }
+    return Row(interp_, computed, values_.data() + slot * kValues * nx_, j, k);
+  }
+
+ private:
+  static constexpr Id kPlanes = 3, kRows = 18;
+  struct Tag {
+    Id j = -1, k = -1;
+  };
+
+  void start(const EdgeInterpolator<T>& interp, std::uint64_t pass) {
+    pass_ = pass;
+    nx_ = interp.s.nx;
+    words_ = static_cast<std::size_t>((nx_ + 63) / 64);
+    tag_.assign(static_cast<std::size_t>(kPlanes * kRows), Tag{});
+    computed_.resize(static_cast<std::size_t>(kPlanes * kRows) * words_);
+    values_.room_for(static_cast<std::size_t>(kPlanes * kRows * kValues * nx_));
+  }
+
+  std::uint64_t pass_ = 0;
+  const EdgeInterpolator<T>* interp_ = nullptr;
+  Id nx_ = 0;
+  std::size_t words_ = 0;
+  std::vector<Tag> tag_;
+  std::vector<std::uint64_t> computed_;
+  KeptArray<double> values_;
+};
+
+}  // namespace keymesh::generate
