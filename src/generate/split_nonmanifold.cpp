@@ -385,56 +385,69 @@ struct FanCache {
     for (const auto& keys : found_by) found.insert(found.end(), keys.begin(), keys.end());
   }
   std::uint32_t* labels(std::size_t k) { return labels_.data() + f.first[k]; }
-  void refresh(std::uint64_t key) {
-    for (PointIndex p : {static_cast<PointIndex>(key >> 32), static_cast<PointIndex>(key & 0xffffffffu)}) {
-      const std::size_t k = f.at(p);
-      fans(p, f.ends(k), labels(k), nullptr);
+  void refresh(std::size_t k) { fans(f.point[k], f.ends(k), labels(k), nullptr); }
+};
+
+// The edges with two pairs or more (`multi`, by key) as the sweeps read
+// them: their ends' places among the flagged points, and the triangles
+// running up each (lo's corners leaving for hi and hi's arriving from lo:
+// the same triangles in the same order), found once a round.
+struct MultiEdges {
+  std::vector<std::uint32_t> lo, hi;     // by edge: its ends' flagged indices
+  std::vector<std::uint32_t> first{0};   // edge e's triangles up: [first[e], first[e + 1])
+  std::vector<std::uint32_t> at_lo, at_hi;
+
+  MultiEdges(const Flagged& f, const std::vector<std::uint64_t>& multi) {
+    std::vector<std::uint32_t> up;
+    for (std::uint64_t key : multi) {
+      const PointIndex p = static_cast<PointIndex>(key >> 32), q = static_cast<PointIndex>(key & 0xffffffffu);
+      const std::size_t a = f.at(p), b = f.at(q);
+      lo.push_back(static_cast<std::uint32_t>(a)), hi.push_back(static_cast<std::uint32_t>(b));
+      half_edges(f.ends(a).to, f.degree(a), q, up);
+      at_lo.insert(at_lo.end(), up.begin(), up.end());
+      half_edges(f.ends(b).from, f.degree(b), p, up);
+      at_hi.insert(at_hi.end(), up.begin(), up.end());
+      first.push_back(static_cast<std::uint32_t>(at_lo.size()));
     }
   }
+  std::uint32_t pairs(std::size_t e) const { return first[e + 1] - first[e]; }
 
-  // Whether the edge's pairs join the same fan at both ends twice.
-  bool joins_twice(std::uint64_t key) {
-    const PointIndex lo = static_cast<PointIndex>(key >> 32), hi = static_cast<PointIndex>(key & 0xffffffffu);
-    const std::size_t a = f.at(lo), b = f.at(hi);
-    half_edges(f.ends(a).to, f.degree(a), hi, up_lo);
-    half_edges(f.ends(b).from, f.degree(b), lo, up_hi);
-    ends.resize(up_lo.size());
-    for (std::size_t i = 0; i < up_lo.size(); ++i)
-      ends[i] = (std::uint64_t{labels(a)[up_lo[i]]} << 32) | labels(b)[up_hi[i]];
+  // Whether edge e's pairs join the same fan at both ends twice.
+  bool joins_twice(FanCache& cache, std::size_t e) {
+    const std::uint32_t *fans_lo = cache.labels(lo[e]), *fans_hi = cache.labels(hi[e]);
+    ends.clear();
+    for (std::uint32_t i = first[e]; i < first[e + 1]; ++i)
+      ends.push_back((std::uint64_t{fans_lo[at_lo[i]]} << 32) | fans_hi[at_hi[i]]);
     std::sort(ends.begin(), ends.end());
     return std::adjacent_find(ends.begin(), ends.end()) != ends.end();
   }
 
  private:
-  std::vector<std::uint32_t> up_lo, up_hi;
   std::vector<std::uint64_t> ends;
 };
 
 // Sweeps over the multi-edges in key order: a conflicted edge takes the
 // first rotation that separates its pairs. Returns the edges left joined.
-Id rotate_pairings(FanCache& cache, std::vector<std::uint32_t>& rotation) {
-  const std::vector<std::uint64_t>& multi = cache.fans.multi;
-  std::vector<std::uint32_t> up;
+Id rotate_pairings(FanCache& cache, MultiEdges& edges, std::vector<std::uint32_t>& rotation) {
+  auto refresh = [&](std::size_t e) { cache.refresh(edges.lo[e]), cache.refresh(edges.hi[e]); };
   for (int sweep = 0; sweep < 4; ++sweep) {
     bool changed = false;
-    for (std::size_t e = 0; e < multi.size(); ++e) {
-      if (!cache.joins_twice(multi[e])) continue;
-      const std::size_t a = cache.f.at(static_cast<PointIndex>(multi[e] >> 32));
-      half_edges(cache.f.ends(a).to, cache.f.degree(a), static_cast<PointIndex>(multi[e] & 0xffffffffu), up);
-      const std::uint32_t pairs = static_cast<std::uint32_t>(up.size()), was = rotation[e];
+    for (std::size_t e = 0; e < rotation.size(); ++e) {
+      if (!edges.joins_twice(cache, e)) continue;
+      const std::uint32_t pairs = edges.pairs(e), was = rotation[e];
       for (std::uint32_t r = 1; r < pairs; ++r) {
         rotation[e] = (was + r) % pairs;
-        cache.refresh(multi[e]);
-        if (!cache.joins_twice(multi[e])) break;
+        refresh(e);
+        if (!edges.joins_twice(cache, e)) break;
         rotation[e] = was;
-        cache.refresh(multi[e]);
+        refresh(e);
       }
       changed = changed || rotation[e] != was;
     }
     if (!changed) break;
   }
   Id left = 0;
-  for (std::uint64_t key : multi) left += cache.joins_twice(key) ? 1 : 0;
+  for (std::size_t e = 0; e < rotation.size(); ++e) left += edges.joins_twice(cache, e) ? 1 : 0;
   return left;
 }
 
@@ -460,7 +473,8 @@ Id split_round(PointIndex* C, Id n, Flagged& f, std::vector<PointIndex>& source,
     return !flagged(static_cast<PointIndex>(key >> 32)) || !flagged(static_cast<PointIndex>(key & 0xffffffffu));
   });
   rotation.assign(multi.size(), 0);
-  const Id left = rotate_pairings(cache, rotation);
+  MultiEdges edges(f, multi);
+  const Id left = rotate_pairings(cache, edges, rotation);
   std::vector<std::pair<std::uint32_t, PointIndex>> moves;  // corner, new id
   std::vector<PointIndex> id_of_root;
   Flagged copies;
