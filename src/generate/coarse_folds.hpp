@@ -128,36 +128,35 @@ struct FoldEntry {
 inline void fold_across_faces(std::size_t positions, FaceTriangle* own, std::size_t n_own, bool j_first, bool k_first,
                               FaceTriangle* next_y, std::size_t n_next_y, FaceTriangle* next_z, std::size_t n_next_z,
                               std::vector<FoldEntry>& entries) {
-  entries.clear();
   // key: ((face position along the row * 3 + axis) * 2 + upper) * 4 + missing corner
   auto key = [](std::uint64_t position, unsigned axis, unsigned upper, unsigned code) {
     return ((position * 3 + axis) * 2 + upper) * 4 + ((code >> 3) & 3u);
   };
-  for (std::size_t e = 0; e < n_own; ++e) {
-    FaceTriangle& f = own[e];
-    const unsigned axis = f.code & 3u, side = (f.code >> 2) & 1u;
-    const bool positive = (f.code >> 5) & 1u;
-    std::uint64_t k = 0;
-    if (axis == 0) k = key(std::uint64_t{f.i} + side, 0, 0, f.code);
-    else if (side == 1) k = key(f.i, axis, 1, f.code);
-    else if (axis == 1 ? j_first : k_first) k = key(f.i, axis, 0, f.code);
-    else continue;  // owned by the row below
-    entries.push_back({k, 0, f.tri, positive, &f});
-  }
-  auto add_next = [&](FaceTriangle* next, std::size_t n, unsigned axis) {
-    for (std::size_t e = 0; e < n; ++e) {
-      FaceTriangle& f = next[e];
-      if ((f.code & 3u) != axis || ((f.code >> 2) & 1u) != 0) continue;
-      entries.push_back({key(f.i, axis, 1, f.code), 1, f.tri, ((f.code >> 5) & 1u) != 0, &f});
+  // Calls visit(key, row, face) for every face triangle of a face this row
+  // owns, in mesh order (this row's, then the next rows').
+  auto for_each_owned = [&](auto&& visit) {
+    for (std::size_t e = 0; e < n_own; ++e) {
+      FaceTriangle& f = own[e];
+      const unsigned axis = f.code & 3u, side = (f.code >> 2) & 1u;
+      if (axis == 0) visit(key(std::uint64_t{f.i} + side, 0, 0, f.code), 0u, f);
+      else if (side == 1) visit(key(f.i, axis, 1, f.code), 0u, f);
+      else if (axis == 1 ? j_first : k_first) visit(key(f.i, axis, 0, f.code), 0u, f);
+      // else: owned by the row below
     }
+    auto next = [&](FaceTriangle* rows, std::size_t n, unsigned axis) {
+      for (std::size_t e = 0; e < n; ++e) {
+        FaceTriangle& f = rows[e];
+        if ((f.code & 3u) == axis && ((f.code >> 2) & 1u) == 0) visit(key(f.i, axis, 1, f.code), 1u, f);
+      }
+    };
+    next(next_y, n_next_y, 1);
+    next(next_z, n_next_z, 2);
   };
-  add_next(next_y, n_next_y, 1);
-  add_next(next_z, n_next_z, 2);
-  if (entries.size() < 2) return;
   // Most face triangles share their face with no other: the keys that occur
-  // more than once are found by direct addressing (a key names a face
-  // position along the row: below 24 * positions), the slots stamped with
-  // the call instead of cleared, and only their entries sorted and decided.
+  // more than once are found by direct addressing first (a key names a face
+  // position along the row: below 24 * positions; the slots stamped with
+  // the call instead of cleared), with no entry built; only a row with such
+  // keys lists their triangles, sorts and decides them.
   struct Seen {
     std::uint32_t call = 0, count = 0;
   };
@@ -166,16 +165,16 @@ inline void fold_across_faces(std::size_t positions, FaceTriangle* own, std::siz
   if (seen.size() < 24 * positions) seen.resize(24 * positions);  // new slots belong to no call
   if (++call == 0) std::fill(seen.begin(), seen.end(), Seen{}), call = 1;
   bool any = false;
-  for (const FoldEntry& e : entries) {
-    Seen& slot = seen[e.key];
+  for_each_owned([&](std::uint64_t k, unsigned, FaceTriangle&) {
+    Seen& slot = seen[k];
     if (slot.call == call) ++slot.count, any = true;
     else slot = {call, 1};
-  }
+  });
   if (!any) return;
-  std::size_t n = 0;
-  for (const FoldEntry& e : entries)
-    if (seen[e.key].count > 1) entries[n++] = e;
-  entries.resize(n);
+  entries.clear();
+  for_each_owned([&](std::uint64_t k, unsigned row, FaceTriangle& f) {
+    if (seen[k].count > 1) entries.push_back({k, row, f.tri, ((f.code >> 5) & 1u) != 0, &f});
+  });
   std::sort(entries.begin(), entries.end(), [](const FoldEntry& a, const FoldEntry& b) {
     return a.key != b.key ? a.key < b.key : a.row != b.row ? a.row < b.row : a.tri < b.tri;
   });
