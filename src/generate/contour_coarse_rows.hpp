@@ -573,14 +573,17 @@ inline void write_coarse_triangles(const GridShape& s, const CoarseBits& cb, con
       const int hi = lo ^ 1;
       for (Id j = j_begin; j < j_begin + rows_j; ++j) cb.row_ids((k + 1) * s.ny + j, ids_of(hi, j));
       for (Id j = j_begin; j < bricks.j_end(brick); ++j) {
-        // The voxel row's corner rows, by corner bits y | z << 1.
-        const std::uint32_t* row_ids[4] = {ids_of(lo, j), ids_of(lo, j + 1), ids_of(hi, j), ids_of(hi, j + 1)};
+        // Corner c (x | y << 1 | z << 2) of voxel i is grid point i + (c & 1)
+        // of corner row c >> 1 (rows by y | z << 1): its id at ids[i +
+        // offset[c]], offsets from the voxel row's first corner row.
+        const std::uint32_t* const ids = ids_of(lo, j);
+        const Id dz = ids_of(hi, j) - ids;
+        const Id offset[8] = {0, 1, s.nx, s.nx + 1, dz, dz + 1, dz + s.nx, dz + s.nx + 1};
         const Id vr = k * (s.ny - 1) + j;
         PointIndex* o = connectivity + 3 * ct.first[vr];
-        // Triangle corners c0 | c1 << 3 | c2 << 6 of voxel i as coarse ids:
-        // corner c is grid point i + (c & 1) of corner row c >> 1.
+        // Triangle corners c0 | c1 << 3 | c2 << 6 of voxel i as coarse ids.
         auto write = [&](Id i, unsigned c) {
-          auto id = [&](unsigned corner) { return row_ids[corner >> 1][i + (corner & 1u)]; };
+          auto id = [&](unsigned corner) { return ids[i + offset[corner]]; };
           o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
           o += 3;
         };
