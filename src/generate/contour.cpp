@@ -194,11 +194,15 @@ struct PointWriter {
   }
 
   // Every field but the position, from the derivatives at the edge's ends
-  // (derivatives_at's gradient is gradient_at's: the same bits either way).
-  void fields(Id id, const typename EdgeInterpolator<T>::Point& p, Id iso_index, const EdgeEnds& ends) const {
+  // (derivatives_at's gradient is gradient_at's: the same bits either way);
+  // with Hessians false, the caller has none (and no curvature to write).
+  template <bool Hessians = true>
+  [[gnu::always_inline]] void fields(Id id, const typename EdgeInterpolator<T>::Point& p, Id iso_index,
+                                     const EdgeEnds& ends) const {
     if (out.scalar) out.scalar[id] = interp.scalar(p);
     if (out.gradient_normal) interp.gradient_normal(p, ends.g[0], ends.g[1], out.gradient_normal + 3 * id);
-    if (out.curvature) out.curvature[id] = interp.mean_curvature(p, ends.g[0], ends.h[0], ends.g[1], ends.h[1]);
+    if constexpr (Hessians)
+      if (out.curvature) out.curvature[id] = interp.mean_curvature(p, ends.g[0], ends.h[0], ends.g[1], ends.h[1]);
     if (out.key)
       out.key[id] = static_cast<std::uint64_t>(iso_index) * total_per_iso + 3 * static_cast<std::uint64_t>(p.p0) +
                     static_cast<std::uint64_t>(p.axis) + key_shift;
@@ -241,7 +245,7 @@ struct RowPointWriter {
     const double* const d1 = axis == 0 ? here.at(i + 1) : (axis == 1 ? next_y : next_z).at(i);
     EdgeEnds ends{{d0, d1}, {}};
     if constexpr (Hessian) ends.h[0] = d0 + 3, ends.h[1] = d1 + 3;
-    write.fields(id, p, iso, ends);
+    write.template fields<Hessian>(id, p, iso, ends);
   }
 };
 
@@ -444,7 +448,7 @@ struct CoarsePointWriter {
       if (row.far.z_below) below_z = rows.row(row.j, row.k - 1);
       if (row.cuts.next_z) above_z = rows.row(row.j, row.k + 1);
     }
-    row.for_each_crossing([&](Id i, const CoarseCrossing& x, auto axis) {
+    row.for_each_crossing([&](Id i, const CoarseCrossing& x, auto axis) __attribute__((always_inline)) {
       constexpr int a = decltype(axis)::value;
       const auto p = crossing<a>(interp, x, iso);
       float xyz[3] = {gx[i], gy, gz};

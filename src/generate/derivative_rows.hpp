@@ -47,7 +47,10 @@ class DerivativeRows {
     Row() = default;
     Row(const EdgeInterpolator<T>* interp, std::uint64_t* computed, double* values, Id j, Id k)
         : interp_(interp), computed_(computed), values_(values), first_(j * interp->s.nx + k * interp->s.nxy), j_(j),
-          k_(k) {}
+          k_(k), last_i_(interp->s.nx - 1) {
+      const Id jk[3] = {1, j, k};
+      interior_row_ = interp->interior(jk);
+    }
 
     [[gnu::always_inline]] const double* at(Id i) const {
       double* const v = values_ + kValues * i;
@@ -55,9 +58,16 @@ class DerivativeRows {
       const std::uint64_t bit = std::uint64_t{1} << (i & 63);
       if (!(word & bit)) {
         word |= bit;
-        const Id ijk[3] = {i, j_, k_};
-        if constexpr (Hessian) interp_->derivatives_at(first_ + i, ijk, v, v + 3);
-        else interp_->gradient_at(first_ + i, ijk, v);
+        // gradient_at / derivatives_at, their interior test made per row
+        // but for i.
+        if (interior_row_ && i > 0 && i < last_i_) {
+          if constexpr (Hessian) interp_->interior_derivatives(first_ + i, v, v + 3);
+          else interp_->interior_gradient(first_ + i, v);
+        } else {
+          const Id ijk[3] = {i, j_, k_};
+          if constexpr (Hessian) interp_->border_derivatives(first_ + i, ijk, v, v + 3);
+          else interp_->border_gradient(first_ + i, ijk, v);
+        }
       }
       return v;
     }
@@ -66,7 +76,8 @@ class DerivativeRows {
     const EdgeInterpolator<T>* interp_ = nullptr;
     std::uint64_t* computed_ = nullptr;
     double* values_ = nullptr;
-    Id first_ = 0, j_ = 0, k_ = 0;
+    Id first_ = 0, j_ = 0, k_ = 0, last_i_ = 0;
+    bool interior_row_ = false;
   };
 
   // The calling thread's cache, for `interp` (the same samples and grid

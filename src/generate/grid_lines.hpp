@@ -36,7 +36,7 @@ struct GridLines {
   }
 
   template <class Point>
-  void position(const Point& p, float* xyz) const {
+  [[gnu::always_inline]] void position(const Point& p, float* xyz) const {
     for (int a = 0; a < 3; ++a) xyz[a] = line[a][p.ijk[a]];
     xyz[p.axis] = grid_coordinate(s, p.axis, p.ijk[p.axis], p.t);
   }
