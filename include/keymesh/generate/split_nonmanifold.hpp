@@ -56,7 +56,7 @@ struct TriangleRange {
 };
 struct NonmanifoldSuspects {
   // Ascending ids: every point that is not one closed fan, and maybe more
-  // (each is checked against its triangles again).
+  // (the rule leaves a point of one closed fan as it is).
   std::vector<PointIndex> points;
   // Ascending, disjoint: ranges holding every triangle at those points;
   // empty: all triangles.
