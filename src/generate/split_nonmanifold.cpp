@@ -130,8 +130,9 @@ bool one_closed_fan(const PointIndex* C, PointIndex v, const std::uint32_t* list
   return one_closed_fan(v, s, d);
 }
 
-// The points that are not one closed fan, by increasing id, with their
-// corners (increasing): the few the rule looks at.
+// The points the rule looks at, by increasing id, with their corners
+// (increasing): those that are not one closed fan (and, told suspects, the
+// few suspects that are).
 struct Flagged {
   std::vector<PointIndex> point;
   std::vector<std::uint32_t> first{0};  // point k's corners: corners[first[k] .. first[k + 1])
