@@ -113,8 +113,11 @@ void classify(const T* samples, const GridShape& s, const InsideTest<T>& test, I
 struct CornerWords {
   std::uint64_t a, b, c, d, a1, b1, c1, d1;
 };
-template <class CaseOf, class F>
-void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, CaseOf&& case_of, F&& f) {
+// Calls word(q, w, active) for every 64-voxel word q of voxel row (j, k)
+// holding cut voxels: w its corner words, bit b of `active` voxel 64 q + b
+// cut.
+template <class Word>
+void for_each_cut_word(const InsideBits& bits, const GridShape& s, Id j, Id k, Word&& word) {
   const std::uint64_t* r00 = bits.row(j, k, s.ny);
   const std::uint64_t* r10 = bits.row(j + 1, k, s.ny);
   const std::uint64_t* r01 = bits.row(j, k + 1, s.ny);
@@ -133,12 +136,19 @@ void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, 
     std::uint64_t active = (a ^ w.b) | (a ^ w.c) | (a ^ w.d) | (a ^ w.a1) | (a ^ w.b1) | (a ^ w.c1) | (a ^ w.d1);
     const Id left = voxels - 64 * q;
     if (left < 64) active &= (std::uint64_t{1} << left) - 1;
+    if (active) word(q, w, active);
+  }
+}
+
+template <class CaseOf, class F>
+void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, CaseOf&& case_of, F&& f) {
+  for_each_cut_word(bits, s, j, k, [&](Id q, const CornerWords& w, std::uint64_t active) {
     while (active) {
       const int bit = std::countr_zero(active);
       active &= active - 1;
       f(64 * q + bit, case_of(bit, w));
     }
-  }
+  });
 }
 
 // The cube case of the voxel at `bit` of corner words w: corners i and i + 1
@@ -152,10 +162,62 @@ inline unsigned cube_case_at(int bit, const CornerWords& w) {
                                           ((w.d >> 63) << 6) | ((w.d1 >> 63) << 7));
 }
 
-// for_each_cut_voxel with each voxel's cube case computed from the bits.
+// The cube cases of all 64 voxels of corner words w at once: cases[b] is
+// cube_case_at(b, w). Bit r of case b is bit b of the r-th of the eight
+// words (a, a1, b, b1, ...): the words' bytes are interleaved so that each
+// 64-bit lane holds eight voxels' bytes of the eight words (byte r: word
+// r), and every lane's 8 x 8 bit matrix is transposed (Hacker's Delight,
+// transpose8). About 100 instructions for 64 voxels, against some 20 a
+// voxel one at a time: the dense words' way.
+inline void cube_cases_of_word(const CornerWords& w, std::uint8_t cases[64]) {
+#if defined(__SSE2__)
+  auto pairs = [](std::uint64_t lo, std::uint64_t hi) {
+    const __m128i p = _mm_set_epi64x(static_cast<long long>(hi), static_cast<long long>(lo));
+    return _mm_unpacklo_epi8(p, _mm_srli_si128(p, 8));  // lo's byte g, hi's byte g, ... for g = 0..7
+  };
+  const __m128i a = pairs(w.a, w.a1), b = pairs(w.b, w.b1), c = pairs(w.c, w.c1), d = pairs(w.d, w.d1);
+  const __m128i ab_lo = _mm_unpacklo_epi16(a, b), ab_hi = _mm_unpackhi_epi16(a, b);
+  const __m128i cd_lo = _mm_unpacklo_epi16(c, d), cd_hi = _mm_unpackhi_epi16(c, d);
+  // Lane pairs of groups (0, 1), (2, 3), (4, 5), (6, 7): each lane one group's eight rows.
+  __m128i x[4] = {_mm_unpacklo_epi32(ab_lo, cd_lo), _mm_unpackhi_epi32(ab_lo, cd_lo), _mm_unpacklo_epi32(ab_hi, cd_hi),
+                  _mm_unpackhi_epi32(ab_hi, cd_hi)};
+  const __m128i m7 = _mm_set1_epi64x(0x00AA00AA00AA00AALL), m14 = _mm_set1_epi64x(0x0000CCCC0000CCCCLL),
+                m28 = _mm_set1_epi64x(0x00000000F0F0F0F0LL);
+  for (__m128i& v : x) {
+    __m128i t = _mm_and_si128(_mm_xor_si128(v, _mm_srli_epi64(v, 7)), m7);
+    v = _mm_xor_si128(v, _mm_xor_si128(t, _mm_slli_epi64(t, 7)));
+    t = _mm_and_si128(_mm_xor_si128(v, _mm_srli_epi64(v, 14)), m14);
+    v = _mm_xor_si128(v, _mm_xor_si128(t, _mm_slli_epi64(t, 14)));
+    t = _mm_and_si128(_mm_xor_si128(v, _mm_srli_epi64(v, 28)), m28);
+    v = _mm_xor_si128(v, _mm_xor_si128(t, _mm_slli_epi64(t, 28)));
+  }
+  for (int i = 0; i < 4; ++i) _mm_storeu_si128(reinterpret_cast<__m128i*>(cases + 16 * i), x[i]);
+#else
+  for (int b = 0; b < 64; ++b) cases[b] = static_cast<std::uint8_t>(cube_case_at(b, w));
+#endif
+}
+
+// for_each_cut_voxel with each voxel's cube case computed from the bits:
+// one at a time in words with few cut voxels, all 64 at once
+// (cube_cases_of_word) in words with many (a dense surface's).
 template <class F>
 void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, F&& f) {
-  for_each_cut_voxel(bits, s, j, k, [](int bit, const CornerWords& w) { return cube_case_at(bit, w); }, f);
+  constexpr int kDense = 4;  // cut voxels in a word from which its cases are made at once
+  for_each_cut_word(bits, s, j, k, [&](Id q, const CornerWords& w, std::uint64_t active) {
+    if (std::popcount(active) >= kDense) {
+      std::uint8_t cases[64];
+      cube_cases_of_word(w, cases);
+      for (; active; active &= active - 1) {
+        const int bit = std::countr_zero(active);
+        f(64 * q + bit, unsigned{cases[bit]});
+      }
+      return;
+    }
+    for (; active; active &= active - 1) {
+      const int bit = std::countr_zero(active);
+      f(64 * q + bit, cube_case_at(bit, w));
+    }
+  });
 }
 
 }  // namespace keymesh::generate

@@ -16,6 +16,7 @@
 #include <random>
 #include <vector>
 
+#include "generate/grid_shape.hpp"
 #include "generate/contour_coarse_rows.hpp"
 #include "keymesh/parallel/threads.hpp"
 
@@ -25,10 +26,7 @@ using namespace keymesh::generate;
 namespace {
 
 TEST(CoarseRows, EveryCrossingOnceToItsNearestEndInKeyOrder) {
-  GridShape s{};
-  s.nx = 150, s.ny = 9, s.nz = 7;
-  s.nxy = s.nx * s.ny, s.n = s.nxy * s.nz;
-  s.stride[0] = 1, s.stride[1] = s.nx, s.stride[2] = s.nxy;
+  const GridShape s = grid_shape(150, 9, 7);
   std::vector<float> v(static_cast<std::size_t>(s.n));
   std::mt19937 rng(3);
   for (Id p = 0; p < s.n; ++p)
