@@ -57,13 +57,27 @@ struct FanRule {
   // many triangles each way and at least two of each (in no set order).
   void operator()(PointIndex v, CornerEnds c, std::uint32_t* labels, std::vector<std::uint64_t>* found) const {
     for (Id j = 0; j < c.d; ++j) labels[j] = static_cast<std::uint32_t>(j);
+    // Up to 64 corners, each fan's corners as a mask and every label kept at
+    // its fan's smallest index (a union-find's path walks cost more); above,
+    // a union-find whose root is the smallest index.
+    const bool small = c.d <= kCornersMatched;
+    std::uint64_t members[kCornersMatched];
+    if (small)
+      for (Id j = 0; j < c.d; ++j) members[j] = std::uint64_t{1} << j;
     auto find = [&](std::uint32_t x) {
       while (labels[x] != x) x = labels[x] = labels[labels[x]];
       return x;
     };
     auto unite = [&](std::uint32_t a, std::uint32_t b) {
-      a = find(a), b = find(b);
-      if (a != b) labels[std::max(a, b)] = std::min(a, b);  // the root is the smallest index
+      a = small ? labels[a] : find(a), b = small ? labels[b] : find(b);
+      if (a == b) return;
+      const std::uint32_t root = std::min(a, b), other = std::max(a, b);
+      if (small) {
+        for (std::uint64_t m = members[other]; m; m &= m - 1) labels[std::countr_zero(m)] = root;
+        members[root] |= members[other];
+      } else {
+        labels[other] = root;
+      }
     };
     // The corners whose edges join v and w, leaving and arriving, in
     // increasing local index: the labels do not depend on the order the
@@ -86,10 +100,11 @@ struct FanRule {
       if (balanced && found && v < w) found->push_back(key);
       for (std::size_t i = 0; i < pairs; ++i) unite(up[i], down[(i + rot) % n_down]);
     };
-    if (c.d <= kCornersMatched)
+    if (small) {
       each_other_end_matched(c, pair_up);
-    else
-      each_other_end_sorted(c, pair_up);
+      return;
+    }
+    each_other_end_sorted(c, pair_up);
     for (Id j = 0; j < c.d; ++j) labels[j] = find(static_cast<std::uint32_t>(j));
   }
 
