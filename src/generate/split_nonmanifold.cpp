@@ -317,12 +317,12 @@ Flagged corners_of(const PointIndex* C, Id n, const std::vector<PointIndex>& poi
     for (const auto& a : at)
       for (std::uint64_t e : a) corners[next[e >> 32]++] = static_cast<std::uint32_t>(e);
   }
+  // The grouped corners become the list as they are (a point without a
+  // corner there has an empty run: left out).
   Flagged out;
-  for (std::size_t k = 0; k < listed_points.size(); ++k) {
-    const std::uint32_t* list = corners.data() + first[k];
-    const Id d = first[k + 1] - first[k];
-    if (d > 0) out.add(listed_points[k], list, d);
-  }
+  out.corners = std::move(corners);
+  for (std::size_t k = 0; k < listed_points.size(); ++k)
+    if (first[k + 1] > first[k]) out.point.push_back(listed_points[k]), out.first.push_back(first[k + 1]);
   return out;
 }
 
