@@ -18,10 +18,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "keymesh/core/types.hpp"
-#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 
 namespace keymesh::generate {
@@ -98,7 +98,7 @@ class DerivativeRows {
       tag_[slot] = {j, k};
       std::fill_n(computed, words_, 0);
     }
-    return Row(interp_, computed, values_.data() + slot * kValues * nx_, j, k);
+    return Row(interp_, computed, values_.get() + slot * kValues * nx_, j, k);
   }
 
  private:
@@ -113,7 +113,10 @@ class DerivativeRows {
     words_ = static_cast<std::size_t>((nx_ + 63) / 64);
     tag_.assign(static_cast<std::size_t>(kPlanes * kRows), Tag{});
     computed_.resize(static_cast<std::size_t>(kPlanes * kRows) * words_);
-    values_.room_for(static_cast<std::size_t>(kPlanes * kRows * kValues * nx_));
+    const auto values = static_cast<std::size_t>(kPlanes * kRows * kValues * nx_);
+    // Without huge pages (KeptArray's): a surface touches a few points of
+    // a row, and each would fault in 2 MB instead of 4 KB.
+    if (values > values_size_) values_ = std::make_unique_for_overwrite<double[]>(values), values_size_ = values;
   }
 
   std::uint64_t pass_ = 0;
@@ -122,7 +125,8 @@ class DerivativeRows {
   std::size_t words_ = 0;
   std::vector<Tag> tag_;
   std::vector<std::uint64_t> computed_;
-  KeptArray<double> values_;
+  std::unique_ptr<double[]> values_;  // kept between calls, grown, never shrunk
+  std::size_t values_size_ = 0;
 };
 
 }  // namespace keymesh::generate
