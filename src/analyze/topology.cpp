@@ -329,11 +329,13 @@ Id count_components(const SurfaceMesh& mesh, const std::vector<Id>& start) {
 
 }  // namespace
 
-TopologyReport check_topology(const SurfaceMesh& mesh) {
+namespace {
+// check_fans' counts; `start` keeps the corners' grouping by point.
+TopologyReport fans_of(const SurfaceMesh& mesh, std::vector<Id>& start) {
   check_layout(mesh);
   TopologyReport r;
-  const Id n = mesh.num_points(), m = mesh.num_cells();
-  r.points = n;
+  const Id m = mesh.num_cells();
+  r.points = mesh.num_points();
   r.cells = m;
   // Cell of every corner (implicit for triangles).
   std::vector<std::uint32_t> corner_cell;
@@ -346,12 +348,24 @@ TopologyReport check_topology(const SurfaceMesh& mesh) {
       if (e - b < 3) degenerate[c] = 1;  // fewer than three points spans no area
     }, 1024);
   }
-  std::vector<Id> start;
   std::vector<std::uint32_t> order;
   corners_by_point(mesh, start, order);
   count_fans(mesh, FanPass{mesh, corner_cell, degenerate}, start, order, r);
   free_storage(order);
   for (std::uint8_t f : degenerate) r.degenerate_cells += f;
+  return r;
+}
+}  // namespace
+
+TopologyReport check_fans(const SurfaceMesh& mesh) {
+  std::vector<Id> start;
+  return fans_of(mesh, start);
+}
+
+TopologyReport check_topology(const SurfaceMesh& mesh) {
+  std::vector<Id> start;
+  TopologyReport r = fans_of(mesh, start);
+  const Id n = mesh.num_points(), m = mesh.num_cells();
   r.components = count_components(mesh, start);
   r.duplicate_points = count_duplicate_points(mesh.points.data(), n);
   const Id used = n - r.unused_points;

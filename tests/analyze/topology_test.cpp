@@ -10,6 +10,7 @@
 #include "keymesh/parallel/threads.hpp"
 
 using namespace keymesh;
+using analyze::check_fans;
 using analyze::check_topology;
 using analyze::TopologyReport;
 
@@ -80,6 +81,7 @@ void expect_closed(const TopologyReport& r, Id chi) {
   EXPECT_EQ(r.euler_characteristic, chi);
   EXPECT_EQ(r.components, 1);
 }
+
 
 }  // namespace
 
@@ -224,4 +226,28 @@ TEST(TopologyTest, LargeTorusIsExactAndDeterministic) {
   EXPECT_EQ(r1.components, r.components);
   EXPECT_EQ(r1.duplicate_points, r.duplicate_points);
   EXPECT_EQ(r1.nonmanifold_vertices, r.nonmanifold_vertices);
+}
+
+// check_fans gives check_topology's edge and vertex counts on meshes with
+// every kind of defect (the coarsened contour's report reads it), and
+// leaves the rest unset.
+TEST(TopologyTest, CheckFansCountsAsCheckTopology) {
+  SurfaceMesh pinched = tetrahedron();
+  pinched.points.insert(pinched.points.end(), {-1, 0, 0, 0, -1, 0, 0, 0, -1, 5, 5, 5});
+  pinched.connectivity.insert(pinched.connectivity.end(), {0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5, 1, 1, 2});
+  const SurfaceMesh meshes[] = {tetrahedron(), cube_triangles(), torus(7, 5), pinched,
+                                make_mesh({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1}, {0, 1, 2, 1, 0, 3, 0, 1, 4})};
+  for (const SurfaceMesh& m : meshes) {
+    const TopologyReport all = check_topology(m), fans = check_fans(m);
+    for (Id TopologyReport::*count : {&TopologyReport::points, &TopologyReport::cells, &TopologyReport::edges,
+                                      &TopologyReport::boundary_edges, &TopologyReport::nonmanifold_edges,
+                                      &TopologyReport::nonmanifold_vertices, &TopologyReport::unused_points,
+                                      &TopologyReport::degenerate_cells})
+      EXPECT_EQ(fans.*count, all.*count);
+    EXPECT_EQ(fans.components, 0);
+    EXPECT_FALSE(fans.closed_manifold);
+  }
+  EXPECT_EQ(check_fans(meshes[3]).nonmanifold_vertices, 1);
+  EXPECT_EQ(check_fans(meshes[3]).unused_points, 1);
+  EXPECT_EQ(check_fans(meshes[4]).nonmanifold_edges, 1);
 }
