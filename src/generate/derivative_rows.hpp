@@ -17,6 +17,7 @@
 // whichever edge asked first.
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -58,18 +59,39 @@ class DerivativeRows {
       const std::uint64_t bit = std::uint64_t{1} << (i & 63);
       if (!(word & bit)) {
         word |= bit;
-        // gradient_at / derivatives_at, their interior test made per row
-        // but for i.
-        if (interior_row_ && i > 0 && i < last_i_) {
-          if constexpr (Hessian) interp_->interior_derivatives(first_ + i, v, v + 3);
-          else interp_->interior_gradient(first_ + i, v);
-        } else {
-          const Id ijk[3] = {i, j_, k_};
-          if constexpr (Hessian) interp_->border_derivatives(first_ + i, ijk, v, v + 3);
-          else interp_->border_gradient(first_ + i, ijk, v);
-        }
+        compute(i, v);
       }
       return v;
+    }
+
+    // Computes the points of `mask` (a bit per point of the row, `words`
+    // words) not computed yet, in a loop of its own: computed() then reads
+    // them with no test (a test taken or not as the surface goes is a
+    // branch mispredicted about every other point).
+    void compute_all(const std::uint64_t* mask, Id words) const {
+      for (Id q = 0; q < words; ++q) {
+        std::uint64_t m = mask[q] & ~computed_[q];
+        computed_[q] |= m;
+        for (; m; m &= m - 1) {
+          const Id i = 64 * q + std::countr_zero(m);
+          compute(i, values_ + kValues * i);
+        }
+      }
+    }
+    [[gnu::always_inline]] const double* computed(Id i) const { return values_ + kValues * i; }
+
+   private:
+    // gradient_at / derivatives_at, their interior test made per row but
+    // for i.
+    [[gnu::always_inline]] void compute(Id i, double* v) const {
+      if (interior_row_ && i > 0 && i < last_i_) {
+        if constexpr (Hessian) interp_->interior_derivatives(first_ + i, v, v + 3);
+        else interp_->interior_gradient(first_ + i, v);
+      } else {
+        const Id ijk[3] = {i, j_, k_};
+        if constexpr (Hessian) interp_->border_derivatives(first_ + i, ijk, v, v + 3);
+        else interp_->border_gradient(first_ + i, ijk, v);
+      }
     }
 
    private:
