@@ -229,35 +229,6 @@ struct RowPointWriter {
   Rows* rows = nullptr;
   Id j = -1, k = -1;
   typename Rows::Row here{}, next_y{}, next_z{};
-  Id words = (write.s.nx + 63) / 64;
-  std::vector<std::uint64_t> end_mask = std::vector<std::uint64_t>(static_cast<std::size_t>(words));
-
-  // The points of grid row (jj, kk) with a cut edge to a neighbour (bit i:
-  // point i), from the inside bits: every point the row's edges, and the
-  // edges of the rows beside it, end at.
-  const std::uint64_t* edge_ends(Id jj, Id kk) {
-    const GridShape& s = write.s;
-    const std::uint64_t* in = bits.row(jj, kk, s.ny);
-    const std::uint64_t* near[4] = {jj > 0 ? bits.row(jj - 1, kk, s.ny) : nullptr,
-                                    jj + 1 < s.ny ? bits.row(jj + 1, kk, s.ny) : nullptr,
-                                    kk > 0 ? bits.row(jj, kk - 1, s.ny) : nullptr,
-                                    kk + 1 < s.nz ? bits.row(jj, kk + 1, s.ny) : nullptr};
-    std::uint64_t carry = 0;  // bit 63 of the previous word's x cuts
-    for (Id q = 0; q < words; ++q) {
-      const std::uint64_t a = in[q], next = q + 1 < words ? in[q + 1] : 0;
-      std::uint64_t x = a ^ ((a >> 1) | (next << 63));  // bit i: x edge (i, i + 1) cut
-      std::uint64_t e = 0;
-      for (const std::uint64_t* r : near)
-        if (r) e |= a ^ r[q];
-      const Id valid = std::min<Id>(64, s.nx - 64 * q);  // points in this word
-      const std::uint64_t points = valid == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << valid) - 1;
-      if (q + 1 == words) x &= points >> 1;  // no x edge from point nx - 1
-      end_mask[static_cast<std::size_t>(q)] = (e | x | (x << 1) | carry) & points;
-      carry = x >> 63;
-    }
-    return end_mask.data();
-  }
-
   [[gnu::always_inline]] void operator()(Id id, Id i, Id j_, Id k_, int axis) {
     const EdgeInterpolator<T>& interp = write.interp;
     const GridShape& s = interp.s;
@@ -273,9 +244,9 @@ struct RowPointWriter {
         // as a loop of independent computations. ch2better, contour_bench
         // 2 threads: 56-57 -> 52 ms, though 0.84 -> 0.94 G instructions; not
         // for derivatives_at (1.23 -> 1.29 G, no time won measured).
-        here.compute_all(edge_ends(j, k), words);
-        if (j + 1 < s.ny) next_y.compute_all(edge_ends(j + 1, k), words);
-        if (k + 1 < s.nz) next_z.compute_all(edge_ends(j, k + 1), words);
+        here.compute_edge_ends(bits);
+        if (j + 1 < s.ny) next_y.compute_edge_ends(bits);
+        if (k + 1 < s.nz) next_z.compute_edge_ends(bits);
       }
     }
     const auto p = interp.at(i + j * s.nx + k * s.nxy, i, j, k, axis, iso);

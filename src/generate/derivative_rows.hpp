@@ -24,6 +24,7 @@
 
 #include "keymesh/core/types.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
+#include "voxel_bits.hpp"
 
 namespace keymesh::generate {
 
@@ -64,18 +65,41 @@ class DerivativeRows {
       return v;
     }
 
-    // Computes the points of `mask` (a bit per point of the row, `words`
-    // words) not computed yet, in a loop of its own: computed() then reads
-    // them with no test (a test taken or not as the surface goes is a
-    // branch mispredicted about every other point).
-    void compute_all(const std::uint64_t* mask, Id words) const {
+    // Computes, in a loop of its own, the points of the row with a cut edge
+    // to a neighbour (`bits`: the isovalue's inside bits), a superset of
+    // the ends of the cut edges the row's and its neighbours' points are
+    // on: computed() then reads them with no test (a test taken or not as
+    // the surface goes is a branch mispredicted about every other point).
+    void compute_edge_ends(const InsideBits& bits) const {
+      const GridShape& s = interp_->s;
+      const Id words = (s.nx + 63) / 64;
+      const std::uint64_t* in = bits.row(j_, k_, s.ny);
+      const std::uint64_t* near[4] = {j_ > 0 ? bits.row(j_ - 1, k_, s.ny) : nullptr,
+                                      j_ + 1 < s.ny ? bits.row(j_ + 1, k_, s.ny) : nullptr,
+                                      k_ > 0 ? bits.row(j_, k_ - 1, s.ny) : nullptr,
+                                      k_ + 1 < s.nz ? bits.row(j_, k_ + 1, s.ny) : nullptr};
+      std::uint64_t carry = 0;  // bit 63 of the previous word's x cuts
       for (Id q = 0; q < words; ++q) {
-        std::uint64_t m = mask[q] & ~computed_[q];
-        computed_[q] |= m;
-        for (; m; m &= m - 1) {
-          const Id i = 64 * q + std::countr_zero(m);
-          compute(i, values_ + kValues * i);
-        }
+        const std::uint64_t a = in[q], next = q + 1 < words ? in[q + 1] : 0;
+        std::uint64_t x = a ^ ((a >> 1) | (next << 63));  // bit i: x edge (i, i + 1) cut
+        std::uint64_t e = 0;
+        for (const std::uint64_t* r : near)
+          if (r) e |= a ^ r[q];
+        const Id valid = std::min<Id>(64, s.nx - 64 * q);  // points in this word
+        const std::uint64_t points = valid == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << valid) - 1;
+        if (q + 1 == words) x &= points >> 1;  // no x edge from point nx - 1
+        compute_word(q, (e | x | (x << 1) | carry) & points);
+        carry = x >> 63;
+      }
+    }
+
+    // The points of word q of `mask` not computed yet.
+    void compute_word(Id q, std::uint64_t mask) const {
+      std::uint64_t m = mask & ~computed_[q];
+      computed_[q] |= m;
+      for (; m; m &= m - 1) {
+        const Id i = 64 * q + std::countr_zero(m);
+        compute(i, values_ + kValues * i);
       }
     }
     [[gnu::always_inline]] const double* computed(Id i) const { return values_ + kValues * i; }
