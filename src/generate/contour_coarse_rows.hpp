@@ -412,10 +412,36 @@ struct CoarseTriangles {
   Id count = 0;                           // triangles kept
   Id fine_triangles = 0;                  // the isovalue's fine triangles (what coarsening started from)
 
+  // Sizes the by-brick and by-voxel-row arrays (their elements written by the tally).
+  void size_for(std::size_t bricks, std::size_t voxel_rows) {
+    if (faces.size() < bricks) faces.resize(bricks), entries.resize(bricks), voxel_i.resize(bricks);
+    voxels.resize(voxel_rows);
+    entry_first.resize(voxel_rows);
+    face_first.resize(voxel_rows);
+    face_count.resize(voxel_rows);
+    first.resize(voxel_rows + 1);
+    fine.assign(bricks, 0);
+  }
+
   FaceTriangle* faces_of(const VoxelBricks& bricks, Id ny, Id vr) const {
     return faces[bricks.brick_of(vr % (ny - 1), vr / (ny - 1))].elements.get() + face_first[vr];
   }
 };
+
+// Room for a brick's cut voxels: a voxel row's, at most two for every
+// three cut edges of its four grid rows (a cut voxel has three or more cut
+// edges, each shared by two voxels of the row at most).
+inline Id cut_voxel_bound(const GridShape& s, const RowCounts& rc, const VoxelBricks& bricks, Id brick) {
+  auto cut_edges = [&](Id r) { return rc.point_first[r + 1] - rc.point_first[r]; };
+  Id voxels = 0;
+  for (Id k = bricks.k_begin(brick); k < bricks.k_end(brick); ++k)
+    for (Id j = bricks.j_begin(brick); j < bricks.j_end(brick); ++j) {
+      const Id r = k * s.ny + j;
+      voxels += std::min(s.nx - 1,
+                         2 * (cut_edges(r) + cut_edges(r + 1) + cut_edges(r + s.ny) + cut_edges(r + s.ny + 1)) / 3);
+    }
+  return voxels;
+}
 
 // Step 3: each cut voxel's cube case and table entry (by its case and far
 // bits, coarse_cases.hpp) found and the entry kept; every voxel row's
@@ -429,14 +455,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
                                    const CoarseBits& cb, CoarseTriangles& ct) {
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   const VoxelBricks bricks(s, 0, layers);
-  const auto n_bricks = static_cast<std::size_t>(bricks.count());
-  if (ct.faces.size() < n_bricks) ct.faces.resize(n_bricks), ct.entries.resize(n_bricks), ct.voxel_i.resize(n_bricks);
-  ct.voxels.resize(static_cast<std::size_t>(voxel_rows));
-  ct.entry_first.resize(static_cast<std::size_t>(voxel_rows));
-  ct.face_first.resize(static_cast<std::size_t>(voxel_rows));
-  ct.face_count.resize(static_cast<std::size_t>(voxel_rows));
-  ct.first.resize(static_cast<std::size_t>(voxel_rows + 1));
-  ct.fine.assign(n_bricks, 0);
+  ct.size_for(static_cast<std::size_t>(bricks.count()), static_cast<std::size_t>(voxel_rows));
   const CoarseVoxelTable& table = coarse_voxel_table();
   const auto& cubes = marching_cubes_table();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
@@ -446,17 +465,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
       const Id r = k * s.ny + j;
       return cb.cut[r] || cb.cut[r + 1] || cb.cut[r + s.ny] || cb.cut[r + s.ny + 1];
     };
-    // Room for the brick's cut voxels: a voxel row's, at most two for
-    // every three cut edges of its four grid rows (a cut voxel has three
-    // or more cut edges, each shared by two voxels of the row at most).
-    auto cut_edges = [&](Id r) { return rc.point_first[r + 1] - rc.point_first[r]; };
-    Id voxels = 0;
-    for (Id k = kb; k < ke; ++k)
-      for (Id j = jb; j < je; ++j) {
-        const Id r = k * s.ny + j;
-        voxels += std::min(s.nx - 1, 2 * (cut_edges(r) + cut_edges(r + 1) + cut_edges(r + s.ny) +
-                                          cut_edges(r + s.ny + 1)) / 3);
-      }
+    const Id voxels = cut_voxel_bound(s, rc, bricks, brick);
     std::uint16_t* entry = ct.entries[brick].room_for(static_cast<std::size_t>(voxels));
     std::uint32_t* voxel_i = ct.voxel_i[brick].room_for(static_cast<std::size_t>(voxels));
     // Face triangles: room for one every four voxels of the bound at first
