@@ -31,11 +31,12 @@ void add_info_options(CLI::App& cmd, InfoCli& o) {
 int run_info(const InfoCli& o) {
   nlohmann::json r;
   r["file"] = o.input;
-  // A grid format (.vtu, .vtk) read as a grid even when is_grid_file's look
-  // at a legacy header says no: the grid reader says what the file holds
-  // (a POLYDATA dataset, no VTK header) instead of "unknown volume format".
+  // A grid format (.vtu, .vtk) is read as a grid, without is_grid_file's
+  // look at a legacy header: for a .vtk holding POLYDATA, or no VTK header,
+  // the grid reader says what the file holds instead of "unknown volume
+  // format".
   const io::Format* format = io::input_format(o.input);
-  if (io::is_grid_file(o.input) || (format && format->kind == io::DataKind::Grid)) {
+  if (format && format->kind == io::DataKind::Grid) {
     const UnstructuredGrid g = io::read_grid(o.input);
     // Counted by type code first: 82.9 M cells are too many for a map keyed by name.
     std::array<Id, 256> by_code{};
