@@ -1,5 +1,6 @@
 #include "coarse_cases.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "coarse_folds.hpp"
@@ -29,16 +30,25 @@ struct CornerTriangles {
 // it (the far bits of the case's cut edges, packed in edge order).
 void build_case(const MarchingCubesTable& mc, const CornerTriangles& by_corners, unsigned cube_case,
                 CoarseVoxelTable& t) {
-  int cut[12], n_cut = 0, rank[12] = {};
+  int n_cut = 0, rank[12];
+  std::fill(rank, rank + 12, -1);
   for (int e = 0; e < 12; ++e)
     if (((cube_case >> mc.edges[e].corner0) & 1u) != ((cube_case >> mc.edges[e].corner1) & 1u))
-      rank[e] = n_cut, cut[n_cut++] = e;
-  for (unsigned m = 0; m < 64; ++m)
-    for (int r = 0; r < n_cut; ++r) {
-      const int e = cut[r];
-      if (e < 6 && ((m >> e) & 1u)) t.low[cube_case][m] |= static_cast<std::uint16_t>(1u << r);
-      if (e >= 6 && ((m >> (e - 6)) & 1u)) t.high[cube_case][m] |= static_cast<std::uint16_t>(1u << r);
+      rank[e] = n_cut++;
+  // Each nibble of the far key: the ranks of its cut edges' bits.
+  auto packed = [&](unsigned m, int first_bit) {
+    unsigned bits = 0;
+    for (int b = 0; b < 4; ++b) {
+      const int e = kFarKeyEdge[first_bit + b];
+      if (((m >> b) & 1u) && rank[e] >= 0) bits |= 1u << rank[e];
     }
+    return static_cast<std::uint16_t>(bits);
+  };
+  CoarseVoxelTable::CaseIndex& by_key = t.by_case[cube_case];
+  for (unsigned m = 0; m < 16; ++m) {
+    by_key.x[m] = static_cast<std::uint16_t>(t.first[cube_case] + packed(m, 0));
+    by_key.here[m] = packed(m, 4), by_key.next[m] = packed(m, 12);
+  }
   // Each marching cubes triangle's corners: its edges' ranks and ends.
   const int count = mc.triangle_count[cube_case];
   unsigned edge_rank[15], near[15], far[15];
@@ -79,6 +89,16 @@ CoarseVoxelTable build() {
   for (int e = 0; e < 12; ++e)
     if (mc.edges[e].corner0 != kCubeEdgeLayout[e][0] || mc.edges[e].axis != kCubeEdgeLayout[e][1])
       throw std::logic_error("coarse_voxel_table: the marching cubes table's edges are not in kCubeEdgeLayout's order");
+  // The far key's bits: bits 0-3 x edges of corner rows 0-3, then y of row
+  // 0, z of row 0, y of row 2, z of row 1; bits 12-15 those four at i + 1.
+  constexpr int kKeyRow[16] = {0, 1, 2, 3, 0, 0, 2, 1, 0, 0, 0, 0, 0, 0, 2, 1};
+  constexpr int kKeyAxis[16] = {0, 0, 0, 0, 1, 2, 1, 2, -1, -1, -1, -1, 1, 2, 1, 2};
+  for (int b = 0; b < 16; ++b) {
+    const int e = kFarKeyEdge[b];
+    if ((e < 0) != (kKeyAxis[b] < 0) ||
+        (e >= 0 && (kCubeEdgeLayout[e][0] != (b >= 12 ? 1 : 0) + 2 * kKeyRow[b] || kCubeEdgeLayout[e][1] != kKeyAxis[b])))
+      throw std::logic_error("coarse_voxel_table: kFarKeyEdge does not match kCubeEdgeLayout");
+  }
   CoarseVoxelTable t;
   std::size_t entries = 0;
   for (unsigned cube_case = 0; cube_case < 256; ++cube_case) {

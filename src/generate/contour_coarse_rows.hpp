@@ -324,70 +324,44 @@ void for_each_coarse_row(const InsideBits& bits, const GridShape& s, const Coars
   });
 }
 
-// The far bits of a brick's grid rows (j, k), j in [j_begin, j_end], k in
-// [k_begin, k_end], one byte per grid point (bit axis: the crossing on the
-// point's edge along that axis is nearer its far end), so that a voxel's
-// twelve far bits are six byte loads instead of twelve bit extractions from
-// the rows' words (callgrind, ch2better: the tally's instructions 286 M ->
-// 234 M). Written eight points at a time where one of the eight starts a
-// cut edge; the other bytes keep whatever they held (far bits of earlier
-// rows: bits 0-2 only), since a voxel's table entry reads only its cut
-// edges' bits (CoarseVoxelTable::index). In the calling thread's scratch
-// (a brick's 17 x 9 rows, a few tens of KB: cached).
-class BrickFarBytes {
+// The far bits a voxel row's cut voxels read: those of its four corner rows
+// (by corner bits y | z << 1): the x edges of all four, the y edges of rows
+// 0 and 2, the z edges of rows 0 and 1, in the order of a far key's bits
+// (coarse_cases.hpp, kFarKeyEdge). A word's 64 voxels' far bytes are made
+// at once by the transpose that makes their cube cases (bytes_of_words),
+// and a voxel's far key is two of them: its point's and the next's.
+// (It replaced far bytes per grid point of a brick's rows, built for every
+// point of a word with a cut edge, then read six times a voxel: ch2better,
+// callgrind, 1 thread: the tally 308 M -> 238 M instructions.)
+class VoxelRowFar {
  public:
-  BrickFarBytes(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, const VoxelBricks& bricks, Id brick)
-      : stride_(64 * bits.words_per_row), j_begin_(bricks.j_begin(brick)), k_begin_(bricks.k_begin(brick)),
-        rows_j_(bricks.j_end(brick) - j_begin_ + 1) {
-    thread_local std::vector<std::uint8_t> scratch;
-    const Id rows = rows_j_ * (bricks.k_end(brick) - k_begin_ + 1);
-    if (static_cast<Id>(scratch.size()) < rows * stride_) scratch.resize(static_cast<std::size_t>(rows * stride_));
-    bytes_ = scratch.data();
-    for (Id k = k_begin_; k <= bricks.k_end(brick); ++k)
-      for (Id j = j_begin_; j < j_begin_ + rows_j_; ++j) {
-        const Id r = k * s.ny + j;
-        if (!cb.cut[r]) continue;  // no cut edge: no byte of it is read
-        const RowCuts cuts(bits, s, j, k, s.nz - 1);
-        const std::uint64_t *fx = cb.far_row(r, 0), *fy = cb.far_row(r, 1), *fz = cb.far_row(r, 2);
-        std::uint8_t* out = row(j, k);
-        // Eight points at a time, each eight with a cut edge written whole.
-        for (Id q = 0; q < cuts.data_words; ++q) {
-          const RowCuts::Words w = cuts.word(q);
-          for (std::uint64_t m = w.x | w.y | w.z; m;) {
-            const int shift = std::countr_zero(m) & ~7;
-            auto spread = [&](const std::uint64_t* f) { return kSpreadBits[(f[q] >> shift) & 255u]; };
-            const std::uint64_t eight = spread(fx) | spread(fy) << 1 | spread(fz) << 2;
-            std::memcpy(out + 64 * q + shift, &eight, sizeof eight);
-            m &= ~(std::uint64_t{255} << shift);
-          }
-        }
-      }
+  VoxelRowFar(const CoarseBits& cb, const GridShape& s, Id j, Id k) {
+    const Id r = k * s.ny + j;
+    for (int row = 0; row < 4; ++row) words_[row] = cb.far_row(r + (row & 1) + (row >> 1) * s.ny, 0);
+    words_[4] = cb.far_row(r, 1), words_[5] = cb.far_row(r, 2);
+    words_[6] = cb.far_row(r + s.ny, 1), words_[7] = cb.far_row(r + 1, 2);
   }
 
-  std::uint8_t* row(Id j, Id k) { return bytes_ + ((k - k_begin_) * rows_j_ + (j - j_begin_)) * stride_; }
+  // bytes[b], b in [0, 64]: the far byte of point 64 q + b (bit n: far
+  // key bit n; point 64 q + 64's only bits 4-7, from word q + 1, which the
+  // far rows have: a row's words include its padding word).
+  [[gnu::always_inline]] void bytes_of_word(Id q, std::uint8_t bytes[65]) const {
+    const std::uint64_t* const* w = words_;
+    bytes_of_words(w[0][q], w[1][q], w[2][q], w[3][q], w[4][q], w[5][q], w[6][q], w[7][q], bytes);
+    unsigned next = 0;
+    for (int n = 4; n < 8; ++n) next |= static_cast<unsigned>(w[n][q + 1] & 1u) << n;
+    bytes[64] = static_cast<std::uint8_t>(next);
+  }
 
-  // The far bits of voxel i's twelve cube edges, in MarchingCubesTable's
-  // order (coarse_cases.hpp, kCubeEdgeLayout), from the bytes of its corner
-  // rows by corner bits y | z << 1 (n0 .. n3): x edges of the four rows at
-  // i, y edges of n0 and n2 and z edges of n0 and n1 at i and i + 1.
-  [[gnu::always_inline]] static unsigned voxel(const std::uint8_t* n0, const std::uint8_t* n1,
-                                               const std::uint8_t* n2, const std::uint8_t* n3, Id i) {
-    const unsigned a = n0[i], a1 = n0[i + 1], b = n1[i], b1 = n1[i + 1], c = n2[i], c1 = n2[i + 1];
-    return a | (a1 >> 1) << 3 | (b & 1u) << 5 | (b & 4u) << 4 | (b1 & 4u) << 5 | (c & 3u) << 8 | (c1 & 2u) << 9 |
-           (n3[i] & 1u) << 11;
+  // The far key of the voxel at `bit` of a word, from its bytes.
+  [[gnu::always_inline]] static unsigned key(const std::uint8_t* bytes, int bit) {
+    std::uint16_t k;
+    std::memcpy(&k, bytes + bit, sizeof k);
+    return k;
   }
 
  private:
-  // Byte b of kSpreadBits[m]: bit b of m.
-  static constexpr auto kSpreadBits = [] {
-    std::array<std::uint64_t, 256> t{};
-    for (unsigned m = 0; m < 256; ++m)
-      for (int b = 0; b < 8; ++b) t[m] |= static_cast<std::uint64_t>((m >> b) & 1u) << (8 * b);
-    return t;
-  }();
-
-  Id stride_, j_begin_, k_begin_, rows_j_;  // stride_: bytes a row, whole words of points
-  std::uint8_t* bytes_;
+  const std::uint64_t* words_[8];
 };
 
 // One isovalue's coarse triangles between their passes, kept by the caller
@@ -470,13 +444,13 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
     std::uint32_t* voxel_i = ct.voxel_i[brick].room_for(static_cast<std::size_t>(voxels));
     // Face triangles: room for one every four voxels of the bound at first
     // (fewer than one a cut voxel on real surfaces), grown (doubled, copied)
-    // when a voxel's five might not fit, and kept for later calls.
+    // when a word's voxels, five each at most, might not fit, and kept for
+    // later calls.
     KeptArray<FaceTriangle>& faces = ct.faces[brick];
     std::size_t room = std::max<std::size_t>(faces.size, static_cast<std::size_t>(voxels / 4) + 64);
     FaceTriangle* base = faces.room_for(room);
     FaceTriangle* f = base;
     Id fine = 0;
-    BrickFarBytes far(bits, s, cb, bricks, brick);
     for (Id k = kb; k < ke; ++k)
       for (Id j = jb; j < je; ++j) {
         const Id vr = k * (s.ny - 1) + j;
@@ -484,32 +458,35 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
         const std::size_t row_faces = static_cast<std::size_t>(f - base);
         std::uint32_t written = 0;  // triangles of the row so far
         if (has_cuts(j, k)) {
-          // The far bytes of the voxel row's corner rows, by corner bits y
-          // | z << 1, held by value (the stores below are of bytes, which
-          // may alias).
-          const std::uint8_t *const n0 = far.row(j, k), *const n1 = far.row(j + 1, k),
-                                    *const n2 = far.row(j, k + 1), *const n3 = far.row(j + 1, k + 1);
-          for_each_cut_voxel(bits, s, j, k, [&, n0, n1, n2, n3](Id i, unsigned cube_case) {
-            fine += cubes.triangle_count[cube_case];
-            const std::uint16_t e = table.index(cube_case, BrickFarBytes::voxel(n0, n1, n2, n3, i));
-            *entry++ = e;
-            *voxel_i++ = static_cast<std::uint32_t>(i);
-            const CoarseVoxel v = table.entries[e];
-            if (static_cast<std::size_t>(f - base) + 5 > room) {
-              const std::size_t used = static_cast<std::size_t>(f - base);
+          const VoxelRowFar far(cb, s, j, k);
+          for_each_cut_word(bits, s, j, k, [&](Id q, const CornerWords& w, std::uint64_t active) {
+            // Room for the word's face triangles, five a voxel at most,
+            // checked once a word.
+            const std::size_t used = static_cast<std::size_t>(f - base),
+                              most = used + 5 * static_cast<std::size_t>(std::popcount(active));
+            if (most > room) {
               KeptArray<FaceTriangle> bigger;
-              room *= 2;
+              room = std::max(2 * room, most);
               std::memcpy(bigger.room_for(room), base, used * sizeof(FaceTriangle));
               faces = std::move(bigger);
               base = faces.data(), f = base + used;
             }
-            for (unsigned m = static_cast<unsigned>(v >> kCoarseFaceShift); m; m &= m - 1) {
-              const int t = std::countr_zero(m);
-              const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
-              *f++ = {written + static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(i),
-                      static_cast<std::uint8_t>(table.face_code[c] & 0x7fu), 0};
-            }
-            written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
+            std::uint8_t far_bytes[65];
+            far.bytes_of_word(q, far_bytes);
+            for_each_case_of_word(w, active, [&](int bit, unsigned cube_case) {
+              const auto i = static_cast<std::uint32_t>(64 * q + bit);
+              fine += cubes.triangle_count[cube_case];
+              const std::uint16_t e = table.index(cube_case, VoxelRowFar::key(far_bytes, bit));
+              *entry++ = e;
+              *voxel_i++ = i;
+              const CoarseVoxel v = table.entries[e];
+              for (unsigned m = static_cast<unsigned>(v >> kCoarseFaceShift); m; m &= m - 1) {
+                const int t = std::countr_zero(m);
+                const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
+                *f++ = {written + static_cast<std::uint32_t>(t), i, static_cast<std::uint8_t>(table.face_code[c] & 0x7fu), 0};
+              }
+              written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
+            });
           });
         }
         ct.voxels[vr] = static_cast<std::uint32_t>(entry - row_entries);

@@ -162,20 +162,20 @@ inline unsigned cube_case_at(int bit, const CornerWords& w) {
                                           ((w.d >> 63) << 6) | ((w.d1 >> 63) << 7));
 }
 
-// The cube cases of all 64 voxels of corner words w at once: cases[b] is
-// cube_case_at(b, w). Bit r of case b is bit b of the r-th of the eight
-// words (a, a1, b, b1, ...): the words' bytes are interleaved so that each
-// 64-bit lane holds eight voxels' bytes of the eight words (byte r: word
-// r), and every lane's 8 x 8 bit matrix is transposed (Hacker's Delight,
-// transpose8). About 100 instructions for 64 voxels, against some 20 a
-// voxel one at a time: the dense words' way.
-inline void cube_cases_of_word(const CornerWords& w, std::uint8_t cases[64]) {
+// Eight words' bits by position: bit r of bytes[b] is bit b of word r
+// (w0 .. w7). The words' bytes are interleaved so that each 64-bit lane
+// holds eight positions' bytes of the eight words (byte r: word r), and
+// every lane's 8 x 8 bit matrix is transposed (Hacker's Delight,
+// transpose8). About 100 instructions for 64 positions, against some 20 a
+// position one at a time.
+inline void bytes_of_words(std::uint64_t w0, std::uint64_t w1, std::uint64_t w2, std::uint64_t w3, std::uint64_t w4,
+                           std::uint64_t w5, std::uint64_t w6, std::uint64_t w7, std::uint8_t bytes[64]) {
 #if defined(__SSE2__)
   auto pairs = [](std::uint64_t lo, std::uint64_t hi) {
     const __m128i p = _mm_set_epi64x(static_cast<long long>(hi), static_cast<long long>(lo));
     return _mm_unpacklo_epi8(p, _mm_srli_si128(p, 8));  // lo's byte g, hi's byte g, ... for g = 0..7
   };
-  const __m128i a = pairs(w.a, w.a1), b = pairs(w.b, w.b1), c = pairs(w.c, w.c1), d = pairs(w.d, w.d1);
+  const __m128i a = pairs(w0, w1), b = pairs(w2, w3), c = pairs(w4, w5), d = pairs(w6, w7);
   const __m128i ab_lo = _mm_unpacklo_epi16(a, b), ab_hi = _mm_unpackhi_epi16(a, b);
   const __m128i cd_lo = _mm_unpacklo_epi16(c, d), cd_hi = _mm_unpackhi_epi16(c, d);
   // Lane pairs of groups (0, 1), (2, 3), (4, 5), (6, 7): each lane one group's eight rows.
@@ -191,32 +191,53 @@ inline void cube_cases_of_word(const CornerWords& w, std::uint8_t cases[64]) {
     t = _mm_and_si128(_mm_xor_si128(v, _mm_srli_epi64(v, 28)), m28);
     v = _mm_xor_si128(v, _mm_xor_si128(t, _mm_slli_epi64(t, 28)));
   }
-  for (int i = 0; i < 4; ++i) _mm_storeu_si128(reinterpret_cast<__m128i*>(cases + 16 * i), x[i]);
+  for (int i = 0; i < 4; ++i) _mm_storeu_si128(reinterpret_cast<__m128i*>(bytes + 16 * i), x[i]);
 #else
-  for (int b = 0; b < 64; ++b) cases[b] = static_cast<std::uint8_t>(cube_case_at(b, w));
+  const std::uint64_t w[8] = {w0, w1, w2, w3, w4, w5, w6, w7};
+  for (int b = 0; b < 64; ++b) {
+    unsigned byte = 0;
+    for (int r = 0; r < 8; ++r) byte |= static_cast<unsigned>((w[r] >> b) & 1u) << r;
+    bytes[b] = static_cast<std::uint8_t>(byte);
+  }
 #endif
 }
 
-// for_each_cut_voxel with each voxel's cube case computed from the bits:
-// one at a time in words with few cut voxels, all 64 at once
-// (cube_cases_of_word) in words with many (a dense surface's).
+// The cube cases of all 64 voxels of corner words w at once: cases[b] is
+// cube_case_at(b, w). Bit r of case b is bit b of the r-th of the eight
+// words (a, a1, b, b1, ...), so the cases are those words' bytes by
+// position: the dense words' way.
+inline void cube_cases_of_word(const CornerWords& w, std::uint8_t cases[64]) {
+  bytes_of_words(w.a, w.a1, w.b, w.b1, w.c, w.c1, w.d, w.d1, cases);
+}
+
+// Calls f(bit, cube_case) for every voxel `bit` of `active` (cut voxels of
+// a word with corner words w), in increasing bit: the cases made one at a
+// time in words with few cut voxels, all 64 at once (cube_cases_of_word)
+// in words with many (a dense surface's).
 template <class F>
-void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, F&& f) {
+[[gnu::always_inline]] inline void for_each_case_of_word(const CornerWords& w, std::uint64_t active, F&& f) {
   constexpr int kDense = 4;  // cut voxels in a word from which its cases are made at once
-  for_each_cut_word(bits, s, j, k, [&](Id q, const CornerWords& w, std::uint64_t active) {
-    if (std::popcount(active) >= kDense) {
-      std::uint8_t cases[64];
-      cube_cases_of_word(w, cases);
-      for (; active; active &= active - 1) {
-        const int bit = std::countr_zero(active);
-        f(64 * q + bit, unsigned{cases[bit]});
-      }
-      return;
-    }
+  if (std::popcount(active) >= kDense) {
+    std::uint8_t cases[64];
+    cube_cases_of_word(w, cases);
     for (; active; active &= active - 1) {
       const int bit = std::countr_zero(active);
-      f(64 * q + bit, cube_case_at(bit, w));
+      f(bit, unsigned{cases[bit]});
     }
+    return;
+  }
+  for (; active; active &= active - 1) {
+    const int bit = std::countr_zero(active);
+    f(bit, cube_case_at(bit, w));
+  }
+}
+
+// for_each_cut_voxel with each voxel's cube case computed from the bits
+// (for_each_case_of_word).
+template <class F>
+void for_each_cut_voxel(const InsideBits& bits, const GridShape& s, Id j, Id k, F&& f) {
+  for_each_cut_word(bits, s, j, k, [&](Id q, const CornerWords& w, std::uint64_t active) {
+    for_each_case_of_word(w, active, [&](int bit, unsigned cube_case) { f(64 * q + bit, cube_case); });
   });
 }
 
