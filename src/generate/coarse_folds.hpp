@@ -124,8 +124,8 @@ struct FoldEntry {
 // passed as `next_y` and `next_z`, empty when there is no such row), and its
 // -y and -z faces when they lie on the grid's border (j == 0, k == 0). Marks the dropped face triangles of all
 // three rows `folded`. Every face is owned by one row, so rows decided at
-// once mark different triangles.
-inline void fold_across_faces(std::size_t positions, FaceTriangle* own, std::size_t n_own, bool j_first, bool k_first,
+// once mark different triangles. Returns whether it marked any.
+inline bool fold_across_faces(std::size_t positions, FaceTriangle* own, std::size_t n_own, bool j_first, bool k_first,
                               FaceTriangle* next_y, std::size_t n_next_y, FaceTriangle* next_z, std::size_t n_next_z,
                               std::vector<FoldEntry>& entries) {
   // key: ((face position along the row * 3 + axis) * 2 + upper) * 4 + missing corner
@@ -170,7 +170,7 @@ inline void fold_across_faces(std::size_t positions, FaceTriangle* own, std::siz
     if (slot.call == call) ++slot.count, any = true;
     else slot = {call, 1};
   });
-  if (!any) return;
+  if (!any) return false;
   entries.clear();
   for_each_owned([&](std::uint64_t k, unsigned row, FaceTriangle& f) {
     if (seen[k].count > 1) entries.push_back({k, row, f.tri, ((f.code >> 5) & 1u) != 0, &f});
@@ -178,13 +178,15 @@ inline void fold_across_faces(std::size_t positions, FaceTriangle* own, std::siz
   std::sort(entries.begin(), entries.end(), [](const FoldEntry& a, const FoldEntry& b) {
     return a.key != b.key ? a.key < b.key : a.row != b.row ? a.row < b.row : a.tri < b.tri;
   });
+  bool marked = false;
   for (std::size_t b = 0; b < entries.size();) {
     std::size_t e = b + 1;
     while (e < entries.size() && entries[e].key == entries[b].key) ++e;
     resolve_equal_triangles(static_cast<int>(e - b), [&](int m) { return entries[b + m].positive; },
-                            [&](int m) { entries[b + m].face->folded = 1; });
+                            [&](int m) { entries[b + m].face->folded = 1, marked = true; });
     b = e;
   }
+  return marked;
 }
 
 }  // namespace keymesh::generate

@@ -48,6 +48,7 @@
 // among all points.
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -509,6 +510,11 @@ inline void fold_and_count(const GridShape& s, Id first_triangle, CoarseTriangle
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   const VoxelBricks bricks(s, 0, layers);
   auto face_count = [&](Id vr) { return static_cast<std::size_t>(ct.face_count[vr]); };
+  // ct.folded first marks the rows a fold may have touched (the deciding
+  // row and the two next to it, which other rows decide at once: a relaxed
+  // atomic store of 1), so that only those rows' records are counted.
+  ct.folded.assign(static_cast<std::size_t>(voxel_rows), 0);
+  auto may_have_folds = [&](Id vr) { std::atomic_ref<std::uint8_t>(ct.folded[vr]).store(1, std::memory_order_relaxed); };
   parallel::for_each_dynamic(voxel_rows, [&](Id vr) {
     const Id j = vr % (s.ny - 1), k = vr / (s.ny - 1);
     const Id ny_row = j + 1 < s.ny - 1 ? vr + 1 : -1, nz_row = k + 1 < layers ? vr + (s.ny - 1) : -1;
@@ -516,12 +522,16 @@ inline void fold_and_count(const GridShape& s, Id first_triangle, CoarseTriangle
                       n_z = nz_row >= 0 ? face_count(nz_row) : 0;
     if (n_own + n_y + n_z < 2) return;
     thread_local std::vector<FoldEntry> entries;
-    fold_across_faces(static_cast<std::size_t>(s.nx), ct.faces_of(bricks, s.ny, vr), n_own, j == 0, k == 0,
-                      n_y ? ct.faces_of(bricks, s.ny, ny_row) : nullptr, n_y,
-                      n_z ? ct.faces_of(bricks, s.ny, nz_row) : nullptr, n_z, entries);
+    if (!fold_across_faces(static_cast<std::size_t>(s.nx), ct.faces_of(bricks, s.ny, vr), n_own, j == 0, k == 0,
+                           n_y ? ct.faces_of(bricks, s.ny, ny_row) : nullptr, n_y,
+                           n_z ? ct.faces_of(bricks, s.ny, nz_row) : nullptr, n_z, entries))
+      return;
+    may_have_folds(vr);
+    if (n_y) may_have_folds(ny_row);
+    if (n_z) may_have_folds(nz_row);
   }, 64);
-  ct.folded.resize(static_cast<std::size_t>(voxel_rows));
   parallel::for_each(voxel_rows, [&](Id vr) {
+    if (!ct.folded[vr]) return;
     const FaceTriangle* f = ct.faces_of(bricks, s.ny, vr);
     Id dropped = 0;
     for (std::size_t e = 0; e < face_count(vr); ++e) dropped += f[e].folded;
@@ -567,18 +577,21 @@ inline void write_coarse_triangles(const GridShape& s, const CoarseBits& cb, con
         const Id offset[8] = {0, 1, s.nx, s.nx + 1, dz, dz + 1, dz + s.nx, dz + s.nx + 1};
         const Id vr = k * (s.ny - 1) + j;
         PointIndex* o = connectivity + 3 * ct.first[vr];
-        // Triangle corners c0 | c1 << 3 | c2 << 6 of voxel i as coarse ids.
-        auto write = [&](Id i, unsigned c) {
-          auto id = [&](unsigned corner) { return ids[i + offset[corner]]; };
-          o[0] = id(c & 7u), o[1] = id((c >> 3) & 7u), o[2] = id(c >> 6);
+        // Triangle corners c0 | c1 << 3 | c2 << 6 (the low 9 bits of c) of
+        // the voxel whose corner 0 has its id at `at`, as coarse ids.
+        auto write = [&](const std::uint32_t* at, std::uint64_t c) {
+          o[0] = at[offset[c & 7u]], o[1] = at[offset[(c >> 3) & 7u]], o[2] = at[offset[(c >> 6) & 7u]];
           o += 3;
         };
         const std::uint32_t* const row_end = voxel_i + ct.voxels[vr];
         if (!ct.folded[vr]) {
+          // The entry's triangles nine bits at a time (a shift by 9 t a
+          // triangle was a multiply and a variable shift).
           for (; voxel_i < row_end; ++voxel_i) {
             const CoarseVoxel v = table[*entry++];
-            const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
-            for (int t = 0; t < count; ++t) write(*voxel_i, static_cast<unsigned>(v >> (9 * t)) & 511u);
+            const std::uint32_t* const at = ids + *voxel_i;
+            std::uint64_t c = v;
+            for (auto t = static_cast<unsigned>(v >> kCoarseCountShift) & 7u; t; --t, c >>= 9) write(at, c);
           }
         } else {
           // A row with folds across faces (few): its dropped triangles, in
@@ -595,7 +608,7 @@ inline void write_coarse_triangles(const GridShape& s, const CoarseBits& cb, con
             const int count = static_cast<int>((v >> kCoarseCountShift) & 7u);
             for (int t = 0; t < count; ++t, ++written) {
               if (written == drop) drop = next_drop();
-              else write(*voxel_i, static_cast<unsigned>(v >> (9 * t)) & 511u);
+              else write(ids + *voxel_i, v >> (9 * t));
             }
           }
         }
