@@ -61,18 +61,65 @@ FanShare fan_share(CornerChain chain, unsigned c) {
          FanShare{n.around[c][first]} << kShareFirst | FanShare{n.around[c][last]} << kShareLast;
 }
 
+namespace {
+
+// spread[c][m]: the local codes in m (bits a ^ c) that are ports (one or
+// two bits: face and edge neighbours), as a set of the 18 ports, numbered
+// in around's order without the centre and the corner neighbours.
+struct PortSets {
+  std::uint32_t spread[8][256] = {};
+
+  constexpr PortSets() {
+    std::uint8_t port_of[27] = {};
+    for (unsigned n = 0, next = 0; n < 27; ++n) {
+      const unsigned off_axis = (n % 3 != 1) + (n / 3 % 3 != 1) + (n / 9 != 1);
+      port_of[n] = static_cast<std::uint8_t>(off_axis == 1 || off_axis == 2 ? next++ : 255);
+    }
+    for (unsigned c = 0; c < 8; ++c)
+      for (unsigned m = 0; m < 256; ++m)
+        for (unsigned x = 1; x < 7; ++x)  // 7: the corner neighbour
+          if ((m >> x) & 1u) spread[c][m] |= 1u << port_of[kFanNeighbours.around[c][x]];
+  }
+};
+constexpr PortSets kPortSets{};
+
+}  // namespace
+
+PortShare port_share(CornerChain chain, unsigned c) {
+  const unsigned kind = chain >> kChainKindShift, first = (chain >> 8) & 7u, last = (chain >> 11) & 7u;
+  if (kind == kNoFan) return 0;
+  // Codes with one or two bits are ports; seven is the corner neighbour,
+  // which no other voxel has.
+  if (kind == kTangled || first == last || first == 7u || last == 7u) return kPortIrregular;
+  const unsigned leaving = chain & 255u, arriving = (leaving & ~(1u << first)) | (1u << last);
+  PortShare s = 1 | PortShare{kPortSets.spread[c][leaving]} << kPortLeavingShift |
+                PortShare{kPortSets.spread[c][arriving]} << kPortArrivingShift;
+  // Both ends in the wall across axis a: neither end is a step along a.
+  const unsigned o = 7u - c;
+  for (unsigned a = 0; a < 3; ++a)
+    if (!(((first | last) >> a) & 1u)) {
+      const unsigned others = a == 0 ? o >> 1 : a == 1 ? (o & 1u) | (o >> 2) << 1 : o & 3u;
+      s |= PortShare{1} << (kPortWallShift + 4 * a + others);
+    }
+  return s;
+}
+
 CoarseFanTable::CoarseFanTable() {
   const CoarseVoxelTable& voxels = coarse_voxel_table();
   if (voxels.first[0] != 0 || ((voxels.entries[0] >> kCoarseCountShift) & 7u) != 0)
     throw std::logic_error("coarse_fan_table: entry 0 is not the voxel without triangles");
   shares_.reset(static_cast<FanShare*>(std::calloc(8 * voxels.entries.size(), sizeof(FanShare))));
-  if (!shares_) throw std::bad_alloc();
+  port_shares_.reset(static_cast<PortShare*>(std::calloc(8 * voxels.entries.size(), sizeof(PortShare))));
+  if (!shares_ || !port_shares_) throw std::bad_alloc();
 }
 
 void CoarseFanTable::work_out(std::uint16_t entry) const {
   CornerChain chains[8];
   corner_chains(coarse_voxel_table().entries[entry], 0, chains);
-  // Corner 0 last, released: a thread that sees it sees the others.
+  for (unsigned c = 0; c < 8; ++c)
+    std::atomic_ref<PortShare>(port_shares_[8 * std::size_t{entry} + c])
+        .store(port_share(chains[c], c), std::memory_order_relaxed);
+  // Corner 0 of shares_ last, released: a thread that sees it sees the others.
   for (unsigned c = 8; c-- > 0;)
     std::atomic_ref<FanShare>(shares_[8 * std::size_t{entry} + c])
         .store(fan_share(chains[c], c), c ? std::memory_order_relaxed : std::memory_order_release);

@@ -78,8 +78,35 @@ constexpr std::uint64_t kShareSets = (std::uint64_t{1} << 52) - 1;
 constexpr int kShareFirst = 52, kShareLast = 57;
 FanShare fan_share(CornerChain chain, unsigned c);
 
-// fan_share(corner_chains(entries[e], 0)[c], c) for every CoarseVoxelTable
-// entry e and corner c, each entry's eight worked out when first asked for:
+// A voxel's share at the point's 18 ports (its face and edge neighbours,
+// the only neighbours two voxels share), for the quick test that clears
+// most points before any walk (coarse_fans.hpp):
+//  bits 0-5    weight: 1 for a path whose ends are ports; 6 for anything
+//              else (a closed chain, an end at a corner neighbour, tangled)
+//  bits 6-17   the wall (kWalls) holding both ends of the path, if any
+//  bits 18-35  the ports a link edge leaves from, bits 36-53 arrives at
+//              (a corner neighbour is then inside the path: left and
+//              arrived at by it alone, so it never decides the test)
+//  0 without a triangle at the corner; bits 54-63 stay 0, so that eight
+// shares add up without a carry past bit 63.
+// The eight shares' weights add up to at most 5, they share no bit (their
+// sum is their union above the weight) and the ports left are those arrived
+// at: then the point is one closed fan. Its link is paths between ports,
+// each in its own voxel, a port left by one and arrived at by one, so the
+// paths join into cycles; a cycle of two paths needs two voxels with both
+// ends in their common wall (voxels sharing two ports share a wall: its two
+// face neighbours and its edge neighbour), which sets that wall's bit twice;
+// so every cycle has three paths or more, and five paths are one cycle.
+using PortShare = std::uint64_t;
+constexpr int kPortWallShift = 6, kPortLeavingShift = 18, kPortArrivingShift = 36;
+constexpr PortShare kPortWeight = 63, kPortIrregular = 6;
+// The internal walls of the point's eight voxels: the wall across axis a
+// between voxel o and o ^ (1 << a) is 4 a + o's other two bits.
+constexpr unsigned kWalls = 12;
+PortShare port_share(CornerChain chain, unsigned c);
+
+// fan_share(corner_chains(entries[e], 0)[c], c) and port_share's for every
+// CoarseVoxelTable entry e and corner c, each entry's worked out when first asked for:
 // a volume meets a few thousand of the 36,450 entries, and working them all
 // out cost 32 M instructions, more than the whole check on a small volume,
 // in every process. Asked for from any thread: a share is the same whoever
@@ -98,6 +125,11 @@ class CoarseFanTable {
   [[gnu::always_inline]] FanShare share(std::uint16_t entry, unsigned c) const {
     return std::atomic_ref<FanShare>(shares_[8 * std::size_t{entry} + c]).load(std::memory_order_relaxed);
   }
+  // Its share at the ports (port_share above), in a table of its own, so that the
+  // quick test reads 64 bytes an entry, as the walk does.
+  [[gnu::always_inline]] PortShare share_at_ports(std::uint16_t entry, unsigned c) const {
+    return std::atomic_ref<PortShare>(port_shares_[8 * std::size_t{entry} + c]).load(std::memory_order_relaxed);
+  }
 
  private:
   void work_out(std::uint16_t entry) const;
@@ -107,6 +139,7 @@ class CoarseFanTable {
     void operator()(FanShare* p) const { std::free(p); }
   };
   std::unique_ptr<FanShare[], Free> shares_;
+  std::unique_ptr<PortShare[], Free> port_shares_;
 };
 
 // Made once (thread-safe static initialisation).

@@ -14,8 +14,10 @@
 // edges form one cycle, except that a fan passing twice through one voxel
 // is called tangled: such points are suspects, a few more than
 // split_nonmanifold needs to look at (it checks each against the triangles
-// again). A point with no share at all has no triangle: it is not numbered,
-// so the output has no unused point and nothing is renumbered afterwards.
+// again). Most points are cleared before that walk by a quick test on
+// their shares at the ports (fan_verdict). A point with no share at all
+// has no triangle: it is not numbered, so the output has no unused point
+// and nothing is renumbered afterwards.
 // Voxels that lost triangles to a fold across a face (few) have their share
 // worked out from what is left.
 #include <algorithm>
@@ -69,6 +71,47 @@ class FanShares {
   FanShare by_first_[32];  // by a 5-bit index: 27 neighbours and room
 };
 
+// What the check makes of a coarse candidate.
+enum class FanVerdict { kNoTriangle, kOneClosedFan, kSuspect };
+
+// The walk, out of line: the quick test's registers are not kept for it.
+template <class ShareAt>
+[[gnu::noinline]] FanVerdict walked_fan_verdict(ShareAt share) {
+  FanShares fan;
+  [&]<unsigned... o>(std::integer_sequence<unsigned, o...>) {
+    (fan.add(share(o)), ...);
+  }(std::make_integer_sequence<unsigned, 8>{});
+  return fan.one_closed_fan() ? FanVerdict::kOneClosedFan : FanVerdict::kSuspect;
+}
+
+// The verdict on a point from its eight voxels' shares, port(o) and
+// share(o) for voxel o = dx | dy << 1 | dz << 2 (the point is its corner
+// 7 - o): first the quick test on the shares at the ports
+// (coarse_fan_table.hpp: PortShare), which clears most points with eight
+// loads and adds; the walk over the whole shares (FanShares) for the rest
+// (one point in six on ch2better: six or more paths, a closed chain, an end
+// at a corner neighbour, two paths with their ends in one wall). The quick
+// test clears only points the walk clears, so the verdict is the walk's.
+template <class PortAt, class ShareAt>
+[[gnu::always_inline]] inline FanVerdict fan_verdict(PortAt port, ShareAt share) {
+  PortShare sum = 0, all = 0;
+  [&]<unsigned... o>(std::integer_sequence<unsigned, o...>) {
+    (
+        [&] {
+          const PortShare p = port(o);  // one load (the table's loads are atomic: never merged)
+          sum += p, all |= p;
+        }(),
+        ...);
+  }(std::make_integer_sequence<unsigned, 8>{});
+  if (all == 0) return FanVerdict::kNoTriangle;
+  constexpr PortShare kPorts = (PortShare{1} << 18) - 1;
+  const PortShare paths = sum & kPortWeight;
+  if (paths - 3 <= 2 && (sum >> kPortWallShift) == (all >> kPortWallShift) &&
+      ((all >> kPortLeavingShift) & kPorts) == all >> kPortArrivingShift)
+    return FanVerdict::kOneClosedFan;
+  return walked_fan_verdict(share);
+}
+
 // A coarse candidate the check could not clear: grid row r, point i.
 struct FanSuspect {
   Id row;
@@ -87,13 +130,18 @@ struct CoarseFans {
 // each voxel that lost some, worked out once from what is left (a voxel is
 // read by the eight points at its corners). In the calling thread's scratch.
 class FanWindow {
+  struct DroppedShare {
+    FanShare whole;
+    PortShare ports;
+  };
+
  public:
   FanWindow(const GridShape& s, const CoarseTriangles& ct, const VoxelBricks& bricks, Id brick)
       : nx_(s.nx), ny_(s.ny), layers_(s.nz - 1), j0_(bricks.j_begin(brick) - 1), k0_(bricks.k_begin(brick) - 1),
         rows_j_(bricks.j_end(brick) - j0_), rows_k_(bricks.k_end(brick) - k0_) {
     thread_local std::vector<std::uint16_t> entry_scratch;
     thread_local std::vector<std::uint32_t> dropped_scratch;
-    thread_local std::vector<FanShare> share_scratch;
+    thread_local std::vector<DroppedShare> share_scratch;
     const auto slots = static_cast<std::size_t>((rows_j_ * rows_k_ + 1) * (nx_ + 1));
     if (entry_scratch.size() < slots) entry_scratch.resize(slots), dropped_scratch.resize(slots);
     entries_ = entry_scratch.data(), dropped_ = dropped_scratch.data();
@@ -130,7 +178,7 @@ class FanWindow {
           if (!lost) continue;
           CornerChain left[8];
           corner_chains(voxels[entry[v]], lost, left);
-          for (unsigned c = 0; c < 8; ++c) shares_->push_back(fan_share(left[c], c));
+          for (unsigned c = 0; c < 8; ++c) shares_->push_back({fan_share(left[c], c), port_share(left[c], c)});
           dropped[voxel_i[v] + 1] = static_cast<std::uint32_t>(shares_->size() / 8);
         }
       }
@@ -143,8 +191,9 @@ class FanWindow {
     const Id at = slot(j, k);
     return folded_[at] ? dropped_ + at * (nx_ + 1) : nullptr;
   }
-  // A voxel that lost triangles: its share at corner c.
-  FanShare dropped_share(std::uint32_t at, unsigned c) const { return (*shares_)[8 * (at - 1) + c]; }
+  // A voxel that lost triangles: its share at corner c, whole and at the ports.
+  FanShare dropped_share(std::uint32_t at, unsigned c) const { return (*shares_)[8 * (at - 1) + c].whole; }
+  PortShare dropped_port_share(std::uint32_t at, unsigned c) const { return (*shares_)[8 * (at - 1) + c].ports; }
 
  private:
   Id none() const { return rows_j_ * rows_k_; }
@@ -155,7 +204,7 @@ class FanWindow {
   Id nx_, ny_, layers_, j0_, k0_, rows_j_, rows_k_;
   std::uint16_t* entries_;
   std::uint32_t* dropped_;
-  std::vector<FanShare>* shares_;
+  std::vector<DroppedShare>* shares_;
   std::vector<std::uint8_t> folded_;
 };
 
@@ -187,25 +236,22 @@ inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, Coa
         const bool any_dropped = dropped[0] || dropped[1] || dropped[2] || dropped[3];
         std::uint64_t* words = cb.points.data() + r * wpr;
         // The point is corner c = 7 - o of its voxel o = dx | dy << 1 | dz << 2.
-        auto fan_of = [&](Id i) {
-          FanShares fan;
+        auto verdict = [&](Id i) {
+          auto entry = [&](unsigned o) { return rows[o >> 1][i + (o & 1u)]; };
           auto at = [&](unsigned o) { return dropped[o >> 1] ? dropped[o >> 1][i + (o & 1u)] : 0u; };
-          if (any_dropped && (at(0) | at(1) | at(2) | at(3) | at(4) | at(5) | at(6) | at(7))) {
-            for (unsigned o = 0; o < 8; ++o)
-              fan.add(at(o) ? window.dropped_share(at(o), 7u - o) : table.share(rows[o >> 1][i + (o & 1u)], 7u - o));
-            return fan;
-          }
-          [&]<unsigned... o>(std::integer_sequence<unsigned, o...>) {
-            (fan.add(table.share(rows[o >> 1][i + (o & 1u)], 7u - o)), ...);
-          }(std::make_integer_sequence<unsigned, 8>{});
-          return fan;
+          if (any_dropped && (at(0) | at(1) | at(2) | at(3) | at(4) | at(5) | at(6) | at(7)))
+            return fan_verdict(
+                [&](unsigned o) { return at(o) ? window.dropped_port_share(at(o), 7u - o) : table.share_at_ports(entry(o), 7u - o); },
+                [&](unsigned o) { return at(o) ? window.dropped_share(at(o), 7u - o) : table.share(entry(o), 7u - o); });
+          return fan_verdict([&](unsigned o) { return table.share_at_ports(entry(o), 7u - o); },
+                             [&](unsigned o) { return table.share(entry(o), 7u - o); });
         };
         for (Id q = 0; q < wpr; ++q)
           for (std::uint64_t m = words[q]; m; m &= m - 1) {
             const Id i = 64 * q + std::countr_zero(m);
-            const FanShares fan = fan_of(i);
-            if (fan.empty()) words[q] &= ~(std::uint64_t{1} << (i % 64));
-            else if (!fan.one_closed_fan()) suspects.push_back({r, i});
+            const FanVerdict v = verdict(i);
+            if (v == FanVerdict::kNoTriangle) words[q] &= ~(std::uint64_t{1} << (i % 64));
+            else if (v == FanVerdict::kSuspect) suspects.push_back({r, i});
           }
       }
   }, 1);
