@@ -121,6 +121,13 @@ class CoarseFanTable {
     if (!std::atomic_ref<FanShare>(shares_[8 * std::size_t{entry}]).load(std::memory_order_acquire))
       work_out(entry);  // 0: not yet (no share is 0)
   }
+  // The same for n entries (a voxel row's): the table's address is read once.
+  void prepare(const std::uint16_t* entries, std::uint32_t n) const {
+    const FanShare* const shares = shares_.get();
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (!std::atomic_ref<const FanShare>(shares[8 * std::size_t{entries[v]}]).load(std::memory_order_acquire))
+        work_out(entries[v]);
+  }
   // A prepared entry's share at corner c.
   [[gnu::always_inline]] FanShare share(std::uint16_t entry, unsigned c) const {
     return std::atomic_ref<FanShare>(shares_[8 * std::size_t{entry} + c]).load(std::memory_order_relaxed);

@@ -142,34 +142,43 @@ class FanWindow {
     thread_local std::vector<std::uint16_t> entry_scratch;
     thread_local std::vector<std::uint32_t> dropped_scratch;
     thread_local std::vector<DroppedShare> share_scratch;
-    const auto slots = static_cast<std::size_t>((rows_j_ * rows_k_ + 1) * (nx_ + 1));
-    if (entry_scratch.size() < slots) entry_scratch.resize(slots), dropped_scratch.resize(slots);
-    entries_ = entry_scratch.data(), dropped_ = dropped_scratch.data();
+    thread_local std::vector<const std::uint16_t*> row_scratch;
+    thread_local std::vector<const std::uint32_t*> dropped_row_scratch;
+    const auto width = static_cast<std::size_t>(nx_ + 1), slots = static_cast<std::size_t>(rows_j_ * rows_k_ + 1);
+    if (entry_scratch.size() < slots * width) entry_scratch.resize(slots * width), dropped_scratch.resize(slots * width);
+    row_scratch.assign(slots, nullptr), dropped_row_scratch.assign(slots, nullptr);
+    rows_ = row_scratch.data(), dropped_rows_ = dropped_row_scratch.data();
     share_scratch.clear();
     shares_ = &share_scratch;
-    folded_.assign(static_cast<std::size_t>(rows_j_ * rows_k_ + 1), 0);
-    std::memset(entries_ + none() * (nx_ + 1), 0, sizeof(std::uint16_t) * static_cast<std::size_t>(nx_ + 1));
+    // Rows without a cut voxel (and those past the grid) read one row of
+    // entry 0, no triangle, cleared once.
+    std::uint16_t* const zeros = entry_scratch.data() + none() * width;
+    std::memset(zeros, 0, sizeof(std::uint16_t) * width);
+    std::fill(rows_, rows_ + slots, zeros);
     const CoarseFanTable& table = coarse_fan_table();
-    table.prepare(0);
     const CoarseVoxel* voxels = coarse_voxel_table().entries.data();
     for (Id k = std::max<Id>(k0_, 0); k < k0_ + rows_k_; ++k)
       for (Id j = std::max<Id>(j0_, 0); j < j0_ + rows_j_; ++j) {
         const Id slot = (k - k0_) * rows_j_ + (j - j0_), vr = k * (ny_ - 1) + j, b = bricks.brick_of(j, k);
-        std::uint16_t* row = entries_ + slot * (nx_ + 1);
-        std::memset(row, 0, sizeof(std::uint16_t) * static_cast<std::size_t>(nx_ + 1));  // entry 0: no triangle
-        const std::uint16_t* entry = ct.entries[b].data() + ct.entry_first[vr];
-        const std::uint32_t* voxel_i = ct.voxel_i[b].data() + ct.entry_first[vr];
-        for (std::uint32_t v = 0; v < ct.voxels[vr]; ++v) row[voxel_i[v] + 1] = entry[v], table.prepare(entry[v]);
+        const std::uint32_t n = ct.voxels[vr];
+        if (n == 0) continue;
+        std::uint16_t* row = entry_scratch.data() + slot * width;
+        std::memset(row, 0, sizeof(std::uint16_t) * width);  // entry 0: no triangle
+        rows_[slot] = row;
+        const std::uint16_t* const entry = ct.entries[b].data() + ct.entry_first[vr];
+        const std::uint32_t* const voxel_i = ct.voxel_i[b].data() + ct.entry_first[vr];
+        for (std::uint32_t v = 0; v < n; ++v) row[voxel_i[v] + 1] = entry[v];
+        table.prepare(entry, n);
         if (!ct.folded[vr]) continue;
         // The dropped face triangles, by voxel: the records follow the
         // row's triangle order, as the voxels do.
-        folded_[slot] = 1;
-        std::uint32_t* dropped = dropped_ + slot * (nx_ + 1);
-        std::memset(dropped, 0, sizeof(std::uint32_t) * static_cast<std::size_t>(nx_ + 1));
+        std::uint32_t* dropped = dropped_scratch.data() + slot * width;
+        std::memset(dropped, 0, sizeof(std::uint32_t) * width);
+        dropped_rows_[slot] = dropped;
         const FaceTriangle* f = ct.faces_of(bricks, ny_, vr);
         const FaceTriangle* const f_end = f + ct.face_count[vr];
         std::uint32_t before = 0;  // the row's triangles before voxel v's
-        for (std::uint32_t v = 0; v < ct.voxels[vr] && f < f_end; ++v) {
+        for (std::uint32_t v = 0; v < n && f < f_end; ++v) {
           const auto count = static_cast<std::uint32_t>((voxels[entry[v]] >> kCoarseCountShift) & 7u);
           unsigned lost = 0;  // bit t: the voxel's triangle t
           for (; f < f_end && f->tri < before + count; ++f)
@@ -182,15 +191,13 @@ class FanWindow {
           dropped[voxel_i[v] + 1] = static_cast<std::uint32_t>(shares_->size() / 8);
         }
       }
+    table.prepare(0);
   }
 
   // The rows of voxel row (j, k): entries, and which voxels lost triangles
   // (null when none did; else 0, or 1 + the voxel's index for dropped_share).
-  const std::uint16_t* entries(Id j, Id k) const { return entries_ + slot(j, k) * (nx_ + 1); }
-  const std::uint32_t* dropped(Id j, Id k) const {
-    const Id at = slot(j, k);
-    return folded_[at] ? dropped_ + at * (nx_ + 1) : nullptr;
-  }
+  const std::uint16_t* entries(Id j, Id k) const { return rows_[slot(j, k)]; }
+  const std::uint32_t* dropped(Id j, Id k) const { return dropped_rows_[slot(j, k)]; }
   // A voxel that lost triangles: its share at corner c, whole and at the ports.
   FanShare dropped_share(std::uint32_t at, unsigned c) const { return (*shares_)[8 * (at - 1) + c].whole; }
   PortShare dropped_port_share(std::uint32_t at, unsigned c) const { return (*shares_)[8 * (at - 1) + c].ports; }
@@ -202,10 +209,9 @@ class FanWindow {
   }
 
   Id nx_, ny_, layers_, j0_, k0_, rows_j_, rows_k_;
-  std::uint16_t* entries_;
-  std::uint32_t* dropped_;
+  const std::uint16_t** rows_;           // by slot; the last (none()) for rows past the grid
+  const std::uint32_t** dropped_rows_;   // by slot; null where no voxel lost triangles
   std::vector<DroppedShare>* shares_;
-  std::vector<std::uint8_t> folded_;
 };
 
 // Checks every coarse candidate of cb.points (mark_coarse_points' bits)
