@@ -114,7 +114,7 @@ CoarseVoxelTable build() {
   parallel::for_each_dynamic(256, [&](Id cube_case) { build_case(mc, by_corners, static_cast<unsigned>(cube_case), t); }, 8);
   for (unsigned c = 0; c < 512; ++c)
     if (!by_corners.collapsed[c] && by_corners.facts[c].on_face)
-      t.face_code[c] = static_cast<std::uint8_t>(by_corners.facts[c].code | 0x80u);
+      t.face_code[c] = by_corners.facts[c].code;
   return t;
 }
 

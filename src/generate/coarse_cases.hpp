@@ -51,8 +51,9 @@ struct CoarseVoxelTable {
     std::uint16_t x[16], here[16], next[16];
   };
   std::array<CaseIndex, 256> by_case{};
-  // By a triangle's 9 corner bits: CornerTriangle::code | 0x80 when its
-  // corners lie on one face of the voxel, else 0.
+  // By a triangle's 9 corner bits: CornerTriangle::code when its corners
+  // lie on one face of the voxel, else 0 (the entry's face bits say which
+  // triangles are on a face).
   std::array<std::uint8_t, 512> face_code{};
 
   // The entry of a voxel of this cube case and far key (below 2^16: there

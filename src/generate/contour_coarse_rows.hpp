@@ -484,7 +484,7 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
               for (unsigned m = static_cast<unsigned>(v >> kCoarseFaceShift); m; m &= m - 1) {
                 const int t = std::countr_zero(m);
                 const unsigned c = static_cast<unsigned>(v >> (9 * t)) & 511u;
-                *f++ = {written + static_cast<std::uint32_t>(t), i, static_cast<std::uint8_t>(table.face_code[c] & 0x7fu), 0};
+                *f++ = {written + static_cast<std::uint32_t>(t), i, table.face_code[c], 0};
               }
               written += static_cast<std::uint32_t>((v >> kCoarseCountShift) & 7u);
             });
