@@ -8,10 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
+#include "keymesh/core/equal_mask.hpp"
 #include "keymesh/core/types.hpp"
 
 namespace keymesh::generate::split_rule {
@@ -115,19 +112,7 @@ struct FanRule {
   // more than the rest of the rule).
   static constexpr Id kCornersMatched = 64;
   // Bit j set when ends[j] is w, for j < d (and maybe past d: masked).
-  static std::uint64_t matching(const PointIndex* ends, Id d, PointIndex w) {
-    std::uint64_t m = 0;
-#if defined(__SSE2__)
-    const __m128i wide = _mm_set1_epi32(static_cast<int>(w));
-    for (Id k = 0; k < d; k += 4) {
-      const __m128i four = _mm_loadu_si128(reinterpret_cast<const __m128i*>(ends + k));
-      m |= std::uint64_t{static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(four, wide))))} << k;
-    }
-#else
-    for (Id k = 0; k < d; ++k) m |= std::uint64_t{ends[k] == w} << k;
-#endif
-    return m;
-  }
+  static std::uint64_t matching(const PointIndex* ends, Id d, PointIndex w) { return equal_mask(ends, d, w); }
   template <class F>
   static void each_other_end_matched(CornerEnds c, F&& pair_up) {
     const std::uint64_t all = c.d == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << c.d) - 1;

@@ -251,3 +251,69 @@ TEST(TopologyTest, CheckFansCountsAsCheckTopology) {
   EXPECT_EQ(check_fans(meshes[3]).unused_points, 1);
   EXPECT_EQ(check_fans(meshes[4]).nonmanifold_edges, 1);
 }
+
+// The triangle meshes' fast path (bit masks of the corners holding each
+// point) against the general one, which a triangle mesh given with
+// explicit cell offsets takes: random meshes over few points, so that every
+// defect occurs (edges of one, two, three and more cells, pinched vertices,
+// triangles repeating a point, unused points), and points of more than 64
+// corners (the fast path's limit) as well.
+TEST(TopologyTest, TriangleFastPathCountsAsThePolygonPath) {
+  std::uint64_t state = 12345;
+  auto next_random = [&](std::uint64_t n) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return (state >> 33) % n;
+  };
+  int meshes_with[4] = {};  // boundary, non-manifold edges, non-manifold vertices, degenerate cells
+  for (int trial = 0; trial < 300; ++trial) {
+    const std::uint64_t points = 4 + next_random(trial < 200 ? 40 : 8), triangles = 1 + next_random(trial < 200 ? 60 : 200);
+    SurfaceMesh tri;
+    tri.points.assign(3 * points, 0.0f);
+    for (std::uint64_t t = 0; t < triangles; ++t) {
+      const auto a = static_cast<PointIndex>(next_random(points));
+      auto b = static_cast<PointIndex>(next_random(points)), c = static_cast<PointIndex>(next_random(points));
+      if (next_random(8) != 0) {  // mostly proper triangles
+        while (b == a) b = static_cast<PointIndex>(next_random(points));
+        while (c == a || c == b) c = static_cast<PointIndex>(next_random(points));
+      }
+      tri.connectivity.insert(tri.connectivity.end(), {a, b, c});
+    }
+    SurfaceMesh poly = tri;
+    for (std::uint64_t t = 0; t <= triangles; ++t) poly.offsets.push_back(3 * t);
+    const TopologyReport fast = check_fans(tri), general = check_fans(poly);
+    for (Id TopologyReport::*count : {&TopologyReport::edges, &TopologyReport::boundary_edges,
+                                      &TopologyReport::nonmanifold_edges, &TopologyReport::nonmanifold_vertices,
+                                      &TopologyReport::unused_points, &TopologyReport::degenerate_cells})
+      EXPECT_EQ(fast.*count, general.*count) << "trial " << trial;
+    meshes_with[0] += fast.boundary_edges > 0, meshes_with[1] += fast.nonmanifold_edges > 0;
+    meshes_with[2] += fast.nonmanifold_vertices > 0, meshes_with[3] += fast.degenerate_cells > 0;
+  }
+  for (int kind = 0; kind < 4; ++kind) EXPECT_GT(meshes_with[kind], 20) << "defect kind " << kind;
+  // Points with one or two corners in a triangle repeating a point (whose
+  // corners' other points could pass for a cycle), beside a proper one.
+  for (const Array<PointIndex>& conn : {Array<PointIndex>{0, 0, 1}, Array<PointIndex>{0, 1, 1}, Array<PointIndex>{1, 0, 0},
+                                        Array<PointIndex>{0, 0, 1, 1, 2, 3}, Array<PointIndex>{0, 1, 1, 0, 2, 3}}) {
+    const SurfaceMesh tri = make_mesh(Array<float>(12, 0.0f), conn);
+    SurfaceMesh poly = tri;
+    for (Id t = 0; t <= tri.num_cells(); ++t) poly.offsets.push_back(static_cast<std::uint64_t>(3 * t));
+    const TopologyReport fast = check_fans(tri), general = check_fans(poly);
+    EXPECT_EQ(fast.boundary_edges, general.boundary_edges);
+    EXPECT_EQ(fast.edges, general.edges);
+    EXPECT_EQ(fast.degenerate_cells, general.degenerate_cells);
+    EXPECT_GT(general.boundary_edges, 0);
+  }
+  // A closed torus and a fan of 80 triangles around one point (an open disk,
+  // then pinched by a second fan at the same point).
+  const SurfaceMesh closed = torus(9, 7);
+  SurfaceMesh closed_poly = closed;
+  for (Id t = 0; t <= closed.num_cells(); ++t) closed_poly.offsets.push_back(static_cast<std::uint64_t>(3 * t));
+  EXPECT_EQ(check_fans(closed).edges, check_fans(closed_poly).edges);
+  EXPECT_EQ(check_fans(closed).nonmanifold_vertices, 0);
+  SurfaceMesh fan;
+  fan.points.assign(3 * 162, 0.0f);
+  for (PointIndex t = 0; t < 80; ++t) fan.connectivity.insert(fan.connectivity.end(), {0, 1 + t, 2 + t});
+  EXPECT_EQ(check_fans(fan).nonmanifold_vertices, 0);
+  EXPECT_EQ(check_fans(fan).boundary_edges, 80 + 2);
+  for (PointIndex t = 0; t < 3; ++t) fan.connectivity.insert(fan.connectivity.end(), {0, 100 + t, 101 + t});
+  EXPECT_EQ(check_fans(fan).nonmanifold_vertices, 1);
+}

@@ -8,9 +8,9 @@
 
 namespace keymesh {
 
-template <class T>
-void free_storage(std::vector<T>& v) {
-  std::vector<T>().swap(v);
+template <class T, class Allocator>
+void free_storage(std::vector<T, Allocator>& v) {
+  std::vector<T, Allocator>().swap(v);
 }
 
 }  // namespace keymesh
