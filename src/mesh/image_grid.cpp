@@ -5,6 +5,10 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <type_traits>
+#include <vector>
+
+#include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh {
 
@@ -51,16 +55,41 @@ void ImageGrid::allocate(std::array<Id, 3> new_dims, ScalarType new_type) {
   bytes.assign(static_cast<std::size_t>(count * size), std::byte{0});
 }
 
+// The samples' range, by chunks on the threads. Integer samples are
+// compared as themselves (a loop the compiler vectorises: the command line
+// reads a volume's range before every contour, and the per-sample double
+// conversion and finiteness test cost more than the rest of the read);
+// floating samples skip NaN and infinities.
 std::array<double, 2> scalar_range(const ImageGrid& grid) {
   return visit_scalars(grid, [&](const auto* s) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(s)>>;
+    constexpr double kInf = std::numeric_limits<double>::infinity();
     const Id n = grid.num_points();
-    for (Id i = 0; i < n; ++i) {
-      const double v = static_cast<double>(s[i]);
-      if (!std::isfinite(v)) continue;
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
+    const int chunks = std::max(parallel::chunk_count(n, Id{1} << 20), 1);
+    std::vector<std::array<double, 2>> part(static_cast<std::size_t>(chunks), {kInf, -kInf});
+    parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
+      if (b == e) return;
+      if constexpr (std::is_integral_v<T>) {
+        T lo = s[b], hi = s[b];
+        for (Id i = b; i < e; ++i) {
+          const T v = s[i];
+          lo = v < lo ? v : lo;
+          hi = v > hi ? v : hi;
+        }
+        part[static_cast<std::size_t>(c)] = {static_cast<double>(lo), static_cast<double>(hi)};
+      } else {
+        double lo = kInf, hi = -kInf;
+        for (Id i = b; i < e; ++i) {
+          const double v = static_cast<double>(s[i]);
+          if (!std::isfinite(v)) continue;
+          lo = std::min(lo, v);
+          hi = std::max(hi, v);
+        }
+        part[static_cast<std::size_t>(c)] = {lo, hi};
+      }
+    });
+    double lo = kInf, hi = -kInf;
+    for (const auto& [l, h] : part) lo = std::min(lo, l), hi = std::max(hi, h);
     if (lo > hi) return std::array<double, 2>{0.0, 0.0};
     return std::array<double, 2>{lo, hi};
   });

@@ -1,8 +1,10 @@
 // ScalarType: sizes against the C++ types, names and parsing round-trip,
-// and which types a grid may hold (visit_scalars' list).
+// which types a grid may hold (visit_scalars' list), and a grid's range.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdint>
+#include <limits>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/mesh/image_grid.hpp"
@@ -43,6 +45,41 @@ TEST(ScalarType, GridTypesParseBackFromTheirNamesOthersAreRefused) {
   EXPECT_TRUE(scalar_is_float(ScalarType::Float32));
   EXPECT_TRUE(scalar_is_float(ScalarType::Float64));
   EXPECT_FALSE(scalar_is_float(ScalarType::UInt64));
+}
+
+// scalar_range: the extremes wherever they lie among the threads' chunks
+// (grids past one chunk of 2^20 samples), NaN and infinities skipped, the
+// range of a grid of nothing finite [0, 0].
+TEST(ScalarType, RangeFindsTheExtremesInEveryChunkAndSkipsNonFinite) {
+  const std::array<Id, 3> dims{128, 128, 130};  // 2,129,920 samples: three chunks
+  const Id n = dims[0] * dims[1] * dims[2];
+  for (const Id at : {Id{0}, n / 2 + 7, n - 1}) {
+    ImageGrid bytes;
+    bytes.allocate(dims, ScalarType::UInt8);
+    auto* b = static_cast<std::uint8_t*>(bytes.data());
+    for (Id i = 0; i < n; ++i) b[i] = static_cast<std::uint8_t>(40 + i % 100);
+    b[at] = 3, b[(at + n / 3) % n] = 250;
+    EXPECT_EQ(scalar_range(bytes), (std::array<double, 2>{3, 250})) << at;
+    ImageGrid shorts;
+    shorts.allocate(dims, ScalarType::Int16);
+    auto* h = static_cast<std::int16_t*>(shorts.data());
+    for (Id i = 0; i < n; ++i) h[i] = static_cast<std::int16_t>(i % 1000 - 500);
+    h[at] = -30000;
+    EXPECT_EQ(scalar_range(shorts), (std::array<double, 2>{-30000, 499})) << at;
+    ImageGrid floats;
+    floats.allocate(dims, ScalarType::Float32);
+    auto* f = static_cast<float*>(floats.data());
+    for (Id i = 0; i < n; ++i) f[i] = static_cast<float>(i % 77) * 0.5f;
+    f[at] = std::numeric_limits<float>::quiet_NaN();
+    f[(at + 1) % n] = -std::numeric_limits<float>::infinity();
+    f[(at + n / 3) % n] = -2.25f;
+    EXPECT_EQ(scalar_range(floats), (std::array<double, 2>{-2.25, 38})) << at;
+  }
+  ImageGrid nothing;
+  nothing.allocate({2, 2, 1}, ScalarType::Float64);
+  auto* d = static_cast<double*>(nothing.data());
+  for (int i = 0; i < 4; ++i) d[i] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(scalar_range(nothing), (std::array<double, 2>{0, 0}));
 }
 
 }  // namespace
