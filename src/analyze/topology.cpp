@@ -228,6 +228,8 @@ void corners_by_point(const SurfaceMesh& mesh, std::vector<Id>& start, CornerOrd
 // at its smaller end point, with how many cells use it; the corners are
 // united through shared edges and repeated cells, and more than one class
 // makes v non-manifold. `ent` and `par` are scratch for 2d and d entries.
+// The list is in increasing corner order (corners_by_point), so a cell's
+// corners at v are next to each other.
 struct FanPass {
   const SurfaceMesh& mesh;
   const std::vector<std::uint32_t>& corner_cell;  // empty for triangles
@@ -250,10 +252,9 @@ struct FanPass {
     }
   }
 
-  void operator()(Id v, std::uint32_t* list, Id d, FanEntry* ent, std::uint32_t* par, ChunkCounts& cc) const {
+  void operator()(Id v, const std::uint32_t* list, Id d, FanEntry* ent, std::uint32_t* par, ChunkCounts& cc) const {
     if (triangle_fan(v, list, d, cc)) return;
     const auto& conn = mesh.connectivity;
-    small_sort(list, list + d, [](std::uint32_t a, std::uint32_t b) { return a < b; });
     Id ne = 0;
     Id prev_cell = -1;
     for (Id j = 0; j < d; ++j) {
