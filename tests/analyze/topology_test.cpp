@@ -2,9 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
+#include <random>
+#include <set>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/threads.hpp"
@@ -316,4 +320,35 @@ TEST(TopologyTest, TriangleFastPathCountsAsThePolygonPath) {
   EXPECT_EQ(check_fans(fan).boundary_edges, 80 + 2);
   for (PointIndex t = 0; t < 3; ++t) fan.connectivity.insert(fan.connectivity.end(), {0, 100 + t, 101 + t});
   EXPECT_EQ(check_fans(fan).nonmanifold_vertices, 1);
+}
+
+// duplicate_points against a count made here: the positions (x, y, z with -0
+// as +0) in a std::set, NaN points never counted. Points on few grid planes
+// (as a contour's), repeated, with -0, NaN and a large run of one position;
+// with the default hash bits, and with 1 and 3 bits, which put hundreds of
+// positions in each run (the run's sort by coordinates).
+TEST(TopologyTest, DuplicatePointsCountAsASetOfPositions) {
+  std::mt19937 rng(7);
+  for (int round = 0; round < 20; ++round) {
+    const Id n = 50 + static_cast<Id>(rng() % 3000);
+    std::vector<float> xyz(static_cast<std::size_t>(3 * n));
+    for (Id i = 0; i < n; ++i) {
+      for (int a = 0; a < 3; ++a) xyz[3 * i + a] = static_cast<float>(static_cast<int>(rng() % 7) - 3) * 0.5f;
+      if (rng() % 5 == 0) xyz[3 * i + rng() % 3] = static_cast<float>(rng() % 1000) / 7.0f;
+      if (rng() % 17 == 0) xyz[3 * i + rng() % 3] = -0.0f;
+      if (rng() % 29 == 0) xyz[3 * i + rng() % 3] = std::numeric_limits<float>::quiet_NaN();
+      if (round % 4 == 0 && i % 3 == 0) xyz[3 * i] = xyz[3 * i + 1] = xyz[3 * i + 2] = 1.0f;  // one long run
+    }
+    std::set<std::array<float, 3>> positions;
+    Id expected = 0;
+    for (Id i = 0; i < n; ++i) {
+      std::array<float, 3> p{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+      if (p[0] != p[0] || p[1] != p[1] || p[2] != p[2]) continue;
+      for (float& c : p) c = c == 0.0f ? 0.0f : c;
+      if (!positions.insert(p).second) ++expected;
+    }
+    ASSERT_GT(expected, 0);
+    for (int bits : {0, 1, 3})
+      EXPECT_EQ(analyze::detail::count_duplicate_points(xyz.data(), n, bits), expected) << "round " << round << " bits " << bits;
+  }
 }

@@ -34,4 +34,11 @@ TopologyReport check_topology(const SurfaceMesh& mesh);
 // coarsened contour's report needs, at about three quarters of the cost.
 TopologyReport check_fans(const SurfaceMesh& mesh);
 
+namespace detail {
+// check_topology's duplicate_points of the n points at xyz; `hash_bits` (1 to
+// 32) sets how many bits of the positions' hash group them (0: as many as n
+// needs), so that a test can make every run hold many positions.
+Id count_duplicate_points(const float* xyz, Id n, int hash_bits = 0);
+}  // namespace detail
+
 }  // namespace keymesh::analyze
