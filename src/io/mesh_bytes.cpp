@@ -245,8 +245,12 @@ void validate_mesh(const SurfaceMesh& mesh, const std::string& path) {
   if (mesh.points.size() % 3 != 0)
     throw InputError(path + ": mesh has " + std::to_string(mesh.points.size()) + " point coordinates, not a multiple of 3");
   const std::uint64_t n = mesh.points.size() / 3;
-  // 1e39, inf and nan all end up non-finite as float: refused by name, never written on.
-  for (std::size_t i = 0; i < mesh.points.size(); ++i)
+  // 1e39, inf and nan all end up non-finite as float: refused by name, never
+  // written on. Each check is first one pass with no exit inside, which
+  // vectorises (a whole mesh is read here), then the first offender found.
+  std::uint32_t non_finite = 0;
+  for (const float v : mesh.points) non_finite |= (std::bit_cast<std::uint32_t>(v) & 0x7f800000u) == 0x7f800000u;
+  for (std::size_t i = 0; non_finite && i < mesh.points.size(); ++i)
     if (!std::isfinite(mesh.points[i]))
       throw InputError(path + ": point " + std::to_string(i / 3) + " has a non-finite coordinate " + "xyz"[i % 3] +
                        " = " + std::to_string(mesh.points[i]));
@@ -258,7 +262,9 @@ void validate_mesh(const SurfaceMesh& mesh, const std::string& path) {
   } else if (mesh.connectivity.size() % 3 != 0) {
     throw InputError(path + ": triangle connectivity size " + std::to_string(mesh.connectivity.size()) + " is not a multiple of 3");
   }
-  for (std::size_t i = 0; i < mesh.connectivity.size(); ++i)
+  PointIndex largest = 0;
+  for (const PointIndex id : mesh.connectivity) largest = std::max(largest, id);
+  for (std::size_t i = 0; !mesh.connectivity.empty() && largest >= n && i < mesh.connectivity.size(); ++i)
     if (mesh.connectivity[i] >= n)
       throw InputError(path + ": cell point id " + std::to_string(mesh.connectivity[i]) + " out of range (" +
                        std::to_string(n) + " points)");

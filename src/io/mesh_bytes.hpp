@@ -69,6 +69,9 @@ class ByteCursor {
   ByteCursor(std::string_view data, const std::string& path) : data_(data), path_(path) {}
   std::size_t pos() const { return pos_; }
   std::size_t remaining() const { return data_.size() - pos_; }
+  // The bytes at the cursor, for a reader that checks sizes itself and then
+  // steps over what it read with take().
+  const char* here() const { return data_.data() + pos_; }
   // Throws InputError "<path>: truncated ... (<what>)" unless n bytes remain.
   void need(std::size_t n, std::string_view what) const;
   const char* take(std::size_t n, std::string_view what) {

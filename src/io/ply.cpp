@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <set>
@@ -109,8 +110,14 @@ class ValueReader {
 
   std::size_t remaining() const { return format_ == Format::Ascii ? text_remaining() : bytes_.remaining(); }
 
- private:
+  // A binary body's bytes at the cursor, for the readers of whole records
+  // (read_binary_vertices, read_binary_faces), and a step over those read.
+  bool binary() const { return format_ != Format::Ascii; }
   bool big() const { return format_ == Format::BinaryBig; }
+  const char* here() const { return bytes_.here(); }
+  void step(std::size_t n, std::string_view what) { bytes_.take(n, what); }
+
+ private:
   std::size_t text_remaining() const { return body_size() - text_.pos(); }
   std::size_t body_size() const { return bytes_.pos() + bytes_.remaining(); }
 
@@ -294,6 +301,74 @@ VertexLayout plan_vertex(const Element& e, const std::string& path) {
   return layout;
 }
 
+// A binary vertex element of scalars only, record by record in place: each
+// property's value at its offset, converted as the value-by-value path does
+// (through double; a float32 NaN goes that way too, which quiets a
+// signalling one), for the records the body holds whole. Returns how many it
+// read; the value-by-value path reads the rest and names what is missing.
+std::uint64_t read_binary_vertices(const Element& e, const VertexLayout& layout, ValueReader& in, SurfaceMesh& mesh) {
+  if (!in.binary()) return 0;
+  struct Slot {
+    std::size_t offset;
+    ScalarType type;
+    float* out;
+    std::size_t step;
+  };
+  std::vector<Slot> slots;
+  std::size_t stride = 0;
+  for (std::size_t i = 0; i < e.props.size(); ++i) {
+    const Property& p = e.props[i];
+    if (p.is_list) return 0;
+    if (layout.coordinate[i] >= 0) {
+      slots.push_back({stride, p.type, mesh.points.data() + layout.coordinate[i], 3});
+    } else {
+      const auto [f, k] = layout.field_slot[i];
+      Field& fd = mesh.point_fields[f];
+      slots.push_back({stride, p.type, fd.values.data() + k, static_cast<std::size_t>(fd.components)});
+    }
+    stride += scalar_size(p.type);
+  }
+  const std::uint64_t whole = std::min<std::uint64_t>(e.count, in.remaining() / stride);
+  const bool big = in.big();
+  const char* record = in.here();
+  // x y z as float32, little-endian, and nothing else (what keymesh and
+  // most tools write): the records are the points array. (A coordinate's NaN
+  // is refused by checked_mesh whatever its bits.)
+  if (!big && stride == 12 && slots.size() == 3 && mesh.point_fields.empty()) {
+    bool plain = true;
+    for (int a = 0; a < 3; ++a)
+      plain = plain && slots[a].type == ScalarType::Float32 && slots[a].offset == 4 * std::size_t(a) &&
+              slots[a].out == mesh.points.data() + a;
+    if (plain) {
+      std::memcpy(mesh.points.data(), record, 12 * whole);
+      in.step(12 * whole, "vertices");
+      return whole;
+    }
+  }
+  // A block of records at a time, one property after the other over it (a
+  // tight loop per property, the block still in cache).
+  constexpr std::uint64_t kBlock = 4096;
+  for (std::uint64_t b = 0; b < whole; b += kBlock) {
+    const std::uint64_t e_block = std::min(whole, b + kBlock);
+    for (const Slot& s : slots) {
+      const char* at = record + b * stride + s.offset;
+      float* out = s.out + b * s.step;
+      if (s.type == ScalarType::Float32 && !big) {
+        for (std::uint64_t r = b; r < e_block; ++r, at += stride, out += s.step) {
+          float v;
+          std::memcpy(&v, at, sizeof v);
+          *out = v == v ? v : static_cast<float>(load_as_double(at, s.type, big));
+        }
+      } else {
+        for (std::uint64_t r = b; r < e_block; ++r, at += stride, out += s.step)
+          *out = static_cast<float>(load_as_double(at, s.type, big));
+      }
+    }
+  }
+  in.step(whole * stride, "vertices");
+  return whole;
+}
+
 void read_vertices(const Element& e, ValueReader& in, SurfaceMesh& mesh, const std::string& path) {
   if (e.count > std::numeric_limits<PointIndex>::max())
     throw LimitError(path + ": " + std::to_string(e.count) + " vertices exceed 2^32 - 1");
@@ -306,7 +381,7 @@ void read_vertices(const Element& e, ValueReader& in, SurfaceMesh& mesh, const s
     mesh.point_fields[f].components = static_cast<int>(layout.fields[f].props.size());
     mesh.point_fields[f].values.resize(e.count * layout.fields[f].props.size());
   }
-  for (std::uint64_t r = 0; r < e.count; ++r) {
+  for (std::uint64_t r = read_binary_vertices(e, layout, in, mesh); r < e.count; ++r) {
     for (std::size_t i = 0; i < e.props.size(); ++i) {
       const auto& p = e.props[i];
       if (p.is_list) {
@@ -342,6 +417,100 @@ void read_face(const Property& p, std::uint64_t r, std::uint64_t num_points, Val
   mesh.offsets.push_back(mesh.connectivity.size());
 }
 
+// The face layout nearly every binary PLY has (a one-byte count, 32-bit
+// ids, nothing else per face, little-endian): 13-byte triangles, their ids
+// written in place, for as long as each is a triangle with ids in range.
+// Offsets are made only when a face that is not such follows (a triangle
+// mesh has none). Returns how many faces it read.
+std::uint64_t read_binary_triangles(const Element& e, std::size_t list, std::uint64_t num_points, ValueReader& in,
+                                    SurfaceMesh& mesh) {
+  const Property& p = e.props[list];
+  if (!in.binary() || in.big() || e.props.size() != 1 || scalar_size(p.count_type) != 1 ||
+      (p.type != ScalarType::Int32 && p.type != ScalarType::UInt32) || !mesh.connectivity.empty())
+    return 0;
+  constexpr std::size_t kRecord = 13;
+  // Ids read as unsigned: a negative int32 is then 2^31 or more.
+  const std::uint64_t limit =
+      p.type == ScalarType::Int32 ? std::min<std::uint64_t>(num_points, std::uint64_t{1} << 31) : num_points;
+  const std::uint64_t whole = std::min<std::uint64_t>(e.count, in.remaining() / kRecord);
+  mesh.connectivity.resize(3 * whole);
+  PointIndex* out = mesh.connectivity.data();
+  const char* face = in.here();
+  std::uint64_t r = 0;
+  for (; r < whole; ++r, face += kRecord, out += 3) {
+    std::uint32_t id[3];
+    std::memcpy(id, face + 1, sizeof id);
+    if (face[0] != 3 || id[0] >= limit || id[1] >= limit || id[2] >= limit) break;
+    out[0] = id[0], out[1] = id[1], out[2] = id[2];
+  }
+  mesh.connectivity.resize(3 * r);
+  in.step(r * kRecord, "faces");
+  if (r < e.count) {
+    mesh.offsets.resize(r + 1);
+    for (std::uint64_t k = 0; k <= r; ++k) mesh.offsets[k] = 3 * k;
+  }
+  return r;
+}
+
+// A binary face element whose only list is the vertex indices, face by face
+// in place, for as long as each face is whole in the body, has at least
+// three ids, all in range: no value is read twice and no call is made per
+// value. From face `first` on; returns the first face it did not read, from
+// which the value-by-value path reads (and names what is wrong).
+std::uint64_t read_binary_faces(const Element& e, std::size_t list, std::uint64_t num_points, ValueReader& in,
+                                SurfaceMesh& mesh, std::uint64_t first) {
+  if (!in.binary() || first == e.count) return first;
+  std::size_t before = 0, after = 0;  // the other properties' bytes
+  for (std::size_t i = 0; i < e.props.size(); ++i) {
+    if (i == list) continue;
+    if (e.props[i].is_list) return 0;
+    (i < list ? before : after) += scalar_size(e.props[i].type);
+  }
+  const Property& p = e.props[list];
+  const std::size_t count_bytes = scalar_size(p.count_type), id_bytes = scalar_size(p.type);
+  const bool big = in.big();
+  const bool plain_ids = !big && (p.type == ScalarType::Int32 || p.type == ScalarType::UInt32);
+  auto id_at = [&](const char* at, std::int64_t& id) {
+    if (plain_ids) {
+      std::uint32_t u;
+      std::memcpy(&u, at, sizeof u);
+      id = p.type == ScalarType::Int32 ? std::int64_t{static_cast<std::int32_t>(u)} : std::int64_t{u};
+      return true;
+    }
+    return load_as_int64(at, p.type, big, id);
+  };
+  const char* const begin = in.here();
+  const char* face = begin;
+  const std::size_t body = in.remaining();
+  std::uint64_t r = first;
+  for (; r < e.count; ++r) {
+    const std::size_t left = body - static_cast<std::size_t>(face - begin);
+    if (left < before + count_bytes) break;
+    std::int64_t n = 0;
+    if (p.count_type == ScalarType::UInt8) n = static_cast<unsigned char>(face[before]);
+    else if (!load_as_int64(face + before, p.count_type, big, n)) break;
+    if (n < 3 || static_cast<std::uint64_t>(n) > (left - before - count_bytes) / id_bytes) break;
+    const char* const ids = face + before + count_bytes;
+    const std::size_t record = before + count_bytes + static_cast<std::size_t>(n) * id_bytes + after;
+    if (record > left) break;
+    bool in_range = true;
+    for (std::int64_t k = 0; k < n && in_range; ++k) {
+      std::int64_t id = 0;
+      in_range = id_at(ids + k * id_bytes, id) && id >= 0 && static_cast<std::uint64_t>(id) < num_points;
+    }
+    if (!in_range) break;
+    for (std::int64_t k = 0; k < n; ++k) {
+      std::int64_t id = 0;
+      id_at(ids + k * id_bytes, id);
+      mesh.connectivity.push_back(static_cast<PointIndex>(id));
+    }
+    mesh.offsets.push_back(mesh.connectivity.size());
+    face += record;
+  }
+  in.step(static_cast<std::size_t>(face - begin), "faces");
+  return r;
+}
+
 void read_faces(const Element& e, std::uint64_t num_points, ValueReader& in, SurfaceMesh& mesh,
                 const std::string& path) {
   std::optional<std::size_t> plist;
@@ -353,7 +522,8 @@ void read_faces(const Element& e, std::uint64_t num_points, ValueReader& in, Sur
   mesh.offsets.reserve(e.count + 1);
   mesh.offsets.push_back(0);
   mesh.connectivity.reserve(3 * e.count);
-  for (std::uint64_t r = 0; r < e.count; ++r)
+  const std::uint64_t triangles = read_binary_triangles(e, *plist, num_points, in, mesh);
+  for (std::uint64_t r = read_binary_faces(e, *plist, num_points, in, mesh, triangles); r < e.count; ++r)
     for (std::size_t i = 0; i < e.props.size(); ++i) {
       if (i == *plist) read_face(e.props[i], r, num_points, in, mesh, what, path);
       else in.skip(e.props[i], what);

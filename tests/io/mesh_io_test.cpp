@@ -716,3 +716,97 @@ TEST(PvtpTest, PiecesWeldByGlobalIdsNotPositions) {
   write_text(dir.file("not.pvtp"), "<VTKFile type=\"PolyData\"/>");
   EXPECT_THROW(io::read_mesh(dir.file("not.pvtp")), InputError);
 }
+
+// The binary PLY readers of whole records (vertex records in place, 13-byte
+// triangles, then faces of any size) give what the ASCII reader gives for
+// the same values: meshes of mostly triangles with polygons among them
+// (first, middle, last), in every common layout of counts, ids and extra
+// properties; and refuse a bad face by its index wherever it falls.
+TEST(PlyTest, BinaryRecordsReadAsTheirAsciiText) {
+  std::mt19937 rng(11);
+  struct Layout {
+    const char* count;
+    const char* id;
+    bool face_extra, vertex_extra;
+  };
+  const Layout layouts[] = {{"uchar", "uint", false, false}, {"uchar", "int", false, true},
+                            {"int", "int", false, false},    {"uchar", "uint", true, false},
+                            {"ushort", "uint", false, true}};
+  auto put = [](std::string& d, auto v) { d.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  for (int round = 0; round < 40; ++round) {
+    const Layout& L = layouts[round % 5];
+    const int n_points = 5 + static_cast<int>(rng() % 50), n_faces = 1 + static_cast<int>(rng() % 60);
+    std::vector<std::vector<std::uint32_t>> faces(static_cast<std::size_t>(n_faces));
+    for (int f = 0; f < n_faces; ++f) {
+      const bool polygon = rng() % 6 == 0 || (round % 3 == 0 && (f == 0 || f == n_faces - 1));
+      faces[f].resize(polygon ? 4 + rng() % 3 : 3);
+      for (auto& id : faces[f]) id = rng() % static_cast<std::uint32_t>(n_points);
+    }
+    std::ostringstream header, text;
+    header << "element vertex " << n_points << "\nproperty float x\nproperty float y\nproperty float z\n"
+           << (L.vertex_extra ? "property double w\n" : "") << "element face " << n_faces << "\n"
+           << (L.face_extra ? "property uchar flags\n" : "") << "property list " << L.count << " " << L.id
+           << " vertex_indices\nend_header\n";
+    text << "ply\nformat ascii 1.0\n" << header.str();
+    std::string bin = "ply\nformat binary_little_endian 1.0\n";
+    bin += header.str();
+    text.precision(9);
+    for (int p = 0; p < n_points; ++p) {
+      const float xyz[3] = {static_cast<float>(rng() % 1000) / 8, static_cast<float>(p), -0.5f * p};
+      for (float c : xyz) text << c << " ", put(bin, c);
+      if (L.vertex_extra) text << p * 0.25 << " ", put(bin, p * 0.25);
+      text << "\n";
+    }
+    for (const auto& f : faces) {
+      if (L.face_extra) text << "7 ", put(bin, std::uint8_t{7});
+      text << f.size();
+      if (std::string(L.count) == "uchar") put(bin, static_cast<std::uint8_t>(f.size()));
+      else if (std::string(L.count) == "ushort") put(bin, static_cast<std::uint16_t>(f.size()));
+      else put(bin, static_cast<std::int32_t>(f.size()));
+      for (std::uint32_t id : f) text << " " << id, put(bin, id);
+      text << "\n";
+    }
+    const SurfaceMesh a = io::parse_ply(text.str(), "a.ply"), b = io::parse_ply(bin, "b.ply");
+    EXPECT_EQ(a.points, b.points) << round;
+    EXPECT_EQ(a.connectivity, b.connectivity) << round;
+    EXPECT_EQ(a.offsets, b.offsets) << round;
+    ASSERT_EQ(a.point_fields.size(), b.point_fields.size());
+    for (std::size_t f = 0; f < a.point_fields.size(); ++f) EXPECT_EQ(a.point_fields[f].values, b.point_fields[f].values);
+    // A bad face k (an id past the points, a negative int id, two ids, or
+    // the file cut inside it): refused, naming face k or the truncation.
+    const std::size_t k = rng() % faces.size();
+    std::size_t at = bin.size();
+    for (std::size_t f = faces.size(); f-- > k;)
+      at -= (L.face_extra ? 1 : 0) + (std::string(L.count) == "uchar" ? 1 : std::string(L.count) == "ushort" ? 2 : 4) +
+            4 * faces[f].size();
+    const std::size_t ids = at + (L.face_extra ? 1 : 0) + (std::string(L.count) == "uchar" ? 1 : std::string(L.count) == "ushort" ? 2 : 4);
+    auto refused = [&](const std::string& data, const std::string& says, const std::string& or_says = "") {
+      try {
+        io::parse_ply(data, "b.ply");
+        ADD_FAILURE() << "accepted, round " << round << ", face " << k;
+      } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_TRUE(what.find(says) != std::string::npos || (!or_says.empty() && what.find(or_says) != std::string::npos))
+            << what << " / " << says;
+      }
+    };
+    for (std::size_t j = 0; j < faces[k].size(); ++j) {
+      std::string past = bin;
+      const auto n = static_cast<std::uint32_t>(n_points);
+      std::memcpy(&past[ids + 4 * j], &n, 4);
+      refused(past, "face " + std::to_string(k) + " refers to vertex " + std::to_string(n_points));
+    }
+    if (std::string(L.id) == "int") {
+      std::string negative = bin;
+      const std::int32_t minus = -1;
+      std::memcpy(&negative[ids], &minus, 4);
+      refused(negative, "face " + std::to_string(k) + " refers to vertex -1");
+    }
+    if (std::string(L.count) == "uchar") {
+      std::string two = bin;
+      two[ids - 1] = 2;
+      refused(two, "face " + std::to_string(k) + " has 2 vertices");
+    }
+    refused(bin.substr(0, ids + 2), "truncated", "more than the file can hold");
+  }
+}
