@@ -412,7 +412,8 @@ struct FanPass {
     for (Id j = 0; j < d; ++j) {
       // The corner's place in its triangle, and the offsets of the corners after and before it.
       constexpr int kAfter[3] = {1, 1, -2}, kBefore[3] = {2, -1, -1};
-      const Id corner = list[j], at = corner % 3;
+      // (32-bit: corners are below 2^32, checked, and % 3 is then one multiply.)
+      const std::uint32_t corner = list[j], at = corner % 3u;
       next[j] = conn[corner + kAfter[at]];
       prev[j] = conn[corner + kBefore[at]];
     }
