@@ -47,6 +47,13 @@ T load(const void* p, bool big_endian) {
   return (big_endian != native_big && sizeof(T) > 1) ? byteswap_value(v) : v;
 }
 
+// Stores v at p (no alignment needed) in little-endian byte order.
+template <class T>
+void store_le(void* p, T v) {
+  if constexpr (std::endian::native == std::endian::big && sizeof(T) > 1) v = byteswap_value(v);
+  std::memcpy(p, &v, sizeof(T));
+}
+
 // Appends v in little-endian byte order.
 template <class T>
 void append_le(std::string& out, T v) {

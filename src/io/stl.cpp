@@ -1,12 +1,15 @@
 #include "mesh_formats.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
+#include "keymesh/parallel/for_each.hpp"
 #include "mesh_bytes.hpp"
 #include "keymesh/weld/vertex_weld.hpp"
 
@@ -134,12 +137,18 @@ void write_stl(const SurfaceMesh& mesh, const std::string& path) {
     throw LimitError(path + ": " + std::to_string(triangles) + " triangles exceed binary STL's 2^32 - 1");
 
   AtomicFile file(path);
-  std::string buf(80, ' ');
+  std::string header(80, ' ');
   const std::string_view title = "binary STL written by keymesh";
-  buf.replace(0, title.size(), title);
-  append_le(buf, static_cast<std::uint32_t>(triangles));
+  header.replace(0, title.size(), title);
+  append_le(header, static_cast<std::uint32_t>(triangles));
+  file.write(header);
+  // 50-byte records (normal, three corners, attribute 0) filled a block at
+  // a time, on the threads for a triangle mesh (each record is its own
+  // triangle's: the bytes do not depend on the threads), then written.
+  constexpr std::size_t kRecord = 50, kPerBlock = std::size_t{1} << 16;
+  std::unique_ptr<char[]> block(new char[kRecord * kPerBlock]);
   const float* pts = mesh.points.data();
-  auto write_triangle = [&](PointIndex a, PointIndex b, PointIndex c) {
+  auto record = [&](char* out, PointIndex a, PointIndex b, PointIndex c) {
     const float* p[3] = {pts + 3 * std::size_t{a}, pts + 3 * std::size_t{b}, pts + 3 * std::size_t{c}};
     double u[3], v[3];
     for (int k = 0; k < 3; ++k) {
@@ -148,22 +157,34 @@ void write_stl(const SurfaceMesh& mesh, const std::string& path) {
     }
     double nrm[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
     const double len = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
-    for (double& x : nrm) x = len > 0 ? x / len : 0.0;
-    for (double x : nrm) append_le(buf, static_cast<float>(x));
-    for (const float* q : p)
-      for (int k = 0; k < 3; ++k) append_le(buf, q[k]);
-    append_le(buf, std::uint16_t{0});
-    if (buf.size() >= (1 << 20)) {
-      file.write(buf);
-      buf.clear();
-    }
+    float values[12];
+    for (int k = 0; k < 3; ++k) values[k] = static_cast<float>(len > 0 ? nrm[k] / len : 0.0);
+    for (int q = 0; q < 3; ++q)
+      for (int k = 0; k < 3; ++k) values[3 + 3 * q + k] = p[q][k];
+    for (int k = 0; k < 12; ++k) store_le(out + 4 * k, values[k]);
+    out[48] = out[49] = 0;
   };
-  for (Id c = 0; c < cells; ++c) {
-    const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
-    for (std::uint64_t k = b + 1; k + 1 < e; ++k)
-      write_triangle(mesh.connectivity[b], mesh.connectivity[k], mesh.connectivity[k + 1]);
+  const PointIndex* conn = mesh.connectivity.data();
+  if (mesh.offsets.empty()) {
+    for (Id first = 0; first < cells; first += static_cast<Id>(kPerBlock)) {
+      const Id count = std::min<Id>(cells - first, static_cast<Id>(kPerBlock));
+      parallel::for_each(count, [&](Id t) {
+        const PointIndex* c = conn + 3 * (first + t);
+        record(block.get() + kRecord * static_cast<std::size_t>(t), c[0], c[1], c[2]);
+      }, 4096);
+      file.write(block.get(), kRecord * static_cast<std::size_t>(count));
+    }
+  } else {
+    std::size_t filled = 0;
+    for (Id c = 0; c < cells; ++c) {
+      const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
+      for (std::uint64_t k = b + 1; k + 1 < e; ++k) {
+        if (filled == kPerBlock) file.write(block.get(), kRecord * filled), filled = 0;
+        record(block.get() + kRecord * filled++, conn[b], conn[k], conn[k + 1]);
+      }
+    }
+    file.write(block.get(), kRecord * filled);
   }
-  file.write(buf);
   file.commit();
 }
 
