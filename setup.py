@@ -46,13 +46,20 @@ class CMakeBuild(build_ext):
         exe.parent.mkdir(exist_ok=True)
         shutil.copyfile(tree / "keymesh", exe)
         exe.chmod(0o755)
+        # GDCM's module, opened by the first DICOM read, is looked for beside
+        # the binary holding the reader: the extension and the command.
+        module = tree / "libkeymesh_gdcm.so"
+        if not module.exists():
+            raise RuntimeError(f"CMake did not build {module}")
+        for folder in (target.parent, exe.parent):
+            shutil.copyfile(module, folder / module.name)
 
 
 BUILD_BASE.mkdir(exist_ok=True)
 setup(
     packages=["keymesh"],
     package_dir={"keymesh": "python/keymesh"},
-    package_data={"keymesh": ["*.pyi", "py.typed", "bin/keymesh"]},
+    package_data={"keymesh": ["*.pyi", "py.typed", "bin/keymesh", "*.so", "bin/*.so"]},
     ext_modules=[CMakeExtension("keymesh._keymesh")],
     cmdclass={"build_ext": CMakeBuild},
     options={"build": {"build_base": str(BUILD_BASE)}, "egg_info": {"egg_base": str(BUILD_BASE)}},

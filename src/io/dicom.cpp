@@ -1,10 +1,5 @@
 #include "dicom.hpp"
 
-#include <gdcmImage.h>
-#include <gdcmImageReader.h>
-#include <gdcmScanner.h>
-#include <gdcmTrace.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,29 +7,50 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <iostream>
 #include <iterator>
 #include <map>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "child_process.hpp"
+#include "gdcm_module/gdcm_api.hpp"
 #include "keymesh/io/input_file.hpp"
+#include "loadable_module.hpp"
 #include "volume_formats.hpp"
 
 namespace keymesh::io {
 
 namespace {
 
-const gdcm::Tag kSeriesUid(0x0020, 0x000e), kPosition(0x0020, 0x0032), kOrientation(0x0020, 0x0037),
-    kPixelSpacing(0x0028, 0x0030), kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kSamples(0x0028, 0x0002),
-    kBitsAllocated(0x0028, 0x0100), kSigned(0x0028, 0x0103), kFrames(0x0028, 0x0008), kSlope(0x0028, 0x1053),
-    kIntercept(0x0028, 0x1052);
+// GDCM, through keymesh's module (gdcm_module/gdcm_api.hpp), opened by the
+// first DICOM read: before any fork, so that every child process inherits it.
+const KeymeshGdcmApi& gdcm() {
+  static const KeymeshGdcmApi* const api = [] {
+    const char* purpose = "reading a DICOM series";
+    const auto entry = reinterpret_cast<const KeymeshGdcmApi* (*)()>(
+        loadable_module_entry(KEYMESH_GDCM_MODULE_FILE, kKeymeshGdcmEntry, purpose));
+    const KeymeshGdcmApi* table = entry();
+    if (!table || table->version != kKeymeshGdcmApiVersion)
+      throw InputError(std::string(purpose) + ": keymesh's module " + KEYMESH_GDCM_MODULE_FILE +
+                       " is of another keymesh build (reinstall keymesh)");
+    table->quiet();  // GDCM prints its own warnings on stderr; keymesh reports what matters
+    return table;
+  }();
+  return *api;
+}
+
+constexpr KeymeshGdcmTag tag(std::uint16_t group, std::uint16_t element) {
+  return (KeymeshGdcmTag{group} << 16) | element;
+}
+constexpr KeymeshGdcmTag kSeriesUid = tag(0x0020, 0x000e), kPosition = tag(0x0020, 0x0032),
+                         kOrientation = tag(0x0020, 0x0037), kPixelSpacing = tag(0x0028, 0x0030),
+                         kRows = tag(0x0028, 0x0010), kColumns = tag(0x0028, 0x0011), kSamples = tag(0x0028, 0x0002),
+                         kBitsAllocated = tag(0x0028, 0x0100), kSigned = tag(0x0028, 0x0103),
+                         kFrames = tag(0x0028, 0x0008), kSlope = tag(0x0028, 0x1053), kIntercept = tag(0x0028, 0x1052);
 // Every tag the scan reads.
-const gdcm::Tag kScanTags[] = {kSeriesUid, kPosition, kOrientation, kPixelSpacing, kRows, kColumns,
+constexpr KeymeshGdcmTag kScanTags[] = {kSeriesUid, kPosition, kOrientation, kPixelSpacing, kRows, kColumns,
                                kSamples, kBitsAllocated, kSigned, kFrames, kSlope, kIntercept};
 constexpr std::size_t kScanTagCount = std::size(kScanTags);
 
@@ -114,18 +130,22 @@ std::size_t gdcm_memory_budget(const std::string& file, std::size_t plane_bytes)
 // GDCM asserts on malformed headers), passed back as bytes: a DICOM flag,
 // then per tag a presence flag, a 4-byte length and the value.
 ScannedTags scan_file(const std::string& folder, const std::string& file) {
+  const KeymeshGdcmApi& library = gdcm();
   const std::string bytes = run_in_child(
       [&] {
-        gdcm::Scanner scanner;
-        for (const gdcm::Tag& t : kScanTags) scanner.AddTag(t);
-        if (!scanner.Scan({file})) throw InputError(folder + ": cannot scan the DICOM files");
-        std::string out(1, scanner.IsKey(file.c_str()) ? '\1' : '\0');
-        for (const gdcm::Tag& t : kScanTags) {
-          const char* v = scanner.GetValue(file.c_str(), t);
-          const std::uint32_t size = v ? static_cast<std::uint32_t>(std::strlen(v)) : 0;
+        // The values live as long as the module's scanner: copied as found.
+        std::array<std::optional<std::string>, kScanTagCount> found;
+        auto keep = [](void* values, std::size_t k, const char* v) {
+          (*static_cast<std::array<std::optional<std::string>, kScanTagCount>*>(values))[k] = v;
+        };
+        const int dicom = library.scan(file.c_str(), kScanTags, kScanTagCount, keep, &found);
+        if (dicom < 0) throw InputError(folder + ": cannot scan the DICOM files");
+        std::string out(1, dicom ? '\1' : '\0');
+        for (const std::optional<std::string>& v : found) {
+          const std::uint32_t size = v ? static_cast<std::uint32_t>(v->size()) : 0;
           out.push_back(v ? '\1' : '\0');
           out.append(reinterpret_cast<const char*>(&size), sizeof size);
-          if (v) out.append(v, size);
+          if (v) out.append(*v);
         }
         return out;
       },
@@ -153,7 +173,7 @@ class SeriesScan {
   InputError fail(const std::string& file, const std::string& what) const {
     return InputError(folder_ + ": " + name_of(file) + ": " + what);
   }
-  const char* value(const std::string& file, const gdcm::Tag& t) const {
+  const char* value(const std::string& file, KeymeshGdcmTag t) const {
     const auto it = tags_.find(file);
     if (it == tags_.end()) return nullptr;
     for (std::size_t k = 0; k < kScanTagCount; ++k)
@@ -163,7 +183,7 @@ class SeriesScan {
   // An integer tag; `fallback` when absent (an error when fallback < 0).
   // Within 32 bits, as DICOM's IS and US values are: "1e300" passes
   // strtod and floor, and its cast to long would be undefined (UBSan).
-  long integer(const std::string& file, const gdcm::Tag& t, const char* what, long fallback) const {
+  long integer(const std::string& file, KeymeshGdcmTag t, const char* what, long fallback) const {
     const char* v = value(file, t);
     if (!v) {
       if (fallback >= 0) return fallback;
@@ -310,10 +330,6 @@ double order_slices(std::vector<Slice>& slices, const std::array<double, 3>& nor
 class DicomPlanes : public PlaneSource {
  public:
   explicit DicomPlanes(const std::string& folder) : folder_(folder) {
-    // GDCM prints its own warnings on stderr; keymesh reports what matters.
-    gdcm::Trace::WarningOff();
-    gdcm::Trace::ErrorOff();
-    gdcm::Trace::DebugOff();
     const std::vector<std::string> files = list_slice_files(folder);
     const SeriesScan scan(folder, files);
     const std::string& first = files.front();
@@ -350,6 +366,7 @@ class DicomPlanes : public PlaneSource {
 
   void read_planes(Id first, Id count, std::byte* out) override {
     const std::size_t plane = static_cast<std::size_t>(head_.dims[0] * head_.dims[1]);
+    gdcm();  // opened here, not in each child
     for (Id k = 0; k < count; ++k) {
       const Slice& s = slices_[static_cast<std::size_t>(first + k)];
       // In a child process: GDCM asserts on some malformed files (io/child_process.hpp).
@@ -368,31 +385,23 @@ class DicomPlanes : public PlaneSource {
   }
 
  private:
-  // One slice's stored samples, decoded by GDCM's ImageReader; the size is
-  // checked against the header before the samples are allocated.
+  // One slice's stored samples, decoded by GDCM's ImageReader into a plane
+  // of the size the header declares (checked_byte_count bounded it); the
+  // module decodes only pixel data of that very length.
   std::string decode_slice(const Slice& s) const {
     const std::size_t bytes = static_cast<std::size_t>(head_.dims[0] * head_.dims[1]) * scalar_size(stored_);
-    gdcm::ImageReader reader;
-    reader.SetFileName(s.file.c_str());
-    // GDCM reads a file cut inside its pixel data without failing and
-    // only warns; the warning is caught so that no slice of garbage passes.
-    std::ostringstream warnings;
-    gdcm::Trace::SetWarningStream(warnings);
-    gdcm::Trace::WarningOn();
-    const bool read = reader.Read();
-    gdcm::Trace::WarningOff();
-    gdcm::Trace::SetWarningStream(std::cerr);
-    if (!read) throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
-    if (warnings.str().find("Incomplete Pixel Data") != std::string::npos)
-      throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data ends early (a truncated file)");
-    const gdcm::Image& image = reader.GetImage();
-    const gdcm::PixelFormat& pf = image.GetPixelFormat();
-    if (image.GetColumns() != head_.dims[0] || image.GetRows() != head_.dims[1] || pf.GetSamplesPerPixel() != 1 ||
-        pf.GetBitsAllocated() != 8 * scalar_size(stored_) || image.GetBufferLength() != bytes)
-      throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data of " + std::to_string(image.GetBufferLength()) +
-                       " bytes, the header declares " + std::to_string(bytes));
     std::string stored(bytes, '\0');
-    if (!image.GetBuffer(stored.data()))
+    KeymeshGdcmImage image;
+    const int decoded = gdcm().decode(s.file.c_str(), &image, stored.data(), bytes);
+    if (decoded == kKeymeshGdcmUnreadable)
+      throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
+    if (decoded == kKeymeshGdcmTruncated)
+      throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data ends early (a truncated file)");
+    if (image.columns != head_.dims[0] || image.rows != head_.dims[1] || image.samples_per_pixel != 1 ||
+        image.bits_allocated != 8 * scalar_size(stored_) || image.buffer_bytes != bytes)
+      throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data of " + std::to_string(image.buffer_bytes) +
+                       " bytes, the header declares " + std::to_string(bytes));
+    if (decoded != kKeymeshGdcmDecoded)
       throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot decode its pixel data");
     return stored;
   }
