@@ -27,8 +27,9 @@
 
 using namespace keymesh;
 
+KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
+
 int main(int argc, char** argv) {
-  reexec_with_huge_pages(argc, argv);
   bench::CommonOptions o;
   std::string weld = "keyreduce", normals = "none", grid_kind = "voxel";
   bool coarsen = false, scalars = false;

@@ -32,8 +32,9 @@
 
 using namespace keymesh;
 
+KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
+
 int main(int argc, char** argv) {
-  reexec_with_huge_pages(argc, argv);
   bench::CommonOptions o;
   o.size = 128;
   std::string op = "subdivide", weld = "keyreduce", scheme = "linear";

@@ -49,8 +49,9 @@ struct Equal {
 };
 }  // namespace
 
+KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
+
 int main(int argc, char** argv) {
-  reexec_with_huge_pages(argc, argv);
   bench::CommonOptions o;
   const int status = bench::parse_options(argc, argv, o, [](const std::string&, const char*) { return false; });
   if (status != 0) return status;

@@ -11,8 +11,9 @@
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/io/output_transaction.hpp"
 
+KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
+
 int main(int argc, char** argv) {
-  keymesh::reexec_with_huge_pages(argc, argv);
   // Under mpirun: MPI for the whole run (a no-op otherwise).
   keymesh::distributed::init(&argc, &argv);
   struct Finalize {
