@@ -46,13 +46,18 @@ class CMakeBuild(build_ext):
         exe.parent.mkdir(exist_ok=True)
         shutil.copyfile(tree / "keymesh", exe)
         exe.chmod(0o755)
-        # GDCM's module, opened by the first DICOM read, is looked for beside
-        # the binary holding the reader: the extension and the command.
-        module = tree / "libkeymesh_gdcm.so"
-        if not module.exists():
-            raise RuntimeError(f"CMake did not build {module}")
+        # Modules opened on first use are looked for beside the binary holding
+        # the caller: GDCM's (DICOM reads) beside the extension and the
+        # command, MPI's (runs under mpirun; built when MPI was found) beside
+        # the command.
+        gdcm = tree / "libkeymesh_gdcm.so"
+        if not gdcm.exists():
+            raise RuntimeError(f"CMake did not build {gdcm}")
         for folder in (target.parent, exe.parent):
-            shutil.copyfile(module, folder / module.name)
+            shutil.copyfile(gdcm, folder / gdcm.name)
+        mpi = tree / "libkeymesh_mpi.so"
+        if mpi.exists():
+            shutil.copyfile(mpi, exe.parent / mpi.name)
 
 
 BUILD_BASE.mkdir(exist_ok=True)

@@ -15,7 +15,12 @@ KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
 
 int main(int argc, char** argv) {
   // Under mpirun: MPI for the whole run (a no-op otherwise).
-  keymesh::distributed::init(&argc, &argv);
+  try {
+    keymesh::distributed::init(&argc, &argv);
+  } catch (const std::exception& e) {  // MPI's module missing
+    std::fprintf(stderr, "keymesh: %s\n", e.what());
+    return 1;
+  }
   struct Finalize {
     ~Finalize() { keymesh::distributed::finalize(); }
   } finalize;

@@ -3,7 +3,7 @@
 
 #if defined(KEYMESH_HAVE_MPI)
 
-#include <mpi.h>
+#include "mpi_library.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -37,8 +37,8 @@ template <class T, class A>
 void gather_segments(const std::vector<T>& local, int per, MPI_Datatype type, const std::vector<long long>& count,
                      int segments, std::vector<T, A>& out) {
   int P = 1, r = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &P);
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  mpi().Comm_size(mpi().comm_world, &P);
+  mpi().Comm_rank(mpi().comm_world, &r);
   std::vector<int> sizes(static_cast<std::size_t>(P)), displs(static_cast<std::size_t>(P));
   long long all = 0;
   for (int q = 0; q < P; ++q) {
@@ -50,8 +50,8 @@ void gather_segments(const std::vector<T>& local, int per, MPI_Datatype type, co
   }
   checked_int(all * per, "gathered arrays");
   std::vector<T> packed(r == 0 ? static_cast<std::size_t>(all * per) : 0);
-  MPI_Gatherv(local.data(), checked_int(static_cast<long long>(local.size()), "gathered arrays"), type, packed.data(),
-              sizes.data(), displs.data(), type, 0, MPI_COMM_WORLD);
+  mpi().Gatherv(local.data(), checked_int(static_cast<long long>(local.size()), "gathered arrays"), type, packed.data(),
+                sizes.data(), displs.data(), type, 0, mpi().comm_world);
   if (r != 0) return;
   std::vector<long long> dst_first(static_cast<std::size_t>(segments) * P);
   long long at = 0;
@@ -145,8 +145,8 @@ HeldSlab balance(PlaneSource& source, const generate::ContourOptions& options, s
     sizes[q] = checked_int(bounds[q + 1] - bounds[q], "voxel layers");
     displs[q] = checked_int(bounds[q], "voxel layers");
   }
-  MPI_Allgatherv(counts.data(), sizes[r], MPI_LONG_LONG, all.data(), sizes.data(), displs.data(), MPI_LONG_LONG,
-                 MPI_COMM_WORLD);
+  mpi().Allgatherv(counts.data(), sizes[r], mpi().long_long, all.data(), sizes.data(), displs.data(), mpi().long_long,
+                   mpi().comm_world);
   bounds = balanced_bounds(all, head.dims[0] * head.dims[1], P);
   st.balance = seconds_since(t0);
   return held;
@@ -210,8 +210,8 @@ void number_piece(ContourPiece& piece, const generate::ContourOptions& options, 
 
 ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance_work) {
   int P = 1, r = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &P);
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  mpi().Comm_size(mpi().comm_world, &P);
+  mpi().Comm_rank(mpi().comm_world, &r);
   const ImageGrid& head = source.header();
   require_distributable(head, options, P);
   const Id nz = head.dims[2], nxy = head.dims[0] * head.dims[1];
@@ -259,7 +259,7 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   // The exchange starts when the slowest rank is done: that wait is the
   // load imbalance, timed apart from the exchange.
   t0 = Clock::now();
-  MPI_Barrier(MPI_COMM_WORLD);
+  mpi().Barrier(mpi().comm_world);
   st.wait = seconds_since(t0);
   t0 = Clock::now();
   number_piece(piece, options, bounds, nxy, nz, average ? &normal_sums : nullptr);
@@ -270,8 +270,8 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
 SurfaceMesh gather(ContourPiece& piece) {
   const auto t0 = Clock::now();
   int P = 1, r = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &P);
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  mpi().Comm_size(mpi().comm_world, &P);
+  mpi().Comm_rank(mpi().comm_world, &r);
   const SurfaceMesh& m = piece.mesh;
   const GlobalNumbering& g = piece.numbering;
   const int S = g.segments;
@@ -303,22 +303,22 @@ SurfaceMesh gather(ContourPiece& piece) {
     ++my_tris[static_cast<std::size_t>(segment_of_id(conn[3 * t]))];
   }
   std::vector<long long> tri_counts(static_cast<std::size_t>(P) * S);
-  MPI_Allgather(my_tris.data(), S, MPI_LONG_LONG, tri_counts.data(), S, MPI_LONG_LONG, MPI_COMM_WORLD);
+  mpi().Allgather(my_tris.data(), S, mpi().long_long, tri_counts.data(), S, mpi().long_long, mpi().comm_world);
 
   SurfaceMesh out;
-  gather_segments(xyz, 3, MPI_FLOAT, g.counts, S, out.points);
+  gather_segments(xyz, 3, mpi().float_, g.counts, S, out.points);
   for (std::size_t f = 0; f < fields.size(); ++f) {
     Field whole{m.point_fields[f].name, m.point_fields[f].components, {}};
-    gather_segments(fields[f], whole.components, MPI_FLOAT, g.counts, S, whole.values);
+    gather_segments(fields[f], whole.components, mpi().float_, g.counts, S, whole.values);
     if (r == 0) out.point_fields.push_back(std::move(whole));
   }
   static_assert(sizeof(PointIndex) == 4, "the gather sends point ids as MPI_UINT32_T");
-  gather_segments(conn, 3, MPI_UINT32_T, tri_counts, S, out.connectivity);
+  gather_segments(conn, 3, mpi().uint32, tri_counts, S, out.connectivity);
   if (piece.coarsen) {
     // The fine mesh of one process, and its points' coarse keys: coarsened
     // as one process coarsens it.
     std::vector<std::uint64_t> all_nearest;
-    gather_segments(nearest, 1, MPI_UINT64_T, g.counts, S, all_nearest);
+    gather_segments(nearest, 1, mpi().uint64, g.counts, S, all_nearest);
     if (r == 0) {
       piece.triangles_before_coarsening = out.num_cells();
       out = generate::coarsen(out, all_nearest, piece.coarse_range);
@@ -332,12 +332,12 @@ SurfaceMesh gather(ContourPiece& piece) {
 
 std::vector<RankStats> gather_stats(const RankStats& mine) {
   int P = 1, r = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &P);
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  mpi().Comm_size(mpi().comm_world, &P);
+  mpi().Comm_rank(mpi().comm_world, &r);
   static_assert(std::is_trivially_copyable_v<RankStats> && sizeof(RankStats) % sizeof(double) == 0);
   constexpr int n = sizeof(RankStats) / sizeof(double);
   std::vector<RankStats> all(r == 0 ? static_cast<std::size_t>(P) : 0);
-  MPI_Gather(&mine, n, MPI_DOUBLE, all.data(), n, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  mpi().Gather(&mine, n, mpi().double_, all.data(), n, mpi().double_, 0, mpi().comm_world);
   return all;
 }
 

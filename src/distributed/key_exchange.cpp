@@ -3,7 +3,7 @@
 
 #if defined(KEYMESH_HAVE_MPI)
 
-#include <mpi.h>
+#include "mpi_library.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -74,7 +74,7 @@ void number_owned(GlobalNumbering& g, const KeyRanges& kr, int r) {
   std::vector<long long> mine(static_cast<std::size_t>(segments), 0);
   for (int s = 0; s < segments; ++s) mine[s] = static_cast<long long>(kr.at(s, r + 1) - kr.at(s, r));
   g.counts.assign(static_cast<std::size_t>(P) * segments, 0);
-  MPI_Allgather(mine.data(), segments, MPI_LONG_LONG, g.counts.data(), segments, MPI_LONG_LONG, MPI_COMM_WORLD);
+  mpi().Allgather(mine.data(), segments, mpi().long_long, g.counts.data(), segments, mpi().long_long, mpi().comm_world);
   g.first_ids.assign(static_cast<std::size_t>(segments) * P, 0);
   long long total = 0;
   for (int s = 0; s < segments; ++s)
@@ -112,8 +112,8 @@ struct Routing {
     const auto& sd = forward ? send_displs : recv_displs;
     const auto& rc = forward ? recv_counts : send_counts;
     const auto& rd = forward ? recv_displs : send_displs;
-    MPI_Alltoallv(out, scaled(sc).data(), scaled(sd).data(), MPI_BYTE, in, scaled(rc).data(), scaled(rd).data(),
-                  MPI_BYTE, MPI_COMM_WORLD);
+    mpi().Alltoallv(out, scaled(sc).data(), scaled(sd).data(), mpi().byte, in, scaled(rc).data(), scaled(rd).data(),
+                    mpi().byte, mpi().comm_world);
   }
 };
 
@@ -128,7 +128,7 @@ Routing route_foreign_keys(std::span<const std::uint64_t> keys, const KeyRanges&
   for (int s = 0; s < segments; ++s)
     for (int q = 0; q < P; ++q)
       if (q != r) rt.send_counts[static_cast<std::size_t>(q)] += static_cast<int>(kr.at(s, q + 1) - kr.at(s, q));
-  MPI_Alltoall(rt.send_counts.data(), 1, MPI_INT, rt.recv_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  mpi().Alltoall(rt.send_counts.data(), 1, mpi().int_, rt.recv_counts.data(), 1, mpi().int_, mpi().comm_world);
   rt.send_displs = displacements(rt.send_counts, "requested keys");
   rt.recv_displs = displacements(rt.recv_counts, "requested keys");
   std::size_t n_send = 0, n_recv = 0;
@@ -173,8 +173,8 @@ GlobalNumbering number_keys(std::span<const std::uint64_t> keys, int segments,
                             const std::function<std::uint64_t(int segment, int rank)>& first_key,
                             const ValueMerge* values) {
   int P = 1, r = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &P);
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  mpi().Comm_size(mpi().comm_world, &P);
+  mpi().Comm_rank(mpi().comm_world, &r);
   GlobalNumbering g;
   g.ranks = P;
   g.segments = segments;

@@ -3,26 +3,44 @@
 
 #if defined(KEYMESH_HAVE_MPI)
 
-#include <mpi.h>
-
 #include <algorithm>
+#include <atomic>
 #include <climits>
 #include <cstdint>
 #include <cstdlib>
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/loadable_module.hpp"
+#include "mpi_library.hpp"
 
 namespace keymesh::distributed {
 
 namespace {
+
+std::atomic<const KeymeshMpiApi*> opened{nullptr};
+
 bool initialized() {
+  if (!mpi_opened()) return false;
   int init = 0, fin = 0;
-  MPI_Initialized(&init);
-  MPI_Finalized(&fin);
+  mpi().Initialized(&init);
+  mpi().Finalized(&fin);
   return init && !fin;
 }
+
 }  // namespace
+
+const KeymeshMpiApi& mpi() {
+  // Global: Open MPI's components (which libmpi dlopens) look for libmpi's
+  // and libopen-pal's symbols in the global scope.
+  static const KeymeshMpiApi& api = loadable_module_table<KeymeshMpiApi>(
+      KEYMESH_MPI_MODULE_FILE, kKeymeshMpiEntry, kKeymeshMpiApiVersion, "a run under an MPI launcher",
+      ModuleScope::Global);
+  opened.store(&api, std::memory_order_release);
+  return api;
+}
+
+bool mpi_opened() { return opened.load(std::memory_order_acquire) != nullptr; }
 
 bool compiled() { return true; }
 
@@ -30,34 +48,34 @@ void init(int* argc, char*** argv) {
   if (!launched_by_mpi() || initialized()) return;
   // Only the main thread calls MPI; OpenMP threads work between the calls.
   int provided = 0;
-  MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
+  mpi().Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
 }
 
 void finalize() {
-  if (initialized()) MPI_Finalize();
+  if (initialized()) mpi().Finalize();
 }
 
 int rank() {
   int r = 0;
-  if (initialized()) MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  if (initialized()) mpi().Comm_rank(mpi().comm_world, &r);
   return r;
 }
 
 int size() {
   int s = 1;
-  if (initialized()) MPI_Comm_size(MPI_COMM_WORLD, &s);
+  if (initialized()) mpi().Comm_size(mpi().comm_world, &s);
   return s;
 }
 
 void abort_all(int code) {
-  if (initialized()) MPI_Abort(MPI_COMM_WORLD, code);
+  if (initialized()) mpi().Abort(mpi().comm_world, code);
   std::exit(code);
 }
 
 bool all_ok(bool ok) {
   if (!initialized()) return ok;
   int mine = ok ? 1 : 0, all = 0;
-  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  mpi().Allreduce(&mine, &all, 1, mpi().int_, mpi().min, mpi().comm_world);
   return all == 1;
 }
 
@@ -66,7 +84,7 @@ std::vector<std::vector<std::byte>> all_gather_bytes(const std::vector<std::byte
   const int ranks = size();
   long long n = static_cast<long long>(mine.size());
   std::vector<long long> sizes(static_cast<std::size_t>(ranks));
-  MPI_Allgather(&n, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
+  mpi().Allgather(&n, 1, mpi().long_long, sizes.data(), 1, mpi().long_long, mpi().comm_world);
   std::vector<int> counts(static_cast<std::size_t>(ranks)), displs(static_cast<std::size_t>(ranks));
   long long total = 0;
   for (int q = 0; q < ranks; ++q) {
@@ -77,8 +95,8 @@ std::vector<std::vector<std::byte>> all_gather_bytes(const std::vector<std::byte
   if (total > INT_MAX)  // every rank sees the same sizes: all refuse alike
     throw LimitError("distributed: " + std::to_string(total) + " bytes to share among the ranks exceed 2^31 - 1");
   std::vector<std::byte> all(static_cast<std::size_t>(total));
-  MPI_Allgatherv(mine.data(), static_cast<int>(n), MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE,
-                 MPI_COMM_WORLD);
+  mpi().Allgatherv(mine.data(), static_cast<int>(n), mpi().byte, all.data(), counts.data(), displs.data(), mpi().byte,
+                   mpi().comm_world);
   std::vector<std::vector<std::byte>> out(static_cast<std::size_t>(ranks));
   for (int q = 0; q < ranks; ++q)
     out[static_cast<std::size_t>(q)].assign(all.begin() + displs[static_cast<std::size_t>(q)],
@@ -93,21 +111,21 @@ std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& m
   constexpr std::uint64_t kPiece = 1u << 30;  // MPI counts are int
   if (me != 0) {
     const std::uint64_t n = mine.size();
-    MPI_Send(&n, 1, MPI_UINT64_T, 0, 0, MPI_COMM_WORLD);
+    mpi().Send(&n, 1, mpi().uint64, 0, 0, mpi().comm_world);
     for (std::uint64_t at = 0; at < n; at += kPiece)
-      MPI_Send(mine.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_BYTE, 0, 1, MPI_COMM_WORLD);
+      mpi().Send(mine.data() + at, static_cast<int>(std::min(kPiece, n - at)), mpi().byte, 0, 1, mpi().comm_world);
     return {};
   }
   std::vector<std::vector<std::byte>> out(static_cast<std::size_t>(ranks));
   out[0] = mine;
   for (int q = 1; q < ranks; ++q) {
     std::uint64_t n = 0;
-    MPI_Recv(&n, 1, MPI_UINT64_T, q, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    mpi().Recv(&n, 1, mpi().uint64, q, 0, mpi().comm_world, MPI_STATUS_IGNORE);
     auto& bytes = out[static_cast<std::size_t>(q)];
     bytes.resize(static_cast<std::size_t>(n));
     for (std::uint64_t at = 0; at < n; at += kPiece)
-      MPI_Recv(bytes.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_BYTE, q, 1, MPI_COMM_WORLD,
-               MPI_STATUS_IGNORE);
+      mpi().Recv(bytes.data() + at, static_cast<int>(std::min(kPiece, n - at)), mpi().byte, q, 1, mpi().comm_world,
+                 MPI_STATUS_IGNORE);
   }
   return out;
 }

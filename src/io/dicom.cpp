@@ -16,8 +16,8 @@
 #include "keymesh/core/error.hpp"
 #include "child_process.hpp"
 #include "gdcm_module/gdcm_api.hpp"
+#include "keymesh/core/loadable_module.hpp"
 #include "keymesh/io/input_file.hpp"
-#include "loadable_module.hpp"
 #include "volume_formats.hpp"
 
 namespace keymesh::io {
@@ -28,15 +28,10 @@ namespace {
 // first DICOM read: before any fork, so that every child process inherits it.
 const KeymeshGdcmApi& gdcm() {
   static const KeymeshGdcmApi* const api = [] {
-    const char* purpose = "reading a DICOM series";
-    const auto entry = reinterpret_cast<const KeymeshGdcmApi* (*)()>(
-        loadable_module_entry(KEYMESH_GDCM_MODULE_FILE, kKeymeshGdcmEntry, purpose));
-    const KeymeshGdcmApi* table = entry();
-    if (!table || table->version != kKeymeshGdcmApiVersion)
-      throw InputError(std::string(purpose) + ": keymesh's module " + KEYMESH_GDCM_MODULE_FILE +
-                       " is of another keymesh build (reinstall keymesh)");
-    table->quiet();  // GDCM prints its own warnings on stderr; keymesh reports what matters
-    return table;
+    const auto& table = loadable_module_table<KeymeshGdcmApi>(KEYMESH_GDCM_MODULE_FILE, kKeymeshGdcmEntry,
+                                                              kKeymeshGdcmApiVersion, "reading a DICOM series");
+    table.quiet();  // GDCM prints its own warnings on stderr; keymesh reports what matters
+    return &table;
   }();
   return *api;
 }

@@ -5,6 +5,8 @@
   a copy of the command without it reads every other format and refuses a
   DICOM series naming the missing file; with the module beside it, it reads
   the series as the build's command does.
+- MPI is the module libkeymesh_mpi.so, opened only under an MPI launcher:
+  a copy of the command without it refuses `mpirun -np 2` naming the file.
 - The huge-page re-exec (core/huge_pages.hpp), seen through strace (skipped
   without it, and in sanitizer builds, which never re-exec): one re-exec of
   /proc/self/exe adding glibc.malloc.hugetlb=1 and the mark
@@ -18,10 +20,12 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import KEYMESH, check, finish, run, tempdir  # noqa: E402
+from kmtest import KEYMESH, check, finish, mpirun, run, tempdir  # noqa: E402
 
 D = tempdir()
 MODULE = "libkeymesh_gdcm.so"
+MPI_MODULE = "libkeymesh_mpi.so"
+KEYMESH_FILE = os.path.abspath(KEYMESH)
 SANITIZED = any(k in os.environ for k in ("ASAN_OPTIONS", "TSAN_OPTIONS", "UBSAN_OPTIONS"))
 
 
@@ -57,7 +61,7 @@ def copied_command(name, with_module):
     os.makedirs(folder)
     shutil.copy2(KEYMESH, os.path.join(folder, "keymesh"))
     if with_module:
-        shutil.copy2(os.path.join(os.path.dirname(os.path.abspath(KEYMESH)), MODULE), os.path.join(folder, MODULE))
+        shutil.copy2(os.path.join(os.path.dirname(KEYMESH_FILE), MODULE), os.path.join(folder, MODULE))
     return os.path.join(folder, "keymesh")
 
 
@@ -93,6 +97,16 @@ def module_found_beside_the_real_file():
     assert info(link, series, 0).stdout == expected
 
 
+def without_mpi_module_mpirun_refused_by_name():
+    alone = os.path.join(D, "alone", "keymesh")
+    if not os.path.exists(alone):
+        copied_command("alone", with_module=False)
+    p = mpirun(2, "--version", expect=None, program=alone)
+    assert p.returncode != 0, p.stdout
+    message = f"keymesh: a run under an MPI launcher needs keymesh's module {os.path.join(D, 'alone', MPI_MODULE)}"
+    assert p.stderr.count(message) == 2 and "missing" in p.stderr, p.stderr  # once per rank, no crash
+
+
 def execs(env):
     """The execve calls of one `keymesh --version` (program, environment)."""
     log = os.path.join(D, "strace.log")
@@ -121,6 +135,12 @@ def no_reexec_when_off_or_set():
 
 check("GDCM module missing: other formats read, DICOM refused naming the file", without_module_dicom_refused_by_name)
 check("GDCM module found beside the executable's real file (symlinked too)", module_found_beside_the_real_file)
+if not shutil.which("mpirun") or not os.path.exists(os.path.join(os.path.dirname(KEYMESH_FILE), MPI_MODULE)):
+    print("        (MPI module check skipped: no mpirun, or keymesh built without MPI)")
+elif mpirun(2, expect=None, program=shutil.which("true") or "/bin/true").returncode != 0:
+    print("        (MPI module check skipped: mpirun -np 2 true fails here)")
+else:
+    check("MPI module missing: mpirun refused naming the file on every rank", without_mpi_module_mpirun_refused_by_name)
 if SANITIZED:
     print("        (re-exec checks skipped: sanitizer builds never re-exec)")
 elif not shutil.which("strace"):

@@ -1,4 +1,4 @@
-#include "loadable_module.hpp"
+#include "keymesh/core/loadable_module.hpp"
 
 #include <dlfcn.h>
 #include <link.h>
@@ -10,7 +10,7 @@
 
 #include "keymesh/core/error.hpp"
 
-namespace keymesh::io {
+namespace keymesh {
 
 namespace {
 
@@ -31,24 +31,27 @@ std::filesystem::path binary_holding_this_code() {
 
 }  // namespace
 
-void* loadable_module_entry(const std::string& file_name, const char* entry, const std::string& purpose) {
+void* loadable_module_entry(const std::string& file_name, const char* entry, const std::string& purpose,
+                            ModuleScope scope) {
   std::error_code ec;
   std::filesystem::path binary = binary_holding_this_code();
   const std::filesystem::path resolved = std::filesystem::weakly_canonical(binary, ec);
   if (!ec) binary = resolved;
   const std::string path = (binary.parent_path() / file_name).string();
-  void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  void* module = ::dlopen(path.c_str(), RTLD_NOW | (scope == ModuleScope::Global ? RTLD_GLOBAL : RTLD_LOCAL));
   if (!module) {
     const char* why = ::dlerror();
-    const bool missing = !std::filesystem::exists(path, ec);
-    throw InputError(purpose + " needs keymesh's module " + path + ", which " +
-                     (missing ? std::string("is missing (it is built and installed beside ") + binary.filename().string() + ")"
-                              : std::string("cannot be loaded: ") + (why ? why : "dlopen failed")));
+    const std::string state =
+        std::filesystem::exists(path, ec)
+            ? std::string("cannot be loaded: ") + (why ? why : "dlopen failed")
+            : "is missing (it is built and installed beside " + binary.filename().string() + ")";
+    throw InputError(purpose + " needs keymesh's module " + path + ", which " + state);
   }
   ::dlerror();
   void* found = ::dlsym(module, entry);
-  if (!found) throw InputError(purpose + ": keymesh's module " + path + " has no " + entry + " (a module of another build?)");
+  if (!found)
+    throw InputError(purpose + ": keymesh's module " + path + " has no " + entry + " (a module of another build?)");
   return found;
 }
 
-}  // namespace keymesh::io
+}  // namespace keymesh
