@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Proves that a change to the PLY reader left what it reads alone: two builds
-read the same valid, truncated, byte-corrupted and fuzz-corpus PLY files
-(binary little- and big-endian, fields, polygons, extra face properties) and
-must agree on `keymesh check` (exit code, stdout, stderr) and on the bytes of
-`keymesh convert` to .vtp.
+"""Proves that a change to the PLY or VTP readers left what they read alone:
+two builds read the same valid, truncated, byte-corrupted and fuzz-corpus
+files (PLY binary little- and big-endian, fields, polygons, extra face
+properties; VTP raw and zlib-compressed) and must agree on `keymesh check`
+(exit code, stdout, stderr) and on the bytes of `keymesh convert` to .vtp.
 
     python3 scripts/same_reads.py --before /path/to/old/keymesh --after build/keymesh
 
@@ -39,10 +39,11 @@ def le_mixed():
     for f in ([0, 1, 2], [1, 2, 3, 4], [2, 3, 4], [0, 4, 5, 1, 3]): body += struct.pack('<i', len(f)) + b''.join(struct.pack('<I', v) for v in f)
     return hdr + body
 open('lem.ply', 'wb').write(le_mixed())
-files = ['le.ply', 'fields.ply', 'be.ply', 'lem.ply']
+subprocess.run([old, 'dual', 'le.ply', '-o', 'poly.vtp', '-q'], check=True)
+files = ['le.ply', 'fields.ply', 'be.ply', 'lem.ply', 'f.vtp', 'poly.vtp']
 for src in list(files):
     data = open(src, 'rb').read()
-    hdr_end = data.index(b'end_header\n') + 11
+    hdr_end = data.index(b'end_header\n') + 11 if src.endswith('.ply') else max(0, data.find(b'<AppendedData'))
     for k in range(40):
         fn = f'trunc_{k}_{src}'; open(fn, 'wb').write(data[:random.randrange(hdr_end, len(data))]); files.append(fn)
     for k in range(120):
@@ -52,8 +53,9 @@ for src in list(files):
         fn = f'corrupt_{k}_{src}'; open(fn, 'wb').write(bytes(b)); files.append(fn)
     fn = f'trail_{src}'; open(fn, 'wb').write(data + b'\x01\x02\x03'); files.append(fn)
 for f in glob.glob(os.path.join(REPO, 'tests/fuzz/**/*'), recursive=True):
-    if os.path.isfile(f) and ('ply' in f.lower()):
-        fn = 'c_' + f.replace('/', '_') + '.ply'; open(fn, 'wb').write(open(f, 'rb').read()); files.append(fn)
+    for ext in ('ply', 'vtp'):
+        if os.path.isfile(f) and ext in f.lower():
+            fn = 'c_' + f.replace('/', '_') + '.' + ext; open(fn, 'wb').write(open(f, 'rb').read()); files.append(fn)
 diff = 0; codes = collections.Counter()
 for fn in files:
     r = [subprocess.run([k, 'check', fn, '-q', '--threads', '2'], capture_output=True, text=True) for k in (old, new)]

@@ -81,11 +81,36 @@ struct Array {
   int components = 1;
   std::string bytes;
   std::size_t count() const { return bytes.size() / scalar_size(type); }
+  // The common little-endian types inline (a file's whole arrays go
+  // through here value by value), the rest through the general loads.
   double as_double(std::size_t i) const {
-    return mesh_bytes::load_as_double(bytes.data() + i * scalar_size(type), type, big);
+    const char* p = bytes.data() + i * scalar_size(type);
+    // (A NaN goes the general way, which quiets a signalling one, as before.)
+    if (!big && type == ScalarType::Float32) {
+      const float f = load_native<float>(p);
+      if (f == f) return f;
+    }
+    if (!big && type == ScalarType::Float64) {
+      const double d = load_native<double>(p);
+      if (d == d) return d;
+    }
+    return mesh_bytes::load_as_double(p, type, big);
   }
   bool as_int(std::size_t i, std::int64_t& v) const {
-    return mesh_bytes::load_as_int64(bytes.data() + i * scalar_size(type), type, big, v);
+    const char* p = bytes.data() + i * scalar_size(type);
+    if (!big && type == ScalarType::Int64) return v = load_native<std::int64_t>(p), true;
+    if (!big && type == ScalarType::Int32) return v = load_native<std::int32_t>(p), true;
+    if (!big && type == ScalarType::UInt32) return v = load_native<std::uint32_t>(p), true;
+    return mesh_bytes::load_as_int64(p, type, big, v);
+  }
+
+ private:
+  template <class T>
+  static T load_native(const char* p) {
+    if constexpr (std::endian::native == std::endian::big) return mesh_bytes::load<T>(p, false);
+    T v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
   }
 };
 

@@ -7,22 +7,6 @@
 
 namespace keymesh {
 
-std::size_t scalar_size(ScalarType type) {
-  switch (type) {
-    case ScalarType::UInt8:
-    case ScalarType::Int8: return 1;
-    case ScalarType::UInt16:
-    case ScalarType::Int16: return 2;
-    case ScalarType::Int32:
-    case ScalarType::UInt32:
-    case ScalarType::Float32: return 4;
-    case ScalarType::Float64:
-    case ScalarType::Int64:
-    case ScalarType::UInt64: return 8;
-  }
-  return 0;
-}
-
 const char* scalar_type_name(ScalarType type) {
   switch (type) {
     case ScalarType::UInt8: return "uint8";

@@ -16,8 +16,22 @@ enum class ScalarType : std::uint8_t {
   UInt32, Int64, UInt64                                 // file types only
 };
 
-// Size in bytes of one sample.
-std::size_t scalar_size(ScalarType type);
+// Size in bytes of one sample (inline: readers ask it per value).
+constexpr std::size_t scalar_size(ScalarType type) {
+  switch (type) {
+    case ScalarType::UInt8:
+    case ScalarType::Int8: return 1;
+    case ScalarType::UInt16:
+    case ScalarType::Int16: return 2;
+    case ScalarType::Int32:
+    case ScalarType::UInt32:
+    case ScalarType::Float32: return 4;
+    case ScalarType::Float64:
+    case ScalarType::Int64:
+    case ScalarType::UInt64: return 8;
+  }
+  return 0;
+}
 // "uint8", "int8", "uint16", "int16", "int32", "float32", "float64",
 // "uint32", "int64", "uint64".
 const char* scalar_type_name(ScalarType type);
