@@ -6,10 +6,12 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <type_traits>
 
 #include "keymesh/io/input_file.hpp"
 #include "volume_formats.hpp"
+#include "whole_inflate.hpp"
 
 namespace keymesh::io {
 
@@ -31,9 +33,9 @@ gzFile open_gz(const std::string& path) {
 // never further than the caller asks.
 class Stream {
  public:
-  explicit Stream(const std::string& path) : path_(path), gz_(open_gz(path)) {
-    gzbuffer(gz_, 1 << 20);
-  }
+  // `buffer`: zlib reads that many compressed bytes at a time and inflates
+  // up to twice as many ahead of what is asked.
+  Stream(const std::string& path, unsigned buffer) : path_(path), gz_(open_gz(path)) { gzbuffer(gz_, buffer); }
   ~Stream() { gzclose(gz_); }
   Stream(const Stream&) = delete;
   Stream& operator=(const Stream&) = delete;
@@ -56,6 +58,14 @@ class Stream {
   gzFile gz_;
 };
 
+// kDataBuffer for reading the samples with zlib; kHeaderBuffer for the
+// header alone, where kDataBuffer inflates 2 MiB to give 348 bytes (18 M
+// instructions). nifti_layout keeps kDataBuffer all the same: how far ahead
+// it inflates decides whether a damage early in the stream is reported by
+// it ("truncated (header...)") or by the reader after it, and its messages
+// stay the ones it always gave.
+constexpr unsigned kHeaderBuffer = 4 << 10, kDataBuffer = 1 << 20;
+
 template <class T>
 T get(const unsigned char* h, std::size_t offset, bool swap) {
   T v;
@@ -69,15 +79,9 @@ T get(const unsigned char* h, std::size_t offset, bool swap) {
   return v;
 }
 
-}  // namespace
-
-VolumeLayout nifti_layout(const std::string& path) {
-  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
-  unsigned char h[348];
-  {
-    Stream in(path);
-    in.read(h, sizeof h, "header");
-  }
+// The layout the 348 header bytes of `path` (of file_bytes) declare, after
+// every check of the header.
+VolumeLayout header_layout(const unsigned char* h, const std::string& path, std::uint64_t file_bytes) {
   bool swap = false;
   if (get<std::int32_t>(h, 0, false) != 348) {
     if (get<std::int32_t>(h, 0, true) != 348) throw InputError(path + ": not a NIfTI-1 file (sizeof_hdr is not 348)");
@@ -146,16 +150,73 @@ VolumeLayout nifti_layout(const std::string& path) {
   return layout;
 }
 
+// Swaps to native order, then applies the scaling the layout declares.
+ImageGrid finish_samples(ImageGrid grid, const VolumeLayout& layout) {
+  if (layout.raw.big_endian != (std::endian::native == std::endian::big)) detail::swap_samples(grid);
+  if (!layout.scaled()) return grid;
+  // Scaled data: the real values are slope * stored + inter.
+  ImageGrid scaled;
+  scaled.allocate(grid.dims, detail::scaled_type(grid.type));
+  scaled.spacing = grid.spacing;
+  scaled.name = grid.name;
+  detail::scale_samples(grid.type, grid.bytes.data(), scaled.bytes.data(), static_cast<std::uint64_t>(grid.num_points()),
+                        layout.scale_slope, layout.scale_inter);
+  return scaled;
+}
+
+// A .nii.gz whose gzip members are clean (whole_inflate.hpp), its header
+// read through a small zlib buffer and its samples inflated by libdeflate.
+// std::nullopt for anything else, the header's refusals included: the zlib
+// read then gives its own result or message, and as it inflates further
+// ahead for the header (kDataBuffer) it may meet a damage in the stream
+// before a check of the header would.
+std::optional<ImageGrid> read_clean_gzip(const std::string& path) {
+  VolumeLayout layout;
+  try {
+    const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+    unsigned char h[348];
+    Stream in(path, kHeaderBuffer);
+    in.read(h, sizeof h, "header");
+    layout = header_layout(h, path, file_bytes);
+  } catch (const InputError&) {
+    return std::nullopt;
+  } catch (const LimitError&) {
+    return std::nullopt;
+  }
+  const std::uint64_t need = detail::checked_byte_count(layout.raw.dims, layout.raw.type, path);
+  auto samples = detail::inflate_gzip_file(path, 0, static_cast<std::uint64_t>(layout.raw.header_bytes), need);
+  if (!samples) return std::nullopt;
+  ImageGrid grid;
+  grid.spacing = layout.raw.spacing;
+  grid.name = "scalars";
+  detail::adopt_samples(grid, layout.raw.dims, layout.raw.type, std::move(*samples));
+  return finish_samples(std::move(grid), layout);
+}
+
+}  // namespace
+
+VolumeLayout nifti_layout(const std::string& path) {
+  const std::uint64_t file_bytes = detail::file_size_or_throw(path);
+  unsigned char h[348];
+  {
+    Stream in(path, kDataBuffer);
+    in.read(h, sizeof h, "header");
+  }
+  return header_layout(h, path, file_bytes);
+}
+
 ImageGrid read_nifti(const std::string& path) {
+  const bool gz = path.size() > 3 && path.compare(path.size() - 3, 3, ".gz") == 0;
+  if (gz)
+    if (auto grid = read_clean_gzip(path)) return std::move(*grid);
+  // zlib: plain data, or gzip that is not clean.
   const VolumeLayout layout = nifti_layout(path);
   const std::uint64_t file_bytes = detail::file_size_or_throw(path);
   const std::array<Id, 3> dims = layout.raw.dims;
   const ScalarType type = layout.raw.type;
   const std::uint64_t need = detail::checked_byte_count(dims, type, path);
-  const bool gz = !layout.compressed.empty();
   const auto offset = static_cast<std::uint64_t>(layout.raw.header_bytes);
-  const bool swap = layout.raw.big_endian != (std::endian::native == std::endian::big);
-  Stream in(path);
+  Stream in(path, kDataBuffer);
   unsigned char h[348];
   in.read(h, sizeof h, "header");
   ImageGrid grid;
@@ -169,24 +230,13 @@ ImageGrid read_nifti(const std::string& path) {
     in.read(pad, n, "extension");
     skip -= n;
   }
-  if (gz) {
+  if (!layout.compressed.empty()) {
     detail::adopt_samples(grid, dims, type, detail::read_gz_growing(in.handle(), need, file_bytes, path, "voxel data", true));
   } else {
     detail::allocate_checked(grid, dims, type, path);
     in.read(grid.data(), grid.bytes.size(), "voxel data");
   }
-  if (swap) detail::swap_samples(grid);
-  if (layout.scaled()) {
-    // Scaled data: the real values are slope * stored + inter.
-    ImageGrid scaled;
-    scaled.allocate(dims, detail::scaled_type(type));
-    scaled.spacing = grid.spacing;
-    scaled.name = grid.name;
-    detail::scale_samples(type, grid.bytes.data(), scaled.bytes.data(), static_cast<std::uint64_t>(grid.num_points()),
-                          layout.scale_slope, layout.scale_inter);
-    return scaled;
-  }
-  return grid;
+  return finish_samples(std::move(grid), layout);
 }
 
 namespace detail {

@@ -15,6 +15,7 @@
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/input_file.hpp"
 #include "volume_formats.hpp"
+#include "whole_inflate.hpp"
 
 namespace keymesh::io {
 
@@ -84,9 +85,11 @@ std::vector<std::vector<double>> vectors(const std::string& path, const std::str
   return out;
 }
 
-// Reads `size` bytes of gzip data from `path` at `offset` (and no more).
+// Reads `size` bytes of gzip data from `path` at `offset` (and no more):
+// with libdeflate when the data is clean, otherwise zlib decides.
 std::vector<std::byte> read_gzip(const std::string& path, std::uint64_t offset, std::uint64_t file_bytes,
                                  std::uint64_t size) {
+  if (auto samples = detail::inflate_gzip_file(path, offset, 0, size)) return std::move(*samples);
   InputFile in(path);
   if (fseeko(in.stream(), static_cast<off_t>(offset), SEEK_SET) != 0)
     throw InputError(path + ": cannot seek to the data");

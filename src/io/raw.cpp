@@ -58,17 +58,21 @@ std::uint64_t checked_byte_count(std::array<Id, 3> dims, ScalarType type, const 
   return static_cast<std::uint64_t>(count * size);
 }
 
+std::uint64_t initial_inflate_bytes(std::uint64_t compressed_bytes, std::uint64_t size) {
+  // Typical volumes compress 2-10:1; a first guess of 4x (plus 64 KiB) takes
+  // one allocation for many, and doubling covers the rest.
+  if (compressed_bytes > (std::uint64_t{1} << 60) / 4) return size;
+  return std::min(size, 4 * compressed_bytes + (64u << 10));
+}
+
 std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
                                        const std::string& path, const std::string& what, bool allow_plain) {
   gzFile gz = static_cast<gzFile>(gz_file);
   std::vector<std::byte> out;
-  // Typical volumes compress 2-10:1; a first guess of 4x (plus 64 KiB) takes
-  // one allocation for many, and doubling covers the rest.
-  const std::uint64_t guess = compressed_bytes > (std::uint64_t{1} << 60) / 4 ? size : 4 * compressed_bytes + (64u << 10);
   std::uint64_t done = 0;
   while (done < size) {
     if (done == out.size()) {
-      const std::uint64_t grow = out.empty() ? guess : 2 * out.size();
+      const std::uint64_t grow = out.empty() ? initial_inflate_bytes(compressed_bytes, size) : 2 * out.size();
       out.resize(static_cast<std::size_t>(std::min<std::uint64_t>(size, grow)));
     }
     const unsigned chunk = static_cast<unsigned>(std::min<std::uint64_t>(out.size() - done, 1u << 30));

@@ -70,12 +70,16 @@ void allocate_checked(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, 
 // Bytes of samples dims x type need, after the checks allocate_checked makes
 // (each dim positive, no overflow): InputError / LimitError naming path.
 std::uint64_t checked_byte_count(std::array<Id, 3> dims, ScalarType type, const std::string& path);
+// The first allocation for `size` bytes inflated from `compressed_bytes`:
+// at most size, and no more than the data is likely to inflate to, so that
+// a header declaring more than the stream holds costs little.
+std::uint64_t initial_inflate_bytes(std::uint64_t compressed_bytes, std::uint64_t size);
 // Reads exactly `size` bytes of an opened zlib/gzip stream (gzFile, passed
 // as void* to keep <zlib.h> out of this header) into a buffer that grows as
 // the data arrives: a header declaring more than the stream holds costs no
 // more memory than the stream really inflates to, and nothing past `size`
 // is ever inflated. `compressed_bytes` (the stream's size on disk) sizes the
-// first allocation. InputError naming path and `what` when the stream ends
+// first allocation (initial_inflate_bytes). InputError naming path and `what` when the stream ends
 // early or is corrupt, or (unless allow_plain) is not gzip data at all.
 std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
                                        const std::string& path, const std::string& what, bool allow_plain);
