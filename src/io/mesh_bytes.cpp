@@ -1,6 +1,7 @@
 #include "mesh_bytes.hpp"
 
 #include "keymesh/io/input_file.hpp"
+#include "whole_inflate.hpp"
 
 #include <zlib.h>
 
@@ -199,15 +200,20 @@ void Base64Reader::read(std::size_t n, std::string& out, std::string_view what) 
 
 void zlib_inflate(const char* src, std::size_t size, std::size_t expected, std::string& out,
                   const std::string& path, std::string_view what) {
-  // Streamed through a fixed buffer: `out` grows only by what the data
-  // really inflates to (a header may lie about `expected`), and inflation
-  // stops as soon as the stream would exceed `expected`.
+  // libdeflate straight into `out` when the stream is clean; `expected` is
+  // within ~1032:1 of `size` (the callers check), so a lie costs little.
+  const std::size_t start = out.size();
+  out.resize(start + expected);
+  if (detail::inflate_zlib_exact(src, size, out.data() + start, expected)) return;
+  out.resize(start);
+  // Otherwise zlib decides, streamed through a fixed buffer: `out` grows
+  // only by what the data really inflates to, and inflation stops as soon as
+  // the stream would exceed `expected`.
   auto fail = [&](const std::string& why) {
     return InputError(path + ": corrupt zlib data in " + std::string(what) + " (" + why + ")");
   };
   z_stream z{};
   if (inflateInit(&z) != Z_OK) throw fail("zlib cannot start");
-  const std::size_t start = out.size();
   char buffer[1 << 16];
   z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(src));
   std::size_t fed = 0;

@@ -153,6 +153,8 @@ class Base64Reader {
 
 // Inflates one zlib stream that must expand to exactly `expected` bytes,
 // appending them to out. Throws InputError naming path and `what`.
+// `expected` bytes are allocated before inflating: the caller checks that
+// `size` compressed bytes can hold them (zlib expands at most ~1032:1).
 void zlib_inflate(const char* src, std::size_t size, std::size_t expected, std::string& out,
                   const std::string& path, std::string_view what);
 

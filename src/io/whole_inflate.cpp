@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <limits>
+#include <memory>
 
 #include "keymesh/io/input_file.hpp"
 #include "volume_formats.hpp"
@@ -42,19 +43,13 @@ class MappedFile {
   std::uint64_t size_ = 0;
 };
 
-class Decompressor {
- public:
-  Decompressor() : d_(libdeflate_alloc_decompressor()) {}
-  ~Decompressor() {
-    if (d_) libdeflate_free_decompressor(d_);
-  }
-  Decompressor(const Decompressor&) = delete;
-  Decompressor& operator=(const Decompressor&) = delete;
-  libdeflate_decompressor* get() const { return d_; }
-
- private:
-  libdeflate_decompressor* d_;
-};
+// One decompressor per thread, kept: allocating one costs more than
+// inflating a small block (VTK writes 32 KiB blocks).
+libdeflate_decompressor* decompressor() {
+  thread_local const std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor*)> d(
+      libdeflate_alloc_decompressor(), libdeflate_free_decompressor);
+  return d.get();
+}
 
 std::uint32_t little_endian_32(const unsigned char* p) {
   return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
@@ -81,13 +76,13 @@ std::optional<std::vector<std::byte>> inflate_gzip_file(const std::string& path,
   // usual single member.
   const bool trailer_agrees = little_endian_32(in + in_size - 4) == static_cast<std::uint32_t>(total);
   std::vector<std::byte> out(static_cast<std::size_t>(trailer_agrees ? total : initial_inflate_bytes(in_size, total)));
-  const Decompressor d;
-  if (!d.get()) return std::nullopt;
+  libdeflate_decompressor* d = decompressor();
+  if (!d) return std::nullopt;
   std::size_t read = 0, done = 0;
   while (done < total) {
     if (!member_starts(in + read, in_size - read)) return std::nullopt;
     std::size_t used = 0, got = 0;
-    const libdeflate_result r = libdeflate_gzip_decompress_ex(d.get(), in + read, in_size - read, out.data() + done,
+    const libdeflate_result r = libdeflate_gzip_decompress_ex(d, in + read, in_size - read, out.data() + done,
                                                               out.size() - done, &used, &got);
     if (r == LIBDEFLATE_SUCCESS) {
       read += used;
@@ -101,6 +96,13 @@ std::optional<std::vector<std::byte>> inflate_gzip_file(const std::string& path,
   }
   out.erase(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(skip));
   return out;
+}
+
+bool inflate_zlib_exact(const char* src, std::size_t size, char* out, std::size_t expected) {
+  libdeflate_decompressor* d = decompressor();
+  std::size_t used = 0, got = 0;
+  return d && libdeflate_zlib_decompress_ex(d, src, size, out, expected, &used, &got) == LIBDEFLATE_SUCCESS &&
+         got == expected;
 }
 
 }  // namespace keymesh::io::detail

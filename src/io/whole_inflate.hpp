@@ -1,7 +1,7 @@
 #pragma once
 // Inflation with libdeflate of compressed data held whole in memory, for the
-// reads that know how many bytes to expect (a volume's declared samples): a
-// few times faster than zlib's streaming inflate, and straight into the
+// reads that know how many bytes to expect (a volume's declared samples, a
+// VTK XML block's declared size): a few times faster than zlib's streaming inflate, and straight into the
 // final buffer. Only the clean case is decided here; whatever is not clean
 // (truncated, corrupt, not compressed at all, more data than declared) is
 // left to the zlib path in front of which this sits, so that the result or
@@ -26,5 +26,12 @@ namespace keymesh::io::detail {
 // as the members need it, so a header that lies costs what it costs zlib.
 std::optional<std::vector<std::byte>> inflate_gzip_file(const std::string& path, std::uint64_t offset,
                                                         std::uint64_t skip, std::uint64_t size);
+
+// One zlib stream (RFC 1950) of `size` bytes inflated with libdeflate into
+// out[0, expected): true only when it is well formed (its Adler-32 checked)
+// and inflates to exactly `expected` bytes (bytes after the stream are not
+// looked at, as zlib's inflate stops at its end); false leaves the decision
+// and the message to zlib, and out's bytes are then unspecified.
+bool inflate_zlib_exact(const char* src, std::size_t size, char* out, std::size_t expected);
 
 }  // namespace keymesh::io::detail

@@ -1,7 +1,8 @@
-// detail::inflate_gzip_file (src/io/whole_inflate.cpp): gzip members made by
-// zlib's deflate from bytes the test chose, inflated by libdeflate. What it
-// returns must be those bytes; what it leaves to zlib (std::nullopt) is
-// every case that is not clean, so that the readers' zlib path decides it.
+// detail::inflate_gzip_file and inflate_zlib_exact (src/io/whole_inflate.cpp):
+// gzip members and zlib streams made by zlib's deflate from bytes the test
+// chose, inflated by libdeflate. What they give must be those bytes; what
+// they leave to zlib (std::nullopt, false) is every case that is not clean,
+// so that the readers' zlib path decides it.
 // tests/cli/test_gzip_volumes_cli.py checks the readers end to end.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -98,6 +99,31 @@ TEST_F(WholeInflate, WhatIsNotCleanIsLeftToZlib) {
   const auto crc = static_cast<std::uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(with_hcrc.data()), 10));
   with_hcrc += std::string{static_cast<char>(crc & 0xff), static_cast<char>((crc >> 8) & 0xff)} + gb.substr(10);
   EXPECT_EQ(inflate(ga + with_hcrc, 0, 0, n), std::nullopt) << "header CRC";
+}
+
+// inflate_zlib_exact on `stream`, into exactly `expected` bytes.
+std::optional<std::string> inflate_zlib(const std::string& stream, std::size_t expected) {
+  std::string out(expected, '\0');
+  if (!detail::inflate_zlib_exact(stream.data(), stream.size(), out.data(), expected)) return std::nullopt;
+  return out;
+}
+
+TEST(WholeInflateZlib, ExactlyTheDeclaredBytesOfAWellFormedStream) {
+  const std::string a = noise(40000, 7), z = zlib_bytes(a);
+  EXPECT_EQ(inflate_zlib(z, a.size()), a);
+  EXPECT_EQ(inflate_zlib(z + "bytes after the stream", a.size()), a);
+  EXPECT_EQ(inflate_zlib(zlib_bytes(""), 0), "");
+  EXPECT_EQ(inflate_zlib(z, a.size() + 1), std::nullopt) << "inflates to fewer";
+  EXPECT_EQ(inflate_zlib(z, a.size() - 1), std::nullopt) << "inflates to more";
+  EXPECT_EQ(inflate_zlib(z.substr(0, z.size() - 1), a.size()), std::nullopt) << "truncated";
+  std::string bad_adler = z;
+  bad_adler.back() = static_cast<char>(bad_adler.back() ^ 1);
+  EXPECT_EQ(inflate_zlib(bad_adler, a.size()), std::nullopt) << "Adler-32";
+  std::string dictionary = z;  // FDICT set, FCHECK adjusted to keep the header a multiple of 31
+  dictionary[1] = static_cast<char>(dictionary[1] | 0x20);
+  dictionary[1] = static_cast<char>((dictionary[1] & 0xe0) + (31 - ((static_cast<unsigned char>(dictionary[0]) << 8 |
+                                                                   (dictionary[1] & 0xe0)) % 31)) % 31);
+  EXPECT_EQ(inflate_zlib(dictionary, a.size()), std::nullopt) << "preset dictionary";
 }
 
 }  // namespace
