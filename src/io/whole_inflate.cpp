@@ -105,4 +105,14 @@ bool inflate_zlib_exact(const char* src, std::size_t size, char* out, std::size_
          got == expected;
 }
 
+bool inflate_zlib_or_gzip_exact(const char* src, std::size_t size, char* out, std::size_t expected) {
+  const auto* in = reinterpret_cast<const unsigned char*>(src);
+  if (size < 2 || in[0] != 0x1f || in[1] != 0x8b) return inflate_zlib_exact(src, size, out, expected);
+  libdeflate_decompressor* d = decompressor();
+  std::size_t used = 0, got = 0;
+  return d && member_starts(in, size) &&
+         libdeflate_gzip_decompress_ex(d, in, size, out, expected, &used, &got) == LIBDEFLATE_SUCCESS &&
+         got == expected;
+}
+
 }  // namespace keymesh::io::detail

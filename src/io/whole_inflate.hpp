@@ -33,5 +33,9 @@ std::optional<std::vector<std::byte>> inflate_gzip_file(const std::string& path,
 // looked at, as zlib's inflate stops at its end); false leaves the decision
 // and the message to zlib, and out's bytes are then unspecified.
 bool inflate_zlib_exact(const char* src, std::size_t size, char* out, std::size_t expected);
+// The same for what zlib's inflateInit2(15 + 32) reads (Zarr's zlib and gzip
+// chunks): one gzip member when the stream starts with gzip's magic bytes
+// (and carries no header CRC-16), a zlib stream otherwise.
+bool inflate_zlib_or_gzip_exact(const char* src, std::size_t size, char* out, std::size_t expected);
 
 }  // namespace keymesh::io::detail

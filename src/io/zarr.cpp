@@ -17,6 +17,7 @@
 #include "keymesh/core/error.hpp"
 #include "mesh_bytes.hpp"
 #include "volume_formats.hpp"
+#include "whole_inflate.hpp"
 
 #include "type_names.hpp"
 
@@ -336,6 +337,10 @@ class ZarrPlanes : public PlaneSource {
           throw bad(std::to_string(data.size()) + " bytes of zlib/gzip data cannot inflate to the " +
                     std::to_string(chunk_bytes_) + " bytes the chunk shape needs");
         out.resize(chunk_bytes_);
+        if (data.size() <= std::numeric_limits<uInt>::max() &&
+            detail::inflate_zlib_or_gzip_exact(data.data(), data.size(), reinterpret_cast<char*>(out.data()), out.size()))
+          return true;
+        // Otherwise zlib decides, and words the refusal.
         z_stream s{};
         if (inflateInit2(&s, 15 + 32) != Z_OK) throw bad("zlib cannot start");  // 32: zlib or gzip header
         s.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));

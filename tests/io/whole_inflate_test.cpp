@@ -1,4 +1,5 @@
-// detail::inflate_gzip_file and inflate_zlib_exact (src/io/whole_inflate.cpp):
+// detail::inflate_gzip_file, inflate_zlib_exact and inflate_zlib_or_gzip_exact
+// (src/io/whole_inflate.cpp):
 // gzip members and zlib streams made by zlib's deflate from bytes the test
 // chose, inflated by libdeflate. What they give must be those bytes; what
 // they leave to zlib (std::nullopt, false) is every case that is not clean,
@@ -124,6 +125,24 @@ TEST(WholeInflateZlib, ExactlyTheDeclaredBytesOfAWellFormedStream) {
   dictionary[1] = static_cast<char>((dictionary[1] & 0xe0) + (31 - ((static_cast<unsigned char>(dictionary[0]) << 8 |
                                                                    (dictionary[1] & 0xe0)) % 31)) % 31);
   EXPECT_EQ(inflate_zlib(dictionary, a.size()), std::nullopt) << "preset dictionary";
+}
+
+TEST(WholeInflateZlib, ZlibOrOneGzipMemberAsZlibDetectsThem) {
+  const std::string a = noise(30000, 8), b = noise(100, 9);
+  std::string out(a.size(), '\0');
+  auto inflate_either = [&](const std::string& s) {
+    return detail::inflate_zlib_or_gzip_exact(s.data(), s.size(), out.data(), out.size()) && out == a;
+  };
+  EXPECT_TRUE(inflate_either(zlib_bytes(a)));
+  EXPECT_TRUE(inflate_either(gzip_bytes(a)));
+  EXPECT_TRUE(inflate_either(gzip_bytes(a) + "after the member"));
+  // zlib's inflate stops at the end of the first member.
+  EXPECT_FALSE(inflate_either(gzip_bytes(a.substr(0, 1000)) + gzip_bytes(a.substr(1000))));
+  std::string hcrc = gzip_bytes(a);
+  hcrc[3] = static_cast<char>(hcrc[3] | 0x02);
+  EXPECT_FALSE(inflate_either(hcrc.substr(0, 10) + "\x01\x02" + hcrc.substr(10))) << "header CRC";
+  EXPECT_FALSE(inflate_either(gzip_bytes(a + b))) << "longer";
+  EXPECT_FALSE(inflate_either(a)) << "neither";
 }
 
 }  // namespace
