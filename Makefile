@@ -69,7 +69,7 @@ bench: build
 SANITIZE_CMAKE = -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEYMESH_PYTHON=OFF -DKEYMESH_BUILD_BENCH=OFF -DKEYMESH_CUDA=OFF
 TSAN_FILTER ?= *Threads*:ExclusiveScan*:BitsNeeded*:Contour*:ContourTets*:Tetrahedralize*:Subdivide*:Coarsen*:Dual*:Curvature*:Incidence*:TopologyTest*
 SANITIZER_ENV = KEYMESH_HUGE_PAGES=0 ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
-  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan_suppressions.txt \
+  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan_suppressions.txt:print_suppressions=0 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:ignore_noninstrumented_modules=1 \
   OMP_TOOL_LIBRARIES=/usr/lib/llvm-14/lib/libarcher.so
 
