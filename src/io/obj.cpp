@@ -150,12 +150,12 @@ void write_lines(AtomicFile& file, Id count, const Line& line) {
     const Id n = std::min(kRound, count - first);
     parallel::for_each_chunk(n, kParts, [&](Id b, Id e, int part) {
       std::string& t = text[static_cast<std::size_t>(part)];
-      t.clear();
       for (Id i = b; i < e; ++i) line(t, first + i);
     });
-    for (const std::string& t : text)
+    for (std::string& t : text) {  // cleared here: a part may get no lines in the next round
       if (!t.empty()) file.write(t);
-    for (std::string& t : text) t.clear();
+      t.clear();
+    }
   }
 }
 

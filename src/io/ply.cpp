@@ -465,7 +465,7 @@ std::uint64_t read_binary_faces(const Element& e, std::size_t list, std::uint64_
   std::size_t before = 0, after = 0;  // the other properties' bytes
   for (std::size_t i = 0; i < e.props.size(); ++i) {
     if (i == list) continue;
-    if (e.props[i].is_list) return 0;
+    if (e.props[i].is_list) return first;
     (i < list ? before : after) += scalar_size(e.props[i].type);
   }
   const Property& p = e.props[list];
@@ -677,15 +677,14 @@ bool write_ply_records(const SurfaceMesh& mesh, bool wide_count, AtomicFile& fil
     for (Id c = 0; c < cells; ++c) {
       const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
       const std::size_t ids = 4 * static_cast<std::size_t>(e - b), count = wide_count ? 4 : 1;
+      const auto size = static_cast<std::uint32_t>(e - b);  // its low byte when not wide
       if (count + ids > kBlock) {  // one huge polygon: its own writes
         room(kBlock);
-        const std::uint32_t size = static_cast<std::uint32_t>(e - b);
         file.write(&size, count);
         file.write(mesh.connectivity.data() + b, ids);
         continue;
       }
       room(count + ids);
-      const std::uint32_t size = static_cast<std::uint32_t>(e - b);
       put(&size, count);
       put(mesh.connectivity.data() + b, ids);
     }

@@ -85,32 +85,21 @@ struct Array {
   // through here value by value), the rest through the general loads.
   double as_double(std::size_t i) const {
     const char* p = bytes.data() + i * scalar_size(type);
-    // (A NaN goes the general way, which quiets a signalling one, as before.)
+    // (A float32 NaN goes the general way, which quiets a signalling one, as
+    // before.)
     if (!big && type == ScalarType::Float32) {
-      const float f = load_native<float>(p);
+      const float f = mesh_bytes::load<float>(p, false);
       if (f == f) return f;
     }
-    if (!big && type == ScalarType::Float64) {
-      const double d = load_native<double>(p);
-      if (d == d) return d;
-    }
+    if (!big && type == ScalarType::Float64) return mesh_bytes::load<double>(p, false);
     return mesh_bytes::load_as_double(p, type, big);
   }
   bool as_int(std::size_t i, std::int64_t& v) const {
     const char* p = bytes.data() + i * scalar_size(type);
-    if (!big && type == ScalarType::Int64) return v = load_native<std::int64_t>(p), true;
-    if (!big && type == ScalarType::Int32) return v = load_native<std::int32_t>(p), true;
-    if (!big && type == ScalarType::UInt32) return v = load_native<std::uint32_t>(p), true;
+    if (!big && type == ScalarType::Int64) return v = mesh_bytes::load<std::int64_t>(p, false), true;
+    if (!big && type == ScalarType::Int32) return v = mesh_bytes::load<std::int32_t>(p, false), true;
+    if (!big && type == ScalarType::UInt32) return v = mesh_bytes::load<std::uint32_t>(p, false), true;
     return mesh_bytes::load_as_int64(p, type, big, v);
-  }
-
- private:
-  template <class T>
-  static T load_native(const char* p) {
-    if constexpr (std::endian::native == std::endian::big) return mesh_bytes::load<T>(p, false);
-    T v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
   }
 };
 
