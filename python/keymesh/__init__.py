@@ -35,6 +35,7 @@ from ._skimage_compat import marching_cubes
 __all__ = [
     "Mesh", "Volume", "Error", "LimitError", "Grid", "contour", "key_reduce", "check", "read", "write", "marching_cubes",
     "tetrahedralize", "subdivide", "dual", "quality", "coarsen", "incidence", "from_vtk", "from_meshio",
+    "release_memory", "retained_memory",
 ]
 
 __version__ = "0.1.0"
@@ -220,6 +221,29 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
     last_contour_info.clear()
     last_contour_info.update(info)
     return _mesh(parts)
+
+
+def release_memory() -> int:
+    """Unmap the memory kept from freed outputs; returns its bytes.
+
+    When a mesh's large arrays (4 MiB or more) are freed, keymesh keeps their
+    pages mapped, for 10 seconds and up to the smaller of 1 GiB and an
+    eighth of RAM (environment variable KEYMESH_RETAINED_MEMORY_MB; 0 keeps
+    nothing), and the next call's outputs reuse them instead of faulting in
+    fresh pages (on a VM the first touch of a page can cost more than the
+    contour's own work). Call this to give that memory back now.
+
+        >>> m = keymesh.contour(volume, 90.5); del m
+        >>> keymesh.release_memory()   # e.g. 69206016
+    """
+    return int(_ext.release_memory())
+
+
+def retained_memory() -> Dict[str, int]:
+    """What release_memory() would give back, and how often kept blocks served
+    a call: {'kept_bytes', 'kept_blocks', 'reused', 'mapped', 'limit_bytes',
+    'limit_seconds'}."""
+    return dict(_ext.retained_memory())
 
 
 def key_reduce(keys: Any, values: Any, op: str = "mean",

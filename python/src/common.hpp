@@ -34,14 +34,6 @@ py::array adopt(std::vector<T, A>&& v, std::vector<py::ssize_t> shape) {
   return py::array_t<V>(std::move(shape), reinterpret_cast<const V*>(owned->data()), base);
 }
 
-// The same for an array the module allocated itself (no vector around it).
-template <class T>
-py::array adopt(std::unique_ptr<T[]>&& a, std::vector<py::ssize_t> shape) {
-  T* owned = a.release();
-  py::capsule base(owned, [](void* p) { delete[] static_cast<T*>(p); });
-  return py::array_t<T>(std::move(shape), owned, base);
-}
-
 // Sets the library's (process-wide) worker count for one call, restores it
 // after. threads: 0 = all cores; negative is refused before this is built.
 class ThreadScope {

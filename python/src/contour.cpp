@@ -48,24 +48,26 @@ void swap_x_z(SurfaceMesh& mesh) {
 // The output of a contour with positions and triangles (and the scalar)
 // only, in arrays the module allocates itself (ContourOptions::
 // output_arrays): uninitialised until the contour writes them, as a
-// SurfaceMesh's Arrays are now too.
+// SurfaceMesh's Arrays are; their storage is kept for the next call when
+// the arrays are freed (core/retained_blocks.hpp).
 struct OwnArrays {
   Id points = 0, triangles = 0;
-  std::unique_ptr<float[]> xyz, scalars;
-  std::unique_ptr<PointIndex[]> connectivity;
+  bool with_scalars = false;
+  Array<float> xyz, scalars;
+  Array<PointIndex> connectivity;
 
-  generate::ContourArrays allocate(Id n, Id m, bool with_scalars) {
-    points = n, triangles = m;
-    xyz = parallel::fresh_array<float>(static_cast<std::size_t>(3 * n));
-    connectivity = parallel::fresh_array<PointIndex>(static_cast<std::size_t>(3 * m));
-    if (with_scalars) scalars = parallel::fresh_array<float>(static_cast<std::size_t>(n));
-    return {xyz.get(), connectivity.get(), scalars.get()};
+  generate::ContourArrays allocate(Id n, Id m, bool scalar) {
+    points = n, triangles = m, with_scalars = scalar;
+    parallel::resize_fresh(xyz, static_cast<std::size_t>(3 * n));
+    parallel::resize_fresh(connectivity, static_cast<std::size_t>(3 * m));
+    if (with_scalars) parallel::resize_fresh(scalars, static_cast<std::size_t>(n));
+    return {xyz.data(), connectivity.data(), with_scalars ? scalars.data() : nullptr};
   }
 
   // (points, cells, None, point_data), as mesh_to_python gives them.
   py::tuple to_python(const std::string& scalar_name) {
     py::dict point_data;
-    if (scalars) point_data[py::str(scalar_name)] = adopt(std::move(scalars), {points});
+    if (with_scalars) point_data[py::str(scalar_name)] = adopt(std::move(scalars), {points});
     py::array p = adopt(std::move(xyz), {points, 3});
     return py::make_tuple(p, adopt(std::move(connectivity), {triangles, 3}), py::none(), point_data);
   }
@@ -134,8 +136,8 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
     contour_s = seconds_since(t0);
     t0 = Clock::now();
     if (view.reversed && own_arrays) {
-      swap_x_z(own.xyz.get(), own.points);
-      swap_corners(own.connectivity.get(), own.triangles);
+      swap_x_z(own.xyz.data(), own.points);
+      swap_corners(own.connectivity.data(), own.triangles);
     } else if (view.reversed) {
       swap_x_z(mesh);
     }

@@ -3,6 +3,7 @@
 #include "common.hpp"
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/retained_blocks.hpp"
 
 namespace keymesh::python {
 
@@ -86,4 +87,13 @@ PYBIND11_MODULE(_keymesh, m) {
   kp::register_labels(m);
   m.def("thread_count", &keymesh::parallel::thread_count,
         "Worker threads the library uses when a call passes threads=0 (all cores).");
+  m.def("release_memory", &keymesh::retained_blocks::release_all,
+        "Unmaps the large blocks kept from freed outputs for the next call's outputs; returns their bytes.");
+  m.def("retained_memory", [] {
+    const auto s = keymesh::retained_blocks::stats();
+    pybind11::dict d;
+    d["kept_bytes"] = s.kept_bytes, d["kept_blocks"] = s.kept_blocks, d["reused"] = s.reused, d["mapped"] = s.mapped;
+    d["limit_bytes"] = keymesh::retained_blocks::limit(), d["limit_seconds"] = keymesh::retained_blocks::limit_seconds();
+    return d;
+  }, "The blocks kept for reuse: bytes, count, acquisitions served by a kept block and by a fresh mapping, limits.");
 }

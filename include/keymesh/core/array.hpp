@@ -10,13 +10,17 @@
 // 3.7 M-triangle contour) that the writes then repeat. resize(n, 0) and
 // assign(n, 0) still fill where zeros are meant. Built with
 // -DKEYMESH_POISON_UNWRITTEN, unwritten elements are set to all ones bits
-// instead, to catch a reader of elements nobody wrote.
+// instead, to catch a reader of elements nobody wrote. Storage of 4 MiB or
+// more comes from core/retained_blocks.hpp: a freed output's pages are kept
+// mapped for the next one, not faulted in afresh.
 #include <cstring>
 #include <memory>
 #include <new>
 #include <type_traits>
 #include <utility>
 #include <vector>
+
+#include "keymesh/core/retained_blocks.hpp"
 
 namespace keymesh {
 
@@ -32,6 +36,20 @@ struct DefaultInitAllocator : std::allocator<T> {
   DefaultInitAllocator() noexcept = default;
   template <class U>
   DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+
+  T* allocate(std::size_t n) {
+    if (retained_blocks::kInUse && n >= retained_blocks::kMinBytes / sizeof(T)) {
+      if (n > std::allocator_traits<std::allocator<T>>::max_size(*this)) throw std::bad_array_new_length();
+      return static_cast<T*>(retained_blocks::acquire(n * sizeof(T)));
+    }
+    return std::allocator<T>::allocate(n);
+  }
+  void deallocate(T* p, std::size_t n) noexcept {
+    if (retained_blocks::kInUse && n >= retained_blocks::kMinBytes / sizeof(T))
+      retained_blocks::release(p, n * sizeof(T));
+    else
+      std::allocator<T>::deallocate(p, n);
+  }
 
   template <class U>
   void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {

@@ -9,12 +9,9 @@
 // output Array (core/array.hpp) is then sized without a fill: its elements
 // are written once, by the generator.
 #include <cstddef>
-#include <memory>
-#include <type_traits>
 #include <vector>
 
 #include "keymesh/core/huge_pages.hpp"
-#include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::parallel {
@@ -47,17 +44,6 @@ void reserve_fresh(std::vector<T, A>& v, std::size_t n) {
   // Raw storage past the elements held: bytes may be written (a resize
   // sets them after).
   fault_in(v.data(), n * sizeof(T), v.size() * sizeof(T));
-}
-
-// An array of n elements left uninitialised (no zero-fill), its pages
-// faulted in by the threads: for output written in place, element by
-// element, before anyone reads it.
-template <class T>
-std::unique_ptr<T[]> fresh_array(std::size_t n) {
-  static_assert(std::is_trivially_default_constructible_v<T>);
-  std::unique_ptr<T[]> a = uninitialized_array<T>(n);  // huge pages asked for
-  touch_pages(a.get(), n * sizeof(T));
-  return a;
 }
 
 // Sizes `v` to n elements, its new pages faulted in by the threads. The new
