@@ -56,7 +56,7 @@ std::size_t default_limit() {
   if (const char* v = std::getenv("KEYMESH_RETAINED_MEMORY_MB")) {
     char* end = nullptr;
     const unsigned long long mb = std::strtoull(v, &end, 10);
-    if (end != v && *end == '\0') return static_cast<std::size_t>(mb) << 20;
+    if (v[0] >= '0' && v[0] <= '9' && *end == '\0') return static_cast<std::size_t>(mb) << 20;
   }
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
   const std::size_t physical = pages > 0 && page > 0 ? static_cast<std::size_t>(pages) * page : 0;

@@ -63,12 +63,6 @@ void InputFile::read_at(std::uint64_t offset, void* dst, std::uint64_t size, con
   if (!ok) throw InputError(path_ + ": read failed (" + what + ")");
 }
 
-std::string InputFile::read_all() {
-  std::string data(static_cast<std::size_t>(size_), '\0');
-  read_at(0, data.data(), size_, "the whole file");
-  return data;
-}
-
 std::uint64_t input_size(const std::string& path) { return InputFile(path).size(); }
 
 bool same_file(const std::string& a, const std::string& b) {

@@ -15,7 +15,12 @@
 
 namespace keymesh::io::mesh_bytes {
 
-std::string read_whole_file(const std::string& path) { return InputFile(path).read_all(); }
+FileBytes read_whole_file(const std::string& path) {
+  InputFile in(path);
+  Array<char> bytes(static_cast<std::size_t>(in.size()));  // unwritten until read
+  in.read_at(0, bytes.data(), in.size(), "the whole file");
+  return FileBytes(std::move(bytes));
+}
 
 double load_as_double(const void* p, ScalarType s, bool big) {
   switch (s) {

@@ -170,7 +170,7 @@ void store_decoded(const std::string& path, const Array& a, ScalarType declared_
 // and anything else returns nullopt.
 // With `layout`, a raw appended uncompressed array is not read: where its
 // samples lie is filled in instead (vti_layout).
-std::optional<ImageGrid> parse_vti(const std::string& path, const std::string& data, bool head_only,
+std::optional<ImageGrid> parse_vti(const std::string& path, std::string_view data, bool head_only,
                                    std::uint64_t file_bytes, VolumeLayout* layout = nullptr) {
   const ParsedXml xml = parse_xml(data, path);
   const Context ctx = file_context(xml, path, "ImageData");

@@ -60,7 +60,7 @@ std::optional<CellArrays> read_cells(const XmlNode& piece, std::string_view sect
 }  // namespace
 
 SurfaceMesh read_vtp(const std::string& path) {
-  const std::string data = read_whole_file(path);
+  const FileBytes data = read_whole_file(path);
   return parse_vtp(data, path);
 }
 
@@ -253,7 +253,7 @@ struct Pieces {
   std::vector<std::vector<std::int64_t>> ids;
 };
 Pieces read_pieces(const std::string& path) {
-  const std::string index = read_whole_file(path);
+  const FileBytes index = read_whole_file(path);
   ParsedXml xml = parse_xml(index, path);
   const XmlNode* root = xml.root.get();
   const std::string* type = root ? root->attr("type") : nullptr;
@@ -267,7 +267,7 @@ Pieces read_pieces(const std::string& path) {
     if (!source || source->empty()) throw InputError(path + ": <Piece> without a Source");
     std::filesystem::path p(*source);
     if (p.is_relative()) p = dir / p;
-    const std::string data = read_whole_file(p.string());
+    const FileBytes data = read_whole_file(p.string());
     pieces.ids.emplace_back();
     pieces.meshes.push_back(parse_vtp(data, p.string(), &pieces.ids.back()));
   }

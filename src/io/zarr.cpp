@@ -36,10 +36,10 @@ constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;
 constexpr int kMaxJsonDepth = 64;
 
 json read_json(const std::string& file, const std::string& folder) {
-  const std::string text = mesh_bytes::read_whole_file(file);
+  const mesh_bytes::FileBytes text = mesh_bytes::read_whole_file(file);
   const std::string name = fs::path(file).filename().string();
   try {
-    return json::parse(text, [&](int depth, json::parse_event_t, json&) {
+    return json::parse(text.view(), [&](int depth, json::parse_event_t, json&) {
       if (depth > kMaxJsonDepth)
         throw InputError(folder + ": " + name + " nests deeper than " + std::to_string(kMaxJsonDepth) + " levels");
       return true;
@@ -321,7 +321,7 @@ class ZarrPlanes : public PlaneSource {
     key += std::to_string(index[0]) + separator_ + std::to_string(index[1]) + separator_ + std::to_string(index[2]);
     const fs::path file = fs::path(array_) / key;
     if (!path_exists(file)) return false;
-    const std::string data = mesh_bytes::read_whole_file(file.string());
+    const mesh_bytes::FileBytes data = mesh_bytes::read_whole_file(file.string());
     auto bad = [&](const std::string& what) { return InputError(folder_ + ": chunk " + key + ": " + what); };
     switch (codec_) {
       case Codec::None:

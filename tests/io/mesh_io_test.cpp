@@ -47,7 +47,7 @@ void write_text(const std::string& path, const std::string& text) {
   out << text;
 }
 
-std::string read_text(const std::string& path) { return io::mesh_bytes::read_whole_file(path); }
+std::string read_text(const std::string& path) { return std::string(io::mesh_bytes::read_whole_file(path).view()); }
 
 // Tetrahedron with a 3-component "Normals", a scalar and a vector field.
 SurfaceMesh sample_mesh() {

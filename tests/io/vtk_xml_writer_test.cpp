@@ -41,7 +41,7 @@ TEST(VtkXmlWriter, EveryArrayReadsBackAtItsOffset) {
   x += "      </PointData>\n    </Piece>\n  </PolyData>\n";
   arrays.write(path, x);
 
-  const std::string data = mesh_bytes::read_whole_file(path);
+  const std::string data(mesh_bytes::read_whole_file(path).view());
   std::filesystem::remove(path);
   const vtk_xml::ParsedXml xml = vtk_xml::parse_xml(data, path);
   const vtk_xml::Context ctx = vtk_xml::file_context(xml, path, "PolyData");

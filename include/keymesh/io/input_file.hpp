@@ -29,8 +29,6 @@ class InputFile {
   // Reads exactly `size` bytes at `offset`; InputError naming `what` when the
   // file holds fewer.
   void read_at(std::uint64_t offset, void* dst, std::uint64_t size, const std::string& what);
-  // The whole file (exactly size() bytes).
-  std::string read_all();
 
  private:
   std::string path_;
