@@ -156,7 +156,7 @@ ImageGrid finish_samples(ImageGrid grid, const VolumeLayout& layout) {
   if (!layout.scaled()) return grid;
   // Scaled data: the real values are slope * stored + inter.
   ImageGrid scaled;
-  scaled.allocate(grid.dims, detail::scaled_type(grid.type));
+  scaled.allocate_unwritten(grid.dims, detail::scaled_type(grid.type));
   scaled.spacing = grid.spacing;
   scaled.name = grid.name;
   detail::scale_samples(grid.type, grid.bytes.data(), scaled.bytes.data(), static_cast<std::uint64_t>(grid.num_points()),

@@ -87,7 +87,7 @@ std::vector<std::vector<double>> vectors(const std::string& path, const std::str
 
 // Reads `size` bytes of gzip data from `path` at `offset` (and no more):
 // with libdeflate when the data is clean, otherwise zlib decides.
-std::vector<std::byte> read_gzip(const std::string& path, std::uint64_t offset, std::uint64_t file_bytes,
+Array<std::byte> read_gzip(const std::string& path, std::uint64_t offset, std::uint64_t file_bytes,
                                  std::uint64_t size) {
   if (auto samples = detail::inflate_gzip_file(path, offset, 0, size)) return std::move(*samples);
   InputFile in(path);

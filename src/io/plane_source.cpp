@@ -139,7 +139,7 @@ ImageGrid read_all_planes(PlaneSource& source) {
   grid.spacing = head.spacing;
   grid.origin = head.origin;
   grid.name = head.name;
-  grid.allocate(head.dims, head.type);
+  grid.allocate_unwritten(head.dims, head.type);
   source.read_planes(0, head.dims[2], grid.bytes.data());
   return grid;
 }

@@ -32,7 +32,7 @@ void swap_samples(ImageGrid& grid) {
 
 void allocate_checked(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, const std::string& path) {
   try {
-    grid.allocate(dims, type);
+    grid.allocate_unwritten(dims, type);  // the reader writes every sample
   } catch (const InputError& e) {
     throw InputError(path + ": " + e.what());
   } catch (const LimitError& e) {
@@ -65,10 +65,10 @@ std::uint64_t initial_inflate_bytes(std::uint64_t compressed_bytes, std::uint64_
   return std::min(size, 4 * compressed_bytes + (64u << 10));
 }
 
-std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
+Array<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
                                        const std::string& path, const std::string& what, bool allow_plain) {
   gzFile gz = static_cast<gzFile>(gz_file);
-  std::vector<std::byte> out;
+  Array<std::byte> out;
   std::uint64_t done = 0;
   while (done < size) {
     if (done == out.size()) {
@@ -90,7 +90,7 @@ std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::u
   return out;
 }
 
-void adopt_samples(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, std::vector<std::byte> samples) {
+void adopt_samples(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, Array<std::byte> samples) {
   grid.dims = dims;
   grid.type = type;
   grid.bytes = std::move(samples);

@@ -81,7 +81,7 @@ std::uint64_t initial_inflate_bytes(std::uint64_t compressed_bytes, std::uint64_
 // is ever inflated. `compressed_bytes` (the stream's size on disk) sizes the
 // first allocation (initial_inflate_bytes). InputError naming path and `what` when the stream ends
 // early or is corrupt, or (unless allow_plain) is not gzip data at all.
-std::vector<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
+Array<std::byte> read_gz_growing(void* gz_file, std::uint64_t size, std::uint64_t compressed_bytes,
                                        const std::string& path, const std::string& what, bool allow_plain);
 // NIfTI scaling: value = slope * stored + inter, computed in double and
 // stored as float32 (float64 input stays float64: scaled_type). `out` holds
@@ -90,7 +90,7 @@ ScalarType scaled_type(ScalarType stored_type);
 void scale_samples(ScalarType stored_type, const std::byte* stored, std::byte* out, std::uint64_t n, double slope,
                    double inter);
 // Moves samples read by read_gz_growing into grid (dims already checked).
-void adopt_samples(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, std::vector<std::byte> samples);
+void adopt_samples(ImageGrid& grid, std::array<Id, 3> dims, ScalarType type, Array<std::byte> samples);
 }  // namespace detail
 
 }  // namespace keymesh::io

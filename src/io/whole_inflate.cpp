@@ -66,7 +66,7 @@ bool member_starts(const unsigned char* p, std::size_t left) {
 
 }  // namespace
 
-std::optional<std::vector<std::byte>> inflate_gzip_file(const std::string& path, std::uint64_t offset,
+std::optional<Array<std::byte>> inflate_gzip_file(const std::string& path, std::uint64_t offset,
                                                         std::uint64_t skip, std::uint64_t size) {
   const MappedFile file(path);
   if (!file.data() || offset >= file.size()) return std::nullopt;
@@ -77,7 +77,7 @@ std::optional<std::vector<std::byte>> inflate_gzip_file(const std::string& path,
   // ISIZE, the last member's length modulo 2^32: the whole stream's for the
   // usual single member.
   const bool trailer_agrees = little_endian_32(in + in_size - 4) == static_cast<std::uint32_t>(total);
-  std::vector<std::byte> out(static_cast<std::size_t>(trailer_agrees ? total : initial_inflate_bytes(in_size, total)));
+  Array<std::byte> out(static_cast<std::size_t>(trailer_agrees ? total : initial_inflate_bytes(in_size, total)));
   libdeflate_decompressor* d = decompressor();
   if (!d) return std::nullopt;
   std::size_t read = 0, done = 0;

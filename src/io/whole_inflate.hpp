@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "keymesh/core/array.hpp"
+
 namespace keymesh::io::detail {
 
 // The gzip members of `path` from byte `offset` to its end, inflated with
@@ -24,7 +26,7 @@ namespace keymesh::io::detail {
 // bytes only when the last member's trailer says the stream inflates to
 // that; otherwise at zlib's first guess (initial_inflate_bytes), doubling
 // as the members need it, so a header that lies costs what it costs zlib.
-std::optional<std::vector<std::byte>> inflate_gzip_file(const std::string& path, std::uint64_t offset,
+std::optional<Array<std::byte>> inflate_gzip_file(const std::string& path, std::uint64_t offset,
                                                         std::uint64_t skip, std::uint64_t size);
 
 // One zlib stream (RFC 1950) of `size` bytes inflated with libdeflate into

@@ -35,7 +35,7 @@ void check_float32_geometry(const std::array<Id, 3>& dims, const std::array<doub
   }
 }
 
-void ImageGrid::allocate(std::array<Id, 3> new_dims, ScalarType new_type) {
+void ImageGrid::allocate_unwritten(std::array<Id, 3> new_dims, ScalarType new_type) {
   constexpr Id kMax = std::numeric_limits<Id>::max();
   Id count = 1;
   for (int a = 0; a < 3; ++a) {
@@ -52,7 +52,13 @@ void ImageGrid::allocate(std::array<Id, 3> new_dims, ScalarType new_type) {
     throw LimitError("grid of " + std::to_string(count) + " points is too large");
   dims = new_dims;
   type = new_type;
-  bytes.assign(static_cast<std::size_t>(count * size), std::byte{0});
+  bytes.clear();  // nothing copied if the storage grows
+  bytes.resize(static_cast<std::size_t>(count * size));
+}
+
+void ImageGrid::allocate(std::array<Id, 3> new_dims, ScalarType new_type) {
+  allocate_unwritten(new_dims, new_type);
+  std::fill(bytes.begin(), bytes.end(), std::byte{0});
 }
 
 // The samples' range, by chunks on the threads. Integer samples are

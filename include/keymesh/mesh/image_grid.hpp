@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "keymesh/core/array.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/types.hpp"
 #include "keymesh/mesh/scalar_type.hpp"
@@ -20,7 +21,8 @@ struct ImageGrid {
   std::array<double, 3> spacing{1.0, 1.0, 1.0};
   ScalarType type = ScalarType::Float32;
   std::string name = "scalars";              // the point field's name
-  std::vector<std::byte> bytes;              // dims[0]*dims[1]*dims[2] samples, native endian
+  Array<std::byte> bytes;                    // dims[0]*dims[1]*dims[2] samples, native endian (no zero fill:
+                                             // a reader writes every sample)
   // A non-owning view instead of `bytes` (e.g. a numpy array's memory, which
   // must outlive every use of the grid): when set, algorithms read the
   // samples from here and `bytes` stays empty.
@@ -35,8 +37,12 @@ struct ImageGrid {
   }
 
   // Allocates bytes for dims and type after checking every product for
-  // overflow; throws LimitError naming the dims otherwise.
+  // overflow; throws LimitError naming the dims otherwise. The samples are
+  // zeros.
   void allocate(std::array<Id, 3> new_dims, ScalarType new_type);
+  // The same with the samples left unwritten, for a reader that writes every
+  // one (no zero fill of the whole volume first).
+  void allocate_unwritten(std::array<Id, 3> new_dims, ScalarType new_type);
 };
 
 // Calls f(const T* samples) with T the grid's C++ sample type.
