@@ -8,6 +8,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
+#include "keymesh/core/retained_blocks.hpp"
 #include "keymesh/generate/coarsen.hpp"
 #include "keymesh/generate/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -141,6 +142,7 @@ void add_stats(ContourStats& total, const ContourStats& st) {
 
 SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
                              ContourStats* stats, StreamStats* stream_stats) {
+  const retained_blocks::KeepNothing within_the_budget;
   const ImageGrid& head = source.header();
   check_streamable(head, options);
   const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];

@@ -1,5 +1,6 @@
 // Label maps streamed in slabs: the three passes over the planes and the
 // merge of the slabs' pieces by key (see keymesh/generate/labels_stream.hpp).
+#include "keymesh/core/retained_blocks.hpp"
 #include "keymesh/generate/labels_stream.hpp"
 
 #include <algorithm>
@@ -93,6 +94,8 @@ std::vector<std::byte> counts_bytes(const detail::LabelCounts& c) {
 }  // namespace
 
 struct LabelSlabs::Impl {
+  // Slabs are held to a memory budget (or a rank's rows): no freed block kept.
+  retained_blocks::KeepNothing within_the_budget;
   PlaneSource& source;
   LabelOptions options;
   std::pair<Id, Id> rows;

@@ -140,6 +140,24 @@ TEST_F(RetainedBlocks, ReleaseAllUnmapsEverythingKept) {
   EXPECT_EQ(rb::stats().kept_blocks, 0u);
 }
 
+TEST_F(RetainedBlocks, NothingIsKeptWhileAKeepNothingLives) {
+  void* p = rb::acquire(8 * kMiB);
+  rb::release(p, 8 * kMiB);
+  ASSERT_EQ(rb::stats().kept_blocks, 1u);
+  {
+    const rb::KeepNothing scope;
+    EXPECT_EQ(rb::stats().kept_blocks, 0u);  // what was kept is unmapped
+    void* q = rb::acquire(8 * kMiB);
+    rb::release(q, 8 * kMiB);
+    EXPECT_EQ(rb::stats().kept_blocks, 0u);
+  }
+  EXPECT_EQ(rb::limit(), std::size_t{1} << 30);  // the limits come back
+  EXPECT_EQ(rb::limit_seconds(), 3600);
+  void* r = rb::acquire(8 * kMiB);
+  rb::release(r, 8 * kMiB);
+  EXPECT_EQ(rb::stats().kept_blocks, 1u);
+}
+
 TEST_F(RetainedBlocks, ThreadsNeverShareABlock) {
   std::vector<std::thread> threads;
   std::vector<int> failures(4, 0);
