@@ -139,19 +139,28 @@ SurfaceMesh parse_obj(std::string_view data, const std::string& path) {
 namespace {
 
 // `count` lines of one section, formatted on the threads a round at a time
-// (16 parts a round, each into its own text), written in order: the same
-// text at any thread count. Formatting floats is most of an .obj's cost.
+// (16 parts a round, each into its own text, taken by whichever thread is
+// free), written in order: the same text at any thread count. Formatting
+// floats is most of an .obj's cost. A round of a few lines is one part,
+// formatted where it is: waking the threads would cost more. (The parts
+// once ran as a parallel region of 16 threads, 16 on a 2-core machine.)
 template <class Line>
 void write_lines(AtomicFile& file, Id count, const Line& line) {
-  constexpr Id kRound = Id{1} << 16;
+  constexpr Id kRound = Id{1} << 16, kFewLines = 4096;
   constexpr int kParts = 16;
   std::vector<std::string> text(kParts);
   for (Id first = 0; first < count; first += kRound) {
     const Id n = std::min(kRound, count - first);
-    parallel::for_each_chunk(n, kParts, [&](Id b, Id e, int part) {
-      std::string& t = text[static_cast<std::size_t>(part)];
-      for (Id i = b; i < e; ++i) line(t, first + i);
-    });
+    const int parts = n < kFewLines ? 1 : kParts;
+    parallel::for_each_dynamic(
+        parts,
+        [&](Id part) {
+          std::string& t = text[static_cast<std::size_t>(part)];
+          const auto p = static_cast<int>(part);
+          for (Id i = parallel::chunk_begin(n, parts, p); i < parallel::chunk_begin(n, parts, p + 1); ++i)
+            line(t, first + i);
+        },
+        1);
     for (std::string& t : text) {  // cleared here: a part may get no lines in the next round
       if (!t.empty()) file.write(t);
       t.clear();
