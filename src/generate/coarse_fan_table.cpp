@@ -110,19 +110,20 @@ CoarseFanTable::CoarseFanTable() {
     throw std::logic_error("coarse_fan_table: entry 0 is not the voxel without triangles");
   shares_.reset(static_cast<FanShare*>(std::calloc(8 * voxels.entries.size(), sizeof(FanShare))));
   port_shares_.reset(static_cast<PortShare*>(std::calloc(8 * voxels.entries.size(), sizeof(PortShare))));
-  if (!shares_ || !port_shares_) throw std::bad_alloc();
+  ready_.reset(static_cast<std::uint8_t*>(std::calloc(voxels.entries.size(), 1)));
+  if (!shares_ || !port_shares_ || !ready_) throw std::bad_alloc();
 }
 
 void CoarseFanTable::work_out(std::uint16_t entry) const {
   CornerChain chains[8];
   corner_chains(coarse_voxel_table().entries[entry], 0, chains);
-  for (unsigned c = 0; c < 8; ++c)
+  for (unsigned c = 0; c < 8; ++c) {
     std::atomic_ref<PortShare>(port_shares_[8 * std::size_t{entry} + c])
         .store(port_share(chains[c], c), std::memory_order_relaxed);
-  // Corner 0 of shares_ last, released: a thread that sees it sees the others.
-  for (unsigned c = 8; c-- > 0;)
-    std::atomic_ref<FanShare>(shares_[8 * std::size_t{entry} + c])
-        .store(fan_share(chains[c], c), c ? std::memory_order_relaxed : std::memory_order_release);
+    std::atomic_ref<FanShare>(shares_[8 * std::size_t{entry} + c]).store(fan_share(chains[c], c), std::memory_order_relaxed);
+  }
+  // Released: a thread that sees the byte sees the shares.
+  std::atomic_ref<std::uint8_t>(ready_[entry]).store(1, std::memory_order_release);
 }
 
 const CoarseFanTable& coarse_fan_table() {

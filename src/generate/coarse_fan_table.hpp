@@ -110,23 +110,30 @@ PortShare port_share(CornerChain chain, unsigned c);
 // a volume meets a few thousand of the 36,450 entries, and working them all
 // out cost 32 M instructions, more than the whole check on a small volume,
 // in every process. Asked for from any thread: a share is the same whoever
-// works it out, so two threads storing it at once store the same bits.
+// works it out, so two threads storing it at once store the same bits (and
+// both then set its ready byte, released after the shares).
 class CoarseFanTable {
  public:
   CoarseFanTable();
 
   // Makes sure entry's shares are worked out (once a cut voxel, before its
-  // corners' points ask for them).
+  // corners' points ask for them), and starts loading its shares at the
+  // ports, which those points read next. Whether an entry is worked out is
+  // a byte of its own (36 KB for all): finding out from the shares loaded
+  // the line the walk reads, which most points never do, and left the
+  // ports' line to miss in the check.
   [[gnu::always_inline]] void prepare(std::uint16_t entry) const {
-    if (!std::atomic_ref<FanShare>(shares_[8 * std::size_t{entry}]).load(std::memory_order_acquire))
-      work_out(entry);  // 0: not yet (no share is 0)
+    if (!std::atomic_ref<std::uint8_t>(ready_[entry]).load(std::memory_order_acquire)) work_out(entry);
+    __builtin_prefetch(port_shares_.get() + 8 * std::size_t{entry});
   }
-  // The same for n entries (a voxel row's): the table's address is read once.
+  // The same for n entries (a voxel row's): the tables' addresses read once.
   void prepare(const std::uint16_t* entries, std::uint32_t n) const {
-    const FanShare* const shares = shares_.get();
-    for (std::uint32_t v = 0; v < n; ++v)
-      if (!std::atomic_ref<const FanShare>(shares[8 * std::size_t{entries[v]}]).load(std::memory_order_acquire))
-        work_out(entries[v]);
+    std::uint8_t* const ready = ready_.get();
+    const PortShare* const ports = port_shares_.get();
+    for (std::uint32_t v = 0; v < n; ++v) {
+      if (!std::atomic_ref<std::uint8_t>(ready[entries[v]]).load(std::memory_order_acquire)) work_out(entries[v]);
+      __builtin_prefetch(ports + 8 * std::size_t{entries[v]});
+    }
   }
   // A prepared entry's share at corner c.
   [[gnu::always_inline]] FanShare share(std::uint16_t entry, unsigned c) const {
@@ -143,10 +150,11 @@ class CoarseFanTable {
 
   // Zero pages until written (calloc): only the entries met are touched.
   struct Free {
-    void operator()(FanShare* p) const { std::free(p); }
+    void operator()(void* p) const { std::free(p); }
   };
   std::unique_ptr<FanShare[], Free> shares_;
   std::unique_ptr<PortShare[], Free> port_shares_;
+  std::unique_ptr<std::uint8_t[], Free> ready_;  // 1 once the entry's shares are stored
 };
 
 // Made once (thread-safe static initialisation).
