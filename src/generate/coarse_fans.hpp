@@ -118,10 +118,32 @@ struct FanSuspect {
   Id i;
 };
 
-// Every brick's suspects, in its rows' order (kept by the caller).
+// Every brick's suspects, in its rows' order (kept by the caller), and how
+// many copies of points the split can make of them: a point with d
+// corners has at most d fans and keeps one (split_nonmanifold.hpp; its
+// copies' corners are its own), so that the caller can leave room for them.
 struct CoarseFans {
   std::vector<std::vector<FanSuspect>> suspects;
+  std::vector<Id> copies;  // by brick, at most
+
+  Id most_copies() const {
+    Id total = 0;
+    for (Id c : copies) total += c;
+    return total;
+  }
 };
+
+// The corners at its corner c of a voxel's table entry's triangles (those a
+// fold across a face dropped still counted: a bound).
+inline unsigned corners_at(CoarseVoxel v, unsigned c) {
+  const auto count = static_cast<unsigned>((v >> kCoarseCountShift) & 7u);
+  unsigned at = 0;
+  for (unsigned t = 0; t < count; ++t) {
+    const auto x = static_cast<unsigned>(v >> (9 * t));
+    at += ((x & 7u) == c) + (((x >> 3) & 7u) == c) + (((x >> 6) & 7u) == c);
+  }
+  return at;
+}
 
 // The table entries of a window of voxel rows around one brick's point
 // rows, by voxel i + 1 (slots 0 and nx hold entry 0, no triangle, so that a
@@ -216,17 +238,21 @@ class FanWindow {
 
 // Checks every coarse candidate of cb.points (mark_coarse_points' bits)
 // from its voxels' table entries: clears the bits of those without a
-// triangle and lists, by brick, those that may not be one closed fan. Each
+// triangle and lists, by brick, those that may not be one closed fan (and
+// the most copies the split can make of them). Each
 // brick checks the points of its grid rows (and of the grid's last row and
 // plane, for the bricks along them), so each point once.
 inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, CoarseBits& cb, CoarseFans& fans) {
   const Id layers = s.nz - 1, wpr = cb.words_per_row;
   const VoxelBricks bricks(s, 0, layers);
   fans.suspects.resize(static_cast<std::size_t>(bricks.count()));
+  fans.copies.assign(static_cast<std::size_t>(bricks.count()), 0);
   const CoarseFanTable& table = coarse_fan_table();
+  const CoarseVoxel* const voxels = coarse_voxel_table().entries.data();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
     std::vector<FanSuspect>& suspects = fans.suspects[static_cast<std::size_t>(brick)];
     suspects.clear();
+    Id copies = 0;
     const FanWindow window(s, ct, bricks, brick);
     const Id j_end = bricks.j_end(brick) == s.ny - 1 ? s.ny : bricks.j_end(brick);
     const Id k_end = bricks.k_end(brick) == layers ? s.nz : bricks.k_end(brick);
@@ -256,10 +282,17 @@ inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, Coa
           for (std::uint64_t m = words[q]; m; m &= m - 1) {
             const Id i = 64 * q + std::countr_zero(m);
             const FanVerdict v = verdict(i);
-            if (v == FanVerdict::kNoTriangle) words[q] &= ~(std::uint64_t{1} << (i % 64));
-            else if (v == FanVerdict::kSuspect) suspects.push_back({r, i});
+            if (v == FanVerdict::kNoTriangle) {
+              words[q] &= ~(std::uint64_t{1} << (i % 64));
+            } else if (v == FanVerdict::kSuspect) {
+              suspects.push_back({r, i});
+              Id corners = 0;
+              for (unsigned o = 0; o < 8; ++o) corners += corners_at(voxels[rows[o >> 1][i + (o & 1u)]], 7u - o);
+              copies += corners - 1;
+            }
           }
       }
+    fans.copies[static_cast<std::size_t>(brick)] = copies;
   }, 1);
 }
 

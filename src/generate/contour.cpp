@@ -261,25 +261,27 @@ struct RowPointWriter {
   }
 };
 
-// The mesh's point arrays, sized for `points`, and the writer filling them.
+// The mesh's point arrays, sized for `points` (with room for `room_after`
+// more: the coarsening's split appends copies), and the writer filling them.
 template <class T>
 PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& grid, const EdgeInterpolator<T>& interp,
                               const GridShape& s, const ContourOptions& opt, std::vector<std::uint64_t>* point_keys,
-                              std::vector<std::uint64_t>* nearest_keys, bool write_xyz) {
+                              std::vector<std::uint64_t>* nearest_keys, bool write_xyz, Id room_after = 0) {
   PointWriter<T> w{interp, s, {}, 0, 0, 0, 0};
   // Output arrays at their final size, unwritten (Array), with huge pages
   // asked for and their pages faulted in by the threads (a host process
   // such as Python has no huge pages by default).
-  auto sized = [&](Array<float>& v, Id n) {
-    parallel::resize_fresh(v, static_cast<std::size_t>(n));
+  auto sized = [&](Array<float>& v, int components) {
+    parallel::reserve_fresh(v, static_cast<std::size_t>(components * (points + room_after)));
+    parallel::resize_fresh(v, static_cast<std::size_t>(components * points));
     return v.data();
   };
   mesh.point_fields.reserve(mesh.point_fields.size() + 3);  // the writer's pointers stay valid
   auto field = [&](const std::string& name, int components) {
     mesh.point_fields.push_back(Field{name, components, {}});
-    return sized(mesh.point_fields.back().values, components * points);
+    return sized(mesh.point_fields.back().values, components);
   };
-  if (write_xyz) w.out.xyz = sized(mesh.points, 3 * points);
+  if (write_xyz) w.out.xyz = sized(mesh.points, 3);
   if (opt.scalars) w.out.scalar = field(grid.name, 1);
   if (opt.normals == ContourNormals::Gradient) w.out.gradient_normal = field("Normals", 3);
   if (opt.curvature) w.out.curvature = field("mean_curvature", 1);
@@ -521,7 +523,7 @@ template <class T>
 PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, const ImageGrid& grid,
                                   const EdgeInterpolator<T>& interp, const GridShape& s, const ContourOptions& opt,
                                   std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys,
-                                  PointIndex*& connectivity);
+                                  PointIndex*& connectivity, Id room_after = 0);
 
 void check_output_size(const ContourOptions& opt, Id points, Id triangles);
 
@@ -556,7 +558,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
       if (bytes > kKeepScratchBytes) free_storage(coarse), free_storage(triangles);
     }
   } release;
-  Id coarse_points = 0, coarse_triangles = 0, fine_triangles = 0;
+  Id coarse_points = 0, coarse_triangles = 0, fine_triangles = 0, most_copies = 0;
   CoarseFans fans;
   NonmanifoldSuspects suspects;  // every isovalue's, ascending
   for (Id iso = 0; iso < n_iso; ++iso) {
@@ -572,6 +574,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     fold_and_count(s, coarse_triangles, triangles[iso]);
     coarse_triangles += triangles[iso].count;
     check_coarse_fans(s, triangles[iso], coarse[iso], fans);
+    most_copies += fans.most_copies();
     st.coarsen += seconds_since(t0);
     t0 = Clock::now();
     number_coarse_points(s, coarse_points, coarse[iso]);
@@ -587,8 +590,12 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
   check_output_size(opt, fine_points, fine_triangles);
   auto t0 = Clock::now();
   PointIndex* connectivity = nullptr;
+  // Room after the points for the split's copies, up to a sixteenth more
+  // (a bound far past what it makes is not worth its pages; the split
+  // grows the arrays when the room is short).
   const CoarsePointWriter<T> write{structured_outputs(mesh, coarse_points, coarse_triangles, grid, interp, s, opt,
-                                                      nullptr, nullptr, connectivity)};
+                                                      nullptr, nullptr, connectivity,
+                                                      std::min(most_copies, coarse_points / 16))};
   st.fields += seconds_since(t0);
   for (Id iso = 0; iso < n_iso; ++iso) {
     const CoarseBits& cb = coarse[iso];
@@ -624,7 +631,8 @@ void check_output_size(const ContourOptions& opt, Id points, Id triangles) {
 }
 
 // The structured plan's output arrays, for `points` points and `triangles`
-// triangles, and the writer filling them; `connectivity` is set to the
+// triangles (the mesh's point arrays with room for `room_after` points
+// more), and the writer filling them; `connectivity` is set to the
 // triangles' array. The caller's (ContourOptions::output_arrays: positions
 // and the scalar only, as contour() checked), or the mesh's: unwritten
 // Arrays whose pages the threads fault in, so the contour writes each byte
@@ -633,7 +641,7 @@ template <class T>
 PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, const ImageGrid& grid,
                                   const EdgeInterpolator<T>& interp, const GridShape& s, const ContourOptions& opt,
                                   std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys,
-                                  PointIndex*& connectivity) {
+                                  PointIndex*& connectivity, Id room_after) {
   if (opt.output_arrays) {
     const ContourArrays out = opt.output_arrays(points, triangles);
     connectivity = out.connectivity;
@@ -644,7 +652,7 @@ PointWriter<T> structured_outputs(SurfaceMesh& mesh, Id points, Id triangles, co
   }
   parallel::resize_fresh(mesh.connectivity, static_cast<std::size_t>(3 * triangles));
   connectivity = mesh.connectivity.data();
-  return prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true);
+  return prepare_points(mesh, points, grid, interp, s, opt, point_keys, nearest_keys, true, room_after);
 }
 
 // The structured plan's pass over the rows of every isovalue (write_rows):

@@ -527,13 +527,20 @@ void split_flagged(SurfaceMesh& mesh, Flagged f, NonmanifoldSplit& result) {
     f = still_odd(C, regrouped);
   }
   const Id added = static_cast<Id>(source.size());
-  // Grown to their exact size (resize() would double the capacity).
+  // In the room the caller left after the points (the contour's pass), or
+  // in arrays grown to their exact size (resize() past the capacity would
+  // double it).
   auto append_copies = [&](Array<float>& values, int k) {
-    Array<float> grown;
-    parallel::resize_fresh(grown, static_cast<std::size_t>((n + added) * k));
-    parallel::for_each(n * k, [&](Id i) { grown[i] = values[i]; }, 1 << 16);
-    for (Id i = 0; i < added; ++i) std::copy_n(values.begin() + Id{source[i]} * k, k, grown.begin() + (n + i) * k);
-    values.swap(grown);
+    const auto size = static_cast<std::size_t>((n + added) * k);
+    if (values.capacity() < size) {
+      Array<float> grown;
+      parallel::reserve_fresh(grown, size);
+      grown.resize(static_cast<std::size_t>(n * k));
+      parallel::for_each(n * k, [&](Id i) { grown[i] = values[i]; }, 1 << 16);
+      values.swap(grown);
+    }
+    values.resize(size);  // within the capacity, unwritten (Array)
+    for (Id i = 0; i < added; ++i) std::copy_n(values.begin() + Id{source[i]} * k, k, values.begin() + (n + i) * k);
   };
   if (added > 0) {
     append_copies(mesh.points, 3);

@@ -8,7 +8,8 @@
 // one_closed_fan). The verdict must be the walk's alone (the quick test
 // clears only what the walk clears), no triangle exactly when the point has
 // none, one closed fan only when it is one, and a suspect that is one
-// closed fan only when a voxel's share is tangled.
+// closed fan only when a voxel's share is tangled; corners_at (the bound on
+// the split's copies) counts the point's corners.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -59,8 +60,9 @@ std::array<std::uint16_t, 8> entries_of(const Block& b) {
 
 // The brute force: the point's link edges a -> b, one per coarse triangle
 // (13, a, b) of its voxels, counter-clockwise from it.
+// `corners` gets their count (the point's corners).
 enum class Reference { kNoTriangle, kOneClosedFan, kNotOne };
-Reference reference_fan(const std::array<std::uint16_t, 8>& entries) {
+Reference reference_fan(const std::array<std::uint16_t, 8>& entries, std::size_t& corners) {
   const auto& table = coarse_voxel_table();
   std::vector<std::pair<unsigned, unsigned>> link;
   for (unsigned o = 0; o < 8; ++o) {
@@ -77,6 +79,7 @@ Reference reference_fan(const std::array<std::uint16_t, 8>& entries) {
         if (p[k] == 13) link.emplace_back(p[(k + 1) % 3], p[(k + 2) % 3]);
     }
   }
+  corners = link.size();
   if (link.empty()) return Reference::kNoTriangle;
   std::map<unsigned, unsigned> next;
   std::map<unsigned, int> arrivals;
@@ -130,7 +133,12 @@ TEST(CoarseFans, VerdictIsTheWalksAndMatchesTheTrianglesAroundThePoint) {
                                     : walk.one_closed_fan() ? FanVerdict::kOneClosedFan
                                                             : FanVerdict::kSuspect;
     ASSERT_EQ(verdict, walk_verdict) << "trial " << trial;
-    const Reference ref = reference_fan(entries);
+    std::size_t corners = 0;
+    const Reference ref = reference_fan(entries, corners);
+    // The bound on a suspect's copies counts its corners as the triangles do.
+    std::size_t counted = 0;
+    for (unsigned o = 0; o < 8; ++o) counted += corners_at(coarse_voxel_table().entries[entries[o]], 7u - o);
+    ASSERT_EQ(counted, corners) << "trial " << trial;
     ASSERT_EQ(verdict == FanVerdict::kNoTriangle, ref == Reference::kNoTriangle) << "trial " << trial;
     if (verdict == FanVerdict::kOneClosedFan) {
       ASSERT_EQ(ref, Reference::kOneClosedFan) << "trial " << trial;
