@@ -284,27 +284,41 @@ Flagged corners_of(const PointIndex* C, Id n, const std::vector<PointIndex>& poi
   std::vector<std::vector<std::uint64_t>> at(static_cast<std::size_t>(std::max(chunks, 1)));  // rank << 32 | corner
   std::vector<std::uint8_t> past_last(at.size(), 0);
   const std::uint64_t* listed = is_listed.data();
-  auto is = [listed](PointIndex p) { return (listed[p / 64] >> (p % 64)) & 1u; };
+  // The scan tests a byte per point (three loads a triangle; the bits took
+  // a shift and a mask more each), kept zero between calls by the calling
+  // thread (set for the listed points, cleared after).
+  thread_local std::vector<std::uint8_t> listed_bytes;
+  if (listed_bytes.size() < static_cast<std::size_t>(n)) listed_bytes.resize(static_cast<std::size_t>(n));
+  for (PointIndex p : listed_points) listed_bytes[p] = 1;
+  const std::uint8_t* is = listed_bytes.data();
   parallel::for_each_chunk(static_cast<Id>(pieces.size()), chunks, [&](Id piece_begin, Id piece_end, int chunk) {
-    // A triangle at a time: one test for its three corners (nearly every
-    // triangle has none of the few listed points).
-    for (Id piece = piece_begin; piece < piece_end; ++piece)
-      for (Id t = pieces[piece].begin; t < pieces[piece].end; ++t) {
+    for (Id piece = piece_begin; piece < piece_end; ++piece) {
+      const Id begin = pieces[piece].begin, end = pieces[piece].end;
+      // Every id below n before any is looked up (one pass the compiler
+      // vectorises, not a test a triangle).
+      PointIndex most = 0;
+      for (Id x = 3 * begin; x < 3 * end; ++x) most = std::max(most, C[x]);
+      if (most >= n) {
+        past_last[chunk] = 1;
+        return;
+      }
+      // A triangle at a time: one test for its three corners (nearly every
+      // triangle has none of the few listed points).
+      for (Id t = begin; t < end; ++t) {
         const PointIndex* x = C + 3 * t;
-        if (std::max({x[0], x[1], x[2]}) >= n) {
-          past_last[chunk] = 1;
-          return;
-        }
-        if (is(x[0]) | is(x[1]) | is(x[2]))
+        if (is[x[0]] | is[x[1]] | is[x[2]])
           for (int k = 0; k < 3; ++k)
-            if (is(x[k])) {
+            if (is[x[k]]) {
               const PointIndex p = x[k];
               const std::uint64_t below = listed[p / 64] & ((std::uint64_t{1} << (p % 64)) - 1);
               const std::uint64_t rank = rank_before[p / 64] + static_cast<std::uint64_t>(std::popcount(below));
               at[chunk].push_back(rank << 32 | static_cast<std::uint64_t>(3 * t + k));
             }
       }
+    }
   });
+  for (PointIndex p : listed_points) listed_bytes[p] = 0;
+  if (listed_bytes.size() > kKeepScratchBytes) listed_bytes = {};
   if (std::find(past_last.begin(), past_last.end(), 1) != past_last.end())
     throw InputError("split_nonmanifold: a corner refers to a point past the last");
   std::vector<std::uint32_t> first(listed_points.size() + 1, 0);

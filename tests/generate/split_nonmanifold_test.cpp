@@ -107,14 +107,26 @@ TEST(SplitNonmanifold, TwoTetrahedraOnOneEdgeBecomeTwo) {
 }
 
 // A corner referring to a point past the last is refused by name, in
-// either triangle order (the check sits where such a corner must go).
+// either triangle order (the check sits where such a corner must go), and
+// told suspects too; the refused call leaves nothing behind for the next
+// (its scratch marks the listed points: a point left marked would be
+// gathered, and split, though not listed).
 TEST(SplitNonmanifold, RefusesPointsPastTheLast) {
   for (bool last : {false, true}) {
     SurfaceMesh m = points_at_random(4);
     m.connectivity = tetrahedron(0, 1, 2, 3);
     m.connectivity[last ? 11 : 0] = 9;
     EXPECT_THROW(generate::split_nonmanifold(m), InputError) << last;
+    EXPECT_THROW(generate::split_nonmanifold(m, {{0, 1, 2, 3}, {}}), InputError) << last;
   }
+  // Two tetrahedra touching at point 0 (two fans), told of point 1 only.
+  SurfaceMesh m = points_at_random(7);
+  m.connectivity = tetrahedron(0, 1, 2, 3);
+  for (PointIndex c : tetrahedron(0, 4, 5, 6)) m.connectivity.push_back(c);
+  const auto before = m.connectivity;
+  EXPECT_EQ(generate::split_nonmanifold(m, {{1}, {}}).points_added, 0);
+  EXPECT_EQ(m.connectivity, before);
+  EXPECT_EQ(generate::split_nonmanifold(m, {{0}, {}}).points_added, 1);
 }
 
 // Told where to look: with every point as a suspect, or only those the
