@@ -126,13 +126,17 @@ class CoarseFanTable {
     if (!std::atomic_ref<std::uint8_t>(ready_[entry]).load(std::memory_order_acquire)) work_out(entry);
     __builtin_prefetch(port_shares_.get() + 8 * std::size_t{entry});
   }
-  // The same for n entries (a voxel row's): the tables' addresses read once.
-  void prepare(const std::uint16_t* entries, std::uint32_t n) const {
+  // The same for n entries (a voxel row's cut voxels), each also stored in
+  // row[at[v]] (the row's entries by voxel), in one loop: the tables'
+  // addresses read once.
+  void prepare(const std::uint16_t* entries, const std::uint32_t* at, std::uint32_t n, std::uint16_t* row) const {
     std::uint8_t* const ready = ready_.get();
     const PortShare* const ports = port_shares_.get();
     for (std::uint32_t v = 0; v < n; ++v) {
-      if (!std::atomic_ref<std::uint8_t>(ready[entries[v]]).load(std::memory_order_acquire)) work_out(entries[v]);
-      __builtin_prefetch(ports + 8 * std::size_t{entries[v]});
+      const std::uint16_t e = entries[v];
+      row[at[v]] = e;
+      if (!std::atomic_ref<std::uint8_t>(ready[e]).load(std::memory_order_acquire)) work_out(e);
+      __builtin_prefetch(ports + 8 * std::size_t{e});
     }
   }
   // A prepared entry's share at corner c.

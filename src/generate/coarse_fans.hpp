@@ -189,8 +189,7 @@ class FanWindow {
         rows_[slot] = row;
         const std::uint16_t* const entry = ct.entries[b].data() + ct.entry_first[vr];
         const std::uint32_t* const voxel_i = ct.voxel_i[b].data() + ct.entry_first[vr];
-        for (std::uint32_t v = 0; v < n; ++v) row[voxel_i[v] + 1] = entry[v];
-        table.prepare(entry, n);
+        table.prepare(entry, voxel_i, n, row + 1);
         if (!ct.folded[vr]) continue;
         // The dropped face triangles, by voxel: the records follow the
         // row's triangle order, as the voxels do.
