@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <bit>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdlib>
 #include <mutex>
 #include <new>
+#include <thread>
 #include <unordered_map>
 #include <vector>
 
@@ -69,11 +71,22 @@ struct Pool {
   std::unordered_map<void*, std::size_t> lent;   // blocks in use, by address: their size
   std::size_t kept_bytes = 0, limit = default_limit(), reused = 0, mapped = 0;
   double seconds = 10;
+  std::condition_variable changed;  // wakes the reaper: a block kept, the limits changed
+  bool reaper_running = false;
+  bool forked_child = false;  // a fork's child starts no thread (blocks there go on calls)
 
   Pool() {
     // A fork while another thread holds the lock would leave the child's
-    // copy locked forever: hold it across the fork instead.
-    ::pthread_atfork([] { pool().mutex.lock(); }, [] { pool().mutex.unlock(); }, [] { pool().mutex.unlock(); });
+    // copy locked forever: hold it across the fork instead. The child has
+    // no reaper thread (fork copies only the caller) and starts none: a
+    // multi-threaded process's child should not create threads (POSIX
+    // allows only async-signal-safe calls there; ThreadSanitizer dies).
+    ::pthread_atfork([] { pool().mutex.lock(); }, [] { pool().mutex.unlock(); },
+                     [] {
+                       pool().reaper_running = false;
+                       pool().forked_child = true;
+                       pool().mutex.unlock();
+                     });
   }
   // Never destroyed: arrays freed by static destructors still come back here.
   static Pool& pool() {
@@ -81,17 +94,46 @@ struct Pool {
     return *p;
   }
 
+  // How long a block is kept unused (bounded, so that a due time never
+  // overflows the clock).
+  Clock::duration keep_for() const {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::min(seconds, 1e7)));
+  }
+
   // Unmaps the oldest blocks while past the size limit, and those kept
-  // longer than `seconds`.
+  // `seconds` or longer.
   void expire() noexcept {
     const auto now = Clock::now();
-    const auto keep_for = std::chrono::duration<double>(seconds);
     std::size_t n = 0;
-    for (; n < kept.size() && (kept_bytes > limit || now - kept[n].freed > keep_for); ++n) {
+    for (; n < kept.size() && (kept_bytes > limit || now - kept[n].freed >= keep_for()); ++n) {
       ::munmap(kept[n].data, kept[n].size);
       kept_bytes -= kept[n].size;
     }
     kept.erase(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+
+  // With the lock held, after a block is kept: a thread unmaps blocks once
+  // they have been kept `seconds`, so that a process which stops calling
+  // keymesh (a Python session after its last contour) gets the memory back;
+  // expire() alone runs only on calls. One thread at a time, gone when
+  // nothing is kept. Without a thread (creating one failed) blocks still
+  // go on the next call.
+  void wake_reaper() noexcept {
+    if (reaper_running) {
+      changed.notify_one();
+      return;
+    }
+    if (forked_child) return;
+    try {
+      std::thread([this] { reap(); }).detach();
+      reaper_running = true;
+    } catch (...) {
+    }
+  }
+  void reap() {
+    std::unique_lock lock(mutex);
+    for (expire(); !kept.empty(); expire()) changed.wait_until(lock, kept.front().freed + keep_for());
+    reaper_running = false;
   }
 };
 
@@ -150,6 +192,7 @@ void release(void* block, std::size_t bytes) noexcept {
     }
   if (!keep) ::munmap(block, size);
   p.expire();
+  if (!p.kept.empty()) p.wake_reaper();
 }
 
 std::size_t release_all() noexcept {
@@ -185,6 +228,7 @@ void set_limits(std::size_t bytes, double seconds) noexcept {
   std::lock_guard lock(p.mutex);
   p.limit = bytes, p.seconds = seconds;
   p.expire();
+  p.changed.notify_one();  // a sleeping reaper's due time may have moved
 }
 
 }  // namespace keymesh::retained_blocks

@@ -125,6 +125,19 @@ TEST_F(RetainedBlocks, AnUnusedBlockGoesAfterTheTimeLimit) {
   rb::release(q, 4 * kMiB);
 }
 
+TEST_F(RetainedBlocks, AKeptBlockGoesAfterTheTimeLimitWithNoFurtherCall) {
+  rb::set_limits(std::size_t{1} << 30, 0.1);
+  void* p = rb::acquire(8 * kMiB);
+  rb::release(p, 8 * kMiB);
+  EXPECT_EQ(rb::stats().kept_blocks, 1u);
+  // No acquire or release from here on (stats() expires nothing): only
+  // the pool's own thread can unmap the block.
+  for (int waited = 0; waited < 100 && rb::stats().kept_blocks != 0; ++waited)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(rb::stats().kept_blocks, 0u);
+  EXPECT_EQ(rb::stats().kept_bytes, 0u);
+}
+
 TEST_F(RetainedBlocks, ReleaseAllUnmapsEverythingKept) {
   void* p = rb::acquire(8 * kMiB);
   void* q = rb::acquire(6 * kMiB);

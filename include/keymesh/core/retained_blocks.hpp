@@ -14,7 +14,9 @@
 // block freed is kept, up to limit() bytes, for limit_seconds() unless used
 // again, and the next array that fits (its size up to twice the request)
 // gets it, pages already mapped. Blocks are whole mappings, 2 MiB aligned,
-// with huge pages asked for (core/huge_pages.hpp).
+// with huge pages asked for (core/huge_pages.hpp). A thread of its own
+// unmaps a block once it has been kept that long, so a process that stops
+// calling keymesh gets its memory back.
 //
 // KEYMESH_RETAINED_MEMORY_MB sets the limit (0: every block unmapped when
 // freed, as before); sanitizer builds never keep a block (ASan must see a
