@@ -227,8 +227,8 @@ def release_memory() -> int:
     """Unmap the memory kept from freed outputs; returns its bytes.
 
     When a mesh's large arrays (4 MiB or more) are freed, keymesh keeps their
-    pages mapped, for 10 seconds and up to the smaller of 1 GiB and an
-    eighth of RAM (environment variable KEYMESH_RETAINED_MEMORY_MB; 0 keeps
+    pages mapped, for 10 seconds (then a thread of its own unmaps them) and
+    up to the smaller of 1 GiB and an eighth of RAM (environment variable KEYMESH_RETAINED_MEMORY_MB; 0 keeps
     nothing), and the next call's outputs reuse them instead of faulting in
     fresh pages (on a VM the first touch of a page can cost more than the
     contour's own work). Call this to give that memory back now.

@@ -1,6 +1,7 @@
 // core/retained_blocks: a freed large block is kept mapped and handed to the
 // next request it fits (its bytes still there, so no fresh page was
-// mapped), within the size and time limits, from any thread, across a
+// mapped), within the size and time limits (the time limit kept by the
+// pool's own thread, with no further call), from any thread, across a
 // fork; Array's large storage comes from it.
 #include "keymesh/core/retained_blocks.hpp"
 
