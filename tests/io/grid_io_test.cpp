@@ -1,6 +1,7 @@
 #include "keymesh/io/grid_io.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <bit>
@@ -21,8 +22,11 @@ using namespace keymesh;
 
 namespace {
 
+// The process id keeps ctest's parallel runs of this file's tests (one process
+// each) off each other's files: two tests write "poly.vtk".
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("keymesh-gridio-" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("keymesh-gridio-" + std::to_string(::getpid()) + "-" + name))
+      .string();
 }
 
 void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
