@@ -17,7 +17,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
   clang-14 libfuzzer-14-dev libclang-rt-14-dev libopenmpi-dev openmpi-bin \
   libgdcm-dev libblosc-dev libdeflate-dev libtinygltf-dev python3-pydicom python3-zarr
 # and those `make bench` adds for its peers, plots and pictures.
-BENCH_PACKAGES = libthrust-dev libtbb-dev python3-openvdb python3-matplotlib xvfb hyperfine
+BENCH_PACKAGES = libthrust-dev libtbb-dev libvtk9-dev python3-openvdb python3-matplotlib xvfb hyperfine
 
 .PHONY: all deps build demo test bench scaling clean sanitize sanitize-quick fuzz fuzz-build fuzz-run
 

@@ -11,9 +11,18 @@
 // CLI do by default); off by default, as the peers are run.
 // --grid tet5 contours the scheme-5 tetrahedralization of the field by
 // marching tetrahedra; the tetrahedralization is timed once ("build").
+// --peer fe3d also runs vtkFlyingEdges3D on the same samples in this process,
+// at the same thread count, a call of each in turn, and adds "peer",
+// "peer_median", "peer_min", "peer_max", "peer_first", "peer_points",
+// "peer_cells", "peer_ratio" (the peer's median over keymesh's) and
+// "peak_rss_mib_with_peer" to the line; "peak_rss_mib" is then taken after
+// keymesh's first call, before the peer's first. Only in a build with VTK's C++ package (libvtk9-dev); refused by
+// name otherwise, and with --grid tet5.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -24,6 +33,9 @@
 #include "keymesh/parallel/threads.hpp"
 #include "bench_common.hpp"
 #include "bench_input.hpp"
+#ifdef KEYMESH_BENCH_VTK
+#include "peers/flying_edges_peer.hpp"
+#endif
 
 using namespace keymesh;
 
@@ -31,7 +43,7 @@ KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
 
 int main(int argc, char** argv) {
   bench::CommonOptions o;
-  std::string weld = "keyreduce", normals = "none", grid_kind = "voxel";
+  std::string weld = "keyreduce", normals = "none", grid_kind = "voxel", peer;
   bool coarsen = false, scalars = false;
   std::vector<double> isos;
   const int status = bench::parse_options(argc, argv, o, [&](const std::string& a, const char* value) {
@@ -50,6 +62,7 @@ int main(int argc, char** argv) {
     else if (a == "--grid") grid_kind = value;
     else if (a == "--coarsen") coarsen = std::string(value) == "on";
     else if (a == "--scalars") scalars = std::string(value) == "on";
+    else if (a == "--peer") peer = value;
     else return false;
     return true;
   });
@@ -60,6 +73,20 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--grid must be voxel or tet5\n");
     return 2;
   }
+  if (!peer.empty() && peer != "fe3d") {
+    std::fprintf(stderr, "--peer must be fe3d\n");
+    return 2;
+  }
+  if (!peer.empty() && grid_kind != "voxel") {
+    std::fprintf(stderr, "--peer fe3d contours the voxel grid only\n");
+    return 2;
+  }
+#ifndef KEYMESH_BENCH_VTK
+  if (!peer.empty()) {
+    std::fprintf(stderr, "--peer fe3d: this contour_bench was built without VTK's C++ package (libvtk9-dev)\n");
+    return 2;
+  }
+#endif
   const ImageGrid grid = bench::input_volume(o.file, o.size);
   UnstructuredGrid tets;
   double build = 0;
@@ -78,22 +105,62 @@ int main(int argc, char** argv) {
                                         : generate::ContourNormals::None;
   opt.scalars = scalars;
   opt.coarsen = coarsen;
-  std::vector<double> times;
+  std::vector<double> times, peer_times;
   generate::ContourStats stats;
   Id points = 0, cells = 0;
+  long long peer_points = 0, peer_cells = 0;
+  double own_peak_rss = 0;  // after keymesh's first call, before any of the peer's
+#ifdef KEYMESH_BENCH_VTK
+  std::unique_ptr<bench::FlyingEdgesPeer> fe3d;
+  if (!peer.empty()) fe3d = std::make_unique<bench::FlyingEdgesPeer>(grid, used);
+#endif
   for (int r = 0; r < o.reps; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const SurfaceMesh m = grid_kind == "tet5" ? generate::contour(tets, opt, &stats) : generate::contour(grid, opt, &stats);
-    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    points = m.num_points();
-    cells = m.num_cells();
+#ifdef KEYMESH_BENCH_VTK
+    // The peer runs second on even repetitions and first on odd ones, so
+    // neither always follows the other's call; keymesh's first call comes
+    // before any of the peer's, so the peak RSS taken after it is keymesh's.
+    const auto run_peer = [&] {
+      const bench::FlyingEdgesPeer::Run p = fe3d->run(opt.isovalues, scalars);
+      peer_times.push_back(p.seconds);
+      peer_points = p.points;
+      peer_cells = p.cells;
+    };
+    if (fe3d && r % 2 == 1) run_peer();
+#endif
+    {  // the mesh goes before the peer's next run
+      const auto t0 = std::chrono::steady_clock::now();
+      const SurfaceMesh m =
+          grid_kind == "tet5" ? generate::contour(tets, opt, &stats) : generate::contour(grid, opt, &stats);
+      times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      points = m.num_points();
+      cells = m.num_cells();
+    }
+    if (r == 0) own_peak_rss = bench::peak_rss_mib();
+#ifdef KEYMESH_BENCH_VTK
+    if (fe3d && r % 2 == 0) run_peer();
+#endif
+  }
+  std::string peer_json;
+  if (!peer_times.empty()) {
+    std::vector<double> sorted = peer_times;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<double> own = times;
+    std::sort(own.begin(), own.end());
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  ",\"peer\":\"vtkFlyingEdges3D\",\"peer_median\":%.6f,\"peer_min\":%.6f,\"peer_max\":%.6f,"
+                  "\"peer_first\":%.6f,\"peer_points\":%lld,\"peer_cells\":%lld,\"peer_ratio\":%.4f,"
+                  "\"peak_rss_mib_with_peer\":%.1f",
+                  sorted[sorted.size() / 2], sorted.front(), sorted.back(), peer_times.front(), peer_points, peer_cells,
+                  sorted[sorted.size() / 2] / own[own.size() / 2], bench::peak_rss_mib());
+    peer_json = text;
   }
   std::printf(
       "{\"bench\":\"contour\",\"grid\":\"%s\",\"build\":%.6f,\"size\":%lld,\"iso\":%.6f,\"weld\":\"%s\",\"normals\":\"%s\",\"threads\":%d,"
       "\"points\":%lld,\"cells\":%lld,%s,"
-      "\"classify\":%.6f,\"generate\":%.6f,\"weld_s\":%.6f,\"fields\":%.6f,\"coarsen_s\":%.6f,\"peak_rss_mib\":%.1f}\n",
+      "\"classify\":%.6f,\"generate\":%.6f,\"weld_s\":%.6f,\"fields\":%.6f,\"coarsen_s\":%.6f,\"peak_rss_mib\":%.1f%s}\n",
       grid_kind.c_str(), build, o.size, o.iso, weld.c_str(), normals.c_str(), used, (long long)points, (long long)cells,
       bench::timing_json(times).c_str(), stats.classify, stats.generate, stats.weld, stats.fields, stats.coarsen,
-      bench::peak_rss_mib());
+      peer_times.empty() ? bench::peak_rss_mib() : own_peak_rss, peer_json.c_str());
   return 0;
 }

@@ -666,8 +666,13 @@ class Report:
                 "(`glibc.malloc.hugetlb=1` for the whole process) and without (a Python process's default "
                 "malloc; keymesh still asks `madvise` for its output arrays). C++ harness: `bench/contour_bench` "
                 "on the same volume with the same huge-pages setting (`KEYMESH_HUGE_PAGES=0` without), and "
-                "FE3D / C++ harness: the FE3D median of that setting's Python run over the harness's median "
-                "(VTK's C++ library is not installed by the bench: FE3D runs in the Python process). Several isovalues: the sum of the single-isovalue medians over "
+                "FE3D / C++ harness: " + (
+                    "vtkFlyingEdges3D in the harness's own process on the same samples (`--peer fe3d`, a call of "
+                    "each in turn), its median over keymesh's" if any(r.get("fe3d_same_process") for r in self.rows
+                                                                      if r.get("tool") == "contour_bench") else
+                    "the FE3D median of that setting's Python run over the harness's median (this harness was "
+                    "built without VTK's C++ package, libvtk9-dev: FE3D ran in the Python process)") +
+                ". Several isovalues: the sum of the single-isovalue medians over "
                 "the one-call median (≥ 1: one call costs no more). Memory: input + output MiB of the call, and the "
                 "C++ harness's peak RSS (the whole process: volume read, contour, output).", "",
                 table(["volume", "huge pages", "triangles", "keymesh ms", "FE3D ms", "FE3D / keymesh", "C++ harness ms",

@@ -277,10 +277,12 @@ def dense_rows(bench, build, threads, reps, work, quick):
     (glibc.malloc.hugetlb=1) and with the default malloc of a Python process;
     then the C++ harness (contour_bench, positions and triangles only, as
     dense.py runs both tools) on the same volumes written as .nrrd, with huge
-    pages and without (KEYMESH_HUGE_PAGES=0: no re-exec), each row carrying
-    the FE3D median of dense.py's run with the same setting (`fe3d_median`;
-    VTK's C++ library is not among the packages the bench installs, so FE3D
-    runs in the Python process, on the same volume, in the same bench run)."""
+    pages and without (KEYMESH_HUGE_PAGES=0: no re-exec), with
+    vtkFlyingEdges3D in the harness's own process on the same samples
+    (`--peer fe3d`, a call of each in turn; `fe3d_median` is its median).
+    A harness built without VTK's C++ package (libvtk9-dev) refuses the
+    peer; its rows then carry the FE3D median of dense.py's run with the
+    same setting instead (`fe3d_same_process` false)."""
     cases = "brain,brain8,head256" if quick else "brain,brain8,noise,head256,sphere512"
     dense = os.path.join(HERE, "dense.py")
     env = {"PYTHONPATH": os.path.join(build, "python")}
@@ -293,18 +295,31 @@ def dense_rows(bench, build, threads, reps, work, quick):
         except SystemExit as e:
             rows.append(skipped("dense.py", str(e)))
             return rows
+    peer = ["--peer", "fe3d"] if harness_has_peer(bench) else []
     for r in [r for r in rows if r.get("dump")]:
         for huge in (True, False):
-            progress(f"dense {r['case']}: contour_bench (C++ harness), huge pages {huge}")
+            progress(f"dense {r['case']}: contour_bench (C++ harness){' and FE3D' if peer else ''}, huge pages {huge}")
             c = run_json([bench, "--file", r["dump"], "--iso", ",".join(str(v) for v in r["isovalues"]),
-                          "--threads", str(threads), "--reps", str(reps)],
+                          "--threads", str(threads), "--reps", str(reps)] + peer,
                          None if huge else {"KEYMESH_HUGE_PAGES": "0"}, huge_pages=huge)[0]
-            fe = next((f for f in rows if f.get("case") == r["case"] and f.get("tool") == "vtkFlyingEdges3D"
-                       and f.get("huge_pages") == huge), None)
-            c.update(bench="dense", case=r["case"], tool="contour_bench", huge_pages=huge,
-                     fe3d_median=fe["median"] if fe else None)
+            if "peer_median" in c:
+                fe3d = c["peer_median"]
+            else:
+                fe = next((f for f in rows if f.get("case") == r["case"] and f.get("tool") == "vtkFlyingEdges3D"
+                           and f.get("huge_pages") == huge), None)
+                fe3d = fe["median"] if fe else None
+            c.update(bench="dense", case=r["case"], tool="contour_bench", huge_pages=huge, fe3d_median=fe3d,
+                     fe3d_same_process="peer_median" in c)
             rows.append(c)
     return rows
+
+
+def harness_has_peer(bench):
+    """Whether contour_bench was built with VTK's C++ package: a build
+    without it refuses `--peer fe3d` by name (exit 2) before reading input."""
+    p = subprocess.run([bench, "--peer", "fe3d", "--file", "/nonexistent", "--iso", "0", "--reps", "0"],
+                       capture_output=True, text=True)
+    return "built without VTK" not in p.stderr
 
 
 def thread_counts(threads_all, all_only=False):
