@@ -567,7 +567,7 @@ void coarsen_rows(SurfaceMesh& mesh, const std::vector<InsideBits>& bits, const 
     mark_coarse_points(bits[iso], s, rows[iso], interp.samples, far_end, coarse[iso]);
     st.weld += seconds_since(t0);
     t0 = Clock::now();
-    tally_coarse_triangles(bits[iso], s, rows[iso], coarse[iso], triangles[iso]);
+    tally_coarse_triangles(bits[iso], s, coarse[iso], triangles[iso]);
     fine_triangles += triangles[iso].fine_triangles;
     st.generate += seconds_since(t0);
     t0 = Clock::now();
