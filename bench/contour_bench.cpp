@@ -12,11 +12,17 @@
 // --grid tet5 contours the scheme-5 tetrahedralization of the field by
 // marching tetrahedra; the tetrahedralization is timed once ("build").
 // --peer fe3d also runs vtkFlyingEdges3D on the same samples in this process,
-// at the same thread count, a call of each in turn, and adds "peer",
+// at the same thread count, and adds "peer",
 // "peer_median", "peer_min", "peer_max", "peer_first", "peer_points",
 // "peer_cells", "peer_ratio" (the peer's median over keymesh's) and
 // "peak_rss_mib_with_peer" to the line; "peak_rss_mib" is then taken after
-// keymesh's first call, before the peer's first. Only in a build with VTK's C++ package (libvtk9-dev); refused by
+// keymesh's first call, before the peer's first. --peer-order blocks (the
+// default): half the repetitions of keymesh, half of the peer's, then the
+// rest of each; turns: a call of each in turn (the first of a pair
+// alternating). In turns, each tool's call follows the other's, whose
+// threads may still spin (libgomp's, TBB's) on the second core: inia19
+// (168x206x128 float32), 2 threads, keymesh's classify 0.4 ms alone and 1.0
+// ms in turns. Only in a build with VTK's C++ package (libvtk9-dev); refused by
 // name otherwise, and with --grid tet5.
 #include <algorithm>
 #include <chrono>
@@ -43,7 +49,7 @@ KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
 
 int main(int argc, char** argv) {
   bench::CommonOptions o;
-  std::string weld = "keyreduce", normals = "none", grid_kind = "voxel", peer;
+  std::string weld = "keyreduce", normals = "none", grid_kind = "voxel", peer, peer_order = "blocks";
   bool coarsen = false, scalars = false;
   std::vector<double> isos;
   const int status = bench::parse_options(argc, argv, o, [&](const std::string& a, const char* value) {
@@ -63,6 +69,7 @@ int main(int argc, char** argv) {
     else if (a == "--coarsen") coarsen = std::string(value) == "on";
     else if (a == "--scalars") scalars = std::string(value) == "on";
     else if (a == "--peer") peer = value;
+    else if (a == "--peer-order") peer_order = value;
     else return false;
     return true;
   });
@@ -75,6 +82,10 @@ int main(int argc, char** argv) {
   }
   if (!peer.empty() && peer != "fe3d") {
     std::fprintf(stderr, "--peer must be fe3d\n");
+    return 2;
+  }
+  if (peer_order != "blocks" && peer_order != "turns") {
+    std::fprintf(stderr, "--peer-order must be blocks or turns\n");
     return 2;
   }
   if (!peer.empty() && grid_kind != "voxel") {
@@ -114,30 +125,38 @@ int main(int argc, char** argv) {
   std::unique_ptr<bench::FlyingEdgesPeer> fe3d;
   if (!peer.empty()) fe3d = std::make_unique<bench::FlyingEdgesPeer>(grid, used);
 #endif
-  for (int r = 0; r < o.reps; ++r) {
+  auto run_keymesh = [&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    const SurfaceMesh m =
+        grid_kind == "tet5" ? generate::contour(tets, opt, &stats) : generate::contour(grid, opt, &stats);
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    points = m.num_points();
+    cells = m.num_cells();
+    // keymesh's first call comes before any of the peer's: the peak RSS
+    // taken after it is keymesh's. The mesh goes before the next call.
+    if (times.size() == 1) own_peak_rss = bench::peak_rss_mib();
+  };
+  // The order of the calls: 'k' keymesh, 'p' the peer.
+  std::string order;
+  if (peer.empty()) {
+    order.assign(static_cast<std::size_t>(std::max(o.reps, 0)), 'k');
+  } else if (peer_order == "turns") {
+    for (int r = 0; r < o.reps; ++r) order += r % 2 ? "pk" : "kp";
+  } else {
+    const int half = (o.reps + 1) / 2;
+    order = std::string(static_cast<std::size_t>(half), 'k') + std::string(static_cast<std::size_t>(half), 'p') +
+            std::string(static_cast<std::size_t>(o.reps - half), 'k') +
+            std::string(static_cast<std::size_t>(o.reps - half), 'p');
+  }
+  for (const char c : order) {
+    if (c == 'k') run_keymesh();
 #ifdef KEYMESH_BENCH_VTK
-    // The peer runs second on even repetitions and first on odd ones, so
-    // neither always follows the other's call; keymesh's first call comes
-    // before any of the peer's, so the peak RSS taken after it is keymesh's.
-    const auto run_peer = [&] {
+    if (c == 'p') {
       const bench::FlyingEdgesPeer::Run p = fe3d->run(opt.isovalues, scalars);
       peer_times.push_back(p.seconds);
       peer_points = p.points;
       peer_cells = p.cells;
-    };
-    if (fe3d && r % 2 == 1) run_peer();
-#endif
-    {  // the mesh goes before the peer's next run
-      const auto t0 = std::chrono::steady_clock::now();
-      const SurfaceMesh m =
-          grid_kind == "tet5" ? generate::contour(tets, opt, &stats) : generate::contour(grid, opt, &stats);
-      times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      points = m.num_points();
-      cells = m.num_cells();
     }
-    if (r == 0) own_peak_rss = bench::peak_rss_mib();
-#ifdef KEYMESH_BENCH_VTK
-    if (fe3d && r % 2 == 0) run_peer();
 #endif
   }
   std::string peer_json;

@@ -69,6 +69,10 @@ def refused(args, needle):
 
 
 check("--peer other than fe3d is refused by name", refused(["--peer", "flyingedges", "--size", "8"], "--peer must be fe3d"))
+check("--peer-order other than blocks or turns is refused by name",
+      refused(["--peer", "fe3d", "--peer-order", "mixed", "--size", "8"], "--peer-order must be blocks or turns"))
+check("sphere 40, a call of each in turn: FE3D's counts are keymesh's",
+      same_counts("--size", "40", "--peer-order", "turns"))
 check("--peer with --grid tet5 is refused by name",
       refused(["--peer", "fe3d", "--grid", "tet5", "--size", "8"], "voxel grid only"))
 finish()
