@@ -265,7 +265,7 @@ inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, Coa
         const std::uint32_t* dropped[4] = {window.dropped(j - 1, k - 1), window.dropped(j, k - 1),
                                            window.dropped(j - 1, k), window.dropped(j, k)};
         const bool any_dropped = dropped[0] || dropped[1] || dropped[2] || dropped[3];
-        std::uint64_t* words = cb.points.data() + r * wpr;
+        std::uint64_t* words = cb.point_words(r);
         // The point is corner c = 7 - o of its voxel o = dx | dy << 1 | dz << 2.
         auto verdict = [&](Id i) {
           auto entry = [&](unsigned o) { return rows[o >> 1][i + (o & 1u)]; };
@@ -300,9 +300,9 @@ inline std::vector<PointIndex> suspect_ids(const CoarseFans& fans, const CoarseB
   std::vector<PointIndex> ids;
   for (const auto& brick : fans.suspects)
     for (const FanSuspect& p : brick) {
-      const Id w = p.row * cb.words_per_row + p.i / 64;
+      const Id q = p.i / 64;
       const std::uint64_t below = (std::uint64_t{1} << (p.i % 64)) - 1;
-      ids.push_back(static_cast<PointIndex>(cb.first.data()[w] + std::popcount(cb.points.data()[w] & below)));
+      ids.push_back(static_cast<PointIndex>(cb.first_ids(p.row)[q] + std::popcount(cb.point_words(p.row)[q] & below)));
     }
   std::sort(ids.begin(), ids.end());
   return ids;
