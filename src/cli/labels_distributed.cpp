@@ -20,13 +20,13 @@ namespace {
 
 std::vector<std::byte> bytes_of(const std::vector<std::int64_t>& v) {
   std::vector<std::byte> out(v.size() * sizeof(std::int64_t));
-  std::memcpy(out.data(), v.data(), out.size());
+  if (!out.empty()) std::memcpy(out.data(), v.data(), out.size());  // empty: data() may be null
   return out;
 }
 
 std::vector<std::int64_t> labels_of(const std::vector<std::byte>& b) {
   std::vector<std::int64_t> out(b.size() / sizeof(std::int64_t));
-  std::memcpy(out.data(), b.data(), out.size() * sizeof(std::int64_t));
+  if (!out.empty()) std::memcpy(out.data(), b.data(), out.size() * sizeof(std::int64_t));  // empty: data() may be null
   return out;
 }
 

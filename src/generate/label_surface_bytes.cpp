@@ -29,7 +29,7 @@ struct Reader {
   std::size_t at = 0;
   void raw(void* p, std::size_t n) {
     if (n > in.size() - at) throw InputError("labels: a rank's pieces end early (" + std::to_string(in.size()) + " bytes)");
-    std::memcpy(p, in.data() + at, n);
+    if (n) std::memcpy(p, in.data() + at, n);  // an empty array's data() may be null: memcpy's UB even for 0
     at += n;
   }
   std::uint64_t count() {

@@ -30,7 +30,7 @@ namespace {
 // (13) is the point checked.
 struct Block {
   std::array<bool, 27> inside{};
-  std::array<bool, 54> far{};  // by grid edge: 3 * point + axis (edges leaving the block unused)
+  std::array<bool, 81> far{};  // by grid edge: 3 * point + axis (edges leaving the block unused)
 };
 
 unsigned point_of(unsigned x, unsigned y, unsigned z) { return x + 3 * y + 9 * z; }
