@@ -86,8 +86,10 @@ detail::LabelSurface merge_by_key(const std::vector<const detail::LabelSurface*>
 
 std::vector<std::byte> counts_bytes(const detail::LabelCounts& c) {
   std::vector<std::byte> out(c.voxels.size() * sizeof(Id) + c.box.size() * sizeof(c.box[0]));
-  std::memcpy(out.data(), c.voxels.data(), c.voxels.size() * sizeof(Id));
-  std::memcpy(out.data() + c.voxels.size() * sizeof(Id), c.box.data(), c.box.size() * sizeof(c.box[0]));
+  // (memcpy only non-empty arrays: an empty one's data() may be null, UB even for 0 bytes)
+  if (!c.voxels.empty()) std::memcpy(out.data(), c.voxels.data(), c.voxels.size() * sizeof(Id));
+  if (!c.box.empty())
+    std::memcpy(out.data() + c.voxels.size() * sizeof(Id), c.box.data(), c.box.size() * sizeof(c.box[0]));
   return out;
 }
 
@@ -207,8 +209,9 @@ void LabelSlabs::set_counts(const std::vector<std::vector<std::byte>>& all) {
                        std::to_string(expect));
     detail::LabelCounts c;
     c.reset(nl);
-    std::memcpy(c.voxels.data(), bytes.data(), c.voxels.size() * sizeof(Id));
-    std::memcpy(c.box.data(), bytes.data() + c.voxels.size() * sizeof(Id), c.box.size() * sizeof(c.box[0]));
+    if (!c.voxels.empty()) std::memcpy(c.voxels.data(), bytes.data(), c.voxels.size() * sizeof(Id));
+    if (!c.box.empty())
+      std::memcpy(c.box.data(), bytes.data() + c.voxels.size() * sizeof(Id), c.box.size() * sizeof(c.box[0]));
     total.merge(c);
   }
   detail::set_boxes(m.vol, total);

@@ -342,7 +342,7 @@ std::uint64_t read_binary_vertices(const Element& e, const VertexLayout& layout,
       plain = plain && slots[a].type == ScalarType::Float32 && slots[a].offset == 4 * std::size_t(a) &&
               slots[a].out == mesh.points.data() + a;
     if (plain) {
-      std::memcpy(mesh.points.data(), record, 12 * whole);
+      if (whole) std::memcpy(mesh.points.data(), record, 12 * whole);  // no points: data() may be null
       in.step(12 * whole, "vertices");
       return whole;
     }
