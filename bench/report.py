@@ -669,8 +669,8 @@ class Report:
                 "malloc; keymesh still asks `madvise` for its output arrays). C++ harness: `bench/contour_bench` "
                 "on the same volume with the same huge-pages setting (`KEYMESH_HUGE_PAGES=0` without), and "
                 "FE3D / C++ harness: " + (
-                    "vtkFlyingEdges3D in the harness's own process on the same samples (`--peer fe3d`, a call of "
-                    "each in turn), its median over keymesh's" if any(r.get("fe3d_same_process") for r in self.rows
+                    "vtkFlyingEdges3D in the harness's own process on the same samples (`--peer fe3d`, each "
+                    "tool's calls in two blocks), its median over keymesh's" if any(r.get("fe3d_same_process") for r in self.rows
                                                                       if r.get("tool") == "contour_bench") else
                     "the FE3D median of that setting's Python run over the harness's median (this harness was "
                     "built without VTK's C++ package, libvtk9-dev: FE3D ran in the Python process)") +

@@ -279,7 +279,7 @@ def dense_rows(bench, build, threads, reps, work, quick):
     dense.py runs both tools) on the same volumes written as .nrrd, with huge
     pages and without (KEYMESH_HUGE_PAGES=0: no re-exec), with
     vtkFlyingEdges3D in the harness's own process on the same samples
-    (`--peer fe3d`, a call of each in turn; `fe3d_median` is its median).
+    (`--peer fe3d`, each tool's calls in two blocks; `fe3d_median` is its median).
     A harness built without VTK's C++ package (libvtk9-dev) refuses the
     peer; its rows then carry the FE3D median of dense.py's run with the
     same setting instead (`fe3d_same_process` false)."""
