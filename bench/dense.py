@@ -15,6 +15,10 @@ Not in the default run, volumes nothing here was tuned on (--cases bet,inia19):
             iso 92.5 (the median of its non-zero voxels)
   inia19    inia19-t1-brain.nii.gz (mricron-data), a macaque T1 template,
             float32 168 x 206 x 128, iso 90.6 (the same median)
+and the other sample types (--cases brain_i16,brain_u16,noise_f64):
+  brain_i16 ch2better as int16, 10 v - 500, iso 405 (brain's 90.5)
+  brain_u16 ch2better as uint16, 100 v, iso 9050
+  noise_f64 smoothed noise 192^3 as float64, iso 0
 
 Both tools see the same array (x fastest in memory) at the same thread count
 (vtkSMPTools.Initialize(T), keymesh threads=T) and compute the same arrays:
@@ -105,6 +109,15 @@ def cases(names):
         elif name == "inia19":
             v = read_nifti_gz(os.path.join(MRICRON, "inia19-t1-brain.nii.gz"))
             yield name, "inia19-t1-brain.nii.gz float32 168x206x128 (macaque)", v, [90.6]
+        elif name in ("brain_i16", "brain_u16"):  # the same brain in the 16-bit types CT and MR scanners write
+            if brain is None:
+                brain = read_nifti_gz(os.path.join(MRICRON, "ch2better.nii.gz"))
+            if name == "brain_i16":
+                yield name, "ch2better.nii.gz as int16 (10 v - 500)", (brain.astype(np.int16) * 10 - 500), [405.0]
+            else:
+                yield name, "ch2better.nii.gz as uint16 (100 v)", brain.astype(np.uint16) * 100, [9050.0]
+        elif name == "noise_f64":
+            yield name, "smoothed noise 192^3 float64 sigma 2", smoothed_noise(192, 2.0).astype(np.float64), [0.0]
         elif name == "sphere512":
             yield name, "Spherical Distance 512^3 float32", sphere(512), [255.001]
         else:
@@ -113,7 +126,8 @@ def cases(names):
 
 def write_nrrd(path, v):
     """A raw, attached-header .nrrd of a (nz, ny, nx) array (x fastest)."""
-    kind = {np.dtype(np.uint8): "uint8", np.dtype(np.float32): "float"}[v.dtype]
+    kind = {np.dtype(np.uint8): "uint8", np.dtype(np.float32): "float", np.dtype(np.int16): "short",
+            np.dtype(np.uint16): "ushort", np.dtype(np.float64): "double"}[v.dtype]
     nz, ny, nx = v.shape
     with open(path, "wb") as f:
         f.write(f"NRRD0004\ntype: {kind}\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n"
