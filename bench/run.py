@@ -283,7 +283,8 @@ def dense_rows(bench, build, threads, reps, work, quick):
     A harness built without VTK's C++ package (libvtk9-dev) refuses the
     peer; its rows then carry the FE3D median of dense.py's run with the
     same setting instead (`fe3d_same_process` false)."""
-    cases = "brain,brain8,head256" if quick else "brain,brain8,noise,head256,sphere512"
+    # bet and inia19: volumes nothing here was tuned on (issue 17: "other real volumes").
+    cases = "brain,brain8,head256" if quick else "brain,brain8,noise,head256,sphere512,bet,inia19"
     dense = os.path.join(HERE, "dense.py")
     env = {"PYTHONPATH": os.path.join(build, "python")}
     rows = []
