@@ -15,7 +15,8 @@
 // at the same thread count, and adds "peer",
 // "peer_median", "peer_min", "peer_max", "peer_first", "peer_points",
 // "peer_cells", "peer_ratio" (the peer's median over keymesh's) and
-// "peak_rss_mib_with_peer" to the line; "peak_rss_mib" is then taken after
+// "peak_rss_mib_with_peer" to the line ("times_ms" and "peer_times_ms": every
+// call's milliseconds, in run order); "peak_rss_mib" is then taken after
 // keymesh's first call, before the peer's first. --peer-order blocks (the
 // default): half the repetitions of keymesh, half of the peer's, then the
 // rest of each; turns: a call of each in turn (the first of a pair
@@ -174,6 +175,19 @@ int main(int argc, char** argv) {
                   sorted[sorted.size() / 2] / own[own.size() / 2], bench::peak_rss_mib());
     peer_json = text;
   }
+  // Every call's milliseconds in run order (keymesh's, then the peer's):
+  // which calls of a process were slow.
+  auto list = [](const std::vector<double>& t) {
+    std::string out = "[";
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      char v[32];
+      std::snprintf(v, sizeof v, "%s%.3f", i ? "," : "", t[i] * 1e3);
+      out += v;
+    }
+    return out + "]";
+  };
+  peer_json += ",\"times_ms\":" + list(times);
+  if (!peer_times.empty()) peer_json += ",\"peer_times_ms\":" + list(peer_times);
   std::printf(
       "{\"bench\":\"contour\",\"grid\":\"%s\",\"build\":%.6f,\"size\":%lld,\"iso\":%.6f,\"weld\":\"%s\",\"normals\":\"%s\",\"threads\":%d,"
       "\"points\":%lld,\"cells\":%lld,%s,"
