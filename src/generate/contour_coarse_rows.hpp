@@ -149,6 +149,9 @@ template <class T, class NearerFar>
 void mark_coarse_points(const InsideBits& bits, const GridShape& s, const RowCounts& rc, const T* samples,
                         const NearerFar& nearer_far, CoarseBits& cb) {
   const Id wpr = bits.words_per_row, rows = s.ny * s.nz, last_plane = s.nz - 1;
+  // Row slots are 32-bit (checked before anything is sized).
+  if (rows > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("contour --coarsen: " + std::to_string(rows) + " grid rows exceed 2^32 - 1");
   cb.words_per_row = wpr;
   cb.zeros.assign(static_cast<std::size_t>(wpr), 0);
   cb.cut.resize(static_cast<std::size_t>(rows));
@@ -161,8 +164,6 @@ void mark_coarse_points(const InsideBits& bits, const GridShape& s, const RowCou
     cb.far_slot[r] = cb.cut[r];
     cb.live_slot[r] = cb.live[r];
   });
-  if (rows > Id{std::numeric_limits<std::uint32_t>::max()})
-    throw LimitError("contour --coarsen: " + std::to_string(rows) + " grid rows exceed 2^32 - 1");
   const Id cut_rows = parallel::exclusive_scan(cb.far_slot.data(), cb.far_slot.data(), rows);
   const Id live_rows = parallel::exclusive_scan(cb.live_slot.data(), cb.live_slot.data(), rows);
   cb.far.room_for(static_cast<std::size_t>(3 * wpr * cut_rows));
