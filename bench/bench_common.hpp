@@ -44,21 +44,33 @@ int parse_options(int argc, char** argv, CommonOptions& o, Own&& own) {
     std::fprintf(stderr, "--file needs --iso\n");
     return 2;
   }
+  if (o.reps < 1) {  // the timing columns need a run
+    std::fprintf(stderr, "--reps must be 1 or more\n");
+    return 2;
+  }
   return 0;
 }
 
 // The isovalue the paper contours the Spherical Distance field of `size` at.
 inline double sphere_iso(long long size) { return static_cast<double>(size / 2) - 1 + 0.001; }
 
+// The median of the repetitions' seconds (the upper middle of an even count).
+inline double median(std::vector<double> times) {
+  std::sort(times.begin(), times.end());
+  return times[times.size() / 2];
+}
+
 // The JSON columns of the repetitions' seconds, `times` in run order (the
-// first is the cold run: fresh memory, as in a one-shot CLI):
-// "median":…,"min":…,"max":…,"first":…,"reps":N (no braces, no trailing comma).
-inline std::string timing_json(std::vector<double> times) {
+// first is the cold run: fresh memory, as in a one-shot CLI), each name
+// after `prefix`: "median":…,"min":…,"max":…,"first":…,"reps":N (no
+// braces, no trailing comma).
+inline std::string timing_json(std::vector<double> times, const char* prefix = "") {
   const double first = times.front();
   std::sort(times.begin(), times.end());
-  char text[160];
-  std::snprintf(text, sizeof text, "\"median\":%.6f,\"min\":%.6f,\"max\":%.6f,\"first\":%.6f,\"reps\":%d",
-                times[times.size() / 2], times.front(), times.back(), first, static_cast<int>(times.size()));
+  char text[256];
+  std::snprintf(text, sizeof text, "\"%smedian\":%.6f,\"%smin\":%.6f,\"%smax\":%.6f,\"%sfirst\":%.6f,\"%sreps\":%d",
+                prefix, times[times.size() / 2], prefix, times.front(), prefix, times.back(), prefix, first, prefix,
+                static_cast<int>(times.size()));
   return text;
 }
 

@@ -13,7 +13,7 @@
 // marching tetrahedra; the tetrahedralization is timed once ("build").
 // --peer fe3d also runs vtkFlyingEdges3D on the same samples in this process,
 // at the same thread count, and adds "peer",
-// "peer_median", "peer_min", "peer_max", "peer_first", "peer_points",
+// "peer_median", "peer_min", "peer_max", "peer_first", "peer_reps", "peer_points",
 // "peer_cells", "peer_ratio" (the peer's median over keymesh's) and
 // "peak_rss_mib_with_peer" to the line ("times_ms" and "peer_times_ms": every
 // call's milliseconds, in run order); "peak_rss_mib" is then taken after
@@ -25,12 +25,12 @@
 // (168x206x128 float32), 2 threads, keymesh's classify 0.4 ms alone and 1.0
 // ms in turns. Only in a build with VTK's C++ package (libvtk9-dev); refused by
 // name otherwise, and with --grid tet5.
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "keymesh/core/huge_pages.hpp"
@@ -77,28 +77,25 @@ int main(int argc, char** argv) {
   if (status != 0) return status;
   if (o.iso < 0) o.iso = bench::sphere_iso(o.size);
   const int used = parallel::set_thread_count(o.threads);
-  if (grid_kind != "voxel" && grid_kind != "tet5") {
-    std::fprintf(stderr, "--grid must be voxel or tet5\n");
-    return 2;
-  }
-  if (!peer.empty() && peer != "fe3d") {
-    std::fprintf(stderr, "--peer must be fe3d\n");
-    return 2;
-  }
-  if (peer_order != "blocks" && peer_order != "turns") {
-    std::fprintf(stderr, "--peer-order must be blocks or turns\n");
-    return 2;
-  }
-  if (!peer.empty() && grid_kind != "voxel") {
-    std::fprintf(stderr, "--peer fe3d contours the voxel grid only\n");
-    return 2;
-  }
-#ifndef KEYMESH_BENCH_VTK
-  if (!peer.empty()) {
-    std::fprintf(stderr, "--peer fe3d: this contour_bench was built without VTK's C++ package (libvtk9-dev)\n");
-    return 2;
-  }
+#ifdef KEYMESH_BENCH_VTK
+  constexpr bool with_vtk = true;
+#else
+  constexpr bool with_vtk = false;
 #endif
+  // Options refused by name, exit status 2, before the volume is read.
+  const std::pair<bool, const char*> refused[] = {
+      {grid_kind != "voxel" && grid_kind != "tet5", "--grid must be voxel or tet5"},
+      {!peer.empty() && peer != "fe3d", "--peer must be fe3d"},
+      {peer_order != "blocks" && peer_order != "turns", "--peer-order must be blocks or turns"},
+      {!peer.empty() && grid_kind != "voxel", "--peer fe3d contours the voxel grid only"},
+      {!peer.empty() && !with_vtk,
+       "--peer fe3d: this contour_bench was built without VTK's C++ package (libvtk9-dev)"},
+  };
+  for (const auto& [bad, why] : refused)
+    if (bad) {
+      std::fprintf(stderr, "%s\n", why);
+      return 2;
+    }
   const ImageGrid grid = bench::input_volume(o.file, o.size);
   UnstructuredGrid tets;
   double build = 0;
@@ -140,7 +137,7 @@ int main(int argc, char** argv) {
   // The order of the calls: 'k' keymesh, 'p' the peer.
   std::string order;
   if (peer.empty()) {
-    order.assign(static_cast<std::size_t>(std::max(o.reps, 0)), 'k');
+    order.assign(static_cast<std::size_t>(o.reps), 'k');
   } else if (peer_order == "turns") {
     for (int r = 0; r < o.reps; ++r) order += r % 2 ? "pk" : "kp";
   } else {
@@ -160,20 +157,15 @@ int main(int argc, char** argv) {
     }
 #endif
   }
-  std::string peer_json;
+  // The peer's columns, and every call's milliseconds: the line's end.
+  std::string extra_json;
   if (!peer_times.empty()) {
-    std::vector<double> sorted = peer_times;
-    std::sort(sorted.begin(), sorted.end());
-    std::vector<double> own = times;
-    std::sort(own.begin(), own.end());
-    char text[400];
+    char text[200];
     std::snprintf(text, sizeof text,
-                  ",\"peer\":\"vtkFlyingEdges3D\",\"peer_median\":%.6f,\"peer_min\":%.6f,\"peer_max\":%.6f,"
-                  "\"peer_first\":%.6f,\"peer_points\":%lld,\"peer_cells\":%lld,\"peer_ratio\":%.4f,"
-                  "\"peak_rss_mib_with_peer\":%.1f",
-                  sorted[sorted.size() / 2], sorted.front(), sorted.back(), peer_times.front(), peer_points, peer_cells,
-                  sorted[sorted.size() / 2] / own[own.size() / 2], bench::peak_rss_mib());
-    peer_json = text;
+                  ",\"peer\":\"vtkFlyingEdges3D\",\"peer_points\":%lld,\"peer_cells\":%lld,\"peer_ratio\":%.4f,"
+                  "\"peak_rss_mib_with_peer\":%.1f,",
+                  peer_points, peer_cells, bench::median(peer_times) / bench::median(times), bench::peak_rss_mib());
+    extra_json = text + bench::timing_json(peer_times, "peer_");
   }
   // Every call's milliseconds in run order (keymesh's, then the peer's):
   // which calls of a process were slow.
@@ -186,14 +178,14 @@ int main(int argc, char** argv) {
     }
     return out + "]";
   };
-  peer_json += ",\"times_ms\":" + list(times);
-  if (!peer_times.empty()) peer_json += ",\"peer_times_ms\":" + list(peer_times);
+  extra_json += ",\"times_ms\":" + list(times);
+  if (!peer_times.empty()) extra_json += ",\"peer_times_ms\":" + list(peer_times);
   std::printf(
       "{\"bench\":\"contour\",\"grid\":\"%s\",\"build\":%.6f,\"size\":%lld,\"iso\":%.6f,\"weld\":\"%s\",\"normals\":\"%s\",\"threads\":%d,"
       "\"points\":%lld,\"cells\":%lld,%s,"
       "\"classify\":%.6f,\"generate\":%.6f,\"weld_s\":%.6f,\"fields\":%.6f,\"coarsen_s\":%.6f,\"peak_rss_mib\":%.1f%s}\n",
       grid_kind.c_str(), build, o.size, o.iso, weld.c_str(), normals.c_str(), used, (long long)points, (long long)cells,
       bench::timing_json(times).c_str(), stats.classify, stats.generate, stats.weld, stats.fields, stats.coarsen,
-      peer_times.empty() ? bench::peak_rss_mib() : own_peak_rss, peer_json.c_str());
+      peer_times.empty() ? bench::peak_rss_mib() : own_peak_rss, extra_json.c_str());
   return 0;
 }

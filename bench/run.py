@@ -318,7 +318,7 @@ def dense_rows(bench, build, threads, reps, work, quick):
 def harness_has_peer(bench):
     """Whether contour_bench was built with VTK's C++ package: a build
     without it refuses `--peer fe3d` by name (exit 2) before reading input."""
-    p = subprocess.run([bench, "--peer", "fe3d", "--file", "/nonexistent", "--iso", "0", "--reps", "0"],
+    p = subprocess.run([bench, "--peer", "fe3d", "--file", "/nonexistent", "--iso", "0", "--reps", "1"],
                        capture_output=True, text=True)
     return "built without VTK" not in p.stderr
 
