@@ -393,9 +393,12 @@ struct CoarsePointWriter {
   // written at its id.
   void write_points(const InsideBits& bits, const CoarseBits& cb, Id iso) const {
     auto rows = [&](auto scalar, auto normal, auto curvature) {
-      for_each_coarse_row(bits, out.s, cb, [&](const CoarseRow& row) {
-        fields<decltype(scalar)::value, decltype(normal)::value, decltype(curvature)::value>(row, iso);
-      });
+      for_each_coarse_row(
+          bits, out.s, cb,
+          [&](const CoarseRow& row) {
+            fields<decltype(scalar)::value, decltype(normal)::value, decltype(curvature)::value>(row, iso);
+          },
+          out.interp.samples);
     };
     // The fields asked for, as template arguments.
     auto with_curvature = [&](auto scalar, auto normal) {

@@ -372,11 +372,28 @@ struct CoarseRow {
 };
 
 // Step 7: calls f(row) for every grid row (CoarseRow) that holds coarse
-// points of the isovalue.
-template <class F>
-void for_each_coarse_row(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f) {
+// points of the isovalue. With `samples`, each row first asks for the
+// sample lines its row one plane up (`ahead`) will read: at its points and
+// the point after each (the x edge arriving), in its own row and the rows
+// its y and z edges reach, and the row below it (the y edges arriving). The
+// 512^3 sphere's points took 24.5-25.5 ms of a 105-108 ms coarsened contour
+// without (2 threads), most of it waiting on samples; 13.4-13.6 ms with.
+template <class F, class T = std::uint8_t>
+void for_each_coarse_row(const InsideBits& bits, const GridShape& s, const CoarseBits& cb, F&& f,
+                         const T* samples = nullptr) {
   const Id wpr = cb.words_per_row, last_plane = s.nz - 1;
-  for_each_row_in_bricks(s, [&](Id r) {
+  for_each_row_in_bricks_ahead(s, [&](Id r, Id ahead) {
+    if (samples && ahead >= 0 && cb.live[ahead]) {
+      const Id ja = ahead % s.ny, ka = ahead / s.ny;
+      const T* const a_row = samples + ja * s.nx + ka * s.nxy;
+      // Its own row, the next along y and z, the one before along y: all
+      // four off the grid's border, else its own only.
+      const T* const rows[4] = {a_row, a_row + s.stride[1], a_row + s.stride[2], a_row - s.stride[1]};
+      const int n = ka < last_plane && ja > 0 && ja + 1 < s.ny ? 4 : 1;
+      const std::uint64_t* const pw = cb.point_words(ahead);
+      for (Id q = 0; q < wpr; ++q)
+        if (pw[q]) prefetch_samples(rows, n, q, pw[q] | (pw[q] >> 1));
+    }
     if (!cb.live[r]) return;
     const std::uint64_t* const points = cb.point_words(r);
     thread_local std::vector<Id> words;
