@@ -167,7 +167,8 @@ template <class T>
 [[gnu::always_inline]] inline void prefetch_cut_samples(const T* samples, const GridShape& s, const RowCuts& cuts,
                                                         Id j, Id k) {
   const T* const row = samples + j * s.nx + k * s.nxy;
-  const T* const rows3[3] = {row, row + s.stride[1], row + s.stride[2]};
+  // (No pointer past the grid: the last row and plane have no y or z edges.)
+  const T* const rows3[3] = {row, cuts.next_y ? row + s.stride[1] : row, cuts.next_z ? row + s.stride[2] : row};
   for (Id q = 0; q < cuts.data_words; ++q) {
     const RowCuts::Words w = cuts.word(q);
     prefetch_samples(rows3, 1, q, w.x | w.y | w.z);
@@ -374,7 +375,7 @@ struct CoarseRow {
 // Step 7: calls f(row) for every grid row (CoarseRow) that holds coarse
 // points of the isovalue. With `samples`, each row first asks for the
 // sample lines its row one plane up (`ahead`) will read: at its points and
-// the point after each (the x edge arriving), in its own row and the rows
+// the point before each (the x edge arriving), in its own row and the rows
 // its y and z edges reach, and the row below it (the y edges arriving). The
 // 512^3 sphere's points took 24.5-25.5 ms of a 105-108 ms coarsened contour
 // without (2 threads), most of it waiting on samples; 13.4-13.6 ms with.
@@ -387,9 +388,12 @@ void for_each_coarse_row(const InsideBits& bits, const GridShape& s, const Coars
       const Id ja = ahead % s.ny, ka = ahead / s.ny;
       const T* const a_row = samples + ja * s.nx + ka * s.nxy;
       // Its own row, the next along y and z, the one before along y: all
-      // four off the grid's border, else its own only.
-      const T* const rows[4] = {a_row, a_row + s.stride[1], a_row + s.stride[2], a_row - s.stride[1]};
-      const int n = ka < last_plane && ja > 0 && ja + 1 < s.ny ? 4 : 1;
+      // four off the grid's border, else its own only (no pointer off the
+      // grid).
+      const bool inner = ka < last_plane && ja > 0 && ja + 1 < s.ny;
+      const T* const rows[4] = {a_row, inner ? a_row + s.stride[1] : a_row, inner ? a_row + s.stride[2] : a_row,
+                                inner ? a_row - s.stride[1] : a_row};
+      const int n = inner ? 4 : 1;
       const std::uint64_t* const pw = cb.point_words(ahead);
       for (Id q = 0; q < wpr; ++q)
         if (pw[q]) prefetch_samples(rows, n, q, pw[q] | (pw[q] >> 1));
