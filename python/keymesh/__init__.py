@@ -279,13 +279,19 @@ def key_reduce(keys: Any, values: Any, op: str = "mean",
     return _ext.key_reduce(k, np.asarray(values), op, _threads(threads))
 
 
-def check(mesh: Mesh, threads: int = 0) -> Dict[str, Any]:
+def check(mesh: Mesh, threads: int = 0, self_intersections: bool = False) -> Dict[str, Any]:
     """Topology report of a surface mesh, the keys of ``keymesh check --report``:
     points, cells, edges, boundary_edges, nonmanifold_edges,
     nonmanifold_vertices, duplicate_points, unused_points, degenerate_cells,
     components, euler_characteristic, closed_manifold (a closed 2-manifold:
-    no boundary, no non-manifold edge or vertex, no degenerate cell)."""
-    return _ext.check(mesh, _threads(threads))
+    no boundary, no non-manifold edge or vertex, no degenerate cell).
+
+    With ``self_intersections=True`` (``keymesh check --self-intersections``)
+    also: self_intersections (pairs of cells that cross, or touch where they
+    share no corner, decided with exact predicates), self_intersecting_pairs
+    (the first 16 such pairs of cell ids) and zero_area_triangles (left out
+    of that test)."""
+    return _ext.check(mesh, _threads(threads), bool(self_intersections))
 
 
 def read(path: Any, dims: Optional[Sequence[int]] = None, dtype: Any = None,

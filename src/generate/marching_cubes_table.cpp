@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace keymesh::generate {
@@ -66,31 +67,76 @@ struct TableBuilder {
     return false;
   }
 
-  // Triangulates a polygon (cut edges in order) without such diagonals:
-  // the triangle on edge (p0, p1) takes the first apex whose two sides are
-  // polygon edges or allowed diagonals, and the two remaining pieces are
-  // triangulated the same way (a fan when every diagonal is allowed).
-  bool triangulate(const std::vector<int>& poly, std::vector<std::array<int, 3>>& out) const {
+  // Every triangulation of a polygon (cut edges in order) without such
+  // diagonals, in a fixed order: the triangle on edge (p0, p1) takes each
+  // apex whose two sides are polygon edges or allowed diagonals in turn, and
+  // the two remaining pieces are triangulated the same way.
+  void triangulations(const std::vector<int>& poly, std::vector<std::vector<std::array<int, 3>>>& out) const {
     const std::size_t m = poly.size();
-    if (m < 3) return true;
+    if (m < 3) {
+      out.emplace_back();
+      return;
+    }
     if (m == 3) {
-      out.push_back({poly[0], poly[1], poly[2]});
-      return true;
+      out.push_back({{poly[0], poly[1], poly[2]}});
+      return;
     }
     for (std::size_t k = 2; k < m; ++k) {
       const bool side1 = k == 2 || !share_face(poly[1], poly[k]);      // (p1, pk)
       const bool side2 = k == m - 1 || !share_face(poly[k], poly[0]);  // (pk, p0)
       if (!side1 || !side2) continue;
-      std::vector<std::array<int, 3>> tris{{poly[0], poly[1], poly[k]}};
       const std::vector<int> a(poly.begin() + 1, poly.begin() + static_cast<std::ptrdiff_t>(k) + 1);
       std::vector<int> b(poly.begin() + static_cast<std::ptrdiff_t>(k), poly.end());
       b.push_back(poly[0]);
-      if (triangulate(a, tris) && triangulate(b, tris)) {
-        out.insert(out.end(), tris.begin(), tris.end());
-        return true;
+      std::vector<std::vector<std::array<int, 3>>> first, second;
+      triangulations(a, first);
+      triangulations(b, second);
+      for (const auto& x : first)
+        for (const auto& y : second) {
+          std::vector<std::array<int, 3>> tris{{poly[0], poly[1], poly[k]}};
+          tris.insert(tris.end(), x.begin(), x.end());
+          tris.insert(tris.end(), y.begin(), y.end());
+          out.push_back(std::move(tris));
+        }
+    }
+  }
+
+  // Total edge length of a triangulation with every point at its edge's
+  // midpoint (each diagonal counted twice, the polygon's edges once: the
+  // same for every triangulation of one polygon).
+  double midpoint_length(const std::vector<std::array<int, 3>>& tris) const {
+    double sum = 0;
+    for (const auto& tr : tris)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 p = midpoint(tr[k]), q = midpoint(tr[(k + 1) % 3]);
+        sum += std::sqrt((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) + (p.z - q.z) * (p.z - q.z));
+      }
+    return sum;
+  }
+
+  // The triangulation with the shortest diagonals at the edge midpoints (the
+  // first in the order above among equals). Taking the first allowed one
+  // instead lets two triangles of some polygons cross: the 7-gons of a cube
+  // with three corners outside, two of them diagonal on a face, where a
+  // first-found split pairs long diagonals that pass each other for some
+  // sample values (tests/generate/marching_cubes_table_test.cpp sweeps every
+  // case; vtkMarchingCubes' hand-made table has none either). The shortest
+  // split keeps each triangle near the corner it cuts off.
+  bool triangulate(const std::vector<int>& poly, std::vector<std::array<int, 3>>& out) const {
+    std::vector<std::vector<std::array<int, 3>>> all;
+    triangulations(poly, all);
+    if (all.empty()) return false;
+    std::size_t best = 0;
+    double best_length = midpoint_length(all[0]);
+    for (std::size_t i = 1; i < all.size(); ++i) {
+      const double length = midpoint_length(all[i]);
+      if (length < best_length - 1e-9) {
+        best = i;
+        best_length = length;
       }
     }
-    return false;
+    out.insert(out.end(), all[best].begin(), all[best].end());
+    return true;
   }
 
   // The contour segments on the cube's faces: each cut edge gets one

@@ -396,7 +396,10 @@ TEST(SplitNonmanifold, CoarsenedNoiseIsAClosedManifold) {
   EXPECT_EQ(r.points_added, 0);
   EXPECT_EQ(t.nonmanifold_edges, unbalanced_many + r.edges_left);
   EXPECT_EQ(t.boundary_edges + unbalanced_many, unbalanced);
-  EXPECT_LT(r.edges_left, t.nonmanifold_edges);
+  // Fewer edges left than non-manifold ones (none with the table's shortest
+  // splits on this volume, where the first-found splits left a few).
+  if (t.nonmanifold_edges > 0) EXPECT_LT(r.edges_left, t.nonmanifold_edges);
+  else EXPECT_EQ(r.edges_left, 0);
   // The copies: as many points at an earlier point's position as the rule
   // added, which is what a coarsening of white noise needs.
   EXPECT_GT(t.duplicate_points, 0);

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "keymesh/analyze/quality.hpp"
+#include "keymesh/analyze/self_intersections.hpp"
 #include "keymesh/analyze/topology.hpp"
 
 namespace keymesh::analyze {
@@ -22,6 +23,15 @@ void visit_fields(const TopologyReport& t, Visit&& visit) {
       {"euler_characteristic", t.euler_characteristic}};
   for (const auto& [name, count] : counts) visit(name, count);
   visit("closed_manifold", t.closed_manifold);
+}
+
+// `keymesh check --self-intersections`: the count of crossing cell pairs,
+// the first pairs (cell ids) and the zero-area triangles left out.
+template <class Visit>
+void visit_fields(const SelfIntersectionReport& s, Visit&& visit) {
+  visit("self_intersections", s.self_intersections);
+  visit("self_intersecting_pairs", s.pairs);
+  visit("zero_area_triangles", s.zero_area_triangles);
 }
 
 // "cells" is the triangle count; the mesh's point count is the caller's.

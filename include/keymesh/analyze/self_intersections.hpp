@@ -1,0 +1,48 @@
+#pragma once
+// Self-intersections of a surface: pairs of cells that cross or touch where
+// they share nothing. Decided exactly (analyze/exact_predicates.hpp), so a
+// mesh either has a crossing pair or it has not; no tolerance is involved.
+//
+// Two triangles are a pair when they meet anywhere outside the convex hull of
+// the corners they have in common, corners being in common when their
+// positions are equal (so a welded mesh and a soup with the same triangles
+// give the same answer, and points a generator puts at one position on
+// purpose - a sample exactly on the isovalue - are one corner). Neighbours
+// sharing an edge are a pair only when they fold onto each other (coplanar
+// and overlapping); identical triangles are a pair. Triangles of zero area
+// (collinear or coincident corners) are counted, not tested: they hold no
+// surface to cross. Polygon cells are fanned from their first point; a
+// polygon's own fan triangles are not tested against each other.
+//
+// Broad phase: a uniform grid of cells about twice the mean triangle's
+// extent; each pair of triangles whose boxes overlap is tested once, in the
+// grid cell holding the low corner of the boxes' overlap. Threaded; the result
+// (pairs sorted) does not depend on the thread count.
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "keymesh/core/types.hpp"
+#include "keymesh/mesh/surface_mesh.hpp"
+
+namespace keymesh::analyze {
+
+struct SelfIntersectionReport {
+  Id triangles = 0;            // triangles tested (polygons fanned)
+  Id zero_area_triangles = 0;  // left out of the test (collinear or coincident corners)
+  Id self_intersections = 0;   // distinct pairs of cells that cross
+  std::vector<std::array<Id, 2>> pairs;  // the first max_listed pairs (cell ids, smaller first), sorted
+};
+
+// Throws InputError when a cell refers to a point id out of range.
+SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::size_t max_listed = 16);
+
+// The exact pair test: do triangles a and b (three xyz points each) meet
+// outside the convex hull of their common corners? Both must have non-zero
+// area (triangle_has_area).
+bool triangles_cross(const std::array<const float*, 3>& a, const std::array<const float*, 3>& b);
+
+// Whether the triangle's corners span an area (are not collinear), exactly.
+bool triangle_has_area(const std::array<const float*, 3>& t);
+
+}  // namespace keymesh::analyze
