@@ -187,3 +187,19 @@ def test_positions_only_are_written_into_the_modules_own_arrays():
     assert cells.max() > 0 and cells.base is not None
     empty = keymesh.contour(np.zeros((4, 5, 6), np.float32), 0.5, normals="none")
     assert empty.points.shape == (0, 3) and empty.cells.shape == (0, 3)
+
+
+def test_check_self_intersections():
+    """keymesh.check(..., self_intersections=True): none on a contour of white
+    noise (the table's shortest splits), two on a tetrahedron with a planted spike."""
+    from conftest import noise_field
+
+    report = keymesh.check(keymesh.contour(noise_field(), 0.1), self_intersections=True)
+    assert report["self_intersections"] == 0 and report["self_intersecting_pairs"] == []
+    assert report["zero_area_triangles"] == 0 and report["cells"] > 1000
+    assert "self_intersections" not in keymesh.check(keymesh.contour(noise_field(), 0.1))
+    points = np.array([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), (0.2, 0.2, -1), (0.25, 0.2, 2), (0.2, 0.25, 2)],
+                      np.float32)
+    cells = np.array([(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3), (4, 5, 6)], np.uint32)
+    report = keymesh.check(keymesh.Mesh(points, cells), self_intersections=True)
+    assert report["self_intersections"] == 2 and report["self_intersecting_pairs"] == [[0, 4], [3, 4]]

@@ -1,0 +1,153 @@
+#include "keymesh/analyze/self_intersections.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "keymesh/analyze/exact_predicates.hpp"
+#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/spherical_distance.hpp"
+#include "keymesh/parallel/threads.hpp"
+
+using namespace keymesh;
+using analyze::find_self_intersections;
+using analyze::triangles_cross;
+
+namespace {
+
+using P = std::array<float, 3>;
+
+bool cross(const std::array<P, 3>& a, const std::array<P, 3>& b) {
+  return triangles_cross({a[0].data(), a[1].data(), a[2].data()}, {b[0].data(), b[1].data(), b[2].data()});
+}
+
+SurfaceMesh soup(const std::vector<std::array<P, 3>>& tris) {
+  SurfaceMesh m;
+  m.points.resize(9 * tris.size());
+  m.connectivity.resize(3 * tris.size());
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      for (int c = 0; c < 3; ++c) m.points[9 * t + 3 * k + c] = tris[t][k][c];
+      m.connectivity[3 * t + k] = static_cast<PointIndex>(3 * t + k);
+    }
+  return m;
+}
+
+}  // namespace
+
+TEST(ExactPredicates, SignsWhereDoubleRoundingWouldGuess) {
+  const P a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+  EXPECT_EQ(analyze::orient3d(a.data(), b.data(), c.data(), P{0.3f, 0.7f, 0}.data()), 0);
+  EXPECT_EQ(analyze::orient3d(a.data(), b.data(), c.data(), P{0.3f, 0.7f, 1e-30f}.data()), 1);
+  EXPECT_EQ(analyze::orient3d(a.data(), b.data(), c.data(), P{0.3f, 0.7f, -1e-30f}.data()), -1);
+  // Far from the origin, on a plane x + y + z = const through float points:
+  // exactly coplanar, and one ulp off it.
+  const float big = 16777216.0f;  // 2^24: floats step by 2 here
+  const P p{big, 0, 0}, q{0, big, 0}, r{0, 0, big};
+  EXPECT_EQ(analyze::orient3d(p.data(), q.data(), r.data(), P{big / 2, big / 2, 0}.data()), 0);
+  const int above = analyze::orient3d(p.data(), q.data(), r.data(), P{big / 2, big / 2, 2.0f}.data());
+  EXPECT_NE(above, 0);
+  EXPECT_EQ(analyze::orient3d(p.data(), q.data(), r.data(), P{big / 2, big / 2, -2.0f}.data()), -above);
+  // Exponents too far apart for 128-bit integers: GMP decides.
+  EXPECT_EQ(analyze::orient3d(P{0, 0, 0}.data(), P{1e30f, 0, 0}.data(), P{0, 1e-30f, 0}.data(), P{1, 1, 1e-38f}.data()), 1);
+  EXPECT_EQ(analyze::orient2d(P{0, 0, 0}.data(), P{1e30f, 1e-30f, 0}.data(), P{2e30f, 2e-30f, 0}.data(), 2), 0);
+  EXPECT_EQ(analyze::orient2d(P{0, 0, 0}.data(), P{1e30f, 1e-30f, 0}.data(), P{2e30f, 3e-30f, 0}.data(), 2), 1);
+}
+
+TEST(TrianglesCross, EveryKindOfContact) {
+  const std::array<P, 3> base{P{0, 0, 0}, P{4, 0, 0}, P{0, 4, 0}};
+  // Pierced through its interior.
+  EXPECT_TRUE(cross(base, {P{1, 1, -1}, P{1, 1, 1}, P{3, 3, 1}}));
+  // Above it: nothing.
+  EXPECT_FALSE(cross(base, {P{1, 1, 0.5f}, P{1, 2, 1}, P{2, 1, 1}}));
+  // A common corner (by position only: the soup has other point ids), else apart.
+  EXPECT_FALSE(cross(base, {P{0, 0, 0}, P{-1, 0, 1}, P{0, -1, 1}}));
+  // A common edge, the other corner above or below: a fold-free hinge.
+  EXPECT_FALSE(cross(base, {P{4, 0, 0}, P{0, 0, 0}, P{1, -1, 3}}));
+  EXPECT_FALSE(cross(base, {P{4, 0, 0}, P{0, 0, 0}, P{1, 1, 3}}));
+  // A common edge, folded flat onto it: overlap.
+  EXPECT_TRUE(cross(base, {P{4, 0, 0}, P{0, 0, 0}, P{1, 1, 0}}));
+  // A common edge, flat, on the other side: a plain neighbour.
+  EXPECT_FALSE(cross(base, {P{4, 0, 0}, P{0, 0, 0}, P{1, -1, 0}}));
+  // A corner touching the interior (no common corner): a contact.
+  EXPECT_TRUE(cross(base, {P{1, 1, 0}, P{1, 1, 2}, P{2, 1, 2}}));
+  // A common corner and an edge running inside the other triangle.
+  EXPECT_TRUE(cross(base, {P{0, 0, 0}, P{2, 1, 0}, P{1, 1, 3}}));
+  // The same triangle twice, reversed.
+  EXPECT_TRUE(cross(base, {P{0, 4, 0}, P{4, 0, 0}, P{0, 0, 0}}));
+  // Coplanar, corners apart, edges crossing (a star of David).
+  EXPECT_TRUE(cross({P{0, 0, 0}, P{6, 0, 0}, P{3, 5, 0}}, {P{0, 3, 0}, P{6, 3, 0}, P{3, -2, 0}}));
+  // An edge of one lying along an edge of the other past their common corner.
+  EXPECT_TRUE(cross(base, {P{0, 0, 0}, P{2, 0, 0}, P{1, -1, 2}}));
+  // Two triangles of a unit square split both ways (samples on the isovalue do this).
+  EXPECT_TRUE(cross({P{0, 0, 0}, P{1, 0, 0}, P{1, 1, 0}}, {P{0, 0, 0}, P{1, 0, 0}, P{0, 1, 0}}));
+}
+
+TEST(SelfIntersections, ClosedSphereHasNoneAndAPlantedTriangleIsFound) {
+  const ImageGrid g = generate::spherical_distance(24);
+  generate::ContourOptions opt;
+  opt.isovalues = {8.3};
+  SurfaceMesh m = generate::contour(g, opt);
+  const auto clean = find_self_intersections(m);
+  EXPECT_EQ(clean.self_intersections, 0);
+  EXPECT_EQ(clean.triangles, m.num_cells());
+  // A spike from the centre out through the surface crosses exactly the
+  // triangles its edges pass through.
+  const Id n = m.num_points();
+  const std::array<float, 3> centre{11.5f, 11.5f, 11.5f};
+  for (float v : {centre[0], centre[1], centre[2], centre[0] + 20, centre[1] + 0.3f, centre[2] + 0.1f,
+                  centre[0] + 20, centre[1] + 0.6f, centre[2] + 0.5f})
+    m.points.push_back(v);
+  for (Id k = 0; k < 3; ++k) m.connectivity.push_back(static_cast<PointIndex>(n + k));
+  const auto planted = find_self_intersections(m);
+  EXPECT_GE(planted.self_intersections, 1);
+  for (const auto& pair : planted.pairs) EXPECT_EQ(pair[1], m.num_cells() - 1);
+}
+
+// The broad phase finds what testing every pair finds, at any thread count.
+TEST(SelfIntersections, GridEqualsEveryPairOnARandomSoup) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> at(0, 10), step(-1.5f, 1.5f);
+  std::vector<std::array<P, 3>> tris(600);
+  for (auto& t : tris) {
+    const P o{at(rng), at(rng), at(rng)};
+    t = {o, P{o[0] + step(rng), o[1] + step(rng), o[2] + step(rng)}, P{o[0] + step(rng), o[1] + step(rng), o[2] + step(rng)}};
+  }
+  tris.push_back(tris[5]);                               // a duplicate
+  tris.push_back({tris[9][0], tris[9][1], P{20, 20, 20}});  // a neighbour by an edge's positions
+  const SurfaceMesh m = soup(tris);
+  std::vector<std::array<Id, 2>> brute;
+  for (std::size_t a = 0; a < tris.size(); ++a)
+    for (std::size_t b = a + 1; b < tris.size(); ++b)
+      if (cross(tris[a], tris[b])) brute.push_back({Id(a), Id(b)});
+  ASSERT_GT(brute.size(), 50u);
+  for (int threads : {1, 2, 5}) {
+    parallel::set_thread_count(threads);
+    const auto r = find_self_intersections(m, brute.size());
+    EXPECT_EQ(r.self_intersections, static_cast<Id>(brute.size())) << threads;
+    EXPECT_EQ(r.pairs, brute) << threads;
+  }
+  parallel::set_thread_count(0);
+}
+
+TEST(SelfIntersections, PolygonsZeroAreaAndBadInput) {
+  SurfaceMesh quad;  // one non-planar quad: its own fan is not tested against itself
+  quad.points = {0, 0, 0, 1, 0, 0, 1, 1, 1, 0, 1, 0};
+  quad.connectivity = {0, 1, 2, 3};
+  quad.offsets = {0, 4};
+  auto r = find_self_intersections(quad);
+  EXPECT_EQ(r.triangles, 2);
+  EXPECT_EQ(r.self_intersections, 0);
+  SurfaceMesh flat = soup({{P{0, 0, 0}, P{1, 1, 1}, P{2, 2, 2}}, {P{0, 0, 0}, P{1, 0, 0}, P{0, 1, 0}}});
+  r = find_self_intersections(flat);
+  EXPECT_EQ(r.zero_area_triangles, 1);
+  EXPECT_EQ(r.self_intersections, 0);
+  flat.connectivity[0] = 99;
+  EXPECT_THROW(find_self_intersections(flat), InputError);
+  flat.connectivity[0] = 0;
+  flat.points[4] = std::nanf("");
+  EXPECT_THROW(find_self_intersections(flat), InputError);
+}
