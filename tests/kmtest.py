@@ -60,6 +60,35 @@ def box_filtered_noise(shape, seed):
     return v.astype(np.float32)
 
 
+def parse_glb(path):
+    """The glTF 2.0 binary container by its specification: 12-byte header,
+    a JSON chunk and a BIN chunk, each 4-byte aligned."""
+    import struct
+    data = open(path, "rb").read()
+    magic, version, length = struct.unpack_from("<III", data, 0)
+    assert magic == 0x46546C67 and version == 2 and length == len(data) and length % 4 == 0
+    jlen, jtype = struct.unpack_from("<II", data, 12)
+    assert jtype == 0x4E4F534A and jlen % 4 == 0
+    doc = json.loads(data[20:20 + jlen])
+    blen, btype = struct.unpack_from("<II", data, 20 + jlen)
+    assert btype == 0x004E4942 and blen % 4 == 0 and 28 + jlen + blen == length
+    assert doc["buffers"][0]["byteLength"] <= blen
+    return doc, data[28 + jlen:28 + jlen + blen]
+
+
+def accessor(doc, binary, index):
+    """An accessor of a parsed .glb (SCALAR or VEC3 float32 / uint32): (accessor, values (count, width))."""
+    import numpy as np
+    a = doc["accessors"][index]
+    v = doc["bufferViews"][a["bufferView"]]
+    assert v["byteOffset"] % 4 == 0 and "byteStride" not in v
+    dtype = {5126: "<f4", 5125: "<u4"}[a["componentType"]]
+    width = {"SCALAR": 1, "VEC3": 3}[a["type"]]
+    values = np.frombuffer(binary, dtype, a["count"] * width, v["byteOffset"]).reshape(-1, width)
+    assert values.nbytes == v["byteLength"]
+    return a, values
+
+
 def tempdir():
     return tempfile.mkdtemp(prefix="keymesh-test-")
 

@@ -46,7 +46,7 @@ last_contour_info: Dict[str, Any] = {}
 
 
 class Mesh(CellCounts):
-    """A surface mesh: points, cells and point fields, as numpy arrays.
+    """A surface mesh: points, cells, point and cell fields, as numpy arrays.
 
     Attributes:
         points: (n, 3) float32 positions.
@@ -59,22 +59,31 @@ class Mesh(CellCounts):
         point_data: dict of per-point arrays, (n,) or (n, k); contour()
             gives the interpolated ``"scalars"`` and, with normals,
             ``"Normals"`` (unit vectors pointing to lower values).
+        cell_data: dict of per-cell arrays, (m,) or (m, k), e.g. a label
+            surface's ``"boundary_labels"``. Carried by write and read
+            (.vtp CellData, .ply face properties; the other formats have no
+            place for them), to/from VTK and meshio, subdivide (each child
+            cell its parent's) and coarsen (kept cells keep theirs).
 
     Arrays returned by keymesh own their memory (they outlive the Mesh).
     """
 
-    __slots__ = ("points", "cells", "offsets", "point_data")
+    __slots__ = ("points", "cells", "offsets", "point_data", "cell_data")
 
     def __init__(self, points: Any, cells: Any, point_data: Optional[Dict[str, Any]] = None,
-                 offsets: Any = None) -> None:
+                 offsets: Any = None, cell_data: Optional[Dict[str, Any]] = None) -> None:
         self.points = points
         self.cells = cells
         self.offsets = offsets
         self.point_data = {} if point_data is None else dict(point_data)
+        self.cell_data = {} if cell_data is None else dict(cell_data)
 
     def __repr__(self) -> str:
-        fields = ", ".join(f"{k}{tuple(np.shape(v))}" for k, v in self.point_data.items())
-        return f"keymesh.Mesh({self.n_points} points, {self.n_cells} cells, point_data: [{fields}])"
+        def shapes(data):
+            return ", ".join(f"{k}{tuple(np.shape(v))}" for k, v in data.items())
+        cells = f", cell_data: [{shapes(self.cell_data)}]" if self.cell_data else ""
+        return (f"keymesh.{type(self).__name__}({self.n_points} points, {self.n_cells} cells, "
+                f"point_data: [{shapes(self.point_data)}]{cells})")
 
     def polygons(self):
         """The cells as a list of index arrays (for polygon meshes)."""
@@ -87,7 +96,8 @@ class Mesh(CellCounts):
     # -- VTK and meshio (keymesh._interop says which arrays are shared) --
     def to_meshio(self):
         """A meshio.Mesh over the same arrays (needs python3-meshio):
-        triangles as "triangle" cells, other polygons grouped by size."""
+        triangles as "triangle" cells, other polygons grouped by size (the
+        cell data gathered with them)."""
         from . import _interop
         return _interop.mesh_to_meshio(self)
 
@@ -99,16 +109,16 @@ class Mesh(CellCounts):
         return _interop.mesh_from_meshio(cls, mesh)
 
     def to_vtk(self):
-        """A vtkPolyData (needs python3-vtk9) sharing the points, ids and
-        point fields ("Normals" set as the normals); only the offsets of a
-        triangle mesh are new."""
+        """A vtkPolyData (needs python3-vtk9) sharing the points, ids,
+        point fields ("Normals" set as the normals) and cell fields; only
+        the offsets of a triangle mesh are new."""
         from . import _interop
         return _interop.mesh_to_vtk(self)
 
     @classmethod
     def from_vtk(cls, poly) -> "Mesh":
-        """A Mesh viewing a vtkPolyData's points, polygons and point arrays
-        (no copy; strips, lines and vertices are refused)."""
+        """A Mesh viewing a vtkPolyData's points, polygons, point and cell
+        arrays (no copy; strips, lines and vertices are refused)."""
         from . import _interop
         return _interop.mesh_from_vtk(cls, poly)
 
@@ -131,9 +141,9 @@ def _threads(threads: int) -> int:
     return int(threads)
 
 
-def _mesh(parts) -> Mesh:
-    points, cells, offsets, point_data = parts
-    return Mesh(points, cells, point_data, offsets)
+def _mesh(parts, cls=None) -> Mesh:
+    points, cells, offsets, point_data, cell_data = parts
+    return (cls or Mesh)(points, cells, point_data, offsets, cell_data)
 
 
 def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]],
@@ -303,8 +313,9 @@ def read(path: Any, dims: Optional[Sequence[int]] = None, dtype: Any = None,
     ny, nz) and dtype, optionally spacing, origin, endian, header_bytes)
     give a keymesh.Volume: ``.array`` is a (nx, ny, nz) view of the samples
     (axis 0 = x, no copy), with ``.spacing`` and ``.origin``.
-    Surface meshes (.vtp, .ply, .obj, .stl) give a Mesh; unstructured grids
-    (.vtu, legacy .vtk) a Grid.
+    Surface meshes (.vtp, .ply, .obj, .stl) give a Mesh (with the cell fields
+    of a .vtp or the face properties of a .ply as cell_data); unstructured
+    grids (.vtu, legacy .vtk) a Grid. .glb is written, not read.
     Malformed files raise keymesh.Error (a ValueError) naming the file.
     """
     kind, obj = _ext.read(str(path), dims, dtype, spacing, origin, endian, int(header_bytes))

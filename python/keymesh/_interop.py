@@ -14,7 +14,8 @@ What is shared and what is copied, and why:
   which owns its samples: one copy (Volume.to_vtk shares them the other way). Triangle and tet connectivity is
   reshaped (a view) to (m, 3) / (m, 4).
 - meshio: meshio.Mesh and its CellBlocks keep the arrays given (no copy) both
-  ways; polygon meshes of mixed sizes are regrouped by size (a gather).
+  ways; polygon meshes of mixed sizes are regrouped by size (a gather, cell
+  data too), and meshio's per-block cell data is concatenated on the way back.
 """
 from __future__ import annotations
 
@@ -131,6 +132,7 @@ def mesh_to_vtk(mesh):
     poly.SetPoints(_points(mesh.points))
     poly.SetPolys(_cell_array(mesh.cells, _offsets(mesh, 3)))
     _add_fields(poly.GetPointData(), mesh.point_data)
+    _add_fields(poly.GetCellData(), getattr(mesh, "cell_data", {}))
     return poly
 
 
@@ -145,28 +147,33 @@ def mesh_from_vtk(cls, poly):
     offs = ns.vtk_to_numpy(polys.GetOffsetsArray())
     conn = ns.vtk_to_numpy(polys.GetConnectivityArray())
     data = _fields_from_vtk(poly.GetPointData())
+    cell_data = _fields_from_vtk(poly.GetCellData())  # polygons only: one tuple per polygon
     if len(offs) <= 1 or np.all(np.diff(offs) == 3):
-        return cls(points, conn.reshape(-1, 3), data)
-    return cls(points, conn, data, offs)
+        return cls(points, conn.reshape(-1, 3), data, cell_data=cell_data)
+    return cls(points, conn, data, offs, cell_data)
 
 
 def mesh_to_meshio(mesh):
     import meshio
 
+    fields = {k: np.asarray(v) for k, v in getattr(mesh, "cell_data", {}).items()}
     if mesh.offsets is None:
         blocks = [("triangle", np.asarray(mesh.cells))]
+        cell_data = {k: [v] for k, v in fields.items()}
     else:
         offsets = np.asarray(mesh.offsets)
         sizes = np.diff(offsets)
         flat = np.asarray(mesh.cells)
-        blocks = []
+        blocks, cell_data = [], {k: [] for k in fields}
         for size in np.unique(sizes):
             rows = np.nonzero(sizes == size)[0]
             idx = offsets[rows][:, None] + np.arange(size)[None, :]
             kind = {3: "triangle", 4: "quad"}.get(int(size), "polygon")
             blocks.append((kind, flat[idx]))
+            for k, v in fields.items():
+                cell_data[k].append(v[rows])
     return meshio.Mesh(np.asarray(mesh.points), blocks,
-                       point_data={k: np.asarray(v) for k, v in mesh.point_data.items()})
+                       point_data={k: np.asarray(v) for k, v in mesh.point_data.items()}, cell_data=cell_data)
 
 
 def _is_surface_block(kind: str) -> bool:
@@ -180,15 +187,18 @@ def mesh_from_meshio(cls, m):
             raise ValueError(f"from_meshio: cell type {block.type!r} is not a surface polygon")
         polys.append(np.asarray(block.data))
     data = _meshio_fields(m.point_data)
+    # one array per block, the blocks' cells in order: concatenated (a view for one block)
+    cell_data = _meshio_fields({k: v[0] if len(v) == 1 else np.concatenate([np.asarray(x) for x in v])
+                                for k, v in m.cell_data.items()})
     if len(polys) == 1 and polys[0].shape[1] == 3:
-        return cls(np.asarray(m.points), polys[0], data)
+        return cls(np.asarray(m.points), polys[0], data, cell_data=cell_data)
     if all(p.shape[1] == 3 for p in polys):
         cells = np.concatenate(polys) if polys else np.zeros((0, 3), np.int64)
-        return cls(np.asarray(m.points), cells, data)
+        return cls(np.asarray(m.points), cells, data, cell_data=cell_data)
     sizes = np.concatenate([np.full(len(p), p.shape[1]) for p in polys])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     flat = np.concatenate([p.reshape(-1) for p in polys])
-    return cls(np.asarray(m.points), flat, data, offsets)
+    return cls(np.asarray(m.points), flat, data, offsets, cell_data)
 
 
 # -- unstructured grids ---------------------------------------------------

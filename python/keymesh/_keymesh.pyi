@@ -28,7 +28,7 @@ class Volume:
     origin: Tuple[float, float, float]
     name: str
 
-_MeshParts = Tuple[np.ndarray, np.ndarray, Optional[np.ndarray], Dict[str, np.ndarray]]
+_MeshParts = Tuple[np.ndarray, np.ndarray, Optional[np.ndarray], Dict[str, np.ndarray], Dict[str, np.ndarray]]
 
 def contour(volume: Union[npt.ArrayLike, Volume], isovalues: List[float], spacing: Optional[Sequence[float]] = ...,
             origin: Optional[Sequence[float]] = ..., normals: str = ..., weld: str = ..., coarsen: bool = ..., curvature: bool = ...,

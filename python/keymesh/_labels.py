@@ -10,7 +10,7 @@ from typing import Any, Dict, Optional, Sequence
 import numpy as np
 
 from . import _keymesh as _ext
-from . import Mesh
+from . import Mesh, _mesh
 
 # Timings and counts of the last contour_labels() call (seconds: scan,
 # generate, weld, smooth); for benchmarks.
@@ -18,31 +18,12 @@ last_labels_info: Dict[str, Any] = {}
 
 
 class LabelMesh(Mesh):
-    """A Mesh with per-cell arrays: ``cell_data["boundary_labels"]`` (m, 2)
+    """A Mesh made by contour_labels: ``cell_data["boundary_labels"]`` (m, 2)
     and, for per-label surfaces and discrete marching cubes,
-    ``cell_data["label"]`` (m,), the region whose surface the face is."""
+    ``cell_data["label"]`` (m,), the region whose surface the face is.
+    (Every Mesh has cell_data and carries it; this class names the origin.)"""
 
-    __slots__ = ("cell_data",)
-
-    def __init__(self, points: Any, cells: Any, point_data: Optional[Dict[str, Any]] = None,
-                 offsets: Any = None, cell_data: Optional[Dict[str, Any]] = None) -> None:
-        super().__init__(points, cells, point_data, offsets)
-        self.cell_data = {} if cell_data is None else dict(cell_data)
-
-    def __repr__(self) -> str:
-        fields = ", ".join(f"{k}{tuple(np.shape(v))}" for k, v in self.cell_data.items())
-        return super().__repr__()[:-1] + f", cell_data: [{fields}])"
-
-    def to_vtk(self):
-        """A vtkPolyData with the cell arrays as cell data."""
-        from vtkmodules.util import numpy_support as ns
-
-        poly = super().to_vtk()
-        for name, values in self.cell_data.items():
-            arr = ns.numpy_to_vtk(np.ascontiguousarray(values, dtype=np.float32), deep=True)
-            arr.SetName(name)
-            poly.GetCellData().AddArray(arr)
-        return poly
+    __slots__ = ()
 
 
 def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
@@ -92,9 +73,9 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
         spacing = origin = None
     iterations = int(smoothing_iterations) if smoothing else 0
     wanted = [] if labels is None else [int(v) for v in np.asarray(labels).reshape(-1)]
-    (points, cells, offsets, point_data), cell_data, info = _ext.contour_labels(
+    parts, info = _ext.contour_labels(
         volume, spacing, origin, method, wanted, int(background), bool(per_label), iterations, float(relaxation),
         bool(coarsen), int(threads))
     last_labels_info.clear()
     last_labels_info.update(info)
-    return LabelMesh(points, cells, point_data, offsets, cell_data)
+    return _mesh(parts, LabelMesh)

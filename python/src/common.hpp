@@ -138,7 +138,13 @@ struct ArrayVolume {
 ArrayVolume view_array_volume(const py::object& volume, const py::object& spacing, const py::object& origin,
                               VolumeOrder order, const char* not_an_array);
 
-// SurfaceMesh <-> (points, cells, offsets, point_data) of a Python Mesh.
+// Fields <-> a dict of numpy arrays, (rows,) for one component, (rows, k)
+// otherwise: to_python moves the values (no copy); from_python copies them
+// as float32, ValueError (naming `what`) unless each has `rows` rows.
+py::dict fields_to_python(std::vector<Field>& fields, py::ssize_t rows);
+std::vector<Field> fields_from_python(const py::object& data, py::ssize_t rows, const char* what);
+
+// SurfaceMesh <-> (points, cells, offsets, point_data, cell_data) of a Python Mesh.
 // to_python moves every array into numpy without a copy; triangle meshes
 // give cells of shape (m, 3) and offsets None, polygon meshes a flat
 // connectivity array and offsets (m + 1).

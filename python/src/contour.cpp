@@ -64,12 +64,12 @@ struct OwnArrays {
     return {xyz.data(), connectivity.data(), with_scalars ? scalars.data() : nullptr};
   }
 
-  // (points, cells, None, point_data), as mesh_to_python gives them.
+  // (points, cells, None, point_data, cell_data), as mesh_to_python gives them.
   py::tuple to_python(const std::string& scalar_name) {
     py::dict point_data;
     if (with_scalars) point_data[py::str(scalar_name)] = adopt(std::move(scalars), {points});
     py::array p = adopt(std::move(xyz), {points, 3});
-    return py::make_tuple(p, adopt(std::move(connectivity), {triangles, 3}), py::none(), point_data);
+    return py::make_tuple(p, adopt(std::move(connectivity), {triangles, 3}), py::none(), point_data, py::dict());
   }
 };
 

@@ -6,8 +6,6 @@
 
 namespace keymesh::python {
 
-namespace {
-
 py::dict fields_to_python(std::vector<Field>& fields, py::ssize_t rows) {
   py::dict out;
   for (Field& f : fields) {
@@ -35,8 +33,6 @@ std::vector<Field> fields_from_python(const py::object& data, py::ssize_t rows, 
   }
   return out;
 }
-
-}  // namespace
 
 py::tuple grid_to_python(UnstructuredGrid&& grid) {
   const py::ssize_t n = grid.num_points();

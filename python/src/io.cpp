@@ -10,17 +10,18 @@ namespace keymesh::python {
 namespace {
 
 // Surface meshes and grids by the format table (io/formats.hpp): a surface
-// format keymesh reads; grids by io::is_grid_file (a .vtk may hold another
-// dataset type). Everything else (a folder included) is left to
+// format, read or not (io::read_mesh refuses a write-only one, .glb, as the
+// command does: "... .glb to write"); grids by io::is_grid_file (a .vtk may
+// hold another dataset type). Everything else (a folder included) is left to
 // io::read_volume, which names what the table accepts when it does not
 // know the file.
 bool is_mesh_path(const std::string& path) {
   const io::Format* format = io::format_by_name(path);
-  return format && io::function_of<io::SurfaceReader>(*format);
+  return format && format->kind == io::DataKind::Surface;
 }
 
 // Returns ("volume", Volume), ("grid", grid parts) or ("mesh", (points,
-// cells, offsets, point_data)).
+// cells, offsets, point_data, cell_data)).
 py::tuple read(const std::string& path, const py::object& dims, const py::object& dtype, const py::object& spacing,
                const py::object& origin, const std::string& endian, Id header_bytes) {
   if (io::is_grid_file(path)) {

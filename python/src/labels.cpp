@@ -44,18 +44,11 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   }
   generate::LabelStats stats;
   SurfaceMesh mesh = run_released(threads, [&] { return generate::contour_labels(*grid, opt, &stats); });
-  py::dict cell_data;
-  for (Field& f : mesh.cell_fields) {
-    const auto n = static_cast<py::ssize_t>(f.values.size() / static_cast<std::size_t>(f.components));
-    cell_data[py::str(f.name)] = f.components == 1 ? adopt(std::move(f.values), {n})
-                                                   : adopt(std::move(f.values), {n, f.components});
-  }
-  mesh.cell_fields.clear();
   py::dict info;
   generate::visit_stage_seconds(stats, into(info));
   info["distinct_labels"] = stats.distinct_labels;
   info["surfaces"] = stats.surfaces;
-  return py::make_tuple(mesh_to_python(std::move(mesh)), cell_data, info);
+  return py::make_tuple(mesh_to_python(std::move(mesh)), info);
 }
 
 }  // namespace
@@ -65,7 +58,7 @@ void register_labels(py::module_& m) {
         py::arg("origin") = py::none(), py::arg("method") = "surface_nets",
         py::arg("labels") = std::vector<std::int64_t>{}, py::arg("background") = 0, py::arg("per_label") = false,
         py::arg("smoothing_iterations") = 16, py::arg("relaxation") = 0.5, py::arg("coarsen") = false, py::arg("threads") = 0,
-        "Surfaces of a label map; returns ((points, cells, offsets, point_data), cell_data, info). "
+        "Surfaces of a label map; returns ((points, cells, offsets, point_data, cell_data), info). "
         "Use keymesh.contour_labels, which wraps this in a Mesh.");
 }
 

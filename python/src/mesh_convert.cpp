@@ -28,18 +28,14 @@ py::array_t<std::int64_t, py::array::c_style> integers(const py::handle& obj, co
 py::tuple mesh_to_python(SurfaceMesh&& mesh) {
   const py::ssize_t n = mesh.num_points();
   const py::ssize_t m = mesh.num_cells();
-  py::dict point_data;
-  for (Field& f : mesh.point_fields) {
-    std::vector<py::ssize_t> shape{n};
-    if (f.components != 1) shape.push_back(f.components);
-    point_data[py::str(f.name)] = adopt(std::move(f.values), std::move(shape));
-  }
+  py::dict point_data = fields_to_python(mesh.point_fields, n);
+  py::dict cell_data = fields_to_python(mesh.cell_fields, m);
   py::array points = adopt(std::move(mesh.points), {n, 3});
   if (mesh.all_triangles())
-    return py::make_tuple(points, adopt(std::move(mesh.connectivity), {m, 3}), py::none(), point_data);
+    return py::make_tuple(points, adopt(std::move(mesh.connectivity), {m, 3}), py::none(), point_data, cell_data);
   const auto corners = static_cast<py::ssize_t>(mesh.connectivity.size());
   return py::make_tuple(points, adopt(std::move(mesh.connectivity), {corners}),
-                        adopt(std::move(mesh.offsets), {m + 1}), point_data);
+                        adopt(std::move(mesh.offsets), {m + 1}), point_data, cell_data);
 }
 
 SurfaceMesh mesh_from_python(const py::handle& obj) {
@@ -97,6 +93,7 @@ SurfaceMesh mesh_from_python(const py::handle& obj) {
       mesh.point_fields.push_back(std::move(f));
     }
   }
+  mesh.cell_fields = fields_from_python(py::getattr(obj, "cell_data", py::none()), mesh.num_cells(), "mesh.cell_data");
   return mesh;
 }
 

@@ -21,17 +21,21 @@ void add_dual_options(CLI::App& cmd, DualCli& o) {
   cmd.description("the dual of a polygon surface: a polygon per point through the centroids of its cells");
   cmd.add_option("input", o.input, "polygon surface (" + io::extensions_of(io::DataKind::Surface, false) + ")")
       ->required();
-  cmd.add_option("-o,--output", o.output, "output polygons (" + io::polygon_extensions(true) + ")")->required();
+  cmd.add_option("-o,--output", o.output,
+                 "output surface (" + io::extensions_of(io::DataKind::Surface, true) + "; " +
+                     io::polygon_extensions(false) + " split the polygons into fans of triangles, as convert does)")
+      ->required();
   add_common_options(cmd, o.common);
 }
 
 int run_dual(const DualCli& o, CommandRun& run) {
-  // The dual's cells are polygons: a format that splits them into triangles
-  // (the table's triangles_only) would lose them.
+  // A format that holds triangles only (the table's triangles_only: .stl,
+  // .glb) gets each polygon as a fan, as convert and pipeline --dual write
+  // them; a format that is no surface mesh is refused before the work.
   const io::Format* out = io::format_by_name(o.output);
-  if (!out || out->kind != io::DataKind::Surface || !out->writable() || out->triangles_only) {
-    std::fprintf(stderr, "keymesh dual: %s: write polygons as %s (%s hold triangles only)\n", o.output.c_str(),
-                 io::polygon_extensions(true).c_str(), io::polygon_extensions(false).c_str());
+  if (!out || out->kind != io::DataKind::Surface || !out->writable()) {
+    std::fprintf(stderr, "keymesh dual: %s: write the dual as %s\n", o.output.c_str(),
+                 io::extensions_of(io::DataKind::Surface, true).c_str());
     return 2;
   }
   const SurfaceMesh m = run.stage("read", [&] { return io::read_mesh(o.input); });

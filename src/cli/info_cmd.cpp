@@ -28,6 +28,18 @@ void add_info_options(CLI::App& cmd, InfoCli& o) {
   cmd.add_option("--report", o.report_path, "write the same facts as JSON");
 }
 
+// Prints a grid's or surface's point and cell fields; their report entries.
+nlohmann::json list_fields(const std::vector<Field>& point_fields, const std::vector<Field>& cell_fields) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto* fields : {&point_fields, &cell_fields})
+    for (const auto& f : *fields) {
+      const char* where = fields == &point_fields ? "point" : "cell";
+      std::printf("  %s field %s (%d component%s)\n", where, f.name.c_str(), f.components, f.components == 1 ? "" : "s");
+      out.push_back({{"name", f.name}, {"components", f.components}, {"association", where}});
+    }
+  return out;
+}
+
 int run_info(const InfoCli& o) {
   nlohmann::json r;
   r["file"] = o.input;
@@ -55,14 +67,7 @@ int run_info(const InfoCli& o) {
       std::printf("    %s %lld\n", name.c_str(), (long long)n);
       r["cell_types"][name] = n;
     }
-    r["fields"] = nlohmann::json::array();
-    for (const auto* fields : {&g.point_fields, &g.cell_fields})
-      for (const auto& f : *fields) {
-        const char* where = fields == &g.point_fields ? "point" : "cell";
-        std::printf("  %s field %s (%d component%s)\n", where, f.name.c_str(), f.components,
-                    f.components == 1 ? "" : "s");
-        r["fields"].push_back({{"name", f.name}, {"components", f.components}, {"association", where}});
-      }
+    r["fields"] = list_fields(g.point_fields, g.cell_fields);
   } else if (is_mesh_path(o.input)) {
     const SurfaceMesh mesh = io::read_mesh(o.input);
     std::printf("%s: surface mesh\n  points %lld\n  cells %lld (%s)\n", o.input.c_str(),
@@ -71,11 +76,7 @@ int run_info(const InfoCli& o) {
     r["kind"] = "mesh";
     r["points"] = mesh.num_points();
     r["cells"] = mesh.num_cells();
-    r["fields"] = nlohmann::json::array();
-    for (const auto& f : mesh.point_fields) {
-      std::printf("  point field %s (%d component%s)\n", f.name.c_str(), f.components, f.components == 1 ? "" : "s");
-      r["fields"].push_back({{"name", f.name}, {"components", f.components}});
-    }
+    r["fields"] = list_fields(mesh.point_fields, mesh.cell_fields);
   } else {
     const ImageGrid grid = io::read_volume(o.input);
     const auto range = scalar_range(grid);

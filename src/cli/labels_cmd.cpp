@@ -105,9 +105,9 @@ int run_labels(const LabelsJob& job) {
 void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
                           nlohmann::json r, StageTimer& timer) {
   const std::string ext = std::filesystem::path(job.output).extension().string();
-  if (ext != ".vtp" && !job.common.quiet)
+  if (ext != ".vtp" && ext != ".ply" && !job.common.quiet)
     std::fprintf(stderr, "keymesh: warning: %s: %s files have no cell data; boundary_labels is not written "
-                         "(use .vtp)\n", job.output.c_str(), ext.c_str());
+                         "(use .vtp or .ply)\n", job.output.c_str(), ext.c_str());
   timer.run("write", [&] { io::write_mesh(mesh, job.output); });
   if (!job.common.quiet)
     std::fprintf(stderr, "keymesh: %lld labels, %lld points, %lld triangles -> %s\n",
@@ -144,7 +144,8 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
       ->required();
   cmd.add_option("-o,--output", o.output,
                  "output mesh (" + io::extensions_of(io::DataKind::Surface, true) +
-                     "): .vtp keeps the cell fields boundary_labels (and label), the others drop them")
+                     "): .vtp (CellData) and .ply (face properties) keep the cell fields boundary_labels (and label), "
+                     "the others drop them")
       ->required();
   cmd.add_option("--method", o.method,
                  "surfacenets (a point per cell of mixed labels, a quad per edge between two labels, every "

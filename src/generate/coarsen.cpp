@@ -79,16 +79,21 @@ Id remove_folds(SurfaceMesh& mesh) {
     }
   });
   if (std::find(folded_any.begin(), folded_any.end(), 1) == folded_any.end()) return 0;
-  // Pack the kept triangles in place, in order (each moves to a lower index).
+  // Pack the kept triangles and their cell fields' tuples in place, in
+  // order (each moves to a lower index).
   Id at = 0;
   PointIndex* W = mesh.connectivity.data();
   for (Id t = 0; t < n; ++t) {
     if (drop[t]) continue;
-    if (at != t)
+    if (at != t) {
       for (int k = 0; k < 3; ++k) W[3 * at + k] = W[3 * t + k];
+      for (Field& f : mesh.cell_fields)
+        std::copy_n(f.values.begin() + t * f.components, f.components, f.values.begin() + at * f.components);
+    }
     ++at;
   }
   mesh.connectivity.resize(static_cast<std::size_t>(3 * at));
+  for (Field& f : mesh.cell_fields) f.values.resize(static_cast<std::size_t>(at * f.components));
   return n - at;
 }
 
@@ -140,9 +145,15 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
   });
   const Id t_out = parallel::exclusive_scan(keep.data(), keep.data(), t_in + 1);
   out.connectivity.resize(static_cast<std::size_t>(3 * t_out));
+  for (const Field& f : mesh.cell_fields) out.cell_fields.push_back(Field{f.name, f.components, {}});
+  for (Field& f : out.cell_fields) f.values.resize(static_cast<std::size_t>(t_out * f.components));
   parallel::for_each(t_in, [&](Id t) {
     if (keep[t + 1] == keep[t]) return;
     for (int k = 0; k < 3; ++k) out.connectivity[3 * keep[t] + k] = map[C[3 * t + k]];
+    for (std::size_t i = 0; i < out.cell_fields.size(); ++i) {
+      const int k = out.cell_fields[i].components;
+      std::copy_n(mesh.cell_fields[i].values.begin() + t * k, k, out.cell_fields[i].values.begin() + keep[t] * k);
+    }
   });
   const Id folded = remove_folds(out);
   remove_points(out, split_nonmanifold(out).unused);

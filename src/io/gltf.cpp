@@ -11,6 +11,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
+#include "keymesh/mesh/unit_normals.hpp"
 #include "mesh_bytes.hpp"
 
 namespace keymesh::io {
@@ -83,10 +84,15 @@ const Array<PointIndex>& triangle_indices(const SurfaceMesh& mesh, Array<PointIn
 struct GlbContent {
   nlohmann::json doc;
   std::vector<BinArray> arrays;
+  Array<float> unit_normals;  // the NORMAL array when the mesh's normals were not all unit vectors
 };
 
 // The accessors, buffer views and buffer of a mesh's points, point fields
-// (1 to 4 components; Normals as NORMAL) and triangles.
+// (1 to 4 components; Normals as NORMAL) and triangles. glTF requires
+// NORMAL to hold unit vectors (the Khronos validator's
+// ACCESSOR_VECTOR3_NON_UNIT): normals that are not (zero where a contour's
+// triangles have zero area or its gradient vanishes, NaN from NaN data) are
+// written as make_unit_normals (mesh/unit_normals.hpp) defines them.
 void describe_mesh(const SurfaceMesh& mesh, const Array<PointIndex>& indices, GlbContent& glb) {
   nlohmann::json& doc = glb.doc;
   doc["nodes"] = nlohmann::json::array({{{"mesh", 0}}});
@@ -111,7 +117,12 @@ void describe_mesh(const SurfaceMesh& mesh, const Array<PointIndex>& indices, Gl
   for (const Field& f : mesh.point_fields) {
     if (f.components < 1 || f.components > 4) continue;  // glTF has no wider vector accessor
     const bool normals = f.name == "Normals" && f.components == 3;
-    attributes[normals ? std::string("NORMAL") : attribute_name(f.name)] = add_float_attribute(f.values, f.components);
+    const Array<float>* values = &f.values;
+    if (normals) {
+      glb.unit_normals = f.values;
+      if (make_unit_normals(mesh, glb.unit_normals.data()) > 0) values = &glb.unit_normals;
+    }
+    attributes[normals ? std::string("NORMAL") : attribute_name(f.name)] = add_float_attribute(*values, f.components);
   }
   const int index_view = add_array(indices.data(), indices.size() * sizeof(PointIndex), kElementArrayBuffer);
   const auto [lo, hi] = std::minmax_element(indices.begin(), indices.end());

@@ -247,18 +247,14 @@ struct VertexLayout {
   std::vector<std::pair<std::size_t, std::size_t>> field_slot;  // (field, component) of the others
 };
 
-// The fields of the scalar properties that are not x y z: nx ny nz as
-// "Normals", runs p_0, p_1, ... as one field "p" (as keymesh writes
+// The fields of the scalar properties not `used` (x y z, nx ny nz, taken
+// by the caller): runs p_0, p_1, ... as one field "p" (as keymesh writes
 // multi-component fields), every other property as a 1-component field.
-std::vector<FieldPlan> plan_vertex_fields(const Element& e, const std::size_t xyz[3],
-                                          const std::optional<std::size_t> nxyz[3]) {
-  const bool normals = nxyz[0] && nxyz[1] && nxyz[2];
+std::vector<FieldPlan> plan_fields(const Element& e, const std::vector<bool>& used) {
   std::vector<FieldPlan> plans;
-  if (normals) plans.push_back({"Normals", {*nxyz[0], *nxyz[1], *nxyz[2]}});
   for (std::size_t i = 0; i < e.props.size();) {
     const auto& p = e.props[i];
-    if (p.is_list || i == xyz[0] || i == xyz[1] || i == xyz[2] ||
-        (normals && (i == *nxyz[0] || i == *nxyz[1] || i == *nxyz[2]))) {
+    if (p.is_list || used[i]) {
       ++i;
       continue;
     }
@@ -283,6 +279,39 @@ std::vector<FieldPlan> plan_vertex_fields(const Element& e, const std::size_t xy
   return plans;
 }
 
+// The vertex fields: nx ny nz as "Normals", then plan_fields of the others.
+std::vector<FieldPlan> plan_vertex_fields(const Element& e, const std::size_t xyz[3],
+                                          const std::optional<std::size_t> nxyz[3]) {
+  const bool normals = nxyz[0] && nxyz[1] && nxyz[2];
+  std::vector<bool> used(e.props.size(), false);
+  for (int a = 0; a < 3; ++a) used[xyz[a]] = true;
+  std::vector<FieldPlan> plans;
+  if (normals) {
+    plans.push_back({"Normals", {*nxyz[0], *nxyz[1], *nxyz[2]}});
+    for (int a = 0; a < 3; ++a) used[*nxyz[a]] = true;
+  }
+  for (FieldPlan& plan : plan_fields(e, used)) plans.push_back(std::move(plan));
+  return plans;
+}
+
+// Where each planned property's value goes: (field, component), or
+// (SIZE_MAX, 0) for none; the fields made with their names and components.
+std::vector<std::pair<std::size_t, std::size_t>> field_slots(const Element& e, const std::vector<FieldPlan>& plans) {
+  std::vector<std::pair<std::size_t, std::size_t>> slot(e.props.size(), {SIZE_MAX, 0});
+  for (std::size_t f = 0; f < plans.size(); ++f)
+    for (std::size_t k = 0; k < plans[f].props.size(); ++k) slot[plans[f].props[k]] = {f, k};
+  return slot;
+}
+
+void make_fields(const std::vector<FieldPlan>& plans, std::uint64_t tuples, std::vector<Field>& fields) {
+  fields.resize(plans.size());
+  for (std::size_t f = 0; f < plans.size(); ++f) {
+    fields[f].name = plans[f].name;
+    fields[f].components = static_cast<int>(plans[f].props.size());
+    fields[f].values.resize(tuples * plans[f].props.size());
+  }
+}
+
 VertexLayout plan_vertex(const Element& e, const std::string& path) {
   std::optional<std::size_t> found[6];  // x y z nx ny nz
   static const char* const kNames[6] = {"x", "y", "z", "nx", "ny", "nz"};
@@ -297,9 +326,7 @@ VertexLayout plan_vertex(const Element& e, const std::string& path) {
   layout.fields = plan_vertex_fields(e, xyz, found + 3);
   layout.coordinate.assign(e.props.size(), -1);
   for (int a = 0; a < 3; ++a) layout.coordinate[xyz[a]] = a;
-  layout.field_slot.assign(e.props.size(), {SIZE_MAX, 0});
-  for (std::size_t f = 0; f < layout.fields.size(); ++f)
-    for (std::size_t k = 0; k < layout.fields[f].props.size(); ++k) layout.field_slot[layout.fields[f].props[k]] = {f, k};
+  layout.field_slot = field_slots(e, layout.fields);
   return layout;
 }
 
@@ -377,12 +404,7 @@ void read_vertices(const Element& e, ValueReader& in, SurfaceMesh& mesh, const s
   const VertexLayout layout = plan_vertex(e, path);
   const std::string what = "element '" + e.name + "'";
   mesh.points.resize(3 * e.count);
-  mesh.point_fields.resize(layout.fields.size());
-  for (std::size_t f = 0; f < layout.fields.size(); ++f) {
-    mesh.point_fields[f].name = layout.fields[f].name;
-    mesh.point_fields[f].components = static_cast<int>(layout.fields[f].props.size());
-    mesh.point_fields[f].values.resize(e.count * layout.fields[f].props.size());
-  }
+  make_fields(layout.fields, e.count, mesh.point_fields);
   for (std::uint64_t r = read_binary_vertices(e, layout, in, mesh); r < e.count; ++r) {
     for (std::size_t i = 0; i < e.props.size(); ++i) {
       const auto& p = e.props[i];
@@ -457,16 +479,29 @@ std::uint64_t read_binary_triangles(const Element& e, std::size_t list, std::uin
 // A binary face element whose only list is the vertex indices, face by face
 // in place, for as long as each face is whole in the body, has at least
 // three ids, all in range: no value is read twice and no call is made per
-// value. From face `first` on; returns the first face it did not read, from
+// value; the other properties' values go to the cell fields by `slot`.
+// From face `first` on; returns the first face it did not read, from
 // which the value-by-value path reads (and names what is wrong).
 std::uint64_t read_binary_faces(const Element& e, std::size_t list, std::uint64_t num_points, ValueReader& in,
-                                SurfaceMesh& mesh, std::uint64_t first) {
+                                SurfaceMesh& mesh, std::uint64_t first,
+                                const std::vector<std::pair<std::size_t, std::size_t>>& slot) {
   if (!in.binary() || first == e.count) return first;
+  struct Value {
+    std::size_t offset;  // from the record's start (before the list) or the ids' end (after it)
+    bool after;
+    ScalarType type;
+    Field* field;
+    std::size_t component;
+  };
+  std::vector<Value> values;
   std::size_t before = 0, after = 0;  // the other properties' bytes
   for (std::size_t i = 0; i < e.props.size(); ++i) {
     if (i == list) continue;
     if (e.props[i].is_list) return first;
-    (i < list ? before : after) += scalar_size(e.props[i].type);
+    std::size_t& at = i < list ? before : after;
+    if (slot[i].first != SIZE_MAX)
+      values.push_back({at, i > list, e.props[i].type, &mesh.cell_fields[slot[i].first], slot[i].second});
+    at += scalar_size(e.props[i].type);
   }
   const Property& p = e.props[list];
   const std::size_t count_bytes = scalar_size(p.count_type), id_bytes = scalar_size(p.type);
@@ -506,6 +541,11 @@ std::uint64_t read_binary_faces(const Element& e, std::size_t list, std::uint64_
       id_at(ids + k * id_bytes, id);
       mesh.connectivity.push_back(static_cast<PointIndex>(id));
     }
+    for (const Value& v : values) {
+      const char* at = (v.after ? ids + static_cast<std::size_t>(n) * id_bytes : face) + v.offset;
+      v.field->values[r * static_cast<std::uint64_t>(v.field->components) + v.component] =
+          static_cast<float>(load_as_double(at, v.type, big));
+    }
     mesh.offsets.push_back(mesh.connectivity.size());
     face += record;
   }
@@ -521,14 +561,27 @@ void read_faces(const Element& e, std::uint64_t num_points, ValueReader& in, Sur
   if (!plist) throw InputError(path + ": PLY face element has no vertex_indices list");
   if (scalar_is_float(e.props[*plist].type)) throw InputError(path + ": PLY vertex_indices must be integers");
   const std::string what = "element '" + e.name + "'";
+  // The face's scalar properties are cell fields (keymesh writes a cell
+  // field's components as name_0, name_1, ...); other lists are skipped.
+  std::vector<bool> used(e.props.size(), false);
+  used[*plist] = true;
+  const std::vector<FieldPlan> plans = plan_fields(e, used);
+  const auto slot = field_slots(e, plans);
+  make_fields(plans, e.count, mesh.cell_fields);
   mesh.offsets.reserve(e.count + 1);
   mesh.offsets.push_back(0);
   mesh.connectivity.reserve(3 * e.count);
   const std::uint64_t triangles = read_binary_triangles(e, *plist, num_points, in, mesh);
-  for (std::uint64_t r = read_binary_faces(e, *plist, num_points, in, mesh, triangles); r < e.count; ++r)
+  for (std::uint64_t r = read_binary_faces(e, *plist, num_points, in, mesh, triangles, slot); r < e.count; ++r)
     for (std::size_t i = 0; i < e.props.size(); ++i) {
-      if (i == *plist) read_face(e.props[i], r, num_points, in, mesh, what, path);
-      else in.skip(e.props[i], what);
+      if (i == *plist) {
+        read_face(e.props[i], r, num_points, in, mesh, what, path);
+      } else if (const auto [f, k] = slot[i]; f != SIZE_MAX) {
+        Field& fd = mesh.cell_fields[f];
+        fd.values[r * static_cast<std::uint64_t>(fd.components) + k] = static_cast<float>(in.read_double(e.props[i].type, what));
+      } else {
+        in.skip(e.props[i], what);
+      }
     }
 }
 
@@ -585,19 +638,19 @@ std::vector<std::string> property_names(const std::string& base, int components)
   return names;
 }
 
-// The "property float" lines of the vertex element: x y z, then every point
-// field's components. Every vertex property once: a field whose PLY name is
-// taken (a field named x, nx, or one named like another's component) is
-// written as field_<name> (field_<name>_2, ... while that is taken too).
-std::string vertex_properties(const SurfaceMesh& mesh) {
-  std::set<std::string> taken{"x", "y", "z"};
-  const bool normals = std::any_of(mesh.point_fields.begin(), mesh.point_fields.end(),
+// The "property float" lines of `fields`' components, each property once:
+// a field whose PLY name is `taken` (x, nx, vertex_indices, or one named like
+// another's component) is written as field_<name> (field_<name>_2, ...
+// while that is taken too). With `normals`, the first 3-component field
+// "Normals" is nx ny nz.
+std::string field_properties(const std::vector<Field>& fields, std::set<std::string> taken, bool normals) {
+  normals = normals && std::any_of(fields.begin(), fields.end(),
                                    [](const Field& f) { return f.name == "Normals" && f.components == 3; });
   if (normals) taken.insert({"nx", "ny", "nz"});
-  std::string lines = "property float x\nproperty float y\nproperty float z\n";
+  std::string lines;
   bool normals_written = false;
-  for (const Field& f : mesh.point_fields) {
-    if (f.name == "Normals" && f.components == 3 && !normals_written) {
+  for (const Field& f : fields) {
+    if (normals && f.name == "Normals" && f.components == 3 && !normals_written) {
       lines += "property float nx\nproperty float ny\nproperty float nz\n";
       normals_written = true;
       continue;
@@ -624,6 +677,12 @@ std::string vertex_properties(const SurfaceMesh& mesh) {
     }
   }
   return lines;
+}
+
+// The vertex element's properties: x y z, then every point field's components.
+std::string vertex_properties(const SurfaceMesh& mesh) {
+  return "property float x\nproperty float y\nproperty float z\n" +
+         field_properties(mesh.point_fields, {"x", "y", "z"}, true);
 }
 
 }  // namespace
@@ -668,25 +727,36 @@ bool write_ply_records(const SurfaceMesh& mesh, bool wide_count, AtomicFile& fil
       put(f.values.data() + i * f.components, 4 * static_cast<std::size_t>(f.components));
   });
   static_assert(sizeof(PointIndex) == 4, "ids are written as uint");
-  if (mesh.offsets.empty() && !wide_count) {
-    by_blocks(cells, 13, [&](Id c) {
+  // Each face's cell field values follow its ids (the face properties).
+  std::size_t cell_bytes = 0;
+  for (const Field& f : mesh.cell_fields) cell_bytes += 4 * static_cast<std::size_t>(f.components);
+  auto put_cell_fields = [&](Id c) {
+    for (const Field& f : mesh.cell_fields)
+      put(f.values.data() + c * f.components, 4 * static_cast<std::size_t>(f.components));
+  };
+  if (mesh.offsets.empty() && !wide_count && cell_bytes <= kBlock / 16) {
+    by_blocks(cells, 13 + cell_bytes, [&](Id c) {
       *at++ = 3;
       put(mesh.connectivity.data() + 3 * c, 12);
+      put_cell_fields(c);
     });
   } else {
     for (Id c = 0; c < cells; ++c) {
       const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
       const std::size_t ids = 4 * static_cast<std::size_t>(e - b), count = wide_count ? 4 : 1;
       const auto size = static_cast<std::uint32_t>(e - b);  // its low byte when not wide
-      if (count + ids > kBlock) {  // one huge polygon: its own writes
+      if (count + ids + cell_bytes > kBlock) {  // one huge record: its own writes
         room(kBlock);
         file.write(&size, count);
         file.write(mesh.connectivity.data() + b, ids);
+        for (const Field& f : mesh.cell_fields)
+          file.write(f.values.data() + c * f.components, 4 * static_cast<std::size_t>(f.components));
         continue;
       }
-      room(count + ids);
+      room(count + ids + cell_bytes);
       put(&size, count);
       put(mesh.connectivity.data() + b, ids);
+      put_cell_fields(c);
     }
   }
   file.write(block.get(), static_cast<std::size_t>(at - block.get()));
@@ -708,6 +778,7 @@ void write_ply(const SurfaceMesh& mesh, const std::string& path) {
   header += vertex_properties(mesh);
   header += "element face " + std::to_string(cells) + "\n";
   header += wide_count ? "property list uint uint vertex_indices\n" : "property list uchar uint vertex_indices\n";
+  header += field_properties(mesh.cell_fields, {"vertex_indices"}, false);
   header += "end_header\n";
 
   AtomicFile file(path);
@@ -732,6 +803,8 @@ void write_ply(const SurfaceMesh& mesh, const std::string& path) {
     if (wide_count) append_le(buf, static_cast<std::uint32_t>(e - b));
     else append_le(buf, static_cast<std::uint8_t>(e - b));
     for (std::uint64_t k = b; k < e; ++k) append_le(buf, static_cast<std::uint32_t>(mesh.connectivity[k]));
+    for (const Field& f : mesh.cell_fields)
+      for (int k = 0; k < f.components; ++k) append_le(buf, f.values[c * f.components + k]);
     if (buf.size() >= kFlush) {
       file.write(buf);
       buf.clear();

@@ -107,29 +107,31 @@ void adopt_marked_normals(const XmlNode& point_data, std::vector<Field>& fields)
     if (!taken && f.name == *marked && f.components == 3) f.name = "Normals";
 }
 
-// A piece's point data: every numeric array with one tuple per point becomes
-// a float field; with `global_ids`, the array marked GlobalIds is appended
-// there instead (has_ids says the piece had one).
-struct PiecePointData {
+// A piece's point or cell data (`section`, `what` its tag): every numeric
+// array with one tuple per point (cell) becomes a float field; with
+// `global_ids`, the array marked GlobalIds is appended there instead
+// (has_ids says the piece had one).
+struct PieceData {
   std::vector<Field> fields;
   bool has_ids = false;
 };
-PiecePointData read_point_data(const XmlNode& piece, std::int64_t npts, const Context& ctx,
-                               std::vector<std::int64_t>* global_ids) {
-  PiecePointData out;
-  const XmlNode* pd = piece.child("PointData");
-  if (!pd || npts <= 0) return out;
-  const std::string* ids_name = pd->attr("GlobalIds");
-  for (const auto& c : pd->children) {
+PieceData read_data(const XmlNode* section, std::int64_t tuples, const Context& ctx, const std::string& what,
+                    std::vector<std::int64_t>* global_ids) {
+  PieceData out;
+  if (!section || tuples <= 0) return out;
+  const std::string* ids_name = section->attr("GlobalIds");
+  for (const auto& c : section->children) {
     if (c->name != "DataArray") continue;
     const std::string* t = c->attr("type");
     if (!t || !vtk_scalar(*t)) continue;  // strings and bit arrays are not fields
     const std::string* name = c->attr("Name");
-    Array a = decode_array(*c, ctx, "PointData array", -1);
-    if (a.count() != static_cast<std::uint64_t>(npts) * a.components)
-      throw InputError(ctx.path + ": PointData array '" + (name ? *name : std::string()) + "' holds " +
-                       std::to_string(a.count()) + " values for " + std::to_string(npts) + " points x " +
-                       std::to_string(a.components) + " components");
+    Array a = decode_array(*c, ctx, what + " array", -1);
+    if (a.count() % static_cast<std::uint64_t>(a.components) != 0 ||
+        a.count() / static_cast<std::uint64_t>(a.components) != static_cast<std::uint64_t>(tuples))
+      throw InputError(ctx.path + ": " + what + " array '" + (name ? *name : std::string()) + "' holds " +
+                       std::to_string(a.count()) + " values for " + std::to_string(tuples) +
+                       (what == "PointData" ? " points x " : " cells x ") + std::to_string(a.components) +
+                       " components");
     if (global_ids && ids_name && name && *name == *ids_name && a.components == 1) {
       append_global_ids(a, *name, ctx.path, *global_ids);
       out.has_ids = true;
@@ -139,24 +141,41 @@ PiecePointData read_point_data(const XmlNode& piece, std::int64_t npts, const Co
     for (std::size_t i = 0; i < a.count(); ++i) f.values[i] = static_cast<float>(a.as_double(i));
     out.fields.push_back(std::move(f));
   }
-  adopt_marked_normals(*pd, out.fields);
+  adopt_marked_normals(*section, out.fields);
   return out;
 }
 
-// Fields present in every piece survive; a piece without points adds nothing.
-void merge_piece_fields(SurfaceMesh& mesh, std::vector<Field>& fields, bool first_piece, std::int64_t npts) {
+// The cell data of the polygons and strip triangles a piece appended:
+// tuple source[c] of each field for appended cell c (VTK numbers a
+// piece's cells verts, lines, polys, strips; a strip's tuple goes to each
+// of its triangles).
+std::vector<Field> cell_fields_of(std::vector<Field>&& all, const std::vector<std::uint64_t>& source) {
+  bool identity = true;
+  for (std::size_t c = 0; c < source.size() && identity; ++c) identity = source[c] == c;
+  for (Field& f : all) {
+    if (identity && f.values.size() == source.size() * static_cast<std::size_t>(f.components)) continue;
+    const auto k = static_cast<std::size_t>(f.components);
+    keymesh::Array<float> v(source.size() * k);
+    for (std::size_t c = 0; c < source.size(); ++c) std::copy_n(f.values.begin() + source[c] * k, k, v.begin() + c * k);
+    f.values = std::move(v);
+  }
+  return std::move(all);
+}
+
+// Fields present in every piece survive; a piece without tuples adds nothing.
+void merge_piece_fields(std::vector<Field>& kept, std::vector<Field>& fields, bool first_piece, std::int64_t tuples) {
   if (first_piece) {
-    mesh.point_fields = std::move(fields);
-  } else if (npts > 0) {
-    std::vector<Field> kept;
-    for (Field& f : mesh.point_fields)
+    kept = std::move(fields);
+  } else if (tuples > 0) {
+    std::vector<Field> out;
+    for (Field& f : kept)
       for (Field& g : fields)
         if (g.name == f.name && g.components == f.components) {
           f.values.insert(f.values.end(), g.values.begin(), g.values.end());
-          kept.push_back(std::move(f));
+          out.push_back(std::move(f));
           break;
         }
-    mesh.point_fields = std::move(kept);
+    kept = std::move(out);
   }
 }
 
@@ -175,7 +194,8 @@ struct PieceIds {
   }
 };
 
-void append_polys(const CellArrays& polys, const PieceIds& id, SurfaceMesh& mesh) {
+void append_polys(const CellArrays& polys, const PieceIds& id, std::uint64_t first_tuple, SurfaceMesh& mesh,
+                  std::vector<std::uint64_t>& source) {
   std::uint64_t begin = 0;
   for (std::size_t c = 0; c < polys.ends.size(); ++c) {
     const std::uint64_t end = polys.ends[c];
@@ -184,12 +204,14 @@ void append_polys(const CellArrays& polys, const PieceIds& id, SurfaceMesh& mesh
                        " points (at least 3 needed)");
     for (std::uint64_t k = begin; k < end; ++k) mesh.connectivity.push_back(id(polys.connectivity, k, "Polys"));
     mesh.offsets.push_back(mesh.connectivity.size());
+    source.push_back(first_tuple + c);
     begin = end;
   }
 }
 
 // Strip triangle j is (j, j+1, j+2), every other one flipped to keep orientation.
-void append_strips(const CellArrays& strips, const PieceIds& id, SurfaceMesh& mesh) {
+void append_strips(const CellArrays& strips, const PieceIds& id, std::uint64_t first_tuple, SurfaceMesh& mesh,
+                   std::vector<std::uint64_t>& source) {
   std::uint64_t begin = 0;
   for (std::size_t c = 0; c < strips.ends.size(); ++c) {
     const std::uint64_t end = strips.ends[c];
@@ -202,6 +224,7 @@ void append_strips(const CellArrays& strips, const PieceIds& id, SurfaceMesh& me
       mesh.connectivity.push_back(odd ? a : b);
       mesh.connectivity.push_back(d);
       mesh.offsets.push_back(mesh.connectivity.size());
+      source.push_back(first_tuple + c);
     }
     begin = end;
   }
@@ -219,21 +242,35 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vecto
 
   SurfaceMesh mesh;
   mesh.offsets.push_back(0);
-  bool first_piece = true;
+  bool first_piece = true, cells_started = false;
   for (const auto& piece_ptr : poly->children) {
     if (piece_ptr->name != "Piece") continue;
     const XmlNode& piece = *piece_ptr;
     const std::int64_t npts = count_attr(piece, "NumberOfPoints", path);
+    const std::int64_t nverts = count_attr(piece, "NumberOfVerts", path);
+    const std::int64_t nlines = count_attr(piece, "NumberOfLines", path);
     const std::int64_t npolys = count_attr(piece, "NumberOfPolys", path);
     const std::int64_t nstrips = count_attr(piece, "NumberOfStrips", path);
     const PieceIds id{path, mesh.points.size() / 3, npts};
     read_points(piece, npts, ctx, mesh);
-    PiecePointData point_data = read_point_data(piece, npts, ctx, global_ids);
+    PieceData point_data = read_data(piece.child("PointData"), npts, ctx, "PointData", global_ids);
     if (npts > 0) every_piece_has_ids = every_piece_has_ids && point_data.has_ids;
-    merge_piece_fields(mesh, point_data.fields, first_piece, npts);
+    merge_piece_fields(mesh.point_fields, point_data.fields, first_piece, npts);
     first_piece = false;
-    if (auto polys = read_cells(piece, "Polys", npolys, ctx)) append_polys(*polys, id, mesh);
-    if (auto strips = read_cells(piece, "Strips", nstrips, ctx)) append_strips(*strips, id, mesh);
+    // Cell data: one tuple per cell of every kind (verts and lines too,
+    // whose cells keymesh does not keep), checked before the cells.
+    const std::uint64_t first_poly = static_cast<std::uint64_t>(nverts) + static_cast<std::uint64_t>(nlines);
+    const std::uint64_t all_cells = first_poly + static_cast<std::uint64_t>(npolys) + static_cast<std::uint64_t>(nstrips);
+    PieceData cell_data = read_data(piece.child("CellData"), static_cast<std::int64_t>(all_cells), ctx, "CellData", nullptr);
+    std::vector<std::uint64_t> source;
+    if (auto polys = read_cells(piece, "Polys", npolys, ctx)) append_polys(*polys, id, first_poly, mesh, source);
+    if (auto strips = read_cells(piece, "Strips", nstrips, ctx))
+      append_strips(*strips, id, first_poly + static_cast<std::uint64_t>(npolys), mesh, source);
+    if (!source.empty()) {
+      std::vector<Field> cells = cell_fields_of(std::move(cell_data.fields), source);
+      merge_piece_fields(mesh.cell_fields, cells, !cells_started, static_cast<std::int64_t>(source.size()));
+      cells_started = true;
+    }
   }
   if (mesh.offsets.size() == 1) mesh.offsets.clear();
   compact_offsets(mesh);
@@ -275,23 +312,26 @@ Pieces read_pieces(const std::string& path) {
   return pieces;
 }
 
-const Field* field_of(const SurfaceMesh& m, const Field& like) {
-  for (const Field& g : m.point_fields)
+const Field* field_of(const std::vector<Field>& fields, const Field& like) {
+  for (const Field& g : fields)
     if (g.name == like.name && g.components == like.components) return &g;
   return nullptr;
 }
+const Field* field_of(const SurfaceMesh& m, const Field& like) { return field_of(m.point_fields, like); }
 
-// Fields every piece with points has (name and components), in the first's
-// order, without values.
-std::vector<Field> common_fields(const std::vector<SurfaceMesh>& pieces) {
+// Fields every piece with tuples has (name and components), in the first's
+// order, without values: `of` picks the point or the cell fields, `count`
+// the piece's points or cells.
+std::vector<Field> common_fields(const std::vector<SurfaceMesh>& pieces, std::vector<Field> SurfaceMesh::*of,
+                                 Id (SurfaceMesh::*count)() const) {
   std::vector<Field> fields;
-  const auto has_points = [](const SurfaceMesh& m) { return m.num_points() > 0; };
-  const auto first = std::find_if(pieces.begin(), pieces.end(), has_points);
+  const auto has_tuples = [&](const SurfaceMesh& m) { return (m.*count)() > 0; };
+  const auto first = std::find_if(pieces.begin(), pieces.end(), has_tuples);
   if (first == pieces.end()) return fields;
-  for (const Field& f : first->point_fields) {
+  for (const Field& f : (*first).*of) {
     bool everywhere = true;
     for (const SurfaceMesh& m : pieces)
-      if (m.num_points() > 0) everywhere = everywhere && field_of(m, f);
+      if (has_tuples(m)) everywhere = everywhere && field_of(m.*of, f);
     if (everywhere) fields.push_back(Field{f.name, f.components, {}});
   }
   return fields;
@@ -370,7 +410,7 @@ SurfaceMesh read_pvtp(const std::string& path) {
     if (pieces.meshes[i].num_points() > 0 && pieces.ids[i].empty()) welded = false;
     for (std::int64_t v : pieces.ids[i]) max_id = std::max(max_id, v);
   }
-  std::vector<Field> fields = common_fields(pieces.meshes);
+  std::vector<Field> fields = common_fields(pieces.meshes, &SurfaceMesh::point_fields, &SurfaceMesh::num_points);
   bool polygons = false;
   for (const SurfaceMesh& m : pieces.meshes) polygons = polygons || !m.all_triangles();
   SurfaceMesh out;
@@ -378,6 +418,12 @@ SurfaceMesh read_pvtp(const std::string& path) {
   if (welded && max_id >= 0) weld_by_global_ids(path, pieces, max_id, polygons, fields, out);
   else concatenate(path, pieces, polygons, fields, out);
   out.point_fields = std::move(fields);
+  // Cells are appended piece after piece, either way: so are their fields.
+  out.cell_fields = common_fields(pieces.meshes, &SurfaceMesh::cell_fields, &SurfaceMesh::num_cells);
+  for (Field& f : out.cell_fields)
+    for (const SurfaceMesh& m : pieces.meshes)
+      if (const Field* src = field_of(m.cell_fields, f); src && m.num_cells() > 0)
+        f.values.insert(f.values.end(), src->values.begin(), src->values.end());
   return out;
 }
 
@@ -387,6 +433,12 @@ namespace {
 // Normals, the global ids of a piece as GlobalIds.
 std::string point_data_attributes(const SurfaceMesh& mesh, bool global_point_ids) {
   return vtk_xml::field_attributes(mesh.point_fields) + (global_point_ids ? " GlobalIds=\"GlobalPointIds\"" : "");
+}
+
+// A field's <PDataArray> line in a .pvtp index.
+std::string declared_array(const Field& f) {
+  return "      <PDataArray type=\"Float32\" Name=\"" + xml_escape(f.name) + "\" NumberOfComponents=\"" +
+         std::to_string(f.components) + "\"/>\n";
 }
 
 }  // namespace
@@ -432,11 +484,14 @@ void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vec
   std::string x = vtk_xml::file_header("PPolyData");
   x += "  <PPolyData GhostLevel=\"0\">\n";
   x += "    <PPointData" + point_data_attributes(like, global_point_ids) + ">\n";
-  for (const Field& f : like.point_fields)
-    x += "      <PDataArray type=\"Float32\" Name=\"" + xml_escape(f.name) + "\" NumberOfComponents=\"" +
-         std::to_string(f.components) + "\"/>\n";
+  for (const Field& f : like.point_fields) x += declared_array(f);
   if (global_point_ids) x += "      <PDataArray type=\"Int64\" Name=\"GlobalPointIds\"/>\n";
   x += "    </PPointData>\n";
+  if (!like.cell_fields.empty()) {
+    x += "    <PCellData>\n";
+    for (const Field& f : like.cell_fields) x += declared_array(f);
+    x += "    </PCellData>\n";
+  }
   x += "    <PPoints>\n      <PDataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
   for (const std::string& p : pieces) x += "    <Piece Source=\"" + xml_escape(p) + "\"/>\n";
   x += "  </PPolyData>\n</VTKFile>\n";

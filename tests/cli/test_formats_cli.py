@@ -12,7 +12,7 @@ import struct
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, report, run, tempdir  # noqa: E402
+from kmtest import accessor, check, finish, parse_glb, report, run, tempdir  # noqa: E402
 from dicom_series import write_dicom_series  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -386,32 +386,6 @@ def vti_and_nii_gz_streamed():
 
 
 # ------------------------------------------------------------------ .glb ----
-
-def parse_glb(path):
-    """The glTF 2.0 binary container by its specification: 12-byte header,
-    a JSON chunk and a BIN chunk, each 4-byte aligned."""
-    data = open(path, "rb").read()
-    magic, version, length = struct.unpack_from("<III", data, 0)
-    assert magic == 0x46546C67 and version == 2 and length == len(data) and length % 4 == 0
-    jlen, jtype = struct.unpack_from("<II", data, 12)
-    assert jtype == 0x4E4F534A and jlen % 4 == 0
-    doc = json.loads(data[20:20 + jlen])
-    blen, btype = struct.unpack_from("<II", data, 20 + jlen)
-    assert btype == 0x004E4942 and blen % 4 == 0 and 28 + jlen + blen == length
-    assert doc["buffers"][0]["byteLength"] <= blen
-    return doc, data[28 + jlen:28 + jlen + blen]
-
-
-def accessor(doc, binary, index):
-    a = doc["accessors"][index]
-    v = doc["bufferViews"][a["bufferView"]]
-    assert v["byteOffset"] % 4 == 0 and "byteStride" not in v
-    dtype = {5126: "<f4", 5125: "<u4"}[a["componentType"]]
-    width = {"SCALAR": 1, "VEC3": 3}[a["type"]]
-    values = np.frombuffer(binary, dtype, a["count"] * width, v["byteOffset"]).reshape(-1, width)
-    assert values.nbytes == v["byteLength"]
-    return a, values
-
 
 def glb_from_contour_and_convert():
     """The .glb of a contour holds the .ply's points, normals and triangles

@@ -36,9 +36,16 @@ def dual_counts():
     mesh_mib = (os.path.getsize(src) + os.path.getsize(out)) / 2 ** 20
     assert r["peak_rss_mib"] > 0.5 * mesh_mib, (r["peak_rss_mib"], mesh_mib)
     run("check", out, "--expect-closed", "-q")
-    for triangles_only in ("d.stl", "d.glb"):  # formats that would split the polygons into triangles
-        p = run("dual", src, "-o", os.path.join(D, triangles_only), expect=2)
-        assert "write polygons as" in p.stderr and not os.path.exists(os.path.join(D, triangles_only))
+    # Formats of triangles only get each polygon as a fan, as convert writes them (issue 33).
+    polygons = os.path.join(D, "d.ply")
+    run("dual", src, "-o", polygons, "-q")
+    for triangles_only in ("d.stl", "d.glb"):
+        fanned, converted = os.path.join(D, triangles_only), os.path.join(D, "conv_" + triangles_only)
+        run("dual", src, "-o", fanned, "-q")
+        run("convert", polygons, "-o", converted, "-q")
+        assert open(fanned, "rb").read() == open(converted, "rb").read(), triangles_only
+    p = run("dual", src, "-o", os.path.join(D, "d.vtu"), expect=2)
+    assert "write the dual as" in p.stderr and not os.path.exists(os.path.join(D, "d.vtu"))
 
 
 def pipeline_chain():
@@ -62,7 +69,7 @@ def curvature_on_tets_refused():
 
 
 check("contour --coarsen: report keys, fewer triangles, better quality", coarsen_report)
-check("dual: F* = V, V* = F, closed; .stl and .glb refused", dual_counts)
+check("dual: F* = V, V* = F, closed; .stl and .glb as fans, equal to convert's", dual_counts)
 check("pipeline: coarsen, curvature, Bezier subdivision and dual in one run", pipeline_chain)
 check("--curvature on a tet grid is a usage error", curvature_on_tets_refused)
 finish()

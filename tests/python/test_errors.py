@@ -106,3 +106,8 @@ def test_read_errors(tmp_path):
         keymesh.read(bad)
     with pytest.raises(ValueError, match="dims"):
         keymesh.read(tmp_path / "v.raw", dtype="float32")
+    # .glb is written, not read: said as the command says it, not "not a volume" (issue 33)
+    glb = tmp_path / "m.glb"
+    keymesh.write(keymesh.Mesh(np.eye(3, dtype=np.float32), np.array([[0, 1, 2]])), glb)
+    with pytest.raises(keymesh.Error, match=r"unknown mesh file extension '\.glb' .*\.glb to write"):
+        keymesh.read(glb)

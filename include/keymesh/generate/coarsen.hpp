@@ -7,8 +7,9 @@
 // dropped. Folds are removed too (remove_folds): two triangles on the same
 // three points facing opposite ways cancel. Then non-manifold points are
 // split (split_nonmanifold.hpp) and points left without a triangle removed
-// (mesh/unused_points.hpp). Deterministic: each group averages its points in
-// increasing index.
+// (mesh/unused_points.hpp). Cell fields (a label surface's boundary_labels)
+// follow their triangles: a kept triangle keeps its tuple. Deterministic:
+// each group averages its points in increasing index.
 #include <cstdint>
 #include <vector>
 
@@ -24,7 +25,8 @@ struct CoarsenStats {
 };
 
 // Removes triangles over the same three points: pairs facing opposite ways
-// cancel, repeats facing one way are kept once. Returns the number removed.
+// cancel, repeats facing one way are kept once (the kept one's cell field
+// tuples with it). Returns the number removed.
 Id remove_folds(SurfaceMesh& mesh);
 // (The structured contour applies the same rule in its own triangle pass,
 // src/generate/coarse_folds.hpp, without comparing triangles.)
