@@ -312,7 +312,9 @@ def read(path: Any, dims: Optional[Sequence[int]] = None, dtype: Any = None,
     Volumes (.vti, .nrrd, .nhdr, .nii, .nii.gz, .den, a DICOM or Zarr folder; .raw with dims=(nx,
     ny, nz) and dtype, optionally spacing, origin, endian, header_bytes)
     give a keymesh.Volume: ``.array`` is a (nx, ny, nz) view of the samples
-    (axis 0 = x, no copy), with ``.spacing`` and ``.origin``.
+    (axis 0 = x, no copy), with ``.spacing``, ``.origin`` and ``.name``
+    (the scalar field's name: a .vti's array name, else "scalars", as the
+    keymesh command names it on every path).
     Surface meshes (.vtp, .ply, .obj, .stl) give a Mesh (with the cell fields
     of a .vtp or the face properties of a .ply as cell_data); unstructured
     grids (.vtu, legacy .vtk) a Grid. .glb is written, not read.

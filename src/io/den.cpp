@@ -36,7 +36,7 @@ ImageGrid read_den(const std::string& path) {
                      std::to_string(62 + static_cast<std::uint64_t>(length)));
   ImageGrid grid;
   detail::allocate_checked(grid, dims, ScalarType::UInt8, path);
-  grid.name = "density";
+  grid.name = volume_field_name();  // the format stores no name
   detail::read_exact(path, 62, grid.data(), grid.bytes.size(), "the samples");
   return grid;
 }

@@ -353,7 +353,7 @@ class DicomPlanes : public PlaneSource {
     head_.spacing = {pixel[1], pixel[0], step};
     head_.origin = slices_.front().position;
     head_.type = scaled_ ? detail::scaled_type(stored_) : stored_;
-    head_.name = "scalars";
+    head_.name = volume_field_name();
     detail::checked_byte_count(head_.dims, head_.type, folder);
   }
 

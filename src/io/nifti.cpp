@@ -188,7 +188,7 @@ std::optional<ImageGrid> read_clean_gzip(const std::string& path) {
   if (!samples) return std::nullopt;
   ImageGrid grid;
   grid.spacing = layout.raw.spacing;
-  grid.name = "scalars";
+  grid.name = layout.name;
   detail::adopt_samples(grid, layout.raw.dims, layout.raw.type, std::move(*samples));
   return finish_samples(std::move(grid), layout);
 }
@@ -221,7 +221,7 @@ ImageGrid read_nifti(const std::string& path) {
   in.read(h, sizeof h, "header");
   ImageGrid grid;
   grid.spacing = layout.raw.spacing;
-  grid.name = "scalars";
+  grid.name = layout.name;
   // Skip to vox_offset, then read exactly the declared samples.
   std::uint64_t skip = offset - 348;
   unsigned char pad[4096];

@@ -329,6 +329,7 @@ VolumeLayout nrrd_layout(const std::string& path) {
 ImageGrid read_nrrd(const std::string& path) {
   const VolumeLayout layout = nrrd_layout(path);
   ImageGrid grid;
+  grid.name = layout.name;
   grid.spacing = layout.raw.spacing;
   grid.origin = layout.raw.origin;
   const auto offset = static_cast<std::uint64_t>(layout.raw.header_bytes);

@@ -16,9 +16,9 @@ namespace {
 
 class RawPlanes : public PlaneSource {
  public:
-  RawPlanes(std::string path, const RawOptions& o, double slope = 1, double inter = 0)
+  RawPlanes(std::string path, const RawOptions& o, std::string name, double slope = 1, double inter = 0)
       : path_(std::move(path)), options_(o), slope_(slope), inter_(inter) {
-    set_header(o);
+    set_header(o, std::move(name));
     const std::uint64_t bytes = detail::checked_byte_count(o.dims, o.type, path_);
     check_float32_geometry(o.dims, o.origin, o.spacing, path_);
     const std::uint64_t have = detail::file_size_or_throw(path_);
@@ -31,10 +31,10 @@ class RawPlanes : public PlaneSource {
   }
   // gzip-compressed samples, inflated once in order (see GzipPlaneReader):
   // the stream starts at file_offset and its first `skip` bytes are header.
-  RawPlanes(std::string path, const RawOptions& o, std::uint64_t file_offset, std::uint64_t skip, double slope,
-            double inter)
+  RawPlanes(std::string path, const RawOptions& o, std::string name, std::uint64_t file_offset, std::uint64_t skip,
+            double slope, double inter)
       : path_(std::move(path)), options_(o), slope_(slope), inter_(inter) {
-    set_header(o);
+    set_header(o, std::move(name));
     detail::checked_byte_count(o.dims, o.type, path_);
     gzip_ = std::make_unique<GzipPlaneReader>(path_, file_offset, skip,
                                               static_cast<std::uint64_t>(o.dims[0] * o.dims[1]) * scalar_size(o.type));
@@ -53,7 +53,8 @@ class RawPlanes : public PlaneSource {
   }
 
  private:
-  void set_header(const RawOptions& o) {
+  void set_header(const RawOptions& o, std::string name) {
+    head_.name = std::move(name);
     head_.dims = o.dims;
     head_.type = o.type;
     head_.spacing = o.spacing;
@@ -89,7 +90,7 @@ class RawPlanes : public PlaneSource {
 }  // namespace
 
 std::unique_ptr<PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options) {
-  return std::make_unique<RawPlanes>(path, options);
+  return std::make_unique<RawPlanes>(path, options, volume_field_name());
 }
 
 namespace {
@@ -100,13 +101,14 @@ std::unique_ptr<PlaneSource> open_layout_planes(const std::string& path, const V
                                                 bool whole_stream) {
   if (layout.compressed == "gzip") {
     const auto at = static_cast<std::uint64_t>(layout.raw.header_bytes);
-    return std::make_unique<RawPlanes>(layout.data_path, layout.raw, whole_stream ? 0 : at, whole_stream ? at : 0,
-                                       layout.scale_slope, layout.scale_inter);
+    return std::make_unique<RawPlanes>(layout.data_path, layout.raw, layout.name, whole_stream ? 0 : at,
+                                       whole_stream ? at : 0, layout.scale_slope, layout.scale_inter);
   }
   if (!layout.compressed.empty())
     throw InputError(path + ": " + layout.compressed + " samples cannot be read plane by plane "
                      "(convert it, e.g. `keymesh convert " + path + " out.nrrd`)");
-  return std::make_unique<RawPlanes>(layout.data_path, layout.raw, layout.scale_slope, layout.scale_inter);
+  return std::make_unique<RawPlanes>(layout.data_path, layout.raw, layout.name, layout.scale_slope,
+                                     layout.scale_inter);
 }
 }  // namespace
 

@@ -120,6 +120,7 @@ ImageGrid read_raw(const std::string& path, const RawOptions& o) {
                      (o.header_bytes ? " after " + std::to_string(o.header_bytes) + " header bytes" : std::string()));
   ImageGrid grid;
   detail::allocate_checked(grid, o.dims, o.type, path);
+  grid.name = volume_field_name();
   grid.spacing = o.spacing;
   grid.origin = o.origin;
   detail::read_exact(path, static_cast<std::uint64_t>(o.header_bytes), grid.data(), grid.bytes.size(), "the samples");

@@ -24,6 +24,7 @@ struct VolumeLayout {
   RawOptions raw;          // dims, type, spacing, origin, byte order; header_bytes = data offset
   std::string compressed;  // "gzip" when the samples cannot be read by offset
   double scale_slope = 1, scale_inter = 0;  // NIfTI: value = slope * stored + inter
+  std::string name = volume_field_name();   // the scalar field's name (.vti: its array's)
   bool scaled() const { return !(scale_slope == 1 && scale_inter == 0); }
 };
 VolumeLayout nrrd_layout(const std::string& path);

@@ -28,6 +28,11 @@ ImageGrid read_volume_unchecked(const std::string& path, const RawOptions* raw) 
 }
 }  // namespace
 
+std::string volume_field_name(const std::string* stored) {
+  // "scalars": ImageGrid's default name, which a grid made in memory keeps.
+  return stored && !stored->empty() ? *stored : std::string(ImageGrid{}.name);
+}
+
 ImageGrid read_volume(const std::string& path, const RawOptions* raw) {
   ImageGrid grid = read_volume_unchecked(path, raw);
   check_float32_geometry(grid.dims, grid.origin, grid.spacing, path);

@@ -188,7 +188,7 @@ std::optional<ImageGrid> parse_vti(const std::string& path, std::string_view dat
   ImageGrid grid;
   grid.origin = geometry.origin;
   grid.spacing = geometry.spacing;
-  if (const std::string* name = array.attr("Name")) grid.name = *name;
+  grid.name = volume_field_name(array.attr("Name"));
   const std::string* format = array.attr("format");
   if (head_only && format && *format == "appended" && ctx.compressor.empty() && ctx.appended_encoding &&
       *ctx.appended_encoding == "raw") {
@@ -198,6 +198,7 @@ std::optional<ImageGrid> parse_vti(const std::string& path, std::string_view dat
       layout->data_path = path;
       layout->raw =
           RawOptions{geometry.dims, type, geometry.spacing, geometry.origin, ctx.big_endian, static_cast<Id>(at)};
+      layout->name = grid.name;
       return std::nullopt;
     }
     detail::allocate_checked(grid, geometry.dims, type, path);

@@ -207,6 +207,7 @@ class ZarrPlanes : public PlaneSource {
     const std::size_t n = shape_.size();
     head_.dims = {shape_[n - 1], shape_[n - 2], shape_[n - 3]};
     head_.type = type;
+    head_.name = volume_field_name();  // Zarr stores no name for the array
     detail::checked_byte_count(head_.dims, type, folder_);
     size_chunks(type);
     parse_fill_value(z, type);

@@ -22,6 +22,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "keymesh/io/plane_source.hpp"
@@ -857,13 +858,16 @@ TEST_F(VolumeIo, DispatchSaysAMeshOrGridIsNotAVolume) {
 // ---- plane by plane (the streamed and distributed contours' reader) --------------
 
 // Reads every plane of `p` through open_volume_planes, in two slabs (plane
-// 0, then the rest), and expects the samples, type and geometry read_volume
-// gives.
-void expect_planes_equal_reader(const std::string& p, const RawOptions* raw = nullptr) {
+// 0, then the rest), and expects the samples, type, geometry and field name
+// read_volume gives, the name being `name`.
+void expect_planes_equal_reader(const std::string& p, const RawOptions* raw = nullptr,
+                                const std::string& name = "scalars") {
   SCOPED_TRACE(p);
   const ImageGrid whole = read_volume(p, raw);
   auto source = open_volume_planes(p, raw);
   const ImageGrid& head = source->header();
+  EXPECT_EQ(whole.name, name);
+  EXPECT_EQ(head.name, whole.name);
   EXPECT_EQ(head.dims, whole.dims);
   EXPECT_EQ(head.type, whole.type);
   EXPECT_EQ(head.spacing, whole.spacing);
@@ -907,6 +911,22 @@ TEST_F(VolumeIo, PlanesOfNrrdEqualTheReader) {
   o.big_endian = true;
   o.header_bytes = 5;
   expect_planes_equal_reader(file("p.raw", "HEAD!" + sample_bytes<std::uint16_t>(true)), &o);
+}
+
+// A .vti with raw appended samples streams; its field keeps the array's
+// Name on both paths, and a .vti with no Name or an empty one gives
+// "scalars" on both (io::volume_field_name), as every other format does.
+TEST_F(VolumeIo, PlanesOfAppendedVtiEqualTheReaderNameIncluded) {
+  const std::string block = vtk_block(sample_bytes<float>(), false, false, false);
+  // (the DataArray's Name attribute, the field name both paths must give)
+  const std::pair<std::string, std::string> cases[] = {
+      {" Name=\"density &amp; &lt;co&gt;\"", "density & <co>"}, {" Name=\"\"", "scalars"}, {"", "scalars"}};
+  for (const auto& [attribute, name] : cases) {
+    const std::string array = "    <DataArray type=\"Float32\"" + attribute + " format=\"appended\" offset=\"0\"/>\n";
+    const std::string vti = vti_head(" header_type=\"UInt32\"") + array + kVtiTail +
+                            "<AppendedData encoding=\"raw\">\n   _" + block + "\n</AppendedData>\n</VTKFile>\n";
+    expect_planes_equal_reader(file("named.vti", vti), nullptr, name);
+  }
 }
 
 TEST_F(VolumeIo, PlanesRefusedByNameWhenNotReadableByOffset) {

@@ -23,6 +23,16 @@ struct RawOptions {
   Id header_bytes = 0;  // bytes to skip at the start of the file
 };
 
+// The name of the scalar point field a volume file gives: one rule for every
+// path that reads it (read_volume, the plane sources of --memory-limit and
+// mpirun, Python's keymesh.read), so that their outputs are byte-identical.
+// The name the file stores for its array (`stored`), else "scalars"
+// (ImageGrid's default name). Of the formats read, only .vti stores one (its point
+// DataArray's Name; an empty Name counts as none); raw, NRRD, NIfTI, VolPack
+// .den, DICOM and Zarr store none (docs/DESIGN-NOTES.md, "The scalar field's
+// name").
+std::string volume_field_name(const std::string* stored = nullptr);
+
 // Throws InputError with the path and the problem on any malformed input.
 // `raw` is required for .raw files and ignored otherwise.
 ImageGrid read_volume(const std::string& path, const RawOptions* raw = nullptr);
