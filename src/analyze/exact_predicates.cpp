@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 namespace keymesh::analyze {
@@ -32,14 +33,18 @@ struct ScaledInts {
   int max_shift = 0;
 
   explicit ScaledInts(const std::array<float, N>& v) {
+    // Sign, 24-bit significand and exponent straight from the bits (a
+    // subnormal has no hidden bit and the smallest exponent).
     std::array<int, N> exponent{};
     int low = std::numeric_limits<int>::max();
     for (std::size_t i = 0; i < N; ++i) {
-      int e = 0;
-      const float f = std::frexp(v[i], &e);
-      mantissa[i] = static_cast<std::int64_t>(std::ldexp(f, 24));
-      exponent[i] = e;
-      if (mantissa[i] != 0) low = std::min(low, e);
+      std::uint32_t bits = 0;
+      std::memcpy(&bits, &v[i], sizeof bits);
+      const int biased = static_cast<int>((bits >> 23) & 0xff);
+      const std::int64_t significand = (bits & 0x7fffff) | (biased ? 0x800000u : 0u);
+      mantissa[i] = (bits >> 31) ? -significand : significand;
+      exponent[i] = biased ? biased : 1;
+      if (significand != 0) low = std::min(low, exponent[i]);
     }
     for (std::size_t i = 0; i < N; ++i) {
       shift[i] = mantissa[i] != 0 ? exponent[i] - low : 0;
@@ -155,6 +160,10 @@ int orient3d(const float* a, const float* b, const float* c, const float* d) {
   if (det > bound) return 1;
   if (det < -bound) return -1;
   if (permanent == 0) return 0;  // every difference along some row or column is zero
+  // Four points with one coordinate in common lie in that axis plane: a
+  // grid face, where a contour's points are often (the filter cannot tell 0).
+  for (int k = 0; k < 3; ++k)
+    if (a[k] == b[k] && a[k] == c[k] && a[k] == d[k]) return 0;
   return orient3d_exact(a, b, c, d);
 }
 

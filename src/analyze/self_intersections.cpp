@@ -72,11 +72,8 @@ bool edge_meets(const float* p, const float* q, int side_p, int side_q, bool p_s
   return !(positive && negative);
 }
 
-}  // namespace
-
-bool triangle_has_area(const Tri& t) { return projection_axis(t) >= 0; }
-
-bool triangles_cross(const Tri& a, const Tri& b) {
+// triangles_cross with each triangle's projection axis already known.
+bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b) {
   std::array<bool, 3> a_shared{}, b_shared{};
   int shared = 0;
   for (int i = 0; i < 3; ++i)
@@ -86,21 +83,28 @@ bool triangles_cross(const Tri& a, const Tri& b) {
         ++shared;
       }
   if (shared >= 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // A common edge: out of one plane, the triangles meet only along it (most
+    // pairs a mesh's broad phase gives are such neighbours: one predicate).
+    const int other = !b_shared[0] ? 0 : !b_shared[1] ? 1 : 2;
+    if (orient3d(a[0], a[1], a[2], b[other]) != 0) return false;
+  }
   std::array<int, 3> side_b{}, side_a{};
   int b_above = 0, b_below = 0, a_above = 0, a_below = 0;
   for (int j = 0; j < 3; ++j) {
-    side_b[j] = orient3d(a[0], a[1], a[2], b[j]);
+    // A common corner is on the other's plane: 0 without asking (exactly 0
+    // is what the double filter cannot prove, so it would cost an exact sign).
+    side_b[j] = b_shared[j] ? 0 : orient3d(a[0], a[1], a[2], b[j]);
     b_above += side_b[j] > 0;
     b_below += side_b[j] < 0;
   }
   if (b_above == 3 || b_below == 3) return false;
   for (int i = 0; i < 3; ++i) {
-    side_a[i] = orient3d(b[0], b[1], b[2], a[i]);
+    side_a[i] = a_shared[i] ? 0 : orient3d(b[0], b[1], b[2], a[i]);
     a_above += side_a[i] > 0;
     a_below += side_a[i] < 0;
   }
   if (a_above == 3 || a_below == 3) return false;
-  const int drop_a = projection_axis(a), drop_b = projection_axis(b);
   if (b_above == 0 && b_below == 0) {  // one plane: overlap in 2D
     for (int i = 0; i < 3; ++i)
       if (!a_shared[i] && in_closed_triangle(a[i], b, drop_a)) return true;
@@ -120,6 +124,12 @@ bool triangles_cross(const Tri& a, const Tri& b) {
   }
   return false;
 }
+
+}  // namespace
+
+bool triangle_has_area(const Tri& t) { return projection_axis(t) >= 0; }
+
+bool triangles_cross(const Tri& a, const Tri& b) { return cross_projected(a, b, projection_axis(a), projection_axis(b)); }
 
 namespace {
 
@@ -209,11 +219,12 @@ SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::siz
   auto corners = [&](std::size_t t) {
     return Tri{xyz + 3 * std::size_t(tris[t][0]), xyz + 3 * std::size_t(tris[t][1]), xyz + 3 * std::size_t(tris[t][2])};
   };
-  std::vector<char> has_area(tris.size());
-  parallel::for_each(static_cast<Id>(tris.size()), [&](Id t) { has_area[t] = triangle_has_area(corners(t)); });
+  std::vector<signed char> axis(tris.size());  // projection axis, -1 without area
+  parallel::for_each(static_cast<Id>(tris.size()),
+                     [&](Id t) { axis[t] = static_cast<signed char>(projection_axis(corners(t))); });
   std::vector<std::uint32_t> live;
   for (std::size_t t = 0; t < tris.size(); ++t)
-    if (has_area[t]) live.push_back(static_cast<std::uint32_t>(t));
+    if (axis[t] >= 0) live.push_back(static_cast<std::uint32_t>(t));
   report.zero_area_triangles = report.triangles - static_cast<Id>(live.size());
   if (tris.size() > std::numeric_limits<std::uint32_t>::max())
     throw LimitError("self-intersection check: more than 2^32 - 1 triangles");
@@ -267,7 +278,7 @@ SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::siz
         std::array<float, 3> low{};
         for (int k = 0; k < 3; ++k) low[k] = std::max(boxes[u].lo[k], boxes[v].lo[k]);
         if (grid.key(grid.cell_of(low)) != keys[b]) continue;  // tested in another grid cell
-        if (triangles_cross(corners(live[u]), corners(live[v])))
+        if (cross_projected(corners(live[u]), corners(live[v]), axis[live[u]], axis[live[v]]))
           mine.push_back({std::min(cu, cv), std::max(cu, cv)});
       }
   }
