@@ -248,6 +248,8 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   piece.coarse_range = static_cast<std::uint64_t>(nxy * nz) * options.isovalues.size();
   opt.coarsen = false;
   const bool average = options.normals == generate::ContourNormals::Average && !options.coarsen;
+  piece.average = average;
+  piece.layer_grid = generate::LayerGrid{static_cast<std::uint64_t>(nxy), nz - 1, static_cast<Id>(options.isovalues.size())};
   if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
   piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
   free_storage(slab.bytes);
@@ -278,13 +280,14 @@ SurfaceMesh gather(ContourPiece& piece) {
   // Owned points (positions and fields) in local order: key order, segment after segment.
   const Id n = m.num_points();
   std::vector<float> xyz;
-  std::vector<std::uint64_t> nearest;
+  std::vector<std::uint64_t> nearest, keys;
   std::vector<std::vector<float>> fields(m.point_fields.size());
   xyz.reserve(static_cast<std::size_t>(3 * piece.stats.points_owned));
   for (Id p = 0; p < n; ++p)
     if (g.owned[p]) {
       xyz.insert(xyz.end(), m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3);
       if (piece.coarsen) nearest.push_back(piece.nearest[static_cast<std::size_t>(p)]);
+      if (piece.average) keys.push_back(piece.keys[static_cast<std::size_t>(p)]);
       for (std::size_t f = 0; f < fields.size(); ++f) {
         const Field& fd = m.point_fields[f];
         fields[f].insert(fields[f].end(), fd.values.begin() + fd.components * p, fd.values.begin() + fd.components * (p + 1));
@@ -314,6 +317,14 @@ SurfaceMesh gather(ContourPiece& piece) {
   }
   static_assert(sizeof(PointIndex) == 4, "the gather sends point ids as MPI_UINT32_T");
   gather_segments(conn, 3, mpi().uint32, tri_counts, S, out.connectivity);
+  if (piece.average) {
+    std::vector<std::uint64_t> all_keys;
+    gather_segments(keys, 1, mpi().uint64, g.counts, S, all_keys);
+    if (r == 0)
+      for (Field& f : out.point_fields)
+        if (f.name == "Normals")
+          f = generate::blocked_average_normals(out, generate::layer_blocks(out, all_keys, piece.layer_grid));
+  }
   if (piece.coarsen) {
     // The fine mesh of one process, and its points' coarse keys: coarsened
     // as one process coarsens it.

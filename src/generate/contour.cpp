@@ -29,6 +29,7 @@
 #include "contour_rows.hpp"
 #include "derivative_rows.hpp"
 #include "grid_lines.hpp"
+#include "keymesh/generate/layer_blocks.hpp"
 #include "voxel_bits.hpp"
 
 namespace keymesh::generate {
@@ -55,10 +56,8 @@ GridShape shape_of(const ImageGrid& g) {
   return s;
 }
 
-// Voxel slabs per block of the soup handed to keyreduce::reduce_blocked: a
-// constant, so the blocks (and the merge order they imply) do not depend on
-// the thread count.
-constexpr Id kSlabsPerBlock = 4;
+// kSlabsPerBlock (layer_blocks.hpp): voxel slabs per block of the soup handed
+// to keyreduce::reduce_blocked.
 
 
 // One isovalue's triangle soup as edge keys, appended to `keys` with

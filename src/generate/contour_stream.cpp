@@ -15,6 +15,7 @@
 #include "keymesh/mesh/normals.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
+#include "keymesh/generate/layer_blocks.hpp"
 
 namespace keymesh::generate {
 
@@ -50,11 +51,10 @@ Id planes_per_slab(const ImageGrid& head, std::size_t memory_limit, bool ghosts)
 // Every slab's points (global keys, positions, fields), one after the
 // other, and its triangles as indices into that list, per isovalue so that
 // the isovalues' triangles end up one after the other, as in one contour.
-// Averaged normals: each slab's points carry the sum of their triangles'
-// normals (KEY-REDUCE's merge within the slab); the merge across slabs adds
-// a shared point's sums, and the transform normalises once. Equal to the
-// in-memory normals within float rounding (associated differently), not
-// bit for bit.
+// Averaged normals: summed over the merged mesh in the blocks of voxel
+// layers one in-memory contour uses (layer_blocks.hpp), read from the
+// points' edge keys, so they are its normals bit for bit (adding the slabs'
+// partial sums would associate a shared point's additions differently).
 struct SlabPoints {
   std::uint64_t per_iso;
   bool average;
@@ -64,7 +64,7 @@ struct SlabPoints {
   std::vector<float> points;
   std::vector<Field> fields;  // every point field of the slabs, concatenated
   std::vector<std::vector<std::uint32_t>> corners;  // per isovalue
-  std::vector<Vec3f> normal_sums;
+  LayerGrid layers;                                  // for the averaged normals' blocks
 
   void append(const SurfaceMesh& m, const std::vector<std::uint64_t>& slab_keys,
               const std::vector<std::uint64_t>& slab_nearest) {
@@ -78,10 +78,6 @@ struct SlabPoints {
       for (const Field& f : m.point_fields) fields.push_back(Field{f.name, f.components, {}});
     for (std::size_t i = 0; i < fields.size(); ++i)
       fields[i].values.insert(fields[i].values.end(), m.point_fields[i].values.begin(), m.point_fields[i].values.end());
-    if (average) {
-      const std::vector<Vec3f> sums = point_normal_sums(m);
-      normal_sums.insert(normal_sums.end(), sums.begin(), sums.end());
-    }
     for (Id t = 0; t < m.num_cells(); ++t) {
       auto& dst = corners[static_cast<std::size_t>(slab_keys[m.connectivity[3 * t]] / per_iso)];
       for (int c = 0; c < 3; ++c) dst.push_back(static_cast<std::uint32_t>(base + m.connectivity[3 * t + c]));
@@ -102,24 +98,18 @@ struct SlabPoints {
     mesh.points.resize(static_cast<std::size_t>(3 * unique));
     for (const Field& f : fields)
       mesh.point_fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(unique * f.components))});
-    std::vector<Vec3f> normals(average ? static_cast<std::size_t>(unique) : 0);
+    std::vector<std::uint64_t> point_keys(average ? static_cast<std::size_t>(unique) : 0);
     merged_nearest.resize(coarsen ? static_cast<std::size_t>(unique) : 0);
     parallel::for_each(unique, [&](Id p) {
       const Id first = g.order[g.offsets[p]];
       if (coarsen) merged_nearest[p] = nearest[first];
-      if (average) {
-        // The merge across slabs, in slab order, then the transform.
-        Vec3f merged{0, 0, 0};
-        for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) merged = add(merged, normal_sums[g.order[j]]);
-        normals[p] = unit(merged);
-      }
+      if (average) point_keys[p] = keys[first];
       for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
       for (std::size_t i = 0; i < fields.size(); ++i) {
         const int c = fields[i].components;
         std::copy_n(fields[i].values.begin() + c * first, c, mesh.point_fields[i].values.begin() + c * p);
       }
     });
-    if (average) mesh.point_fields.push_back(normals_field(normals));
     std::size_t total_corners = 0;
     for (const auto& c : corners) total_corners += c.size();
     mesh.connectivity.resize(total_corners);
@@ -128,6 +118,7 @@ struct SlabPoints {
       parallel::for_each(static_cast<Id>(c.size()), [&](Id i) { mesh.connectivity[at + i] = g.index_map[c[i]]; });
       at += c.size();
     }
+    if (average) mesh.point_fields.push_back(blocked_average_normals(mesh, layer_blocks(mesh, point_keys, layers)));
     return mesh;
   }
 };
@@ -161,6 +152,7 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   const bool average = options.normals == ContourNormals::Average && !options.coarsen;
   SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, options.coarsen, {}, {}, {}, {}, {}, {}};
   all.corners.resize(options.isovalues.size());
+  all.layers = LayerGrid{static_cast<std::uint64_t>(nx * ny), nz - 1, static_cast<Id>(options.isovalues.size())};
   ContourStats total;
   ImageGrid slab;
   slab.spacing = head.spacing;

@@ -14,6 +14,7 @@
 
 #include "keymesh/distributed/key_exchange.hpp"
 #include "keymesh/generate/contour_stream.hpp"
+#include "keymesh/generate/layer_blocks.hpp"
 
 namespace keymesh::distributed {
 
@@ -41,6 +42,11 @@ struct ContourPiece {
   std::vector<std::uint64_t> nearest;
   Id triangles_before_coarsening = 0;     // rank 0, after gather()
   Id coarse_points = 0;                   // rank 0, after gather()
+  // Averaged normals of a gathered mesh: rank 0 sums them again over the
+  // whole in one process's blocks of layers (generate/layer_blocks.hpp), so
+  // the file is that process's bit for bit; a piece keeps its owners' merge.
+  bool average = false;
+  generate::LayerGrid layer_grid;
 };
 
 // Throws InputError naming what a distributed contour of this volume with
@@ -51,7 +57,7 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 // Collective: every rank calls it with its own source of the same volume.
 // Supports scalars, several isovalues, --weld keyreduce, --normals gradient
 // and --curvature (ghost planes), --normals average (partial sums merged at
-// the owner) and coarsening (done by gather() on rank 0: a piece per rank is
+// the owner; gather() sums the whole again in one process's order) and coarsening (done by gather() on rank 0: a piece per rank is
 // refused by the command); VERTEX-WELD and the GPU are refused by name.
 // With `balance`, the slab boundaries move so that every rank gets about the
 // same work (triangles per layer counted on the equal split first, then

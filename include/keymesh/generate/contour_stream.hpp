@@ -11,9 +11,8 @@
 // Supported: any scalar type, several isovalues, the interpolated scalar,
 // gradient normals and mean curvature (each slab reads a ghost plane on
 // either side for the central differences, so they too are bit-identical).
-// Averaged normals: each slab's partial sums per point, added across slabs
-// by the merge and normalised once; equal to the in-memory run within float
-// rounding (not bit for bit: the summation order differs).
+// Averaged normals: summed over the merged mesh in the in-memory run's
+// blocks of voxel layers (generate/layer_blocks.hpp): bit-identical.
 // Coarsening: the slabs' fine points (with their nearest grid points, the
 // coarse keys) are merged first, then the whole mesh is coarsened as one
 // contour coarsens it: byte-identical, averaged normals included (computed
