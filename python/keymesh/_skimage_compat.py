@@ -50,6 +50,63 @@ def _remove_degenerate_faces(vertices, faces, *arrays):
     return _ext.remove_degenerate_faces(vertices, faces, list(arrays))
 
 
+def _mask_bytes(mask) -> np.ndarray:
+    # scikit-image passes the mask to Cython as np.ndarray[npy_bool, cast=True]:
+    # any ndarray of 1-byte items is taken byte for byte (nonzero = set);
+    # wider items (float, int64, ...) raise ValueError, non-arrays TypeError.
+    if not isinstance(mask, np.ndarray):
+        raise TypeError("Argument 'mask' has incorrect type (expected numpy.ndarray, got %s)"
+                        % type(mask).__name__)
+    if mask.dtype.itemsize != 1:
+        raise ValueError("Item size of buffer (%d bytes) does not match size of 'npy_bool' (1 byte)"
+                         % mask.dtype.itemsize)
+    return np.ascontiguousarray(mask).view(np.uint8)
+
+
+def _level(volume, level, spacing):
+    # scikit-image's level (None: the mid-range) and spacing checks
+    if level is None:
+        level = 0.5 * (volume.min() + volume.max())
+    else:
+        level = float(level)
+        if level < volume.min() or level > volume.max():
+            raise ValueError("Surface level must be within volume data range.")
+    if len(spacing) != 3:
+        raise ValueError("`spacing` must consist of three floats.")
+    return level
+
+
+def _old_lorensen(volume, level, spacing, gradient_direction, threads, progress):
+    # scikit-image 0.19's method='_lorensen' (its old classic code): checks in
+    # its order, float64 data, no step_size or allow_degenerate, and two
+    # arrays: float64 points (always times spacing) and int64 faces with no
+    # degenerate triangle. keymesh gives its 'lorensen' surface with
+    # degenerate triangles removed: the same points (to float32 rounding),
+    # some cubes split along the other diagonal.
+    if volume.ndim != 3:
+        raise ValueError("Input volume must have 3 dimensions.")
+    level = _level(volume, level, spacing)
+    if volume.shape[0] < 2 or volume.shape[1] < 2 or volume.shape[2] < 2:
+        raise ValueError("Input array must be at least 2x2x2.")
+    # scikit-image compares float64 samples with the level, keymesh float32
+    # ones: the same unless a float64 sample rounds across the level.
+    none_above = not np.any(np.asarray(volume, np.float64) > level)
+    volume = np.ascontiguousarray(volume, np.float32)
+    vertices, faces, _, _ = _ext.marching_cubes(volume, float(level), _case_table(), 1, None, True,
+                                                int(threads), progress)
+    if none_above or not len(vertices):
+        # scikit-image indexes its points with an empty float array here
+        raise IndexError("arrays used as indices must be of integer (or boolean) type")
+    if 'descent' in gradient_direction:
+        pass
+    elif 'ascent' in gradient_direction:
+        faces = np.ascontiguousarray(faces[:, ::-1])
+    else:
+        raise ValueError("Incorrect input %s in `gradient_direction`, see docstring." % (gradient_direction))
+    vertices, faces = _remove_degenerate_faces(vertices, faces)
+    return vertices.astype(np.float64) * np.r_[spacing], faces.astype(np.int64)
+
+
 def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Sequence[float] = (1., 1., 1.),
                    gradient_direction: str = 'descent', step_size: int = 1, allow_degenerate: bool = True,
                    method: str = 'lorensen', mask: Any = None, threads: int = 0,
@@ -76,11 +133,14 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
         step_size: cubes of step_size voxels along every axis.
         allow_degenerate: False removes zero-area triangles and merges
             their coincident points (faces are then int64, as in scikit-image).
-        method: 'lorensen'. 'lewiner' (scikit-image's default, Marching
+        method: 'lorensen'; '_lorensen' (scikit-image 0.19's old code)
+            returns only (verts float64, faces int64), no degenerate
+            triangles, no mask. 'lewiner' (scikit-image's default, Marching
             Cubes 33) is refused: it resolves ambiguous cubes with extra
             tests and interior points that keymesh does not implement.
-        mask: boolean array of the volume's shape; a cube is computed when
-            the mask is set at its far corner (scikit-image's rule).
+        mask: array of 1-byte items (bool, int8, uint8; nonzero = set) of
+            the volume's shape; a cube is computed when the mask is set at
+            its far corner (scikit-image's rule). Wider items: ValueError.
         threads: worker threads (keymesh only; 0 = all cores). The result
             does not depend on it.
         progress: keymesh only: progress(stage, fraction) between stages;
@@ -94,43 +154,46 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
 
     Raises:
         ValueError, RuntimeError, TypeError as scikit-image does for the same
-        arguments (RuntimeError when no surface is found); NotImplementedError
-        for method='lewiner'.
+        arguments, in its order (RuntimeError when no surface is found, before
+        a bad gradient_direction); NotImplementedError for method='lewiner'.
+
+    A NaN sample is outside; a point on one of its edges is NaN on all three
+    axes, and normals that took a NaN difference are NaN (as scikit-image).
     """
     if method == 'lewiner':
         raise NotImplementedError(
             "keymesh.marching_cubes: method='lewiner' (Marching Cubes 33: face and interior tests, "
             "extra points inside ambiguous cubes) is not implemented; method='lorensen' gives "
             "scikit-image's 'lorensen' result (same points wherever no cube is ambiguous)")
+    if method == '_lorensen':
+        if mask is not None:
+            raise NotImplementedError(
+                'Parameter `mask` is not implemented for method "_lorensen" and will be ignored.')
+        return _old_lorensen(volume, level, spacing, gradient_direction, threads, progress)
     if method != 'lorensen':
-        raise ValueError(f"method should be 'lorensen' ('lewiner' is not implemented), got {method!r}")
+        raise ValueError(f"method should be 'lorensen' or '_lorensen' ('lewiner' is not implemented), got {method!r}")
     if not isinstance(volume, np.ndarray) or (volume.ndim != 3):
         raise ValueError('Input volume should be a 3D numpy array.')
     if volume.shape[0] < 2 or volume.shape[1] < 2 or volume.shape[2] < 2:
         raise ValueError("Input array must be at least 2x2x2.")
     volume = np.ascontiguousarray(volume, np.float32)
-    if level is None:
-        level = 0.5 * (volume.min() + volume.max())
-    else:
-        level = float(level)
-        if level < volume.min() or level > volume.max():
-            raise ValueError("Surface level must be within volume data range.")
-    if len(spacing) != 3:
-        raise ValueError("`spacing` must consist of three floats.")
+    level = _level(volume, level, spacing)
     step_size = int(step_size)
     if step_size < 1:
         raise ValueError('step_size must be at least one.')
     if mask is not None:
         if not mask.shape == volume.shape:
             raise ValueError('volume and mask must have the same shape.')
-        mask = np.ascontiguousarray(mask, dtype=bool).view(np.uint8)
-    if gradient_direction not in ('descent', 'ascent'):
-        raise ValueError("Incorrect input %s in `gradient_direction`, see docstring." % (gradient_direction))
+        mask = _mask_bytes(mask)
 
     vertices, faces, normals, values = _ext.marching_cubes(
         volume, float(level), _case_table(), step_size, mask, gradient_direction == 'descent', int(threads), progress)
+    # scikit-image's order: "no surface" before a bad gradient_direction
+    # (which it checks only once it has a surface to wind).
     if not len(vertices):
         raise RuntimeError('No surface found at the given iso value.')
+    if gradient_direction not in ('descent', 'ascent'):
+        raise ValueError("Incorrect input %s in `gradient_direction`, see docstring." % (gradient_direction))
     if not np.array_equal(spacing, (1, 1, 1)):
         vertices = vertices * np.r_[spacing]
     if allow_degenerate:

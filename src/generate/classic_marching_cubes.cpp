@@ -243,6 +243,10 @@ struct ClassicRun {
     const double ff = w_lo + w_hi;
     for (int a = 0; a < 3; ++a) xyz[a] = static_cast<double>(lo[a]);
     xyz[axis] += static_cast<double>(g.step) * w_hi / ff;
+    // A NaN sample: scikit-image sums weight * offset on every axis, and
+    // 0 * NaN is NaN, so the whole point is NaN, not just its edge axis.
+    if (std::isnan(ff))
+      for (int a = 0; a < 3; ++a) xyz[a] = std::numeric_limits<double>::quiet_NaN();
   }
 
   // Point p's normal (unnormalised, float sums in scikit-image's order) and

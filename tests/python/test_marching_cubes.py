@@ -190,21 +190,157 @@ BAD_ARGUMENTS = [
 ]
 
 
-@pytest.mark.parametrize("label,make_args", BAD_ARGUMENTS, ids=[b[0] for b in BAD_ARGUMENTS])
-def test_bad_arguments_raise_skimage_types(label, make_args):
-    v = gyroid((8, 9, 10))
-    args, kwargs = make_args(v)
-    theirs = ours = None
+def outcome(function, args, kwargs):
+    """The exception type a call raises, or its result."""
     try:
-        measure.marching_cubes(*args, **{"method": "lorensen", **kwargs})
+        return function(*args, **kwargs)
     except Exception as e:  # noqa: BLE001 - the type is what is compared
-        theirs = type(e)
-    try:
-        keymesh.marching_cubes(*args, **kwargs)
-    except Exception as e:  # noqa: BLE001
-        ours = type(e)
-    assert theirs is not None, "scikit-image accepted it"
-    assert ours is theirs, (ours, theirs)
+        return type(e)
+
+
+def ones_mask(dtype):
+    return lambda v: ((v, 0.2), {"mask": np.ones(v.shape, dtype)})
+
+
+# scikit-image 0.19 hands the mask to Cython as a 1-byte buffer: any 1-byte
+# dtype passes (bytes taken as they are), wider ones raise ValueError; a bad
+# gradient_direction is looked at only once a surface was found.
+MASK_AND_ORDER = [
+    ("mask float64", ones_mask(np.float64)),
+    ("mask float32", ones_mask(np.float32)),
+    ("mask int64", ones_mask(np.int64)),
+    ("mask int16", ones_mask(np.int16)),
+    ("mask object", ones_mask(object)),
+    ("mask int8", lambda v: ((v, 0.2), {"mask": (np.arange(v.size).reshape(v.shape) % 3).astype(np.int8)})),
+    ("mask uint8", lambda v: ((v, 0.2), {"mask": (np.arange(v.size).reshape(v.shape) % 5 == 1).astype(np.uint8) * 7})),
+    ("mask bool strided", lambda v: ((v, 0.2), {"mask": np.ones(v.shape[::-1], bool).T})),
+    ("mask float, bad direction", lambda v: ((v, 0.2), {"mask": np.ones(v.shape), "gradient_direction": "up"})),
+    ("no surface, bad direction", lambda v: ((v, float(np.float32(v).max())), {"gradient_direction": "up"})),
+    ("no surface, direction None", lambda v: ((v, float(np.float32(v).max())), {"gradient_direction": None})),
+    ("surface, direction None", lambda v: ((v, 0.2), {"gradient_direction": None})),
+    ("no surface in mask, bad direction", lambda v: ((v, 0.2), {"mask": np.zeros(v.shape, bool),
+                                                                "gradient_direction": "up"})),
+]
+
+
+def ours_and_theirs(make_args, method):
+    """Both functions' outcomes (result or exception type) on a small gyroid."""
+    args, kwargs = make_args(gyroid((8, 9, 10)))
+    kwargs = {"method": method, **kwargs}
+    return outcome(keymesh.marching_cubes, args, kwargs), outcome(measure.marching_cubes, args, kwargs)
+
+
+ARGUMENTS = BAD_ARGUMENTS + MASK_AND_ORDER
+
+
+@pytest.mark.parametrize("label,make_args", ARGUMENTS, ids=[b[0] for b in ARGUMENTS])
+def test_arguments_as_skimage(label, make_args):
+    """The same exception type as scikit-image, or (accepted) its result."""
+    ours, theirs = ours_and_theirs(make_args, "lorensen")
+    if isinstance(theirs, type):
+        assert ours is theirs, (ours, theirs)
+    else:
+        assert not isinstance(ours, type), ours
+        if _skimage_compat.uses_skimage_table():
+            assert_same(ours, theirs)
+
+
+OLD_LORENSEN_ARGUMENTS = [
+    ("plain", lambda v: ((v, 0.2), {})),
+    ("level None, spacing", lambda v: ((v,), {"spacing": (0.5, 1.0, 2.0)})),
+    ("ascent", lambda v: ((v, 0.2), {"gradient_direction": "ascent"})),
+    ("direction inside a word", lambda v: ((v, 0.2), {"gradient_direction": "xdescentx"})),
+    ("step and degenerate ignored", lambda v: ((v, 0.2), {"step_size": 0, "allow_degenerate": False})),
+    ("mask", lambda v: ((v, 0.2), {"mask": np.ones(v.shape, bool)})),
+    ("mask None", lambda v: ((v, 0.2), {"mask": None})),
+    ("2-D volume", lambda v: ((v[0], 0.2), {})),
+    ("list volume", lambda v: ((v.tolist(), 0.2), {})),
+    ("too small", lambda v: ((v[:1], 0.2), {})),
+    ("too small, level above", lambda v: ((v[:1], 99.0), {})),
+    ("level above", lambda v: ((v, 99.0), {})),
+    ("level text", lambda v: ((v, "abc"), {})),
+    ("spacing number", lambda v: ((v, 0.2), {"spacing": 1.0})),
+    ("direction", lambda v: ((v, 0.2), {"gradient_direction": "up"})),
+    ("direction None", lambda v: ((v, 0.2), {"gradient_direction": None})),
+    ("no surface", lambda v: ((v, float(v.max())), {})),
+    ("no surface, bad direction", lambda v: ((v, float(v.max())), {"gradient_direction": "up"})),
+]
+
+
+@pytest.mark.parametrize("label,make_args", OLD_LORENSEN_ARGUMENTS, ids=[b[0] for b in OLD_LORENSEN_ARGUMENTS])
+def test_old_lorensen_method_as_skimage(label, make_args):
+    """method='_lorensen' (scikit-image 0.19's old classic code) is accepted:
+    the same errors, and two arrays, float64 points and int64 faces, with
+    scikit-image's points (to float32 rounding: it interpolates in float64)
+    and, where a cube is split the same way, its triangles with its winding."""
+    ours, theirs = ours_and_theirs(make_args, "_lorensen")
+    if isinstance(theirs, type):
+        assert ours is theirs, (ours, theirs)
+        return
+    assert isinstance(ours, tuple) and len(ours) == 2, ours
+    for a, b in zip(ours, theirs):
+        assert a.dtype == b.dtype and a.shape[1:] == b.shape[1:], (a.dtype, b.dtype)
+    p = match_points(ours[0], theirs[0], tol=1e-5)
+    assert len(ours[1]) >= 0.95 * len(theirs[1])
+    assert_shared_triangles_wound_alike(p[ours[1]], theirs[1])
+
+
+def assert_shared_triangles_wound_alike(a, b):
+    a_sets = {frozenset(t): t for t in map(tuple, a.tolist())}
+    b_sets = {frozenset(t): t for t in map(tuple, b.tolist())}
+    shared = a_sets.keys() & b_sets.keys()
+    assert len(shared) >= 0.4 * len(b_sets)
+    for key in shared:
+        s, t = a_sets[key], b_sets[key]
+        assert t in (s, s[1:] + s[:1], s[2:] + s[:2]), (s, t)
+
+
+@pytest.mark.parametrize("name", sorted(VOLUMES))
+def test_old_lorensen_points_as_skimage(name):
+    make, level = VOLUMES[name]
+    v = make()
+    theirs = measure.marching_cubes(v, level, spacing=(1.0, 0.5, 3.0), method="_lorensen")
+    ours = keymesh.marching_cubes(v, level, spacing=(1.0, 0.5, 3.0), method="_lorensen")
+    assert ours[0].dtype == theirs[0].dtype and ours[1].dtype == theirs[1].dtype
+    if name == "uint8":
+        # scikit-image's old code also drops points that only degenerate
+        # triangles used; keymesh's degenerate-face rule keeps some of them
+        return
+    p = match_points(ours[0], theirs[0], tol=1e-5)
+    assert_shared_triangles_wound_alike(p[ours[1]], theirs[1])
+
+
+def nan_volume(seed):
+    v = blobs((14, 15, 13), seed=seed, count=3)
+    rng = np.random.default_rng(seed)
+    v.flat[rng.choice(v.size, 12, replace=False)] = np.nan
+    return v
+
+
+@need_table
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("step", [1, 2])
+def test_nan_samples_as_skimage(seed, step):
+    """A NaN sample counts as outside (NaN > level is false); a point on an
+    edge with a NaN end is NaN on all three axes and so is its normal (and
+    every normal that took a NaN gradient); values skip the NaN."""
+    v = nan_volume(seed)
+    level = 0.3 * float(np.nanmax(v))
+    for kwargs in ({}, {"spacing": (0.5, 1.0, 2.0)}, {"allow_degenerate": False}):
+        ours = keymesh.marching_cubes(v, level, step_size=step, **kwargs)
+        theirs = measure.marching_cubes(v, level, step_size=step, method="lorensen", **kwargs)
+        nan_rows = np.isnan(theirs[0]).any(axis=1)
+        assert nan_rows.any() and np.isnan(theirs[0][nan_rows]).all()
+        for name, a, b in zip(("verts", "faces", "normals", "values"), ours, theirs):
+            assert a.dtype == b.dtype and a.shape == b.shape, name
+            assert np.array_equal(np.isnan(a), np.isnan(b)), name
+        assert np.array_equal(ours[0], theirs[0], equal_nan=True)
+        assert np.array_equal(ours[1], theirs[1])
+        assert np.nanmax(np.abs(ours[2] - theirs[2]), initial=0) <= 1e-5
+        assert np.array_equal(ours[3], theirs[3])
+    # level None: the NaN mid-range finds no surface, in both
+    assert outcome(keymesh.marching_cubes, (v,), {}) is RuntimeError
+    assert outcome(measure.marching_cubes, (v,), {"method": "lorensen"}) is RuntimeError
 
 
 def test_lewiner_is_refused_by_name():
