@@ -27,14 +27,32 @@ generate::ClassicTable table_from_python(const py::handle& obj) {
   return table;
 }
 
+// {name: int8 array} -> Mc33Tables (the C++ checks names, shapes, ranges).
+generate::Mc33Tables mc33_from_python(const py::dict& tables) {
+  generate::Mc33Tables out;
+  for (const auto& [name, value] : tables) {
+    auto a = py::array_t<std::int8_t, py::array::c_style | py::array::forcecast>::ensure(value);
+    if (!a) throw py::value_error("marching cubes 33: every table must be an int8 array");
+    generate::Mc33Array& t = out[py::cast<std::string>(name)];
+    t.data.assign(a.data(), a.data() + a.size());
+    for (py::ssize_t d = 0; d < a.ndim(); ++d) t.shape.push_back(static_cast<int>(a.shape(d)));
+  }
+  return out;
+}
+
 py::tuple marching_cubes(const py::array_t<float, py::array::c_style>& volume, double level,
                          const py::object& table_obj, int step, const py::object& mask_obj, bool descent,
-                         int threads, const py::object& callback) {
+                         int threads, const py::object& callback, const py::object& mc33_obj) {
   check_threads(threads);
   const PythonProgress progress(callback);
   if (volume.ndim() != 3) throw py::value_error("Input volume should be a 3D numpy array.");
   const generate::ClassicTable table = table_from_python(table_obj);
+  generate::Mc33Tables mc33;
   generate::ClassicMarchingCubesOptions opt;
+  if (!mc33_obj.is_none()) {
+    mc33 = mc33_from_python(py::cast<py::dict>(mc33_obj));
+    opt.mc33 = &mc33;
+  }
   opt.level = level;
   opt.step = step;
   opt.descent = descent;
@@ -122,9 +140,10 @@ py::array classic_table_array() {
 void register_marching_cubes(py::module_& m) {
   m.def("marching_cubes", &marching_cubes, py::arg("volume"), py::arg("level"), py::arg("table") = py::none(),
         py::arg("step") = 1, py::arg("mask") = py::none(), py::arg("descent") = true, py::arg("threads") = 0,
-        py::arg("progress") = py::none(),
+        py::arg("progress") = py::none(), py::arg("mc33") = py::none(),
         "scikit-image-compatible marching cubes on a C-ordered float32 volume; returns (verts, faces, "
-        "normals, values) at unit spacing. Use keymesh.marching_cubes.");
+        "normals, values) at unit spacing; mc33: {name: int8 array} of Lewiner's tables for "
+        "method='lewiner'. Use keymesh.marching_cubes.");
   m.def("remove_degenerate_faces", &remove_degenerate_faces, py::arg("vertices"), py::arg("faces"),
         py::arg("arrays"), "scikit-image's remove_degenerate_faces: (vertices, faces int64, *arrays).");
   m.def("classic_table", &classic_table_array,

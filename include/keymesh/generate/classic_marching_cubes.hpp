@@ -1,6 +1,7 @@
 #pragma once
 // Marching cubes with scikit-image's conventions (skimage.measure.marching_cubes,
-// method="lorensen"), welded by KEY-REDUCE: what keymesh.marching_cubes runs.
+// method="lorensen", or method="lewiner" with Mc33Tables set), welded by
+// KEY-REDUCE: what keymesh.marching_cubes runs.
 //
 // The library's contour() and this generator find the same points (one per
 // grid edge whose samples straddle the level) but differ in the details a
@@ -18,7 +19,10 @@
 //  - the triangulation of each cube is a caller-given classic case table
 //    (ClassicTable, edge numbering below): scikit-image's own table gives its
 //    faces exactly; classic_table() gives keymesh's (same points and
-//    polygons, other diagonals in some cubes);
+//    polygons, other diagonals in some cubes); or Marching Cubes 33
+//    (Mc33Tables): ambiguous faces and interiors tested, and a point at the
+//    weighted centre of some cubes (its normal the corners' weighted
+//    gradients), keyed after the edges;
 //  - step: cubes of step^3 voxels; mask: a cube is kept when the mask is set
 //    at its far corner (+step on every axis), scikit-image's rule.
 //
@@ -34,6 +38,8 @@
 // axis order (axis 0 first), spacing 1 (the caller scales).
 #include <array>
 #include <cstdint>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "keymesh/core/types.hpp"
@@ -51,11 +57,27 @@ using ClassicTable = std::array<std::array<std::int8_t, 16>, 256>;
 // corner order, triangles wound as scikit-image's table winds them.
 ClassicTable classic_table();
 
+// Lewiner et al.'s Marching Cubes 33 tables, by the names scikit-image gives
+// them (CASES, TILING1 ... TILING14, TEST3 ... TEST13, SUBCONFIG13): int8
+// arrays with their shapes. keymesh ships no copy; the Python module reads
+// scikit-image's at run time. Edge id 12 in a tiling is the cube's centre
+// point.
+struct Mc33Array {
+  std::vector<std::int8_t> data;
+  std::vector<int> shape;
+};
+using Mc33Tables = std::map<std::string, Mc33Array>;
+
 struct ClassicMarchingCubesOptions {
   double level = 0;
   int step = 1;                         // >= 1
   const std::uint8_t* mask = nullptr;   // same shape as the volume, C order; nonzero = set
   bool descent = true;                  // scikit-image's gradient_direction="descent": faces reversed
+  // Set: scikit-image's method="lewiner" (Marching Cubes 33: ambiguous faces
+  // and cube interiors tested, centre points added) with these tables; the
+  // classic table is then not used. InputError when a table is missing or
+  // out of range.
+  const Mc33Tables* mc33 = nullptr;
 };
 
 struct ClassicMarchingCubes {
