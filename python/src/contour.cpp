@@ -119,6 +119,9 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   opt.scalars = scalars;
   ArrayVolume view;  // keeps a numpy array's samples alive while the GIL is released
   const ImageGrid& grid = contour_grid(volume, spacing, origin, view);
+  // A C-order array is contoured with its axes reversed: the mirrored table
+  // gives the triangles of the array's own frame (those of an F-order copy).
+  opt.reversed_axes = view.reversed;
   // Positions and triangles (and the scalar) only: written into the
   // module's own arrays, handed to numpy as they are.
   OwnArrays own;

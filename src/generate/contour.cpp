@@ -39,8 +39,11 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-GridShape shape_of(const ImageGrid& g) {
+// The table is the mirrored one when the caller reversed the axes (not with
+// coarsening, whose tables are built from the plain one).
+GridShape shape_of(const ImageGrid& g, const ContourOptions& opt) {
   GridShape s{};
+  s.table = &marching_cubes_table(opt.reversed_axes && !opt.coarsen);
   s.nx = g.dims[0];
   s.ny = g.dims[1];
   s.nz = g.dims[2];
@@ -69,7 +72,7 @@ template <class K>
 Id generate_soup(const InsideBits& bits, const GridShape& s, Id k_begin, Id k_end, K key_offset, std::vector<K>& keys,
                  std::vector<Id>& blocks, ContourStats& st) {
   // Voxel layers [k_begin, k_end): all of them but ghost planes' layers.
-  const auto& table = marching_cubes_table();
+  const auto& table = *s.table;
   const Id rows = (s.ny - 1) * (k_end - k_begin);
   auto t0 = Clock::now();
   std::vector<Id> row_offsets(rows + 1, 0);
@@ -699,7 +702,7 @@ void write_triangles_and_points(const std::vector<InsideBits>& bits, const std::
 template <class T>
 SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
                          std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys) {
-  GridShape s = shape_of(grid);
+  GridShape s = shape_of(grid, opt);
   s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
   const EdgeInterpolator<T> interp{samples, s, opt.isovalues.data(), 3 * s.n};
@@ -772,7 +775,7 @@ SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourO
 template <class K, class T>
 SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
                          std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys) {
-  GridShape s = shape_of(grid);
+  GridShape s = shape_of(grid, opt);
   s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
   const K keys_per_iso = static_cast<K>(3 * s.n);
@@ -897,10 +900,10 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
 std::vector<Id> triangles_per_layer(const ImageGrid& grid, const ContourOptions& options) {
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2) throw InputError("triangles_per_layer: need at least 2 points along every axis");
-  const auto& table = marching_cubes_table();
   return visit_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
-    const GridShape s = shape_of(grid);
+    const GridShape s = shape_of(grid, options);
+    const auto& table = *s.table;
     std::vector<Id> per_row(static_cast<std::size_t>((s.ny - 1) * (s.nz - 1)), 0);
     InsideBits bits;
     for (double iso : options.isovalues) {

@@ -185,7 +185,7 @@ inline void count_grid_rows(const InsideBits& bits, const GridShape& s, Id kb, I
 // starting at `first_point` and `first_triangle`.
 inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, Id first_point, Id first_triangle,
                        RowCounts& rc) {
-  const auto& table = marching_cubes_table();
+  const auto& table = *s.table;
   const Id voxel_rows = (s.ny - 1) * (ke - kb);
   count_grid_rows(bits, s, kb, ke, first_point, rc);
   rc.triangle_first.assign(static_cast<std::size_t>(voxel_rows + 1), 0);
@@ -237,7 +237,7 @@ inline void count_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke,
 template <class Emit>
 void write_rows(const InsideBits& bits, const GridShape& s, Id kb, Id ke, const RowCounts& rc,
                 PointIndex* connectivity, const Emit& emit_points) {
-  const auto& table = marching_cubes_table();
+  const auto& table = *s.table;
   const VoxelBricks bricks(s, kb, ke);
   constexpr Id kRun = VoxelBricks::kRun;
   parallel::for_each_dynamic(bricks.count(), [&](Id task) {

@@ -221,11 +221,37 @@ MarchingCubesTable build_table() {
   return b.t;
 }
 
+// x <-> z of a corner (c & 1 is x, c >> 2 is z).
+int mirror_corner(int c) { return ((c & 1) << 2) | (c & 2) | ((c >> 2) & 1); }
+
+MarchingCubesTable build_mirrored_table(const MarchingCubesTable& t) {
+  MarchingCubesTable m = t;  // the same edges
+  std::array<std::uint8_t, 12> mirror_edge{};
+  for (int e = 0; e < 12; ++e) {
+    const int a = mirror_corner(t.edges[e].corner0), b = mirror_corner(t.edges[e].corner1);
+    for (int f = 0; f < 12; ++f)
+      if ((t.edges[f].corner0 == a && t.edges[f].corner1 == b) || (t.edges[f].corner0 == b && t.edges[f].corner1 == a))
+        mirror_edge[e] = static_cast<std::uint8_t>(f);
+  }
+  for (int cube_case = 0; cube_case < 256; ++cube_case) {
+    int mirrored = 0;
+    for (int c = 0; c < 8; ++c)
+      if ((cube_case >> c) & 1) mirrored |= 1 << mirror_corner(c);
+    m.triangle_count[cube_case] = t.triangle_count[mirrored];
+    for (int tri = 0; tri < t.triangle_count[mirrored]; ++tri)
+      for (int k = 0; k < 3; ++k)
+        m.triangle_edges[cube_case][3 * tri + k] = mirror_edge[t.triangle_edges[mirrored][3 * tri + 2 - k]];
+  }
+  return m;
+}
+
 }  // namespace
 
-const MarchingCubesTable& marching_cubes_table() {
+const MarchingCubesTable& marching_cubes_table(bool reversed_axes) {
   static const MarchingCubesTable table = build_table();
-  return table;
+  if (!reversed_axes) return table;
+  static const MarchingCubesTable mirrored = build_mirrored_table(table);
+  return mirrored;
 }
 
 }  // namespace keymesh::generate

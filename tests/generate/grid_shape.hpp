@@ -10,6 +10,7 @@ inline GridShape grid_shape(Id nx, Id ny, Id nz) {
   s.nx = nx, s.ny = ny, s.nz = nz;
   s.nxy = s.nx * s.ny, s.n = s.nxy * s.nz;
   s.stride[0] = 1, s.stride[1] = s.nx, s.stride[2] = s.nxy;
+  s.table = &marching_cubes_table();
   return s;
 }
 

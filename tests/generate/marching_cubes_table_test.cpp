@@ -7,6 +7,7 @@
 #include <array>
 #include <atomic>
 #include <cstdlib>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -73,8 +74,10 @@ Sweep sweep_case(int cube_case) {
         if (analyze::triangles_cross(tri(a), tri(b))) {
           crossed = true;
           if (s.first_example.empty()) {
-            s.first_example = "triangles " + std::to_string(a) + ", " + std::to_string(b) + " at corner values";
-            for (float v : value) s.first_example += " " + std::to_string(v);
+            std::ostringstream example;  // (not string +: GCC 12's -Wrestrict misfires on it)
+            example << "triangles " << a << ", " << b << " at corner values";
+            for (float v : value) example << ' ' << v;
+            s.first_example = example.str();
           }
         }
     s.crossing += crossed;

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import keymesh
-from conftest import match_points, oriented_faces, smooth_random_field, sphere_field
+from conftest import match_points, noise_field, oriented_faces, smooth_random_field, sphere_field
 
 ISO = 12.37
 
@@ -27,16 +27,22 @@ def test_sphere_is_closed_manifold_with_expected_euler():
 
 
 def test_memory_layouts():
-    """C order, strided views and other byte orders give the same mesh.
-    Fortran order gives the same points and counts, but marching cubes then
-    walks the cubes with x fastest instead of z, and about half of the cubes
-    split their polygon along the other diagonal: a different, equally valid
-    triangulation (VTK's for the same samples)."""
+    """C order, Fortran order, strided views and other byte orders give the
+    same mesh. A C-order array is contoured with its axes reversed (no copy)
+    by the mirrored case table, so its cubes split their polygons as the
+    Fortran-order walk does (before, about half split along the other
+    diagonal); white noise has every case, averaged normals follow."""
     f = smooth_random_field()
     ref = keymesh.contour(f, 0.0123)
-    fortran = keymesh.contour(np.asfortranarray(f), 0.0123)
-    match_points(fortran.points, ref.points)
-    assert fortran.n_cells == ref.n_cells
+    same_mesh(keymesh.contour(np.asfortranarray(f), 0.0123), ref)
+    noise = noise_field()
+    for normals in ("none", "average", "gradient"):
+        c = keymesh.contour(np.ascontiguousarray(noise), 0.1, normals=normals)
+        fortran = keymesh.contour(np.asfortranarray(noise), 0.1, normals=normals)
+        same_mesh(c, fortran)
+        if normals != "none":  # the same vectors, summed (average) in another cube order
+            p = match_points(c.points, fortran.points)
+            assert np.abs(c.point_data["Normals"] - fortran.point_data["Normals"][p]).max() < 1e-5, normals
     # Non-contiguous views: a strided slice and a transposed copy's transpose.
     big = np.zeros((f.shape[0] * 2, f.shape[1], f.shape[2] + 3))
     big[::2, :, 1:-2] = f

@@ -10,6 +10,7 @@
 
 #include "keymesh/core/device.hpp"
 #include "keymesh/core/types.hpp"
+#include "keymesh/generate/marching_cubes_table.hpp"
 #include "keymesh/mesh/face_normal.hpp"
 
 // The per-point arithmetic the CPU passes call for every point or grid
@@ -58,6 +59,8 @@ struct GridShape {
   // grid (streamed contouring): z positions are computed from the global
   // plane index, so a slab gives the bits the whole grid gives.
   Id k_offset;
+  // The case table: marching_cubes_table(ContourOptions::reversed_axes).
+  const MarchingCubesTable* table;
 };
 
 // Position, scalar and gradient of the point on the edge named by a key.

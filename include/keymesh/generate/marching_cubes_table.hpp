@@ -29,6 +29,12 @@ struct MarchingCubesTable {
 };
 
 // Built once (thread-safe static initialisation).
-const MarchingCubesTable& marching_cubes_table();
+//
+// With `reversed_axes`: the table for a grid whose x and z are the caller's z
+// and x (a C-order numpy array contoured without a copy, its output mirrored
+// back). Each case gets the triangles the caller's frame gives the mirrored
+// case, mirrored and wound the other way (a mirror turns orientation), so the
+// caller receives the same triangles from either memory order.
+const MarchingCubesTable& marching_cubes_table(bool reversed_axes = false);
 
 }  // namespace keymesh::generate
