@@ -202,7 +202,7 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const ge
   samples.upload(host_samples, static_cast<std::size_t>(s.n));
   DeviceArray<double> isovalues(opt.isovalues.size(), stream);
   isovalues.upload(opt.isovalues.data(), opt.isovalues.size());
-  check(cudaMemcpyToSymbolAsync(d_table, &generate::marching_cubes_table(opt.reversed_axes && !opt.coarsen),
+  check(cudaMemcpyToSymbolAsync(d_table, &generate::marching_cubes_table(opt.reversed_axes),
                                 sizeof(generate::MarchingCubesTable), 0,
                                 cudaMemcpyHostToDevice, stream),
         "uploading the case table");

@@ -84,8 +84,7 @@ void build_case(const MarchingCubesTable& mc, const CornerTriangles& by_corners,
 // Every case's entries, the cases shared among the threads (a process pays
 // this once, at its first coarsened contour: it was 17.5 M instructions on
 // one thread).
-CoarseVoxelTable build() {
-  const auto& mc = marching_cubes_table();
+CoarseVoxelTable build(const MarchingCubesTable& mc) {
   for (int e = 0; e < 12; ++e)
     if (mc.edges[e].corner0 != kCubeEdgeLayout[e][0] || mc.edges[e].axis != kCubeEdgeLayout[e][1])
       throw std::logic_error("coarse_voxel_table: the marching cubes table's edges are not in kCubeEdgeLayout's order");
@@ -120,9 +119,11 @@ CoarseVoxelTable build() {
 
 }  // namespace
 
-const CoarseVoxelTable& coarse_voxel_table() {
-  static const CoarseVoxelTable table = build();
-  return table;
+const CoarseVoxelTable& coarse_voxel_table(bool reversed_axes) {
+  static const CoarseVoxelTable table = build(marching_cubes_table());
+  if (!reversed_axes) return table;
+  static const CoarseVoxelTable mirrored = build(marching_cubes_table(true));
+  return mirrored;
 }
 
 }  // namespace keymesh::generate

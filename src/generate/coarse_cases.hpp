@@ -65,6 +65,7 @@ struct CoarseVoxelTable {
 };
 
 // Built once (thread-safe static initialisation).
-const CoarseVoxelTable& coarse_voxel_table();
+// From marching_cubes_table(reversed_axes).
+const CoarseVoxelTable& coarse_voxel_table(bool reversed_axes = false);
 
 }  // namespace keymesh::generate

@@ -104,8 +104,7 @@ PortShare port_share(CornerChain chain, unsigned c) {
   return s;
 }
 
-CoarseFanTable::CoarseFanTable() {
-  const CoarseVoxelTable& voxels = coarse_voxel_table();
+CoarseFanTable::CoarseFanTable(const CoarseVoxelTable& voxels) : voxels_(&voxels) {
   if (voxels.first[0] != 0 || ((voxels.entries[0] >> kCoarseCountShift) & 7u) != 0)
     throw std::logic_error("coarse_fan_table: entry 0 is not the voxel without triangles");
   shares_.reset(static_cast<FanShare*>(std::calloc(8 * voxels.entries.size(), sizeof(FanShare))));
@@ -116,7 +115,7 @@ CoarseFanTable::CoarseFanTable() {
 
 void CoarseFanTable::work_out(std::uint16_t entry) const {
   CornerChain chains[8];
-  corner_chains(coarse_voxel_table().entries[entry], 0, chains);
+  corner_chains(voxels_->entries[entry], 0, chains);
   for (unsigned c = 0; c < 8; ++c) {
     std::atomic_ref<PortShare>(port_shares_[8 * std::size_t{entry} + c])
         .store(port_share(chains[c], c), std::memory_order_relaxed);
@@ -126,9 +125,11 @@ void CoarseFanTable::work_out(std::uint16_t entry) const {
   std::atomic_ref<std::uint8_t>(ready_[entry]).store(1, std::memory_order_release);
 }
 
-const CoarseFanTable& coarse_fan_table() {
-  static const CoarseFanTable table;
-  return table;
+const CoarseFanTable& coarse_fan_table(bool reversed_axes) {
+  static const CoarseFanTable table(coarse_voxel_table());
+  if (!reversed_axes) return table;
+  static const CoarseFanTable mirrored(coarse_voxel_table(true));
+  return mirrored;
 }
 
 }  // namespace keymesh::generate

@@ -114,7 +114,7 @@ PortShare port_share(CornerChain chain, unsigned c);
 // both then set its ready byte, released after the shares).
 class CoarseFanTable {
  public:
-  CoarseFanTable();
+  explicit CoarseFanTable(const CoarseVoxelTable& voxels);
 
   // Makes sure entry's shares are worked out (once a cut voxel, before its
   // corners' points ask for them), and starts loading its shares at the
@@ -159,9 +159,11 @@ class CoarseFanTable {
   std::unique_ptr<FanShare[], Free> shares_;
   std::unique_ptr<PortShare[], Free> port_shares_;
   std::unique_ptr<std::uint8_t[], Free> ready_;  // 1 once the entry's shares are stored
+  const CoarseVoxelTable* voxels_;
 };
 
-// Made once (thread-safe static initialisation).
-const CoarseFanTable& coarse_fan_table();
+// Made once (thread-safe static initialisation), over
+// coarse_voxel_table(reversed_axes).
+const CoarseFanTable& coarse_fan_table(bool reversed_axes = false);
 
 }  // namespace keymesh::generate

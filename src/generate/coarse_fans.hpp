@@ -177,8 +177,8 @@ class FanWindow {
     std::uint16_t* const zeros = entry_scratch.data() + none() * width;
     std::memset(zeros, 0, sizeof(std::uint16_t) * width);
     std::fill(rows_, rows_ + slots, zeros);
-    const CoarseFanTable& table = coarse_fan_table();
-    const CoarseVoxel* voxels = coarse_voxel_table().entries.data();
+    const CoarseFanTable& table = coarse_fan_table(s.reversed_axes);
+    const CoarseVoxel* voxels = coarse_voxel_table(s.reversed_axes).entries.data();
     for (Id k = std::max<Id>(k0_, 0); k < k0_ + rows_k_; ++k)
       for (Id j = std::max<Id>(j0_, 0); j < j0_ + rows_j_; ++j) {
         const Id slot = (k - k0_) * rows_j_ + (j - j0_), vr = k * (ny_ - 1) + j, b = bricks.brick_of(j, k);
@@ -246,8 +246,8 @@ inline void check_coarse_fans(const GridShape& s, const CoarseTriangles& ct, Coa
   const VoxelBricks bricks(s, 0, layers);
   fans.suspects.resize(static_cast<std::size_t>(bricks.count()));
   fans.copies.assign(static_cast<std::size_t>(bricks.count()), 0);
-  const CoarseFanTable& table = coarse_fan_table();
-  const CoarseVoxel* const voxels = coarse_voxel_table().entries.data();
+  const CoarseFanTable& table = coarse_fan_table(s.reversed_axes);
+  const CoarseVoxel* const voxels = coarse_voxel_table(s.reversed_axes).entries.data();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
     std::vector<FanSuspect>& suspects = fans.suspects[static_cast<std::size_t>(brick)];
     suspects.clear();

@@ -39,11 +39,11 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// The table is the mirrored one when the caller reversed the axes (not with
-// coarsening, whose tables are built from the plain one).
+// The table is the mirrored one when the caller reversed the axes.
 GridShape shape_of(const ImageGrid& g, const ContourOptions& opt) {
   GridShape s{};
-  s.table = &marching_cubes_table(opt.reversed_axes && !opt.coarsen);
+  s.table = &marching_cubes_table(opt.reversed_axes);
+  s.reversed_axes = opt.reversed_axes;
   s.nx = g.dims[0];
   s.ny = g.dims[1];
   s.nz = g.dims[2];

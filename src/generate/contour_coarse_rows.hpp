@@ -522,8 +522,8 @@ inline void tally_coarse_triangles(const InsideBits& bits, const GridShape& s, c
   const Id layers = s.nz - 1, voxel_rows = (s.ny - 1) * layers;
   const VoxelBricks bricks(s, 0, layers);
   ct.size_for(static_cast<std::size_t>(bricks.count()), static_cast<std::size_t>(voxel_rows));
-  const CoarseVoxelTable& table = coarse_voxel_table();
-  const auto& cubes = marching_cubes_table();
+  const CoarseVoxelTable& table = coarse_voxel_table(s.reversed_axes);
+  const auto& cubes = *s.table;
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
     const Id kb = bricks.k_begin(brick), ke = bricks.k_end(brick), jb = bricks.j_begin(brick), je = bricks.j_end(brick);
     // Rows whose four grid rows have no cut edge have no cut voxel.
@@ -641,7 +641,7 @@ inline void fold_and_count(const GridShape& s, Id first_triangle, CoarseTriangle
 inline void write_coarse_triangles(const GridShape& s, const CoarseBits& cb, const CoarseTriangles& ct,
                                    PointIndex* connectivity) {
   const VoxelBricks bricks(s, 0, s.nz - 1);
-  const CoarseVoxel* table = coarse_voxel_table().entries.data();
+  const CoarseVoxel* table = coarse_voxel_table(s.reversed_axes).entries.data();
   parallel::for_each_dynamic(bricks.count(), [&](Id brick) {
     // Coarse ids by grid point of the brick's grid rows j in [j_begin,
     // j_end] of two planes: plane k + 1's rows become plane k's for the

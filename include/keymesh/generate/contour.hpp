@@ -71,9 +71,8 @@ struct ContourOptions {
   bool curvature = false;
   // The grid's axes are the caller's in reverse order (x <-> z: a C-order
   // numpy array seen without a copy, the output mirrored back by the
-  // caller): cubes are split by the mirrored table, so the caller gets the
-  // triangles of its own frame. Not with coarsening (its tables follow the
-  // plain table; a C-order coarsening may split some cubes the other way).
+  // caller): cubes are split by the mirrored table (coarsening's tables are
+  // built from it), so the caller gets the triangles of its own frame.
   bool reversed_axes = false;
   // Voxel grids: when the grid is planes [first_plane, first_plane + nz) of
   // a grid of total_planes planes (0: not a slab), positions use the global

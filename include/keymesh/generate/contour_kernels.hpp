@@ -59,8 +59,10 @@ struct GridShape {
   // grid (streamed contouring): z positions are computed from the global
   // plane index, so a slab gives the bits the whole grid gives.
   Id k_offset;
-  // The case table: marching_cubes_table(ContourOptions::reversed_axes).
+  // The case table: marching_cubes_table(reversed_axes), as
+  // ContourOptions::reversed_axes asks (coarsening's tables follow it).
   const MarchingCubesTable* table;
+  bool reversed_axes;
 };
 
 // Position, scalar and gradient of the point on the edge named by a key.
