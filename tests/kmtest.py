@@ -205,3 +205,24 @@ def mpirun(P, *args, expect=0, program=None):
         raise AssertionError(f"mpirun -np {P} keymesh {' '.join(map(str, args))}: exit {p.returncode}, "
                              f"expected {expect}\nstdout: {p.stdout}\nstderr: {p.stderr}")
     return p
+
+
+def require_mpi(*probe):
+    """Exits 77 (skipped) unless this machine runs MPI programs and keymesh
+    was built with MPI: `mpirun -np 2 keymesh probe...` must start (exits 1
+    when it fails for another reason)."""
+    if not shutil.which("mpirun"):
+        print("skipped: no mpirun (install openmpi-bin and libopenmpi-dev)")
+        sys.exit(77)
+    # Can this machine run MPI programs at all? (Not keymesh's fault if not.)
+    launcher = mpirun(2, expect=None, program=shutil.which("true") or "/bin/true")
+    if launcher.returncode != 0:
+        print(f"skipped: mpirun -np 2 true fails here (exit {launcher.returncode}): {launcher.stderr.strip()[:400]}")
+        sys.exit(77)
+    p = mpirun(2, *probe, expect=None)
+    if p.returncode != 0 and "built without MPI" in p.stderr:
+        print("skipped: keymesh was built without MPI (install libopenmpi-dev and rebuild)")
+        sys.exit(77)
+    if p.returncode != 0:
+        print(f"mpirun does not start keymesh here (exit {p.returncode}):\n{p.stderr}")
+        sys.exit(1)

@@ -49,7 +49,8 @@ std::unique_ptr<PlaneSource> open_slab_source(const ContourCli& o, const generat
   }
 }
 
-// Every rank writes its piece; rank 0 writes the index once all exist, so a
+// Every rank writes its piece (its triangles, then the ghost cells it
+// carries for its neighbours); rank 0 writes the index once all exist, so a
 // failure anywhere leaves no index and no pieces. True when all succeeded.
 bool write_pieces(distributed::ContourPiece& piece, const std::string& output) {
   namespace fs = std::filesystem;
@@ -59,9 +60,13 @@ bool write_pieces(distributed::ContourPiece& piece, const std::string& output) {
   auto piece_name = [&](int q) { return stem + "_" + std::to_string(q) + ".vtp"; };
   const fs::path mine = index.parent_path() / piece_name(rank);
   const auto t0 = std::chrono::steady_clock::now();
+  // With one layer of ghost cells from the neighbouring slabs, marked as VTK
+  // marks them: per-piece filters see across the shared planes (issue 33).
+  distributed::GhostedPiece ghosted = distributed::ghosted_piece(piece);
+  const io::PieceGhosts ghosts{std::move(ghosted.point_ghosts), std::move(ghosted.cell_ghosts)};
   bool ok = true;
   try {
-    io::write_vtp(piece.mesh, mine.string(), &piece.numbering.ids);
+    io::write_vtp(ghosted.mesh, mine.string(), &ghosted.ids, &ghosts);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "keymesh: rank %d: %s\n", rank, e.what());
     ok = false;
@@ -71,7 +76,7 @@ bool write_pieces(distributed::ContourPiece& piece, const std::string& output) {
     std::vector<std::string> names;
     for (int q = 0; q < ranks; ++q) names.push_back(piece_name(q));
     try {
-      io::write_pvtp(output, piece.mesh, names, true);
+      io::write_pvtp(output, ghosted.mesh, names, true, true);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "keymesh: %s\n", e.what());
       ok = false;

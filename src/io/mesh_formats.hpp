@@ -131,8 +131,12 @@ UnstructuredGrid parse_legacy_vtk(std::string_view data, const std::string& path
 SurfaceMesh parse_vtp(std::string_view data, const std::string& path);
 // With `global_ids`: an integer PointData array marked GlobalIds is returned
 // there (one id per point, pieces concatenated; empty unless every piece
-// with points has one) instead of becoming a float field.
-SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vector<std::int64_t>* global_ids);
+// with points has one) instead of becoming a float field. Every parse drops
+// the cells marked DUPLICATECELL in a "vtkGhostType" array (ghost cells, a
+// neighbouring piece's) and keeps no ghost array as a field; with
+// `duplicate_points`, each point's DUPLICATEPOINT bit is returned there.
+SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vector<std::int64_t>* global_ids,
+                      std::vector<std::uint8_t>* duplicate_points = nullptr);
 
 // Atomic writes (temporary name, then rename). The pieces of a distributed
 // mesh and their .pvtp index: io/mesh_io.hpp.

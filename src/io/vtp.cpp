@@ -24,6 +24,11 @@ using namespace vtk_xml;
 
 namespace {
 
+// VTK's ghost marks (vtkDataSetAttributes::GhostArrayName()): bits, of
+// which DUPLICATEPOINT and DUPLICATECELL (both 1) say "another piece's".
+constexpr const char* kGhostArray = "vtkGhostType";
+constexpr std::uint8_t kDuplicate = 1;
+
 // Cells of one section (Polys or Strips): (offsets, connectivity) with
 // offsets as end positions, validated.
 struct CellArrays {
@@ -64,7 +69,9 @@ SurfaceMesh read_vtp(const std::string& path) {
   return parse_vtp(data, path);
 }
 
-SurfaceMesh parse_vtp(std::string_view data, const std::string& path) { return parse_vtp(data, path, nullptr); }
+SurfaceMesh parse_vtp(std::string_view data, const std::string& path) {
+  return parse_vtp(data, path, nullptr, nullptr);
+}
 
 namespace {
 
@@ -114,6 +121,7 @@ void adopt_marked_normals(const XmlNode& point_data, std::vector<Field>& fields)
 struct PieceData {
   std::vector<Field> fields;
   bool has_ids = false;
+  std::vector<std::uint8_t> ghosts;  // the vtkGhostType array (not a field), or empty
 };
 PieceData read_data(const XmlNode* section, std::int64_t tuples, const Context& ctx, const std::string& what,
                     std::vector<std::int64_t>* global_ids) {
@@ -132,6 +140,17 @@ PieceData read_data(const XmlNode* section, std::int64_t tuples, const Context& 
                        std::to_string(a.count()) + " values for " + std::to_string(tuples) +
                        (what == "PointData" ? " points x " : " cells x ") + std::to_string(a.components) +
                        " components");
+    if (name && *name == kGhostArray && a.components == 1) {
+      out.ghosts.resize(a.count());
+      for (std::size_t i = 0; i < a.count(); ++i) {
+        std::int64_t v = 0;
+        if (!a.as_int(i, v) || v < 0 || v > 255)
+          throw InputError(ctx.path + ": " + what + " array '" + *name + "' holds a value that is not a byte at " +
+                           std::to_string(i));
+        out.ghosts[i] = static_cast<std::uint8_t>(v);
+      }
+      continue;
+    }
     if (global_ids && ids_name && name && *name == *ids_name && a.components == 1) {
       append_global_ids(a, *name, ctx.path, *global_ids);
       out.has_ids = true;
@@ -194,14 +213,24 @@ struct PieceIds {
   }
 };
 
-void append_polys(const CellArrays& polys, const PieceIds& id, std::uint64_t first_tuple, SurfaceMesh& mesh,
-                  std::vector<std::uint64_t>& source) {
+// Whether cell tuple c is a ghost cell (another piece's, carried for filters).
+struct GhostCells {
+  const std::vector<std::uint8_t>& marks;
+  bool operator()(std::uint64_t c) const { return !marks.empty() && (marks[c] & kDuplicate); }
+};
+
+void append_polys(const CellArrays& polys, const PieceIds& id, std::uint64_t first_tuple, const GhostCells& ghost,
+                  SurfaceMesh& mesh, std::vector<std::uint64_t>& source) {
   std::uint64_t begin = 0;
   for (std::size_t c = 0; c < polys.ends.size(); ++c) {
     const std::uint64_t end = polys.ends[c];
     if (end - begin < 3)
       throw InputError(id.path + ": polygon " + std::to_string(c) + " has " + std::to_string(end - begin) +
                        " points (at least 3 needed)");
+    if (ghost(first_tuple + c)) {
+      begin = end;
+      continue;
+    }
     for (std::uint64_t k = begin; k < end; ++k) mesh.connectivity.push_back(id(polys.connectivity, k, "Polys"));
     mesh.offsets.push_back(mesh.connectivity.size());
     source.push_back(first_tuple + c);
@@ -210,12 +239,12 @@ void append_polys(const CellArrays& polys, const PieceIds& id, std::uint64_t fir
 }
 
 // Strip triangle j is (j, j+1, j+2), every other one flipped to keep orientation.
-void append_strips(const CellArrays& strips, const PieceIds& id, std::uint64_t first_tuple, SurfaceMesh& mesh,
-                   std::vector<std::uint64_t>& source) {
+void append_strips(const CellArrays& strips, const PieceIds& id, std::uint64_t first_tuple, const GhostCells& ghost,
+                   SurfaceMesh& mesh, std::vector<std::uint64_t>& source) {
   std::uint64_t begin = 0;
   for (std::size_t c = 0; c < strips.ends.size(); ++c) {
     const std::uint64_t end = strips.ends[c];
-    for (std::uint64_t j = begin; j + 2 < end; ++j) {
+    for (std::uint64_t j = begin; j + 2 < end && !ghost(first_tuple + c); ++j) {
       const bool odd = (j - begin) % 2 == 1;
       const PointIndex a = id(strips.connectivity, j, "Strips");
       const PointIndex b = id(strips.connectivity, j + 1, "Strips");
@@ -232,8 +261,10 @@ void append_strips(const CellArrays& strips, const PieceIds& id, std::uint64_t f
 
 }  // namespace
 
-SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vector<std::int64_t>* global_ids) {
+SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vector<std::int64_t>* global_ids,
+                      std::vector<std::uint8_t>* duplicate_points) {
   if (global_ids) global_ids->clear();
+  if (duplicate_points) duplicate_points->clear();
   bool every_piece_has_ids = true;
   ParsedXml xml = parse_xml(data, path);
   const Context ctx = file_context(xml, path, "PolyData");
@@ -255,6 +286,11 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vecto
     read_points(piece, npts, ctx, mesh);
     PieceData point_data = read_data(piece.child("PointData"), npts, ctx, "PointData", global_ids);
     if (npts > 0) every_piece_has_ids = every_piece_has_ids && point_data.has_ids;
+    if (duplicate_points) {
+      if (point_data.ghosts.empty())
+        duplicate_points->resize(duplicate_points->size() + static_cast<std::size_t>(npts), 0);
+      for (std::uint8_t g : point_data.ghosts) duplicate_points->push_back(g & kDuplicate);
+    }
     merge_piece_fields(mesh.point_fields, point_data.fields, first_piece, npts);
     first_piece = false;
     // Cell data: one tuple per cell of every kind (verts and lines too,
@@ -262,10 +298,12 @@ SurfaceMesh parse_vtp(std::string_view data, const std::string& path, std::vecto
     const std::uint64_t first_poly = static_cast<std::uint64_t>(nverts) + static_cast<std::uint64_t>(nlines);
     const std::uint64_t all_cells = first_poly + static_cast<std::uint64_t>(npolys) + static_cast<std::uint64_t>(nstrips);
     PieceData cell_data = read_data(piece.child("CellData"), static_cast<std::int64_t>(all_cells), ctx, "CellData", nullptr);
+    // Ghost cells (another piece's, carried for VTK's filters) are not this piece's mesh.
+    const GhostCells ghost{cell_data.ghosts};
     std::vector<std::uint64_t> source;
-    if (auto polys = read_cells(piece, "Polys", npolys, ctx)) append_polys(*polys, id, first_poly, mesh, source);
+    if (auto polys = read_cells(piece, "Polys", npolys, ctx)) append_polys(*polys, id, first_poly, ghost, mesh, source);
     if (auto strips = read_cells(piece, "Strips", nstrips, ctx))
-      append_strips(*strips, id, first_poly + static_cast<std::uint64_t>(npolys), mesh, source);
+      append_strips(*strips, id, first_poly + static_cast<std::uint64_t>(npolys), ghost, mesh, source);
     if (!source.empty()) {
       std::vector<Field> cells = cell_fields_of(std::move(cell_data.fields), source);
       merge_piece_fields(mesh.cell_fields, cells, !cells_started, static_cast<std::int64_t>(source.size()));
@@ -288,6 +326,7 @@ namespace {
 struct Pieces {
   std::vector<SurfaceMesh> meshes;
   std::vector<std::vector<std::int64_t>> ids;
+  std::vector<std::vector<std::uint8_t>> duplicates;  // per point: 1 when another piece owns it
 };
 Pieces read_pieces(const std::string& path) {
   const FileBytes index = read_whole_file(path);
@@ -306,7 +345,8 @@ Pieces read_pieces(const std::string& path) {
     if (p.is_relative()) p = dir / p;
     const FileBytes data = read_whole_file(p.string());
     pieces.ids.emplace_back();
-    pieces.meshes.push_back(parse_vtp(data, p.string(), &pieces.ids.back()));
+    pieces.duplicates.emplace_back();
+    pieces.meshes.push_back(parse_vtp(data, p.string(), &pieces.ids.back(), &pieces.duplicates.back()));
   }
   if (pieces.meshes.empty()) throw InputError(path + ": the index lists no pieces");
   return pieces;
@@ -350,7 +390,8 @@ void append_cells(SurfaceMesh& out, const SurfaceMesh& m, bool polygons, IdOf id
 
 // Welded by the ids the pieces carry (no positions compared): point g of the
 // whole mesh is the piece point with global id g; every copy of a shared
-// point must agree on its position.
+// point must agree on its position, and its fields are its owner's (the
+// copy not marked DUPLICATEPOINT; the last copy when none is marked).
 void weld_by_global_ids(const std::string& path, const Pieces& pieces, std::int64_t max_id, bool polygons,
                         std::vector<Field>& fields, SurfaceMesh& out) {
   if (static_cast<std::uint64_t>(max_id) >= std::numeric_limits<PointIndex>::max())
@@ -369,11 +410,14 @@ void weld_by_global_ids(const std::string& path, const Pieces& pieces, std::int6
   for (std::size_t i = 0; i < pieces.meshes.size(); ++i) {
     const SurfaceMesh& m = pieces.meshes[i];
     const std::vector<std::int64_t>& ids = pieces.ids[i];
+    const std::vector<std::uint8_t>& duplicate = pieces.duplicates[i];
     for (Id p = 0; p < m.num_points(); ++p) {
       const std::size_t g = static_cast<std::size_t>(ids[static_cast<std::size_t>(p)]);
       if (seen[g] && !std::equal(m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3, out.points.begin() + 3 * g))
         throw InputError(path + ": pieces disagree on the position of global point " + std::to_string(g));
-      seen[g] = 1;
+      // seen: 1 a duplicate's copy so far, 2 the owner's.
+      if (seen[g] == 2) continue;
+      seen[g] = duplicate[static_cast<std::size_t>(p)] ? 1 : 2;
       std::copy_n(m.points.begin() + 3 * p, 3, out.points.begin() + 3 * g);
       for (Field& f : fields) {
         const Field* src = field_of(m, f);
@@ -445,15 +489,23 @@ std::string declared_array(const Field& f) {
 
 void write_vtp(const SurfaceMesh& mesh, const std::string& path) { write_vtp(mesh, path, nullptr); }
 
-void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids) {
+void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids,
+               const PieceGhosts* ghosts) {
   validate_mesh(mesh, path);
   if (global_point_ids && global_point_ids->size() != static_cast<std::size_t>(mesh.num_points()))
     throw InputError(path + ": " + std::to_string(global_point_ids->size()) + " global point ids for " +
                      std::to_string(mesh.num_points()) + " points");
   const Id cells = mesh.num_cells();
-  // Appended blocks in file order: point fields (and global ids), cell
-  // fields, points, connectivity, offsets.
+  if (ghosts && (ghosts->points.size() != static_cast<std::size_t>(mesh.num_points()) ||
+                 ghosts->cells.size() != static_cast<std::size_t>(cells)))
+    throw InputError(path + ": ghost marks for " + std::to_string(ghosts->points.size()) + " points and " +
+                     std::to_string(ghosts->cells.size()) + " cells");
+  // Appended blocks in file order: point fields (and global ids, ghost
+  // marks), cell fields (and ghost marks), points, connectivity, offsets.
   vtk_xml::AppendedArrays arrays;
+  const auto ghost_array = [&](const std::vector<std::uint8_t>& marks) {
+    return arrays.bytes(ScalarType::UInt8, kGhostArray, 1, marks.data(), marks.size());
+  };
   std::string x = vtk_xml::file_header("PolyData") + "  <PolyData>\n";
   x += "    <Piece NumberOfPoints=\"" + std::to_string(mesh.num_points()) +
        "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" + std::to_string(cells) +
@@ -463,10 +515,12 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
   if (global_point_ids)
     x += arrays.integers(ScalarType::Int64, "GlobalPointIds", global_point_ids->size(),
                          [&](std::uint64_t i) { return (*global_point_ids)[i]; });
+  if (ghosts) x += ghost_array(ghosts->points);
   x += "      </PointData>\n";
-  if (!mesh.cell_fields.empty()) {
+  if (!mesh.cell_fields.empty() || ghosts) {
     x += "      <CellData>\n";
     for (const Field& f : mesh.cell_fields) x += arrays.floats(f.name, f.components, f.values);
+    if (ghosts) x += ghost_array(ghosts->cells);
     x += "      </CellData>\n";
   }
   x += "      <Points>\n" + arrays.floats("Points", 3, mesh.points) + "      </Points>\n";
@@ -481,15 +535,23 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
 
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
                 bool global_point_ids) {
+  write_pvtp(path, like, pieces, global_point_ids, false);
+}
+
+void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
+                bool global_point_ids, bool ghosts) {
+  const std::string ghost_array = std::string("      <PDataArray type=\"UInt8\" Name=\"") + kGhostArray + "\"/>\n";
   std::string x = vtk_xml::file_header("PPolyData");
-  x += "  <PPolyData GhostLevel=\"0\">\n";
+  x += std::string("  <PPolyData GhostLevel=\"") + (ghosts ? "1" : "0") + "\">\n";
   x += "    <PPointData" + point_data_attributes(like, global_point_ids) + ">\n";
   for (const Field& f : like.point_fields) x += declared_array(f);
   if (global_point_ids) x += "      <PDataArray type=\"Int64\" Name=\"GlobalPointIds\"/>\n";
+  if (ghosts) x += ghost_array;
   x += "    </PPointData>\n";
-  if (!like.cell_fields.empty()) {
+  if (!like.cell_fields.empty() || ghosts) {
     x += "    <PCellData>\n";
     for (const Field& f : like.cell_fields) x += declared_array(f);
+    if (ghosts) x += ghost_array;
     x += "    </PCellData>\n";
   }
   x += "    <PPoints>\n      <PDataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";

@@ -717,6 +717,40 @@ TEST(PvtpTest, PiecesWeldByGlobalIdsNotPositions) {
   EXPECT_THROW(io::read_mesh(dir.file("not.pvtp")), InputError);
 }
 
+// The same square written as distributed pieces with VTK's ghost marks:
+// each piece carries the other's triangle as a ghost cell (DUPLICATECELL)
+// and marks the points the other owns (DUPLICATEPOINT). The reader drops
+// ghost cells (the square's two triangles, once each), keeps no
+// vtkGhostType field, and takes a point's field from its owner's copy.
+TEST(PvtpTest, GhostCellsAreDroppedAndOwnersFieldsKept) {
+  TempDir dir;
+  SurfaceMesh a, b;
+  a.points = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};  // global 0, 1, 2, 3 (3 a ghost point)
+  a.connectivity = {0, 1, 2, 2, 1, 3};              // its triangle, then b's as a ghost cell
+  a.point_fields.push_back({"s", 1, {10, -1, -2, -3}});
+  b.points = {0, 1, 0, 1, 0, 0, 1, 1, 0, 0, 0, 0};  // global 2, 1, 3, 0 (0 a ghost point)
+  b.connectivity = {0, 1, 2, 3, 1, 0};              // its triangle, then a's as a ghost cell
+  b.point_fields.push_back({"s", 1, {12, 11, 13, -4}});
+  const std::vector<std::uint64_t> ia = {0, 1, 2, 3}, ib = {2, 1, 3, 0};
+  const io::PieceGhosts ga{{0, 1, 1, 1}, {0, 1}}, gb{{0, 0, 0, 1}, {0, 1}};
+  io::write_vtp(a, dir.file("sq_0.vtp"), &ia, &ga);
+  io::write_vtp(b, dir.file("sq_1.vtp"), &ib, &gb);
+  io::write_pvtp(dir.file("sq.pvtp"), a, {"sq_0.vtp", "sq_1.vtp"}, true, true);
+  const SurfaceMesh m = io::read_mesh(dir.file("sq.pvtp"));
+  EXPECT_EQ(m.points, (Array<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}));
+  EXPECT_EQ(m.connectivity, (Array<PointIndex>{0, 1, 2, 2, 1, 3}));
+  ASSERT_EQ(m.point_fields.size(), 1u);  // neither the ids nor the marks are fields
+  EXPECT_EQ(m.point_fields[0].values, (Array<float>{10, 11, 12, 13}));
+  EXPECT_TRUE(m.cell_fields.empty());
+  // A lone piece read as a .vtp: its own triangle, its points as they are.
+  const SurfaceMesh lone = io::read_mesh(dir.file("sq_0.vtp"));
+  EXPECT_EQ(lone.connectivity, (Array<PointIndex>{0, 1, 2}));
+  EXPECT_EQ(lone.num_points(), 4);
+  EXPECT_TRUE(lone.cell_fields.empty());
+  const io::PieceGhosts short_marks{{0, 1}, {0, 1}};
+  EXPECT_THROW(io::write_vtp(a, dir.file("bad.vtp"), &ia, &short_marks), InputError);
+}
+
 // The binary PLY readers of whole records (vertex records in place, 13-byte
 // triangles, then faces of any size) give what the ASCII reader gives for
 // the same values: meshes of mostly triangles with polygons among them

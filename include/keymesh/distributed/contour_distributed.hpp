@@ -71,6 +71,25 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
 // others an empty one. Adds the gather's time to piece.stats.output.
 SurfaceMesh gather(ContourPiece& piece);
 
+// A rank's piece as VTK's parallel pipeline wants it: its triangles, then
+// one layer of ghost cells (the neighbouring ranks' triangles that use a
+// point this rank holds, so that per-piece filters see across the shared
+// planes) with the points they add; every point's global id; VTK's
+// vtkGhostType marks: point_ghosts 1 (DUPLICATEPOINT) on the points another
+// rank owns, cell_ghosts 1 (DUPLICATECELL) on the ghost cells.
+struct GhostedPiece {
+  SurfaceMesh mesh;
+  std::vector<std::uint64_t> ids;
+  std::vector<std::uint8_t> point_ghosts, cell_ghosts;
+};
+
+// Collective: each rank sends its neighbours (the only ranks that hold its
+// points: the planes it shares with them) the triangles touching those
+// planes, with their points' ids, positions and fields; it keeps what it
+// receives that uses a point it holds. Moves the piece's mesh and ids into
+// the result.
+GhostedPiece ghosted_piece(ContourPiece& piece);
+
 // Collective: every rank's stats, on rank 0 (empty elsewhere).
 std::vector<RankStats> gather_stats(const RankStats& mine);
 

@@ -24,12 +24,23 @@ void write_mesh(const SurfaceMesh& mesh, const std::string& path);
 // A piece of a distributed mesh (`mpirun ... keymesh contour -o X.pvtp`):
 // a .vtp with an Int64 PointData array "GlobalPointIds" marked GlobalIds,
 // its points' ids in the whole mesh.
-void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids);
+// With `ghosts`, VTK's ghost marks as UInt8 "vtkGhostType" arrays, one per
+// point and one per cell (vtkDataSetAttributes::DUPLICATEPOINT = 1 on the
+// points another piece owns, DUPLICATECELL = 1 on the cells a piece carries
+// for its neighbours): what keymesh's reader drops and VTK's filters skip.
+struct PieceGhosts {
+  std::vector<std::uint8_t> points, cells;
+};
+void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids,
+               const PieceGhosts* ghosts = nullptr);
 
 // A ParaView parallel PolyData index (.pvtp) over piece files written by
 // write_vtp (Source paths relative to the index); `like` gives the point
 // fields every piece has.
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
                 bool global_point_ids);
+// Pieces written with ghosts: GhostLevel 1 and the vtkGhostType arrays declared.
+void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
+                bool global_point_ids, bool ghosts);
 
 }  // namespace keymesh::io
