@@ -122,15 +122,11 @@ Id generate_soup(const InsideBits& bits, const GridShape& s, Id k_begin, Id k_en
 template <class K>
 void average_normals(const keyreduce::Groups<K>* groups, const std::vector<Id>* blocks, const SurfaceMesh& mesh,
                      Array<float>& normals) {
-  const float* P = mesh.points.data();
-  const PointIndex* C = mesh.connectivity.data();
   const Id points = mesh.num_points();
   normals.resize(3 * points);
   auto* out = reinterpret_cast<Vec3f*>(normals.data());
   if (blocks) {
-    // The three corners of a triangle share its face normal (arity 3).
-    keyreduce::reduce_blocked(C, blocks->data(), static_cast<Id>(blocks->size()) - 1, 3,
-                              [P, C](Id t) { return triangle_normal(P, C, t); }, add, Vec3f{0, 0, 0}, out, points);
+    sum_blocked_normals(mesh, *blocks, out);  // layer_blocks.hpp: the order streamed and MPI runs repeat
   } else {
     sum_face_normals(*groups, face_normals(mesh).data(), out);
   }

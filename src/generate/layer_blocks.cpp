@@ -33,15 +33,20 @@ std::vector<Id> layer_blocks(const SurfaceMesh& mesh, const std::vector<std::uin
   return blocks;
 }
 
-Field blocked_average_normals(const SurfaceMesh& mesh, const std::vector<Id>& blocks) {
+void sum_blocked_normals(const SurfaceMesh& mesh, const std::vector<Id>& blocks, Vec3f* out) {
   const float* P = mesh.points.data();
   const PointIndex* C = mesh.connectivity.data();
-  const Id points = mesh.num_points();
-  Field n{"Normals", 3, Array<float>(static_cast<std::size_t>(3 * points))};
-  auto* out = reinterpret_cast<Vec3f*>(n.values.data());
+  // The three corners of a triangle share its face normal (arity 3).
   keyreduce::reduce_blocked(C, blocks.data(), static_cast<Id>(blocks.size()) - 1, 3,
-                            [P, C](Id t) { return triangle_normal(P, C, t); }, add, Vec3f{0, 0, 0}, out, points);
-  normalize(out, points);
+                            [P, C](Id t) { return triangle_normal(P, C, t); }, add, Vec3f{0, 0, 0}, out,
+                            mesh.num_points());
+}
+
+Field blocked_average_normals(const SurfaceMesh& mesh, const std::vector<Id>& blocks) {
+  Field n{"Normals", 3, Array<float>(static_cast<std::size_t>(3 * mesh.num_points()))};
+  auto* out = reinterpret_cast<Vec3f*>(n.values.data());
+  sum_blocked_normals(mesh, blocks, out);
+  normalize(out, mesh.num_points());
   return n;
 }
 

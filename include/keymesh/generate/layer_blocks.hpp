@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "keymesh/core/types.hpp"
+#include "keymesh/mesh/face_normal.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
 
 namespace keymesh::generate {
@@ -32,8 +33,12 @@ struct LayerGrid {
 // each point's global edge key (isovalue * 3 nxy nz + 3 grid point + axis).
 std::vector<Id> layer_blocks(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& point_keys, const LayerGrid& grid);
 
-// The "Normals" field contour() would write for this mesh: face normals
-// summed by reduce_blocked over `blocks`, then made unit.
+// Face normals summed per point from zero by reduce_blocked over `blocks`
+// (corner offsets, ending with the corner count), not yet made unit: the
+// sums contour() makes for --normals average.
+void sum_blocked_normals(const SurfaceMesh& mesh, const std::vector<Id>& blocks, Vec3f* out);
+
+// The "Normals" field contour() would write for this mesh: those sums, made unit.
 Field blocked_average_normals(const SurfaceMesh& mesh, const std::vector<Id>& blocks);
 
 }  // namespace keymesh::generate
