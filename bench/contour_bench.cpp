@@ -34,9 +34,9 @@
 #include <vector>
 
 #include "keymesh/core/huge_pages.hpp"
-#include "keymesh/generate/contour.hpp"
-#include "keymesh/generate/contour_tets.hpp"
-#include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/generate/unstructured/contour_tets.hpp"
+#include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/parallel/threads.hpp"
 #include "bench_common.hpp"
 #include "bench_input.hpp"

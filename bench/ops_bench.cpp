@@ -20,11 +20,11 @@
 #include <vector>
 
 #include "keymesh/core/huge_pages.hpp"
-#include "keymesh/generate/contour.hpp"
-#include "keymesh/generate/contour_tets.hpp"
-#include "keymesh/generate/dual.hpp"
-#include "keymesh/generate/subdivide.hpp"
-#include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/generate/unstructured/contour_tets.hpp"
+#include "keymesh/generate/unstructured/dual.hpp"
+#include "keymesh/generate/unstructured/subdivide.hpp"
+#include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/parallel/threads.hpp"
 #include "bench_common.hpp"
 #include "bench_input.hpp"

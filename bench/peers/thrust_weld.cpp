@@ -24,7 +24,7 @@
 #include <omp.h>
 
 #include "keymesh/core/huge_pages.hpp"
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/parallel/threads.hpp"
 #include "../bench_common.hpp"
 #include "../bench_input.hpp"

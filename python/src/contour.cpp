@@ -16,7 +16,7 @@
 #include <cmath>
 
 #include "common.hpp"
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/option_names.hpp"
 #include "keymesh/generate/report_fields.hpp"
 #include "keymesh/parallel/for_each.hpp"

@@ -4,7 +4,7 @@
 // into Fortran order (labels are small integers: the copy is cheap next to
 // the generator).
 #include "common.hpp"
-#include "keymesh/generate/labels.hpp"
+#include "keymesh/generate/labels/labels.hpp"
 #include "keymesh/generate/option_names.hpp"
 #include "keymesh/generate/report_fields.hpp"
 

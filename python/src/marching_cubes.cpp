@@ -6,7 +6,7 @@
 #include <cstring>
 
 #include "common.hpp"
-#include "keymesh/generate/classic_marching_cubes.hpp"
+#include "keymesh/generate/classic/classic_marching_cubes.hpp"
 
 namespace keymesh::python {
 

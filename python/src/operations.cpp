@@ -10,12 +10,12 @@
 #include "common.hpp"
 #include "keymesh/analyze/incidence.hpp"
 #include "keymesh/analyze/report_fields.hpp"
-#include "keymesh/generate/coarsen.hpp"
-#include "keymesh/generate/dual.hpp"
+#include "keymesh/generate/coarsen/coarsen.hpp"
+#include "keymesh/generate/unstructured/dual.hpp"
 #include "keymesh/generate/option_names.hpp"
 #include "keymesh/generate/report_fields.hpp"
-#include "keymesh/generate/subdivide.hpp"
-#include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/generate/unstructured/subdivide.hpp"
+#include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/mesh/normals.hpp"
 
 namespace keymesh::python {

@@ -10,7 +10,7 @@
 
 #include "command.hpp"
 #include "raw_input.hpp"
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 
 namespace keymesh::cli {
 

@@ -3,7 +3,7 @@
 #include <cstdio>
 
 #include "command.hpp"
-#include "keymesh/generate/dual.hpp"
+#include "keymesh/generate/unstructured/dual.hpp"
 #include "keymesh/generate/report_fields.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/mesh_io.hpp"

@@ -11,7 +11,7 @@
 
 #include "labels_job.hpp"
 #include "keymesh/distributed/mpi.hpp"
-#include "keymesh/generate/labels_stream.hpp"
+#include "keymesh/generate/labels/labels_stream.hpp"
 #include "keymesh/io/plane_source.hpp"
 
 namespace keymesh::cli {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "command.hpp"
-#include "keymesh/generate/labels.hpp"
+#include "keymesh/generate/labels/labels.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::cli {

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "command.hpp"
-#include "keymesh/generate/subdivide.hpp"
+#include "keymesh/generate/unstructured/subdivide.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"

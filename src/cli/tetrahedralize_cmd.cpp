@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "command.hpp"
-#include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/volume_io.hpp"

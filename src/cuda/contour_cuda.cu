@@ -1,7 +1,7 @@
 // The CUDA backend of marching cubes + KEY-REDUCE (see keymesh/cuda/backend.hpp).
 //
 // The stages mirror the CPU backend and share its per-element functors
-// (keymesh/generate/contour_kernels.hpp), compiled here for the device with
+// (keymesh/generate/contour/contour_kernels.hpp), compiled here for the device with
 // --fmad=false so that every floating-point operation rounds as on the CPU:
 //   1. classify: one thread per voxel, its case and triangle count;
 //   2. scan the counts (CUB), emit the soup of edge keys in voxel order (the
@@ -27,8 +27,8 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/backend.hpp"
-#include "keymesh/generate/contour_kernels.hpp"
-#include "keymesh/generate/marching_cubes_table.hpp"
+#include "keymesh/generate/contour/contour_kernels.hpp"
+#include "keymesh/generate/contour/marching_cubes_table.hpp"
 
 namespace keymesh::cuda {
 

@@ -15,8 +15,8 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
-#include "keymesh/generate/coarsen.hpp"
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/coarsen/coarsen.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/mesh/normals.hpp"
 
 namespace keymesh::distributed {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "keymesh/analyze/exact_predicates.hpp"
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/parallel/threads.hpp"
 

@@ -11,7 +11,7 @@
 #include "keymesh/backend/contour.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/backend.hpp"
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 
 using namespace keymesh;

@@ -1,7 +1,7 @@
 #pragma once
 // A GridShape of nx x ny x nz samples, x fastest, unit spacing (the
 // structured contour's tests build their grids' shapes with it).
-#include "keymesh/generate/contour_kernels.hpp"
+#include "keymesh/generate/contour/contour_kernels.hpp"
 
 namespace keymesh::generate {
 

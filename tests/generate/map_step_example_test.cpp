@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "keymesh/generate/tetrahedralize.hpp"
+#include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/keyreduce/weld.hpp"
 #include "keymesh/mesh/cell_tables.hpp"
 #include "keymesh/mesh/fields.hpp"

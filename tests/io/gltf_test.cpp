@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/io/mesh_io.hpp"
 

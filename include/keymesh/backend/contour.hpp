@@ -7,7 +7,7 @@
 // so the choice between them is made above both. The CLI calls this; the
 // generators and the distributed and streamed contours call generate directly
 // (they refuse --backend cuda by name).
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 
 namespace keymesh::backend {
 

@@ -3,7 +3,7 @@
 // keymesh was built with KEYMESH_CUDA and a device is present).
 #include <string>
 
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 
 namespace keymesh::cuda {
 

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "keymesh/distributed/key_exchange.hpp"
-#include "keymesh/generate/contour_stream.hpp"
-#include "keymesh/generate/layer_blocks.hpp"
+#include "keymesh/generate/contour/contour_stream.hpp"
+#include "keymesh/generate/contour/layer_blocks.hpp"
 
 namespace keymesh::distributed {
 

@@ -18,9 +18,9 @@
 #include <vector>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/generate/contour.hpp"
-#include "keymesh/generate/labels.hpp"
-#include "keymesh/generate/subdivide.hpp"
+#include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/generate/labels/labels.hpp"
+#include "keymesh/generate/unstructured/subdivide.hpp"
 
 namespace keymesh::generate {
 

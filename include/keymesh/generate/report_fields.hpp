@@ -7,10 +7,10 @@
 //   visit_fields(dual_stats, [&](const char* name, const auto& value) { json[name] = value; });
 #include <utility>
 
-#include "keymesh/generate/coarsen.hpp"
-#include "keymesh/generate/contour.hpp"
-#include "keymesh/generate/dual.hpp"
-#include "keymesh/generate/labels.hpp"
+#include "keymesh/generate/coarsen/coarsen.hpp"
+#include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/generate/unstructured/dual.hpp"
+#include "keymesh/generate/labels/labels.hpp"
 
 namespace keymesh::generate {
 

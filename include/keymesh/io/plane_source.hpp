@@ -1,6 +1,6 @@
 #pragma once
 // Volumes read plane by plane for streamed and distributed contouring
-// (keymesh/generate/contour_stream.hpp, keymesh/distributed): raw files
+// (keymesh/generate/contour/contour_stream.hpp, keymesh/distributed): raw files
 // described by RawOptions and uncompressed NRRD / NIfTI, read with a seek
 // per slab (either byte order).
 #include <memory>

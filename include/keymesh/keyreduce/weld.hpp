@@ -12,7 +12,7 @@
 // grouped pair order). KEY-REDUCE's groups come in increasing key order;
 // VERTEX-WELD's in lexicographic position order, each group's key being that
 // of its first pair. Voxel-grid marching cubes numbers its keys without a soup
-// (src/generate/contour_rows.hpp) and is not a client.
+// (src/generate/contour/contour_rows.hpp) and is not a client.
 #include <cstdint>
 #include <utility>
 #include <vector>

@@ -1,7 +1,7 @@
 #pragma once
 // PlaneSource: the z-planes of a volume, read on demand. io implements it
 // (raw, NRRD, NIfTI, Zarr, DICOM: keymesh/io/plane_source.hpp) and generate
-// consumes it (streamed contour: keymesh/generate/contour_stream.hpp) and so
+// consumes it (streamed contour: keymesh/generate/contour/contour_stream.hpp) and so
 // does distributed; it lives here, below all three, so none includes another.
 #include <cstddef>
 

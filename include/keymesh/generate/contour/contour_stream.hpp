@@ -1,0 +1,42 @@
+#pragma once
+// Out-of-core marching cubes (issue 9): the volume is read in slabs of
+// z-planes that fit a memory limit, each slab is contoured with *global* edge
+// keys (3 * point id of the whole grid + axis), and one KEY-REDUCE over the
+// slabs' points merges the points of the planes two slabs share. The merge
+// needs no spatial search and the output is byte-identical to contouring the
+// whole volume at once: the same keys give the same point order, the slabs
+// give the triangles in voxel order, and a shared plane's points are
+// computed from the same samples by both slabs.
+//
+// Supported: any scalar type, several isovalues, the interpolated scalar,
+// gradient normals and mean curvature (each slab reads a ghost plane on
+// either side for the central differences, so they too are bit-identical).
+// Averaged normals: summed over the merged mesh in the in-memory run's
+// blocks of voxel layers (generate/layer_blocks.hpp): bit-identical.
+// Coarsening: the slabs' fine points (with their nearest grid points, the
+// coarse keys) are merged first, then the whole mesh is coarsened as one
+// contour coarsens it: byte-identical, averaged normals included (computed
+// from the coarse mesh). The fine mesh is held before coarsening.
+// Refused by name for now: the GPU.
+#include <cstddef>
+#include <memory>
+
+#include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/mesh/plane_source.hpp"
+
+namespace keymesh::generate {
+
+struct StreamStats {
+  Id slabs = 0;
+  Id planes_per_slab = 0;
+  std::size_t slab_bytes = 0;   // samples held at once
+  double read = 0, contour = 0, merge = 0;
+};
+
+// memory_limit: bytes for the samples held at once (at least two planes);
+// the output mesh comes on top. Throws InputError for unsupported options,
+// LimitError when two planes do not fit the limit.
+SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats* stats = nullptr, StreamStats* stream_stats = nullptr);
+
+}  // namespace keymesh::generate

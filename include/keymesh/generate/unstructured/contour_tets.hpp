@@ -1,0 +1,32 @@
+#pragma once
+// Marching tetrahedra on an unstructured tetrahedral grid, welded by history
+// (paper, Section 4.2 and Table 2's tetrahedral rows).
+//
+// The key of a triangle corner is the input edge it lies on, named by its two
+// point ids, smaller first: (min << b) | max, with b the bits of the point
+// count (plus iso_index << 2b for several isovalues). Tets that list a shared
+// edge in opposite orders still produce the same key, which is what welds a
+// conforming tet mesh into a closed surface; KEY-REDUCE's sort plan groups
+// the corners (the key range, N^2, is too wide to address directly).
+//
+// Guarantees (as for the voxel contour, contour.hpp):
+//  - inside means value >= iso; NaN samples are outside; one point per cut
+//    edge, positions interpolated from the smaller id towards the larger, so
+//    an edge gives the same point whichever tet names it;
+//  - triangles point from inside (>= iso) to outside, whatever the handedness
+//    of each input tet (each cut tet's orientation is read off its volume);
+//  - every point field is carried, interpolated along the edge; normals by
+//    averaging incident face normals (ContourNormals::Gradient is refused);
+//  - output bit-identical for any thread count; ContourWeld::VertexWeld gives
+//    the same mesh up to point order.
+#include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/mesh/unstructured_grid.hpp"
+
+namespace keymesh::generate {
+
+// Throws InputError when the grid has cells other than tetrahedra, no such
+// point field, or invalid isovalues; LimitError past 2^32 - 1 output points
+// or corners, or when the edge keys need more than 64 bits.
+SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& options, ContourStats* stats = nullptr);
+
+}  // namespace keymesh::generate

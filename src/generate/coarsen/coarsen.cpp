@@ -1,0 +1,164 @@
+#include "keymesh/generate/coarsen/coarsen.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/contour/contour_kernels.hpp"
+#include "keymesh/generate/coarsen/split_nonmanifold.hpp"
+#include "keymesh/mesh/unused_points.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/radix_sort.hpp"
+#include "keymesh/parallel/scan.hpp"
+
+namespace keymesh::generate {
+
+namespace {
+
+// A triangle as its point set: the smallest id first, the other two in
+// increasing order, and its orientation (+1 when rotating the smallest id to
+// the front leaves the other two increasing).
+struct TriangleSet {
+  std::uint32_t lo, mid, hi;
+  std::int8_t sign;
+};
+
+inline TriangleSet triangle_set(const PointIndex* C, Id t) {
+  const std::uint32_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
+  // Rotating the smallest id to the front keeps the orientation; the order
+  // of the other two then tells it.
+  const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
+  const std::uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
+  return TriangleSet{a, std::min(b, c), std::max(b, c), static_cast<std::int8_t>(b < c ? 1 : -1)};
+}
+
+}  // namespace
+
+// Triangles grouped by their smallest point id (KEY-REDUCE, sort plan), and
+// each group's few triangles compared with one another; of every set of
+// equal triangles the first of the winning orientation is kept when the
+// orientations do not cancel.
+Id remove_folds(SurfaceMesh& mesh) {
+  const Id n = mesh.num_cells();
+  if (n == 0) return 0;
+  const PointIndex* C = mesh.connectivity.data();
+  std::vector<TriangleSet> tri(static_cast<std::size_t>(n));
+  std::vector<std::uint32_t> lo(static_cast<std::size_t>(n));
+  parallel::for_each(n, [&](Id t) {
+    tri[t] = triangle_set(C, t);
+    lo[t] = tri[t].lo;
+  });
+  const auto g = keyreduce::partition_sort(lo.data(), n, parallel::bits_needed<std::uint32_t>(
+                                                             static_cast<std::uint32_t>(mesh.num_points() - 1)),
+                                           keyreduce::Order::Build);
+  std::vector<std::uint8_t> drop(static_cast<std::size_t>(n), 0);  // by triangle
+  std::vector<std::uint8_t> folded_any(static_cast<std::size_t>(g.num_groups()), 0);
+  parallel::for_each(g.num_groups(), [&](Id grp) {
+    const Id b = g.offsets[grp], e = g.offsets[grp + 1];
+    for (Id i = b; i < e; ++i) {
+      const TriangleSet& ti = tri[g.order[i]];
+      bool first = true;
+      for (Id j = b; j < i && first; ++j)
+        first = !(tri[g.order[j]].mid == ti.mid && tri[g.order[j]].hi == ti.hi);
+      if (!first) continue;  // decided with the first of its set
+      int net = ti.sign, copies = 1;
+      for (Id j = i + 1; j < e; ++j)
+        if (tri[g.order[j]].mid == ti.mid && tri[g.order[j]].hi == ti.hi) net += tri[g.order[j]].sign, ++copies;
+      if (copies == 1) continue;
+      folded_any[grp] = 1;
+      bool kept = false;
+      for (Id j = i; j < e; ++j) {
+        const TriangleSet& tj = tri[g.order[j]];
+        if (tj.mid != ti.mid || tj.hi != ti.hi) continue;
+        const bool winner = net != 0 && !kept && (tj.sign > 0) == (net > 0);
+        drop[g.order[j]] = winner ? 0 : 1;
+        kept = kept || winner;
+      }
+    }
+  });
+  if (std::find(folded_any.begin(), folded_any.end(), 1) == folded_any.end()) return 0;
+  // Pack the kept triangles and their cell fields' tuples in place, in
+  // order (each moves to a lower index).
+  Id at = 0;
+  PointIndex* W = mesh.connectivity.data();
+  for (Id t = 0; t < n; ++t) {
+    if (drop[t]) continue;
+    if (at != t) {
+      for (int k = 0; k < 3; ++k) W[3 * at + k] = W[3 * t + k];
+      for (Field& f : mesh.cell_fields)
+        std::copy_n(f.values.begin() + t * f.components, f.components, f.values.begin() + at * f.components);
+    }
+    ++at;
+  }
+  mesh.connectivity.resize(static_cast<std::size_t>(3 * at));
+  for (Field& f : mesh.cell_fields) f.values.resize(static_cast<std::size_t>(at * f.components));
+  return n - at;
+}
+
+SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                    CoarsenStats* stats) {
+  if (!mesh.all_triangles()) throw InputError("coarsen: the mesh has polygons; only triangles are coarsened");
+  const Id n = mesh.num_points();
+  if (static_cast<Id>(keys.size()) != n) throw InputError("coarsen: one key per point is needed");
+  // The dense plan's table spans the key range (every grid point of the
+  // volume, for a contour); past a few keys per point the sort plan (same
+  // groups, same order) touches far less memory.
+  const auto groups = key_range <= static_cast<std::uint64_t>(4 * n + 1024)
+                          ? keyreduce::partition_dense(keys.data(), n, key_range, keyreduce::Order::Build)
+                          : keyreduce::partition_sort(keys.data(), n, parallel::bits_needed<std::uint64_t>(key_range - 1),
+                                                      keyreduce::Order::Build);
+  const Id m = groups.num_groups();
+  SurfaceMesh out;
+  // Positions and every field: the mean over the group, in pair order.
+  auto average = [&](const Array<float>& in, int k, Array<float>& dst) {
+    dst.assign(static_cast<std::size_t>(m * k), 0.f);
+    parallel::for_each(m, [&](Id g) {
+      for (int c = 0; c < k; ++c) {
+        double s = 0;
+        for (Id j = groups.offsets[g]; j < groups.offsets[g + 1]; ++j) s += in[groups.order[j] * std::size_t(k) + c];
+        dst[g * k + c] = static_cast<float>(s / double(groups.count(g)));
+      }
+    });
+  };
+  average(mesh.points, 3, out.points);
+  for (const Field& f : mesh.point_fields) {
+    Field h{f.name, f.components, {}};
+    average(f.values, f.components, h.values);
+    if (f.name == "Normals" && f.components == 3)
+      parallel::for_each(m, [&](Id g) {
+        float* v = &h.values[3 * g];
+        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
+      });
+    out.point_fields.push_back(std::move(h));
+  }
+  // Rewrite the triangles through the index map; keep those with three distinct points.
+  const Id t_in = mesh.num_cells();
+  std::vector<Id> keep(static_cast<std::size_t>(t_in + 1), 0);
+  const PointIndex* C = mesh.connectivity.data();
+  const std::uint32_t* map = groups.index_map.data();
+  parallel::for_each(t_in, [&](Id t) {
+    const std::uint32_t a = map[C[3 * t]], b = map[C[3 * t + 1]], c = map[C[3 * t + 2]];
+    keep[t] = (a != b && b != c && a != c) ? 1 : 0;
+  });
+  const Id t_out = parallel::exclusive_scan(keep.data(), keep.data(), t_in + 1);
+  out.connectivity.resize(static_cast<std::size_t>(3 * t_out));
+  for (const Field& f : mesh.cell_fields) out.cell_fields.push_back(Field{f.name, f.components, {}});
+  for (Field& f : out.cell_fields) f.values.resize(static_cast<std::size_t>(t_out * f.components));
+  parallel::for_each(t_in, [&](Id t) {
+    if (keep[t + 1] == keep[t]) return;
+    for (int k = 0; k < 3; ++k) out.connectivity[3 * keep[t] + k] = map[C[3 * t + k]];
+    for (std::size_t i = 0; i < out.cell_fields.size(); ++i) {
+      const int k = out.cell_fields[i].components;
+      std::copy_n(mesh.cell_fields[i].values.begin() + t * k, k, out.cell_fields[i].values.begin() + keep[t] * k);
+    }
+  });
+  const Id folded = remove_folds(out);
+  remove_points(out, split_nonmanifold(out).unused);
+  if (stats) *stats = CoarsenStats{n, out.num_points(), t_in, t_out - folded, folded};
+  return out;
+}
+
+}  // namespace keymesh::generate

@@ -1,0 +1,185 @@
+#include "keymesh/generate/contour/contour_stream.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/spherical_distance.hpp"
+
+using namespace keymesh;
+using generate::ContourOptions;
+
+namespace {
+
+// Planes served from a grid held in memory (the test's stand-in for a file).
+class GridPlanes : public PlaneSource {
+ public:
+  explicit GridPlanes(const ImageGrid& g) : g_(g) {
+    head_.dims = g.dims, head_.type = g.type, head_.spacing = g.spacing, head_.origin = g.origin, head_.name = g.name;
+  }
+  const ImageGrid& header() const override { return head_; }
+  void read_planes(Id first, Id count, std::byte* out) override {
+    const std::size_t plane = static_cast<std::size_t>(g_.dims[0] * g_.dims[1]) * scalar_size(g_.type);
+    std::memcpy(out, g_.bytes.data() + plane * static_cast<std::size_t>(first), plane * static_cast<std::size_t>(count));
+    ++reads;
+  }
+  int reads = 0;
+
+ private:
+  const ImageGrid& g_;
+  ImageGrid head_;
+};
+
+void expect_same(const SurfaceMesh& a, const SurfaceMesh& b) {
+  ASSERT_EQ(a.points.size(), b.points.size());
+  EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), a.points.size() * sizeof(float)), 0);
+  EXPECT_EQ(a.connectivity, b.connectivity);
+  ASSERT_EQ(a.point_fields.size(), b.point_fields.size());
+  for (std::size_t i = 0; i < a.point_fields.size(); ++i) EXPECT_EQ(a.point_fields[i].values, b.point_fields[i].values);
+}
+
+TEST(ContourStream, SlabsGiveTheWholeVolumesMeshBitForBit) {
+  ImageGrid g = generate::spherical_distance(40);
+  g.origin = {-3.5, 2.25, 10.125};
+  g.spacing = {0.5, 1.5, 0.3};
+  ContourOptions o;
+  o.isovalues = {17.25, 9.5};
+  const SurfaceMesh whole = generate::contour(g, o);
+  const std::size_t plane = 40 * 40 * sizeof(float);
+  for (std::size_t planes : {2u, 3u, 7u, 39u, 40u, 100u}) {
+    GridPlanes src(g);
+    generate::StreamStats ss;
+    const SurfaceMesh m = generate::contour_streamed(src, o, planes * plane, nullptr, &ss);
+    expect_same(whole, m);
+    EXPECT_LE(ss.slab_bytes, planes * plane);
+    EXPECT_EQ(ss.slabs, src.reads);
+  }
+}
+
+TEST(ContourStream, IntegerSamplesAndRefusals) {
+  ImageGrid g;
+  g.allocate({17, 23, 31}, ScalarType::UInt16);
+  std::mt19937 rng(2);
+  auto* v = reinterpret_cast<std::uint16_t*>(g.data());
+  for (Id p = 0; p < g.num_points(); ++p) v[p] = static_cast<std::uint16_t>(rng() % 1000);
+  ContourOptions o;
+  o.isovalues = {500.5};
+  GridPlanes src(g);
+  expect_same(generate::contour(g, o), generate::contour_streamed(src, o, 5 * 17 * 23 * 2));
+  EXPECT_THROW(generate::contour_streamed(src, o, 17 * 23 * 2), LimitError);  // one plane only
+  o.normals = generate::ContourNormals::Gradient;
+  EXPECT_THROW(generate::contour_streamed(src, o, 3 * 17 * 23 * 2), LimitError);  // 1 plane + 2 ghosts
+}
+
+// Averaged normals: a shared point's partial sums from two slabs are added
+// by the merge. Points and triangles bit for bit; normals within rounding of
+// the in-memory sums (another summation order), unit length. A merge that
+// kept one slab's sum only would tilt the border normals far more.
+TEST(ContourStream, AveragedNormalsMergeAcrossSlabs) {
+  const ImageGrid g = generate::spherical_distance(40);
+  ContourOptions o;
+  o.isovalues = {17.25, 9.5};
+  o.normals = generate::ContourNormals::Average;
+  const SurfaceMesh whole = generate::contour(g, o);
+  const std::size_t plane = 40 * 40 * sizeof(float);
+  for (std::size_t planes : {2u, 5u, 40u}) {
+    GridPlanes src(g);
+    const SurfaceMesh m = generate::contour_streamed(src, o, planes * plane);
+    ASSERT_EQ(m.points, whole.points);
+    ASSERT_EQ(m.connectivity, whole.connectivity);
+    ASSERT_EQ(m.point_fields.size(), 2u);
+    EXPECT_EQ(m.point_fields[1].name, "Normals");
+    const auto& a = m.point_fields[1].values;
+    const auto& b = whole.point_fields[1].values;
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) ASSERT_NEAR(a[i], b[i], 1e-6) << i;
+    for (std::size_t p = 0; p < a.size(); p += 3)
+      ASSERT_NEAR(a[p] * a[p] + a[p + 1] * a[p + 1] + a[p + 2] * a[p + 2], 1.0, 1e-5) << p / 3;
+  }
+}
+
+// Gradient normals and curvature read a ghost plane on either side of each
+// slab: the fields are bit for bit those of the whole volume, on noise (every
+// case, large gradients) at every slab size down to two planes.
+TEST(ContourStream, GhostPlanesGiveTheWholeVolumesDerivatives) {
+  ImageGrid g;
+  g.allocate({13, 11, 17}, ScalarType::Float32);
+  g.spacing = {0.5, 2.0, 0.75};
+  std::mt19937 rng(5);
+  auto* v = reinterpret_cast<float*>(g.data());
+  for (Id p = 0; p < g.num_points(); ++p) v[p] = static_cast<float>(rng() % 1000) * 0.01f;
+  ContourOptions o;
+  o.isovalues = {4.995, 2.5};
+  o.normals = generate::ContourNormals::Gradient;
+  o.curvature = true;
+  const SurfaceMesh whole = generate::contour(g, o);
+  ASSERT_EQ(whole.point_fields.size(), 3u);  // scalars, Normals, mean_curvature
+  const std::size_t plane = 13 * 11 * sizeof(float);
+  for (std::size_t planes : {4u, 5u, 8u, 19u}) {
+    GridPlanes src(g);
+    generate::StreamStats ss;
+    expect_same(whole, generate::contour_streamed(src, o, planes * plane, nullptr, &ss));
+    EXPECT_LE(ss.slab_bytes, planes * plane);
+  }
+  // The same slab contoured without its ghosts differs at the border.
+  GridPlanes src(g);
+  auto planes_of = [&](Id first, Id count) {
+    ImageGrid slab;
+    slab.spacing = g.spacing;
+    slab.allocate({13, 11, count}, g.type);
+    src.read_planes(first, count, slab.bytes.data());
+    return slab;
+  };
+  const ImageGrid slab = planes_of(5, 6), ghosted = planes_of(4, 8);
+  ContourOptions bare = o;
+  bare.first_plane = 5;
+  bare.total_planes = 17;
+  ContourOptions with = o;
+  with.first_plane = 4;
+  with.total_planes = 17;
+  with.ghost_below = with.ghost_above = 1;
+  const SurfaceMesh a = generate::contour(slab, bare), b = generate::contour(ghosted, with);
+  EXPECT_EQ(a.points, b.points);
+  EXPECT_EQ(a.connectivity, b.connectivity);
+  EXPECT_NE(a.point_fields[1].values, b.point_fields[1].values);
+  with.ghost_below = 2;
+  EXPECT_THROW(generate::contour(ghosted, with), InputError);
+}
+
+}  // namespace
+
+// Coarsening streamed: the slabs' fine points merged by edge key, then
+// coarsened by nearest grid point, give the in-memory coarse mesh bit for
+// bit (averaged normals too: computed from the coarse mesh either way), for
+// slabs of every size, several isovalues and every field option.
+TEST(ContourStream, CoarseningStreamedEqualsInMemory) {
+  ImageGrid g;
+  g.allocate({37, 29, 23}, ScalarType::Float32);
+  std::mt19937 rng(9);
+  auto* v = reinterpret_cast<float*>(g.data());
+  for (Id p = 0; p < g.num_points(); ++p) v[p] = std::uniform_real_distribution<float>(0, 1)(rng);
+  g.spacing = {0.5, 1.25, 2.0};
+  g.origin = {-3, 1, 7};
+  const std::size_t plane = 37 * 29 * sizeof(float);
+  for (auto normals : {generate::ContourNormals::None, generate::ContourNormals::Gradient,
+                       generate::ContourNormals::Average}) {
+    ContourOptions o;
+    o.isovalues = {0.5, 0.31};
+    o.normals = normals;
+    o.curvature = normals == generate::ContourNormals::Gradient;
+    o.coarsen = true;
+    generate::ContourStats whole_stats;
+    const SurfaceMesh whole = generate::contour(g, o, &whole_stats);
+    ASSERT_GT(whole.num_cells(), 0);
+    for (std::size_t planes : {4u, 5u, 11u, 23u}) {
+      GridPlanes src(g);
+      generate::ContourStats st;
+      const SurfaceMesh m = generate::contour_streamed(src, o, planes * plane, &st);
+      SCOPED_TRACE("planes " + std::to_string(planes) + " normals " + std::to_string(static_cast<int>(normals)));
+      expect_same(whole, m);
+      EXPECT_EQ(st.triangles_before_coarsening, whole_stats.triangles_before_coarsening);
+    }
+  }
+}
