@@ -20,7 +20,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
 # and those `make bench` adds for its peers, plots and pictures.
 BENCH_PACKAGES = libthrust-dev libtbb-dev libvtk9-dev python3-openvdb python3-matplotlib xvfb hyperfine
 
-.PHONY: all deps build demo test bench scaling clean sanitize sanitize-quick fuzz fuzz-build fuzz-run gltf-validator
+.PHONY: all deps build demo test bench scaling cli-docs clean sanitize sanitize-quick fuzz fuzz-build fuzz-run gltf-validator
 
 all: build
 
@@ -73,6 +73,11 @@ endif
 # The distributed contour for 1..8 MPI ranks -> docs/SCALING.md.
 scaling: build
 	@$(PYTHON) bench/scaling.py --build $(BUILD_DIR)
+
+# docs/cli/<command>.md: each command's --help, rewritten from the built binary
+# (tests/cli/test_cli_docs.py fails when a page differs).
+cli-docs: build
+	@$(PYTHON) scripts/cli_docs.py --keymesh $(BUILD_DIR)/keymesh
 
 bench: EXTRA_PACKAGES = $(BENCH_PACKAGES)
 bench: build

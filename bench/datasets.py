@@ -17,8 +17,8 @@ written as .nrrd (numpy, raw encoding) for keymesh, skimage, OpenVDB and
 Thrust, and as .vti (`keymesh convert`) for VTK.
 
 The isovalues are non-integer (no integer source sample lies on the
-surface): 37.3 on head128 (the head's skin, the value docs/DESIGN-NOTES.md
-uses on brainsmall.den), 90.5 on head256 and big432 (the brain tissue
+surface): 37.3 on head128 (the head's skin, the value docs/decisions/
+use on brainsmall.den), 90.5 on head256 and big432 (the brain tissue
 surface, the value of those tried -- 20.5, 40.5, 60.5, 90.5 -- whose triangle
 count comes nearest the paper's). The paper's Table 1 counts are quoted
 beside ours by report.py; the volumes are not the paper's, so they differ.

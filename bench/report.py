@@ -182,8 +182,7 @@ class Report:
             "",
             f"Written by `bench/report.py` from `{os.path.relpath(self.results, ROOT)}`, the output of "
             f"`{run.get('command', 'make bench')}`. Every measured figure below comes from that one run "
-            "(but for the last section, \"Measured by hand, session by session\", which this script keeps as "
-            "it is); "
+            "(the working sessions' measurements by hand are in [results/NOTES.md](results/NOTES.md)); "
             "figures labelled *paper* are quoted from Miller, Moreland and Ma (EGPGV 2014), measured on "
             f"their machine: {PAPER_MACHINE}. Paper quotes {check_paper()}.",
             "",
@@ -677,8 +676,7 @@ class Report:
                 ". Several isovalues: the sum of the single-isovalue medians over "
                 "the one-call median (≥ 1: one call costs no more). Memory: input + output MiB of the call, and the "
                 "C++ harness's peak RSS (the whole process: volume read, contour, output). The working sessions' "
-                "measurements of these volumes, by hand, are in the last section, \"Measured by hand, session by "
-                "session\".", "",
+                "measurements of these volumes, by hand, are in [results/NOTES.md](results/NOTES.md).", "",
                 table(["volume", "huge pages", "triangles", "keymesh ms", "FE3D ms", "FE3D / keymesh", "C++ harness ms",
                        "FE3D / C++ harness",
                        "Σ single / one call", "input + output MiB", "harness peak MiB", "load"], body), ""]
@@ -695,25 +693,17 @@ class Report:
                                "by coordinates (VERTEX-WELD); run up to 128³ (49 M tets). Data-independent: the "
                                "MRI row times the same grid shape.", PAPER_T4) +
                  self.table5_6() + self.dense_table() + self.labels_table() + self.losses() + self.skipped() + self.figures(plots))
+        # The whole file is this run's; measurements by hand live in
+        # docs/results/NOTES.md, which no bench run touches.
+        parts += ["## Measured by hand", "",
+                  "The working sessions' own measurements, each with its date and command: "
+                  "[results/NOTES.md](results/NOTES.md).", ""]
         text = "\n".join(parts).rstrip() + "\n"
-        # The working sessions' own measurements, written by hand below
-        # KEPT_MARKER, are kept: a bench run replaces only what it measured.
-        try:
-            with open(path) as f:
-                old = f.read()
-        except FileNotFoundError:
-            old = ""
-        at = old.find(KEPT_MARKER)
-        if at >= 0:
-            text += "\n" + old[at:].rstrip() + "\n"
         with open(path + ".tmp", "w") as f:
             f.write(text)
         os.replace(path + ".tmp", path)
         return path
 
-
-# The line of docs/RESULTS.md from which on the file is kept as it is.
-KEPT_MARKER = "<!-- bench/report.py keeps everything from this line on: measurements by hand, session by session -->"
 
 
 def main():

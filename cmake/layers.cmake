@@ -6,7 +6,7 @@
 # of a layer that is not listed. A layer may only use layers above it in this
 # list (checked by keymesh_check_layer_table). A layer's files are
 # include/keymesh/<layer>/ and src/<layer>/ (private headers included); the
-# python layer is python/src/. docs/DESIGN-NOTES.md ("Layers") says what each
+# python layer is python/src/. docs/ARCHITECTURE.md ("Layers") says what each
 # layer holds.
 set(KEYMESH_LAYERS core parallel weld keyreduce mesh analyze io generate distributed cuda backend cli python)
 

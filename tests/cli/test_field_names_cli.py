@@ -7,8 +7,8 @@ keymesh.write), for every normals mode, --curvature and --coarsen, into .vtp
 and .ply: each path's file must be byte-identical to the in-memory one.
 
 The scalar field keeps the name the file stores (the .vti's DataArray Name,
-here "density"); formats that store none give "scalars" (docs/DESIGN-NOTES.md,
-"The scalar field's name"). Before that rule was shared, the streamed and
+here "density"); formats that store none give "scalars" (docs/decisions/
+scalar-field-name.md). Before that rule was shared, the streamed and
 MPI paths called a .vti's field "scalars" while the in-memory one kept its
 name, and no test saw it: the streamed .vti was compared with an in-memory
 .nrrd, which is called "scalars" too.

@@ -1,4 +1,4 @@
-// The worked example of docs/DESIGN-NOTES.md ("A new generator is its map
+// The worked example of docs/ARCHITECTURE.md ("A new generator is its map
 // step"): the face centres of a grid of hexahedra, one point per distinct
 // face, written as a map step over the shared layers. The test checks it
 // against tetrahedralize --scheme 24, whose face-centre points it must equal
@@ -18,7 +18,7 @@
 namespace keymesh {
 namespace {
 
-// --- the example (docs/DESIGN-NOTES.md quotes this function) ---
+// --- the example (docs/ARCHITECTURE.md quotes this function) ---
 UnstructuredGrid face_centres(const UnstructuredGrid& hexes) {
   // Input topology: every cell's corners in bit order, and the key of a
   // quad face (its smallest corner and the corner opposite it).

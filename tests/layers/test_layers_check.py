@@ -100,15 +100,15 @@ REFUSED = [
 ]
 
 
-def design_notes_show_the_table():
-    # docs/DESIGN-NOTES.md's "Layers" table lists the layers of cmake/layers.cmake in its order,
+def architecture_shows_the_table():
+    # docs/ARCHITECTURE.md's "Layers" table lists the layers of cmake/layers.cmake in its order,
     # each with the layers the table lets it use.
     with open(os.path.join(SOURCE_DIR, "cmake", "layers.cmake")) as f:
         text = f.read()
     order = re.search(r"set\(KEYMESH_LAYERS ([^)]*)\)", text).group(1).split()
     uses = {m.group(1): m.group(2).replace('"', "").split()
             for m in re.finditer(r"set\(KEYMESH_LAYER_USES_(\w+)\s+([^)]*)\)", text)}
-    with open(os.path.join(SOURCE_DIR, "docs", "DESIGN-NOTES.md")) as f:
+    with open(os.path.join(SOURCE_DIR, "docs", "ARCHITECTURE.md")) as f:
         notes = f.read()
     section = notes.split("\n## Layers\n", 1)[1].split("\n## ", 1)[0]
     rows = [[c.strip() for c in line.strip().strip("|").split("|")]
@@ -128,6 +128,6 @@ check("a tree that keeps to the table passes and gets its stamp", clean_tree_pas
 check("the project's own tree passes", the_project_tree_passes)
 for title, name, extra, phrases in REFUSED:
     check(title, lambda name=name, extra=extra, phrases=phrases: expect_refused(name, extra, *phrases))
-check("docs/DESIGN-NOTES.md's Layers table is cmake/layers.cmake's", design_notes_show_the_table)
+check("docs/ARCHITECTURE.md's Layers table is cmake/layers.cmake's", architecture_shows_the_table)
 shutil.rmtree(D, ignore_errors=True)
 finish()

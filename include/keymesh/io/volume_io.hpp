@@ -29,8 +29,8 @@ struct RawOptions {
 // The name the file stores for its array (`stored`), else "scalars"
 // (ImageGrid's default name). Of the formats read, only .vti stores one (its point
 // DataArray's Name; an empty Name counts as none); raw, NRRD, NIfTI, VolPack
-// .den, DICOM and Zarr store none (docs/DESIGN-NOTES.md, "The scalar field's
-// name").
+// .den, DICOM and Zarr store none (docs/decisions/
+// scalar-field-name.md).
 std::string volume_field_name(const std::string* stored = nullptr);
 
 // Throws InputError with the path and the problem on any malformed input.
