@@ -24,6 +24,10 @@ import pytest
 import keymesh
 
 GIB = 2 ** 30
+# A sanitizer reserves terabytes of shadow memory (no RLIMIT_AS under one),
+# and its allocator aborts on the huge requests these cases make.
+SANITIZED = any(k in os.environ for k in ("ASAN_OPTIONS", "TSAN_OPTIONS", "UBSAN_OPTIONS"))
+address_space_limited = pytest.mark.skipif(SANITIZED, reason="no RLIMIT_AS under a sanitizer")
 SMALL = np.random.default_rng(1).random((6, 7, 8)).astype(np.float32)
 LABELS = (SMALL > 0.5).astype(np.uint8)
 
@@ -60,15 +64,18 @@ def assert_memory_error(code, *named):
         assert word in last, last
 
 
+@address_space_limited
 def test_strided_volume_copy_past_the_address_space():
     # 1.28 GiB of samples, reversed: the C-ordered copy does not fit in 2 GiB
     assert_memory_error("keymesh.contour(np.zeros((700, 700, 700), 'f4')[::-1], .5)", "volume", "GiB")
 
 
+@address_space_limited
 def test_strided_label_map_copy_past_the_address_space():
     assert_memory_error("keymesh.contour_labels(np.zeros((1100, 1100, 1100), 'u1')[::-1])", "volume", "GiB")
 
 
+@address_space_limited
 @pytest.mark.parametrize("dtype,call", [
     ("float32", "keymesh.contour(v, .5)"), ("float32", "keymesh.tetrahedralize(v)"),
     ("uint8", "keymesh.contour_labels(v)")])
@@ -80,6 +87,7 @@ def test_zero_stride_volume_claiming_2_to_the_n_samples(dtype, call, log2):
     assert_memory_error(f"v = np.broadcast_to(np.{dtype}(0), (2 ** {a}, 2 ** {a}, 2 ** {b}))\n{call}", "volume")
 
 
+@address_space_limited
 def test_zero_stride_keys_past_the_index_map_are_a_limit_error():
     rc, last = run_limited("""
         n = 2 ** 32 + 1
@@ -88,18 +96,21 @@ def test_zero_stride_keys_past_the_index_map_are_a_limit_error():
     assert last.startswith("LimitError") and "4294967297" in last, last
 
 
+@address_space_limited
 def test_zero_stride_keys_whose_copy_does_not_fit():
     assert_memory_error("""
         n = 2 ** 31
         keymesh.key_reduce(np.broadcast_to(np.uint64(1), (n,)), np.broadcast_to(np.float32(1), (n,)))""", "keys")
 
 
+@address_space_limited
 def test_zero_stride_cells_of_subdivide():
     assert_memory_error("""
         cells = np.broadcast_to(np.array([0, 1, 2], np.int64), (2 ** 40, 3))
         keymesh.subdivide(keymesh.Mesh(np.eye(3, dtype=np.float32), cells))""", "mesh.cells")
 
 
+@address_space_limited
 def test_zero_stride_points_and_fields():
     assert_memory_error("""
         points = np.broadcast_to(np.float64(0), (2 ** 40, 3))
@@ -114,6 +125,7 @@ def test_zero_stride_points_and_fields():
         keymesh.check(keymesh.Mesh(points, np.zeros((0, 3), np.int64)))""", "mesh.points", "would pass the address space")
 
 
+@address_space_limited
 def test_volume_zeros_past_the_address_space():
     assert_memory_error("keymesh.Volume.zeros((2048, 2048, 2048), 'float32')", "Volume", "32 GiB")
 
