@@ -27,6 +27,7 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from ._keymesh import Error, LimitError, Volume
+from ._arguments import INT32, int_arg as _int_arg
 from . import _keymesh as _ext
 from ._grid import CellCounts, Grid, grid_from_parts as _grid
 from ._operations import coarsen, dual, incidence, quality, subdivide, tetrahedralize
@@ -124,10 +125,12 @@ class Mesh(CellCounts):
 
 
 def _isovalues(iso: Union[float, Sequence[float]]) -> list:
-    if isinstance(iso, (numbers.Real, np.floating, np.integer)):
-        return [float(iso)]
     try:
+        if isinstance(iso, (numbers.Real, np.floating, np.integer)):
+            return [float(iso)]
         values = [float(v) for v in np.asarray(iso, dtype=np.float64).reshape(-1)]
+    except OverflowError:
+        raise OverflowError("iso is past the range of a float64") from None
     except (TypeError, ValueError):
         raise TypeError(f"iso must be a number or a sequence of numbers, got {type(iso).__name__}") from None
     return values
@@ -138,7 +141,7 @@ def _threads(threads: int) -> int:
         raise TypeError(f"threads must be an int, got {type(threads).__name__}")
     if threads < 0:
         raise ValueError(f"threads must be >= 0 (0 = all cores), got {threads}")
-    return int(threads)
+    return _int_arg(threads, "threads", INT32)
 
 
 def _mesh(parts, cls=None) -> Mesh:
@@ -211,8 +214,12 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         TypeError: unsupported dtype or argument type.
         ValueError: wrong ndim, fewer than 2 samples along an axis,
             non-finite iso, negative threads, unknown normals/weld
-            (keymesh.Error, a ValueError, for input the library refuses;
-            keymesh.LimitError past 2^32 - 1 points or corners).
+            (keymesh.Error, a ValueError, for input the library refuses,
+            e.g. a spacing or origin that puts a point past float32 or at
+            NaN; keymesh.LimitError past 2^32 - 1 points or corners).
+        OverflowError: an integer argument past its C++ type.
+        MemoryError: the copy a strided array needs does not fit (the
+            message names the array and its size).
     """
     if normals is None:
         normals = "none"
@@ -320,7 +327,7 @@ def read(path: Any, dims: Optional[Sequence[int]] = None, dtype: Any = None,
     grids (.vtu, legacy .vtk) a Grid. .glb is written, not read.
     Malformed files raise keymesh.Error (a ValueError) naming the file.
     """
-    kind, obj = _ext.read(str(path), dims, dtype, spacing, origin, endian, int(header_bytes))
+    kind, obj = _ext.read(str(path), dims, dtype, spacing, origin, endian, _int_arg(header_bytes, "header_bytes"))
     if kind == "grid":
         return _grid(obj)
     return obj if kind == "volume" else _mesh(obj)

@@ -31,6 +31,23 @@ _MESHIO_TYPES = {"vertex": 1, "line": 3, "triangle": 5, "quad": 9, "tetra": 10, 
 _CORNERS = {1: 1, 3: 2, 5: 3, 9: 4, 10: 4, 11: 8, 12: 8, 13: 6, 14: 5}
 
 
+def _numpy_view(array, what: str) -> np.ndarray:
+    """vtk_to_numpy(array), refusing by name (keymesh.Error) an array it
+    cannot view: a vtkBitArray (8 values a byte) or a type numpy has no
+    dtype for, where vtk_to_numpy only asserts (an AssertionError, or
+    nothing at all under python -O)."""
+    from vtkmodules.util import numpy_support as ns
+    from vtkmodules.util.vtkConstants import VTK_BIT
+
+    from ._keymesh import Error
+
+    kind = array.GetDataType()
+    if kind == VTK_BIT or kind not in ns.get_vtk_to_numpy_typemap():
+        raise Error(f"from_vtk: {what} is a {array.GetClassName()} ({array.GetDataTypeAsString()} values), which "
+                    "numpy cannot view; convert it to a numeric array (e.g. vtkUnsignedCharArray) first")
+    return ns.vtk_to_numpy(array)
+
+
 def _vtk_array(values: Any, name: Optional[str] = None):
     """A VTK data array over `values` (a view when it is contiguous)."""
     from vtkmodules.util import numpy_support as ns
@@ -106,14 +123,12 @@ def _meshio_fields(data) -> Dict[str, np.ndarray]:
     return out
 
 
-def _fields_from_vtk(data) -> Dict[str, np.ndarray]:
-    from vtkmodules.util import numpy_support as ns
-
+def _fields_from_vtk(data, what: str) -> Dict[str, np.ndarray]:
     out = {}
     for i in range(data.GetNumberOfArrays()):
         a = data.GetArray(i)
         if a is not None and a.GetName():
-            out[a.GetName()] = ns.vtk_to_numpy(a)
+            out[a.GetName()] = _numpy_view(a, f"{what} array {a.GetName()!r}")
     return out
 
 
@@ -137,17 +152,15 @@ def mesh_to_vtk(mesh):
 
 
 def mesh_from_vtk(cls, poly):
-    from vtkmodules.util import numpy_support as ns
-
     if poly.GetNumberOfStrips() or poly.GetNumberOfLines() or poly.GetNumberOfVerts():
         raise ValueError("from_vtk: only polygons are supported (triangulate strips first)")
-    points = (ns.vtk_to_numpy(poly.GetPoints().GetData()) if poly.GetNumberOfPoints()
+    points = (_numpy_view(poly.GetPoints().GetData(), "the points") if poly.GetNumberOfPoints()
               else np.zeros((0, 3), np.float32))
     polys = poly.GetPolys()
-    offs = ns.vtk_to_numpy(polys.GetOffsetsArray())
-    conn = ns.vtk_to_numpy(polys.GetConnectivityArray())
-    data = _fields_from_vtk(poly.GetPointData())
-    cell_data = _fields_from_vtk(poly.GetCellData())  # polygons only: one tuple per polygon
+    offs = _numpy_view(polys.GetOffsetsArray(), "the polygon offsets")
+    conn = _numpy_view(polys.GetConnectivityArray(), "the polygon connectivity")
+    data = _fields_from_vtk(poly.GetPointData(), "point data")
+    cell_data = _fields_from_vtk(poly.GetCellData(), "cell data")  # polygons only: one tuple per polygon
     if len(offs) <= 1 or np.all(np.diff(offs) == 3):
         return cls(points, conn.reshape(-1, 3), data, cell_data=cell_data)
     return cls(points, conn, data, offs, cell_data)
@@ -221,17 +234,15 @@ def grid_to_vtk(grid):
 
 
 def grid_from_vtk(cls, ug):
-    from vtkmodules.util import numpy_support as ns
-
-    points = (ns.vtk_to_numpy(ug.GetPoints().GetData()) if ug.GetNumberOfPoints()
+    points = (_numpy_view(ug.GetPoints().GetData(), "the points") if ug.GetNumberOfPoints()
               else np.zeros((0, 3), np.float32))
     cells = ug.GetCells()
-    offs = ns.vtk_to_numpy(cells.GetOffsetsArray())
-    conn = ns.vtk_to_numpy(cells.GetConnectivityArray())
-    types = (ns.vtk_to_numpy(ug.GetCellTypesArray()) if ug.GetNumberOfCells()
+    offs = _numpy_view(cells.GetOffsetsArray(), "the cell offsets")
+    conn = _numpy_view(cells.GetConnectivityArray(), "the cell connectivity")
+    types = (_numpy_view(ug.GetCellTypesArray(), "the cell types") if ug.GetNumberOfCells()
              else np.zeros(0, np.uint8))
-    pd = _fields_from_vtk(ug.GetPointData())
-    cd = _fields_from_vtk(ug.GetCellData())
+    pd = _fields_from_vtk(ug.GetPointData(), "point data")
+    cd = _fields_from_vtk(ug.GetCellData(), "cell data")
     if len(types) and np.all(types == types[0]) and int(types[0]) in _CORNERS:
         k = _CORNERS[int(types[0])]
         if len(conn) == k * len(types):
@@ -305,13 +316,11 @@ def volume_to_vtk(volume):
 def volume_from_vtk(volume_cls, image):
     """A keymesh.Volume from a vtkImageData's point scalars (one copy: a
     Volume owns its samples), spacing and origin."""
-    from vtkmodules.util import numpy_support as ns
-
     scalars = image.GetPointData().GetScalars()
     if scalars is None or scalars.GetNumberOfComponents() != 1:
         raise ValueError("from_vtk: the vtkImageData needs one-component point scalars")
     dims = image.GetDimensions()
-    samples = ns.vtk_to_numpy(scalars).reshape(dims, order="F")
+    samples = _numpy_view(scalars, "the point scalars").reshape(dims, order="F")
     return volume_cls(samples, image.GetSpacing(), image.GetOrigin(), scalars.GetName() or "scalars")
 
 

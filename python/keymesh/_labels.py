@@ -10,7 +10,8 @@ from typing import Any, Dict, Optional, Sequence
 import numpy as np
 
 from . import _keymesh as _ext
-from . import Mesh, _mesh
+from . import Mesh, _mesh, _threads
+from ._arguments import INT32, int_arg
 
 # Timings and counts of the last contour_labels() call (seconds: scan,
 # generate, weld, smooth); for benchmarks.
@@ -71,11 +72,13 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
     """
     if isinstance(volume, _ext.Volume):
         spacing = origin = None
-    iterations = int(smoothing_iterations) if smoothing else 0
-    wanted = [] if labels is None else [int(v) for v in np.asarray(labels).reshape(-1)]
+    iterations = int_arg(smoothing_iterations, "smoothing_iterations", INT32) if smoothing else 0
+    # an object array keeps ints past 64 bits as they are, for int_arg to name
+    wanted = [] if labels is None else [int_arg(v, f"labels[{i}]")
+                                        for i, v in enumerate(np.asarray(labels, dtype=object).reshape(-1))]
     parts, info = _ext.contour_labels(
-        volume, spacing, origin, method, wanted, int(background), bool(per_label), iterations, float(relaxation),
-        bool(coarsen), int(threads))
+        volume, spacing, origin, method, wanted, int_arg(background, "background"), bool(per_label), iterations,
+        float(relaxation), bool(coarsen), _threads(threads))
     last_labels_info.clear()
     last_labels_info.update(info)
     return _mesh(parts, LabelMesh)

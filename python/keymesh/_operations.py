@@ -15,6 +15,7 @@ from typing import Any, Callable, Dict, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _keymesh as _ext
+from ._arguments import INT32, int_arg
 from ._grid import Grid, grid_from_parts
 
 Progress = Optional[Callable[[str, float], Any]]
@@ -59,9 +60,9 @@ def tetrahedralize(volume: Any, scheme: int = 5, *, weld: str = "keyreduce",
     if isinstance(scheme, bool) or not isinstance(scheme, (int, np.integer)):
         raise TypeError(f"scheme must be 5 or 24, got {scheme!r}")
     if isinstance(volume, Grid):
-        return grid_from_parts(_ext.tetrahedralize(volume, int(scheme), weld, None, None, _threads(threads), progress))
-    return grid_from_parts(_ext.tetrahedralize(volume, int(scheme), weld, spacing, origin, _threads(threads),
-                                               progress))
+        spacing = origin = None
+    return grid_from_parts(_ext.tetrahedralize(volume, int_arg(scheme, "scheme", INT32), weld, spacing, origin,
+                                               _threads(threads), progress))
 
 
 def subdivide(mesh: Any, levels: int = 1, *, scheme: str = "linear", weld: str = "keyreduce",
@@ -76,9 +77,10 @@ def subdivide(mesh: Any, levels: int = 1, *, scheme: str = "linear", weld: str =
     """
     if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)):
         raise TypeError(f"levels must be an int, got {type(levels).__name__}")
+    levels = int_arg(levels, "levels", INT32)
     if isinstance(mesh, Grid):
-        return grid_from_parts(_ext.subdivide_grid(mesh, int(levels), scheme, weld, _threads(threads), progress))
-    return _mesh(_ext.subdivide_mesh(mesh, int(levels), scheme, weld, _threads(threads), progress))
+        return grid_from_parts(_ext.subdivide_grid(mesh, levels, scheme, weld, _threads(threads), progress))
+    return _mesh(_ext.subdivide_mesh(mesh, levels, scheme, weld, _threads(threads), progress))
 
 
 def dual(mesh: Any, *, threads: int = 0, progress: Progress = None, return_stats: bool = False):

@@ -14,6 +14,7 @@ from typing import Any, Callable, Optional, Sequence, Tuple
 import numpy as np
 
 from . import _keymesh as _ext
+from ._arguments import INT32, int_arg
 
 _TABLE_CACHE: list = []
 
@@ -117,7 +118,7 @@ def _old_lorensen(volume, level, spacing, gradient_direction, threads, progress)
     none_above = not np.any(np.asarray(volume, np.float64) > level)
     volume = np.ascontiguousarray(volume, np.float32)
     vertices, faces, _, _ = _ext.marching_cubes(volume, float(level), _case_table(), 1, None, True,
-                                                int(threads), progress)
+                                                int_arg(threads, "threads", INT32), progress)
     if none_above or not len(vertices):
         # scikit-image indexes its points with an empty float array here
         raise IndexError("arrays used as indices must be of integer (or boolean) type")
@@ -210,7 +211,7 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
         raise ValueError("Input array must be at least 2x2x2.")
     volume = np.ascontiguousarray(volume, np.float32)
     level = _level(volume, level, spacing)
-    step_size = int(step_size)
+    step_size = int_arg(step_size, "step_size", INT32)
     if step_size < 1:
         raise ValueError('step_size must be at least one.')
     if mask is not None:
@@ -218,9 +219,9 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
             raise ValueError('volume and mask must have the same shape.')
         mask = _mask_bytes(mask)
 
+    threads = int_arg(threads, "threads", INT32)
     vertices, faces, normals, values = _ext.marching_cubes(
-        volume, float(level), _case_table(), step_size, mask, gradient_direction == 'descent', int(threads), progress,
-        mc33)
+        volume, float(level), _case_table(), step_size, mask, gradient_direction == 'descent', threads, progress, mc33)
     # scikit-image's order: "no surface" before a bad gradient_direction
     # (which it checks only once it has a surface to wind).
     if not len(vertices):

@@ -7,6 +7,8 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -103,6 +105,56 @@ inline auto into(py::dict& dict) {
 // ValueError unless threads >= 0.
 void check_threads(int threads);
 
+// An allocation of the module's own that cannot be made: Python's
+// MemoryError (register_errors), the message naming the array and its size.
+class OutOfMemory : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// `a` in `dtype` (native byte order) and the layout `flags` (py::array::
+// c_style or f_style): `a` itself when it is already so, else numpy's copy.
+// The copy's size is checked before it is asked for and a copy numpy cannot
+// allocate raises OutOfMemory naming `what`, the shape, dtype and bytes:
+// never the null array py::array::ensure() gives (every use of which would
+// crash the interpreter). Other failures of the conversion (an object array
+// of strings, ...) give the null array, for the caller's own message.
+py::array converted_array(const py::array& a, const py::dtype& dtype, int flags, const char* what);
+// The same for any object numpy takes as an array (a list, ...): null when
+// it takes none. T and Flags as in py::array_t (forcecast: any numeric dtype).
+template <class T, int Flags = py::array::c_style>
+py::array_t<T, Flags> checked_array(const py::handle& obj, const char* what) {
+  static_assert(Flags == py::array::c_style || Flags == py::array::f_style);
+  const py::array a = py::array::ensure(obj);
+  if (!a) return py::reinterpret_steal<py::array_t<T, Flags>>(py::handle());
+  return py::reinterpret_steal<py::array_t<T, Flags>>(
+      converted_array(a, py::dtype::of<T>(), Flags, what).release());
+}
+// "(700, 700, 700)"
+std::string shape_text(const py::array& a);
+// "1.28 GiB", "512 bytes"
+std::string byte_text(long double bytes);
+// A copy of the module's own (into a std::vector, a library Array): `fill`
+// runs and a std::bad_alloc it throws becomes OutOfMemory naming `what` and
+// the `bytes` it needed.
+template <class F>
+void allocating(const char* what, long double bytes, F&& fill) {
+  try {
+    fill();
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemory(std::string("out of memory: the copy of ") + what + " needs " + byte_text(bytes));
+  }
+}
+
+// Python integers as the library's: OverflowError naming `what` past the
+// 64-bit range, TypeError for a non-integer (pybind11's own cast would say
+// neither which argument nor why).
+std::vector<Id> integer_sequence(const py::handle& obj, const char* what);
+
+// ValueError unless `path` holds no NUL byte: the file system would cut the
+// name there (read a file other than the one named, or write one).
+void refuse_nul_path(const std::string& path, const char* what);
+
 // The library's scalar type of a numpy dtype; TypeError naming the dtype
 // (and what is accepted) otherwise. `what` names the argument.
 ScalarType scalar_type_of(const py::dtype& dtype, const char* what);
@@ -132,11 +184,24 @@ struct ArrayVolume {
   py::array array;
   bool reversed = false;
 };
+// What a function needs of a numpy volume: its name for messages, the
+// samples it needs along every axis, the TypeError for a non-array.
+struct VolumeUse {
+  const char* command;
+  Id min_samples;
+  const char* not_an_array;
+};
 // TypeError `not_an_array` when `volume` is no array, ValueError unless 3-D,
-// TypeError for a dtype the library has no scalar type for; spacing and
-// origin (None: 1 and 0) are given along the array's axes.
+// TypeError for a dtype the library has no scalar type for, keymesh.Error
+// for fewer than min_samples along an axis (named as the docs name it, axis
+// 0 = x) or a geometry past float32 (check_float32_geometry, the check every
+// volume reader makes); MemoryError when the copy a layout needs cannot be
+// made. Spacing and origin (None: 1 and 0) are given along the array's axes.
 ArrayVolume view_array_volume(const py::object& volume, const py::object& spacing, const py::object& origin,
-                              VolumeOrder order, const char* not_an_array);
+                              VolumeOrder order, const VolumeUse& use);
+// keymesh.Error unless a grid's points are finite in float32, checked where
+// a Volume is used (its spacing and origin can be set after it was made).
+void check_volume_geometry(const ImageGrid& grid, const char* command);
 
 // Fields <-> a dict of numpy arrays, (rows,) for one component, (rows, k)
 // otherwise: to_python moves the values (no copy); from_python copies them

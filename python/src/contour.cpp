@@ -78,10 +78,11 @@ const ImageGrid& contour_grid(const py::object& volume, const py::object& spacin
                               ArrayVolume& view) {
   if (!py::isinstance<Volume>(volume)) {
     view = view_array_volume(volume, spacing, origin, VolumeOrder::CAsReversedAxes,
-                             "volume must be a 3-D numpy array or a keymesh.Volume");
+                             {"contour", 2, "volume must be a 3-D numpy array or a keymesh.Volume"});
     return view.grid;
   }
   const ImageGrid& grid = volume.cast<Volume&>().grid;
+  check_volume_geometry(grid, "contour");
   if ((!spacing.is_none() && triple(spacing, "spacing") != grid.spacing) ||
       (!origin.is_none() && triple(origin, "origin") != grid.origin))
     throw py::value_error("contour: a Volume carries its own spacing and origin; set volume.spacing / "

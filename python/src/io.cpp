@@ -24,6 +24,7 @@ bool is_mesh_path(const std::string& path) {
 // cells, offsets, point_data, cell_data)).
 py::tuple read(const std::string& path, const py::object& dims, const py::object& dtype, const py::object& spacing,
                const py::object& origin, const std::string& endian, Id header_bytes) {
+  refuse_nul_path(path, "read");
   if (io::is_grid_file(path)) {
     UnstructuredGrid grid;
     {
@@ -45,7 +46,7 @@ py::tuple read(const std::string& path, const py::object& dims, const py::object
   if (is_raw) {
     if (dims.is_none() || dtype.is_none())
       throw py::value_error(path + ": a .raw volume needs dims=(nx, ny, nz) and dtype");
-    const auto d = dims.cast<std::vector<Id>>();
+    const auto d = integer_sequence(dims, "dims");
     if (d.size() != 3) throw py::value_error("dims must have 3 entries (nx, ny, nz)");
     raw.dims = {d[0], d[1], d[2]};
     raw.type = scalar_type_of(py::dtype::from_args(dtype), "dtype");
@@ -63,19 +64,34 @@ py::tuple read(const std::string& path, const py::object& dims, const py::object
   return py::make_tuple("volume", volume);
 }
 
+// read() with the command's words for a file too large for this machine.
+py::tuple read_or_name_memory(const std::string& path, const py::object& dims, const py::object& dtype,
+                              const py::object& spacing, const py::object& origin, const std::string& endian,
+                              Id header_bytes) {
+  try {
+    return read(path, dims, dtype, spacing, origin, endian, header_bytes);
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemory(path + ": out of memory");
+  }
+}
+
 void write_mesh(const py::handle& mesh_obj, const std::string& path) {
+  refuse_nul_path(path, "write");
   const SurfaceMesh mesh = mesh_from_python(mesh_obj);
   py::gil_scoped_release release;
   io::write_mesh(mesh, path);
 }
 
 void write_grid(const py::handle& grid_obj, const std::string& path) {
+  refuse_nul_path(path, "write");
   const UnstructuredGrid grid = grid_from_python(grid_obj);
   py::gil_scoped_release release;
   io::write_grid(grid, path);
 }
 
 void write_volume(const Volume& volume, const std::string& path) {
+  refuse_nul_path(path, "write");
+  check_volume_geometry(volume.grid, path.c_str());
   py::gil_scoped_release release;
   io::write_volume(volume.grid, path);
 }
@@ -83,7 +99,7 @@ void write_volume(const Volume& volume, const std::string& path) {
 }  // namespace
 
 void register_io(py::module_& m) {
-  m.def("read", &read, py::arg("path"), py::arg("dims") = py::none(), py::arg("dtype") = py::none(),
+  m.def("read", &read_or_name_memory, py::arg("path"), py::arg("dims") = py::none(), py::arg("dtype") = py::none(),
         py::arg("spacing") = py::none(), py::arg("origin") = py::none(), py::arg("endian") = "little",
         py::arg("header_bytes") = 0, "Reads a volume or a surface mesh file. Use keymesh.read.");
   // Docstrings from the format table; static: pybind11 keeps the pointer.

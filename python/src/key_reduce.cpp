@@ -6,6 +6,7 @@
 
 #include "common.hpp"
 #include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/keyreduce/pair_count.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
 
 namespace keymesh::python {
@@ -55,7 +56,7 @@ void reduce_column(const keyreduce::Groups<K>& groups, const V* values, Id cols,
 
 template <class K, class KeyView, class V>
 py::tuple key_reduce_typed(const K* keys, Id n, const py::array& values_in, Op op) {
-  auto values = py::array_t<V, py::array::c_style>::ensure(values_in);
+  auto values = checked_array<V>(values_in, "values");
   const Id cols = values.ndim() == 2 ? static_cast<Id>(values.shape(1)) : 1;
   keyreduce::Groups<K> groups;
   std::vector<V> reduced;
@@ -81,7 +82,7 @@ py::tuple key_reduce_typed(const K* keys, Id n, const py::array& values_in, Op o
 
 template <class K, class KeyView>
 py::tuple key_reduce_keys(const py::array& keys_in, const py::array& values, Op op) {
-  auto keys = py::array_t<K, py::array::c_style>::ensure(keys_in);
+  auto keys = checked_array<K>(keys_in, "keys");
   const Id n = static_cast<Id>(keys.size());
   if (values.dtype().kind() == 'f' && values.dtype().itemsize() == 4)
     return key_reduce_typed<K, KeyView, float>(keys.data(), n, values, op);
@@ -104,15 +105,14 @@ py::tuple key_reduce(const py::object& keys_obj, const py::object& values_obj, c
   const py::dtype vt = values.dtype();
   if (vt.kind() != 'f' || (vt.itemsize() != 4 && vt.itemsize() != 8))
     throw py::type_error("values must be float32 or float64, got dtype " + dtype_name(vt));
-  if (!vt.attr("isnative").cast<bool>()) values = values.attr("astype")(vt.attr("newbyteorder")("="));
   const py::dtype kt = keys.dtype();
-  const bool native = kt.attr("isnative").cast<bool>();
-  if (!native) keys = keys.attr("astype")(kt.attr("newbyteorder")("="));
+  // Before any copy (the byte order's, the layout's): the index map's limit.
+  keyreduce::check_pair_count(static_cast<Id>(keys.shape(0)));
   ThreadScope scope(threads);
   if (kt.kind() == 'u' && kt.itemsize() == 4) return key_reduce_keys<std::uint32_t, std::uint32_t>(keys, values, op);
   if (kt.kind() == 'u' && kt.itemsize() == 8) return key_reduce_keys<std::uint64_t, std::uint64_t>(keys, values, op);
   if (kt.kind() == 'i' && kt.itemsize() == 8) {
-    auto signed_keys = py::array_t<std::int64_t, py::array::c_style>::ensure(keys);
+    auto signed_keys = checked_array<std::int64_t>(keys, "keys");
     const std::int64_t* k = signed_keys.data();
     for (py::ssize_t i = 0; i < signed_keys.size(); ++i)
       if (k[i] < 0) throw py::value_error("keys must be non-negative, keys[" + std::to_string(i) + "] = " + std::to_string(k[i]));

@@ -37,9 +37,10 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   ArrayVolume view;
   if (py::isinstance<Volume>(volume)) {
     grid = &volume.cast<Volume&>().grid;
+    check_volume_geometry(*grid, "contour_labels");
   } else {
     view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
-                             "volume must be a 3-D numpy array or a keymesh.Volume");
+                             {"contour_labels", 1, "volume must be a 3-D numpy array or a keymesh.Volume"});
     grid = &view.grid;
   }
   generate::LabelStats stats;

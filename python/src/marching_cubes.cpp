@@ -58,7 +58,7 @@ py::tuple marching_cubes(const py::array_t<float, py::array::c_style>& volume, d
   opt.descent = descent;
   py::array_t<std::uint8_t, py::array::c_style> mask;
   if (!mask_obj.is_none()) {
-    mask = py::array_t<std::uint8_t, py::array::c_style>::ensure(mask_obj);
+    mask = checked_array<std::uint8_t>(mask_obj, "mask");
     if (!mask || mask.ndim() != 3 || mask.shape(0) != volume.shape(0) || mask.shape(1) != volume.shape(1) ||
         mask.shape(2) != volume.shape(2))
       throw py::value_error("volume and mask must have the same shape.");

@@ -8,19 +8,16 @@ namespace keymesh::python {
 
 namespace {
 
-std::string shape_text(const py::array& a) {
-  std::string s = "(";
-  for (py::ssize_t d = 0; d < a.ndim(); ++d) s += (d ? ", " : "") + std::to_string(a.shape(d));
-  return s + (a.ndim() == 1 ? ",)" : ")");
-}
-
-// An integer array as int64 (C order); TypeError for other kinds.
+// An integer array as int64 (C order); TypeError for other kinds,
+// MemoryError when its copy cannot be allocated.
 py::array_t<std::int64_t, py::array::c_style> integers(const py::handle& obj, const char* what) {
   py::array a = py::array::ensure(obj);
   if (!a) throw py::type_error(std::string(what) + " must be an integer array");
   if (a.size() > 0 && a.dtype().kind() != 'i' && a.dtype().kind() != 'u')
     throw py::type_error(std::string(what) + " must hold integers, got dtype " + dtype_name(a.dtype()));
-  return py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+  auto ids = checked_array<std::int64_t>(a, what);
+  if (!ids) throw py::type_error(std::string(what) + " must be an integer array");
+  return ids;
 }
 
 }  // namespace
@@ -40,12 +37,12 @@ py::tuple mesh_to_python(SurfaceMesh&& mesh) {
 
 SurfaceMesh mesh_from_python(const py::handle& obj) {
   SurfaceMesh mesh;
-  auto points = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(obj.attr("points"));
+  auto points = checked_array<float>(obj.attr("points"), "mesh.points");
   if (!points || points.ndim() != 2 || points.shape(1) != 3)
     throw py::value_error("mesh.points must be an (n, 3) array of numbers, got shape " +
                           (points ? shape_text(points) : std::string("?")));
   const py::ssize_t n = points.shape(0);
-  mesh.points.assign(points.data(), points.data() + 3 * n);
+  allocating("mesh.points", 12.0L * n, [&] { mesh.points.assign(points.data(), points.data() + 3 * n); });
 
   auto cells = integers(obj.attr("cells"), "mesh.cells");
   const py::object offsets_obj = py::getattr(obj, "offsets", py::none());
@@ -64,13 +61,14 @@ SurfaceMesh mesh_from_python(const py::handle& obj) {
         offsets.data()[offsets.size() - 1] != static_cast<std::int64_t>(corners))
       throw py::value_error("mesh.offsets must be 1-D, start at 0 and end at len(mesh.cells) = " +
                             std::to_string(corners));
+    allocating("mesh.offsets", 8.0L * offsets.size(), [&] { mesh.offsets.reserve(offsets.size()); });
     for (py::ssize_t c = 0; c < offsets.size(); ++c) {
       if (c > 0 && offsets.data()[c] < offsets.data()[c - 1])
         throw py::value_error("mesh.offsets must not decrease (index " + std::to_string(c) + ")");
       mesh.offsets.push_back(static_cast<std::uint64_t>(offsets.data()[c]));
     }
   }
-  mesh.connectivity.resize(corners);
+  allocating("mesh.cells", 4.0L * corners, [&] { mesh.connectivity.resize(corners); });
   for (std::size_t i = 0; i < corners; ++i) {
     if (ids[i] < 0 || ids[i] >= n)
       throw py::value_error("mesh.cells refers to point " + std::to_string(ids[i]) + " but the mesh has " +
@@ -78,21 +76,7 @@ SurfaceMesh mesh_from_python(const py::handle& obj) {
     mesh.connectivity[i] = static_cast<PointIndex>(ids[i]);
   }
 
-  const py::object data = py::getattr(obj, "point_data", py::none());
-  if (!data.is_none()) {
-    for (auto item : data.cast<py::dict>()) {
-      const std::string name = py::str(item.first);
-      auto values = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(item.second);
-      if (!values || values.ndim() < 1 || values.ndim() > 2 || values.shape(0) != n)
-        throw py::value_error("mesh.point_data['" + name + "'] must have " + std::to_string(n) +
-                              " rows (one per point), 1 or 2 dimensions");
-      Field f;
-      f.name = name;
-      f.components = values.ndim() == 2 ? static_cast<int>(values.shape(1)) : 1;
-      f.values.assign(values.data(), values.data() + values.size());
-      mesh.point_fields.push_back(std::move(f));
-    }
-  }
+  mesh.point_fields = fields_from_python(py::getattr(obj, "point_data", py::none()), n, "mesh.point_data");
   mesh.cell_fields = fields_from_python(py::getattr(obj, "cell_data", py::none()), mesh.num_cells(), "mesh.cell_data");
   return mesh;
 }

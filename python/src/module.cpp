@@ -67,6 +67,20 @@ void register_errors(py::module_& m) {
       error(e.what());
     }
   });
+  // Out of memory: MemoryError, named where the module allocates itself
+  // (OutOfMemory), the library's own allocations by what was running. Local
+  // to this module: other extensions keep pybind11's translation.
+  py::register_local_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const OutOfMemory& e) {
+      PyErr_SetString(PyExc_MemoryError, e.what());
+    } catch (const std::bad_alloc&) {
+      PyErr_SetString(PyExc_MemoryError,
+                      "out of memory: keymesh could not allocate its working arrays (std::bad_alloc); "
+                      "a smaller input, or more memory");
+    }
+  });
 }
 
 void register_labels(py::module_& m);  // labels.cpp

@@ -4,6 +4,7 @@
 // released under the progress hook (Ctrl-C, progress=), and hands the
 // library's output buffers to numpy without a copy.
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -28,6 +29,7 @@ namespace {
 ImageGrid volume_grid(const py::object& volume, const py::object& spacing, const py::object& origin, py::object& keep) {
   if (py::isinstance<Volume>(volume)) {  // viewed in place, like contour does
     const ImageGrid& src = volume.cast<Volume&>().grid;
+    check_volume_geometry(src, "tetrahedralize");
     ImageGrid g;
     g.dims = src.dims;
     g.spacing = src.spacing;
@@ -38,8 +40,9 @@ ImageGrid volume_grid(const py::object& volume, const py::object& spacing, const
     keep = volume;
     return g;
   }
-  ArrayVolume view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
-                                      "volume must be a 3-D numpy array, a keymesh.Volume or a keymesh.Grid");
+  ArrayVolume view = view_array_volume(
+      volume, spacing, origin, VolumeOrder::Fortran,
+      {"tetrahedralize", 2, "volume must be a 3-D numpy array, a keymesh.Volume or a keymesh.Grid"});
   keep = view.array;
   return view.grid;
 }
@@ -138,6 +141,21 @@ struct LatticeKeys {
   std::uint64_t range = 1;
 };
 
+// Why point p has no lattice index along axis a: the point itself is not
+// finite, or the spacing and origin (checked finite) put it past 9e15
+// spacings from the origin (a spacing of 1e-300, an origin of 3e38).
+InputError lattice_error(const SurfaceMesh& mesh, Id p, int a, const std::array<double, 3>& s,
+                         const std::array<double, 3>& o) {
+  const float x = mesh.points[3 * p + a];
+  if (!std::isfinite(x)) return InputError("coarsen: point " + std::to_string(p) + " is not finite");
+  char b[160];
+  std::snprintf(b, sizeof b, "lies %.3g spacings from the origin along %c (point %g, origin %g, spacing %g)",
+                (static_cast<double>(x) - o[a]) / s[a], "xyz"[a], static_cast<double>(x), o[a], s[a]);
+  return InputError("coarsen: point " + std::to_string(p) + " " + b +
+                    ", past the 9e15 a lattice index holds: the spacing is too fine or the origin too far for this "
+                    "mesh (give the spacing and origin of the grid it was contoured on)");
+}
+
 LatticeKeys lattice_keys(const SurfaceMesh& mesh, const std::array<double, 3>& s, const std::array<double, 3>& o) {
   const Id n = mesh.num_points();
   std::array<std::int64_t, 3> lo{0, 0, 0}, hi{0, 0, 0};
@@ -145,7 +163,7 @@ LatticeKeys lattice_keys(const SurfaceMesh& mesh, const std::array<double, 3>& s
   for (Id p = 0; p < n; ++p)
     for (int a = 0; a < 3; ++a) {
       const double t = std::floor((mesh.points[3 * p + a] - o[a]) / s[a] + 0.5);
-      if (!(std::fabs(t) < 9e15)) throw InputError("coarsen: point " + std::to_string(p) + " is not finite");
+      if (!(std::fabs(t) < 9e15)) throw lattice_error(mesh, p, a, s, o);
       const auto i = static_cast<std::int64_t>(t);
       lattice[3 * p + a] = i;
       if (p == 0 || i < lo[a]) lo[a] = i;
@@ -179,8 +197,9 @@ py::tuple coarsen(const py::handle& mesh_obj, const py::object& spacing, const p
   if (normals != "average" && normals != "merge")
     throw py::value_error("normals must be 'average' or 'merge', got '" + normals + "'");
   const std::array<double, 3> s = triple(spacing, "spacing"), o = triple(origin, "origin");
+  check_float32_geometry({1, 1, 1}, o, s, "coarsen");  // finite, named (the volume readers' check)
   for (int a = 0; a < 3; ++a)
-    if (!(s[a] > 0) || !std::isfinite(s[a])) throw py::value_error("spacing must be positive and finite");
+    if (!(s[a] > 0)) throw py::value_error("spacing must be positive and finite");
   const PythonProgress progress(callback);
   const SurfaceMesh mesh = mesh_from_python(mesh_obj);
   generate::CoarsenStats st;

@@ -24,14 +24,33 @@ py::tuple as_tuple(const std::array<double, 3>& a) { return py::make_tuple(a[0],
 
 std::shared_ptr<Volume> zeros(const py::handle& shape, const py::handle& dtype, const py::handle& spacing,
                               const py::handle& origin, const std::string& name) {
-  auto dims = shape.cast<std::vector<Id>>();
+  const std::vector<Id> dims = integer_sequence(shape, "Volume shape");
   if (dims.size() != 3) throw py::value_error("Volume shape must have 3 entries (nx, ny, nz)");
+  const ScalarType type = scalar_type_of(py::dtype::from_args(py::reinterpret_borrow<py::object>(dtype)), "Volume");
   auto v = std::make_shared<Volume>();
-  v->grid.allocate({dims[0], dims[1], dims[2]}, scalar_type_of(py::dtype::from_args(py::reinterpret_borrow<py::object>(dtype)), "Volume"));
   v->grid.spacing = triple(spacing, "spacing");
   v->grid.origin = triple(origin, "origin");
+  check_float32_geometry({dims[0], dims[1], dims[2]}, v->grid.origin, v->grid.spacing, "Volume");
+  const long double bytes = static_cast<long double>(dims[0]) * static_cast<long double>(dims[1]) *
+                            static_cast<long double>(dims[2]) * static_cast<long double>(scalar_size(type));
+  try {
+    v->grid.allocate({dims[0], dims[1], dims[2]}, type);
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemory("out of memory: a Volume of shape (" + std::to_string(dims[0]) + ", " + std::to_string(dims[1]) +
+                      ", " + std::to_string(dims[2]) + ") " + scalar_type_name(type) + " needs " + byte_text(bytes));
+  }
   v->grid.name = name;
   return v;
+}
+
+// A new spacing or origin, checked with the other as the volume readers check
+// a file's (check_float32_geometry): every point finite in float32.
+void set_geometry(Volume& v, const py::handle& value, bool spacing) {
+  std::array<double, 3> s = v.grid.spacing, o = v.grid.origin;
+  (spacing ? s : o) = triple(value, spacing ? "spacing" : "origin");
+  check_float32_geometry(v.grid.dims, o, s, spacing ? "Volume.spacing" : "Volume.origin");
+  v.grid.spacing = s;
+  v.grid.origin = o;
 }
 
 }  // namespace
@@ -48,7 +67,8 @@ keeps the Volume alive.
 
 Volume(array, spacing=(1, 1, 1), origin=(0, 0, 0), name="scalars") copies a
 3-D numpy array once (axis 0 = x); Volume.zeros(shape, dtype) allocates one to
-fill in place.
+fill in place. Spacing and origin are checked as a file's are, when given and
+when set: every sample's position finite in float32 (keymesh.Error otherwise).
 )doc")
       .def(py::init([](const py::array& array, const py::handle& spacing, const py::handle& origin,
                        const std::string& name) {
@@ -75,10 +95,10 @@ fill in place.
       .def_property_readonly("dtype", [](const Volume& v) { return dtype_of(v.grid.type); }, "numpy dtype of the samples")
       .def_property(
           "spacing", [](const Volume& v) { return as_tuple(v.grid.spacing); },
-          [](Volume& v, const py::handle& s) { v.grid.spacing = triple(s, "spacing"); }, "voxel size along x, y, z")
+          [](Volume& v, const py::handle& s) { set_geometry(v, s, true); }, "voxel size along x, y, z")
       .def_property(
           "origin", [](const Volume& v) { return as_tuple(v.grid.origin); },
-          [](Volume& v, const py::handle& o) { v.grid.origin = triple(o, "origin"); }, "position of sample (0, 0, 0)")
+          [](Volume& v, const py::handle& o) { set_geometry(v, o, false); }, "position of sample (0, 0, 0)")
       .def_property(
           "name", [](const Volume& v) { return v.grid.name; }, [](Volume& v, const std::string& n) { v.grid.name = n; },
           "name of the scalar field (contour's point_data key)")

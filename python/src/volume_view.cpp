@@ -5,26 +5,43 @@
 
 namespace keymesh::python {
 
+namespace {
+
+// Axes named the way the Python docs name them (axis 0 is x, whatever the
+// memory order): the library would name a C-ordered array's axis 0 "z",
+// the grid's axis it becomes.
+void check_volume_shape(const py::array& array, const VolumeUse& use) {
+  for (int a = 0; a < 3; ++a)
+    if (array.shape(a) < use.min_samples)
+      throw InputError(std::string(use.command) + ": volume has shape " + shape_text(array) + ": " +
+                       std::to_string(array.shape(a)) + " sample(s) along axis " + std::to_string(a) + " (" +
+                       "xyz"[a] + "), need at least " + std::to_string(use.min_samples));
+}
+
+}  // namespace
+
+void check_volume_geometry(const ImageGrid& grid, const char* command) {
+  check_float32_geometry(grid.dims, grid.origin, grid.spacing, command);
+}
+
 ArrayVolume view_array_volume(const py::object& volume, const py::object& spacing, const py::object& origin,
-                              VolumeOrder order, const char* not_an_array) {
+                              VolumeOrder order, const VolumeUse& use) {
   ArrayVolume v;
   v.array = py::array::ensure(volume);
-  if (!v.array) throw py::type_error(not_an_array);
+  if (!v.array) throw py::type_error(use.not_an_array);
   if (v.array.ndim() != 3)
     throw py::value_error("volume must be 3-D (axis 0 = x), got ndim=" + std::to_string(v.array.ndim()));
   v.grid.type = scalar_type_of(v.array.dtype(), "volume");
-  if (!v.array.dtype().attr("isnative").cast<bool>())
-    v.array = v.array.attr("astype")(v.array.dtype().attr("newbyteorder")("="));
-  const int flags = v.array.flags();
-  const bool fortran = (flags & py::array::f_style) && !(flags & py::array::c_style);
-  if (order == VolumeOrder::CAsReversedAxes && !fortran) {
-    v.array = py::array::ensure(v.array, py::array::c_style);
-    v.reversed = true;
-  } else {
-    v.array = py::array::ensure(v.array, py::array::f_style);
-  }
+  check_volume_shape(v.array, use);
   const std::array<double, 3> s = spacing.is_none() ? std::array<double, 3>{1, 1, 1} : triple(spacing, "spacing");
   const std::array<double, 3> o = origin.is_none() ? std::array<double, 3>{0, 0, 0} : triple(origin, "origin");
+  // Along the array's axes (x = axis 0), before anything is copied.
+  check_float32_geometry({v.array.shape(0), v.array.shape(1), v.array.shape(2)}, o, s, use.command);
+  const int flags = v.array.flags();
+  const bool fortran = (flags & py::array::f_style) && !(flags & py::array::c_style);
+  v.reversed = order == VolumeOrder::CAsReversedAxes && !fortran;
+  v.array = converted_array(v.array, v.array.dtype(), v.reversed ? py::array::c_style : py::array::f_style, "volume");
+  if (!v.array) throw py::type_error(use.not_an_array);
   for (int a = 0; a < 3; ++a) {
     const int from = v.reversed ? 2 - a : a;
     v.grid.dims[a] = v.array.shape(from);

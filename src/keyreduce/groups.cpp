@@ -1,4 +1,5 @@
 #include "keymesh/keyreduce/groups.hpp"
+#include "keymesh/keyreduce/pair_count.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -15,15 +16,11 @@
 
 namespace keymesh::keyreduce {
 
-namespace {
-
 void check_pair_count(Id n) {
   if (n < 0 || n > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("KEY-REDUCE: " + std::to_string(n) +
                      " keyed pairs exceed the 32-bit index map (at most 4294967295)");
 }
-
-}  // namespace
 
 template <class K>
 Groups<K> partition_sort(const K* keys, Id n, int significant_bits, Order order) {
