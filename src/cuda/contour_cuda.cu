@@ -180,123 +180,138 @@ __global__ void average_kernel(const std::uint32_t* perm, const std::uint32_t* g
   normal[3 * g] = u.x, normal[3 * g + 1] = u.y, normal[3 * g + 2] = u.z;
 }
 
-template <class K, class T>
-SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const generate::ContourOptions& opt,
-                          generate::ContourStats& st, cudaStream_t stream) {
+// The grid as the kernels see it (a whole grid: no slab, no host table).
+GridShape shape_of(const ImageGrid& grid) {
   GridShape s{};
   s.nx = grid.dims[0], s.ny = grid.dims[1], s.nz = grid.dims[2];
   s.nxy = s.nx * s.ny, s.n = s.nxy * s.nz;
   for (int a = 0; a < 3; ++a) s.origin[a] = grid.origin[a], s.spacing[a] = grid.spacing[a];
   s.stride[0] = 1, s.stride[1] = s.nx, s.stride[2] = s.nxy;
+  return s;
+}
+
+// The grid's voxels; LimitError past CUB's int sizes.
+Id voxels_of(const GridShape& s) {
   const Id voxels = (s.nx - 1) * (s.ny - 1) * (s.nz - 1);
   if (voxels > Id{std::numeric_limits<int>::max()})
     throw LimitError("--backend cuda: " + std::to_string(voxels) + " voxels exceed 2^31 - 1 (use the CPU backend)");
-  const Id n_iso = static_cast<Id>(opt.isovalues.size());
-  const K keys_per_iso = static_cast<K>(3 * s.n);
-  const K key_range = static_cast<K>(n_iso) * keys_per_iso;
-  st.key_bits = static_cast<int>(sizeof(K) * 8);
-  const bool average = opt.normals == generate::ContourNormals::Average;
+  return voxels;
+}
 
-  auto t0 = Clock::now();
-  DeviceArray<T> samples(static_cast<std::size_t>(s.n), stream);
-  samples.upload(host_samples, static_cast<std::size_t>(s.n));
-  DeviceArray<double> isovalues(opt.isovalues.size(), stream);
-  isovalues.upload(opt.isovalues.data(), opt.isovalues.size());
-  check(cudaMemcpyToSymbolAsync(d_table, &generate::marching_cubes_table(opt.reversed_axes),
-                                sizeof(generate::MarchingCubesTable), 0,
-                                cudaMemcpyHostToDevice, stream),
-        "uploading the case table");
+// Stage 1's arrays, one entry per voxel, reused by every isovalue: its case,
+// its triangle count and the count's exclusive scan (its first triangle).
+struct VoxelCases {
+  VoxelCases(Id voxels, cudaStream_t stream)
+      : cases(static_cast<std::size_t>(voxels), stream),
+        counts(static_cast<std::size_t>(voxels), stream),
+        offsets(static_cast<std::size_t>(voxels), stream) {}
+  DeviceArray<std::uint8_t> cases;
+  DeviceArray<std::uint32_t> counts, offsets;
+};
 
-  // Stages 1 and 2, per isovalue; the soup grows iso after iso, as on the CPU.
-  std::vector<Id> blocks;  // first pair of every 4 voxel slabs (the CPU's reduce_blocked blocks)
-  std::vector<std::uint64_t> soup_sizes;
+// The soup as stage 2 leaves it: one part per isovalue, and the first pair of
+// every 4 voxel slabs (the CPU's reduce_blocked blocks) across the parts.
+template <class K>
+struct SoupParts {
+  std::vector<std::unique_ptr<DeviceArray<K>>> keys;  // freed by join_parts
+  std::vector<Id> size;
+  std::vector<Id> blocks;
   Id corners = 0;
-  DeviceArray<std::uint8_t> cases(static_cast<std::size_t>(voxels), stream);
-  DeviceArray<std::uint32_t> counts(static_cast<std::size_t>(voxels), stream);
-  DeviceArray<std::uint32_t> offsets(static_cast<std::size_t>(voxels), stream);
-  std::vector<std::unique_ptr<DeviceArray<K>>> parts;
-  std::vector<Id> part_size;
-  for (Id iso_index = 0; iso_index < n_iso; ++iso_index) {
-    const generate::InsideTest<T> test(opt.isovalues[iso_index]);
-    classify_kernel<T><<<grid_for(voxels), kThreads, 0, stream>>>(samples.get(), s, test.threshold,
-                                                                   test.all ? 2 : (test.none ? 1 : 0), cases.get(),
-                                                                   counts.get(), voxels);
-    check(cudaGetLastError(), "classify");
-    std::size_t temp_bytes = 0;
-    cub::DeviceScan::ExclusiveSum(nullptr, temp_bytes, counts.get(), offsets.get(), static_cast<int>(voxels), stream);
-    DeviceArray<std::uint8_t> temp(temp_bytes, stream);
-    check(cub::DeviceScan::ExclusiveSum(temp.get(), temp_bytes, counts.get(), offsets.get(), static_cast<int>(voxels),
-                                        stream),
-          "scanning triangle counts");
-    std::uint32_t last_offset = 0, last_count = 0;
-    check(cudaMemcpyAsync(&last_offset, offsets.get() + voxels - 1, 4, cudaMemcpyDeviceToHost, stream), "downloading");
-    check(cudaMemcpyAsync(&last_count, counts.get() + voxels - 1, 4, cudaMemcpyDeviceToHost, stream), "downloading");
-    // The slab blocks: pair offsets at the first voxel of every 4th slab.
-    std::vector<std::uint32_t> slab_offsets;
-    for (Id k = 0; k < s.nz - 1; k += 4) slab_offsets.push_back(0);
-    for (std::size_t b = 0; b < slab_offsets.size(); ++b)
-      check(cudaMemcpyAsync(&slab_offsets[b], offsets.get() + Id(b) * 4 * (s.ny - 1) * (s.nx - 1), 4,
-                            cudaMemcpyDeviceToHost, stream),
-            "downloading");
-    check(cudaStreamSynchronize(stream), "classify");
-    const Id triangles = Id{last_offset} + Id{last_count};
-    if (corners + 3 * triangles > Id{std::numeric_limits<int>::max()})
-      throw LimitError("--backend cuda: " + std::to_string((corners + 3 * triangles) / 3) +
-                       " triangles exceed the device sort's 2^31 - 1 corners (use the CPU backend)");
-    for (std::uint32_t so : slab_offsets) blocks.push_back(corners + 3 * Id{so});
-    parts.push_back(std::make_unique<DeviceArray<K>>(static_cast<std::size_t>(3 * triangles), stream));
-    DeviceArray<K>* part = parts.back().get();
-    part_size.push_back(3 * triangles);
-    if (triangles > 0) {
-      emit_kernel<K><<<grid_for(voxels), kThreads, 0, stream>>>(cases.get(), offsets.get(), s,
-                                                                static_cast<K>(iso_index) * keys_per_iso, part->get(),
-                                                                voxels);
-      check(cudaGetLastError(), "emit");
-    }
-    corners += 3 * triangles;
-  }
-  blocks.push_back(corners);
-  st.soup_points = corners;
-  // One soup: the parts end to end.
-  DeviceArray<K> soup(static_cast<std::size_t>(corners), stream);
-  {
-    Id at = 0;
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-      if (part_size[k])
-        check(cudaMemcpyAsync(soup.get() + at, parts[k]->get(), part_size[k] * sizeof(K), cudaMemcpyDeviceToDevice,
-                              stream),
-              "joining the soup");
-      at += part_size[k];
-    }
-    parts.clear();
-  }
-  check(cudaStreamSynchronize(stream), "generate");
-  st.generate += seconds_since(t0);
+};
 
-  // Stage 3: KEY-REDUCE, sort plan.
-  t0 = Clock::now();
-  const int n = static_cast<int>(corners);
-  SurfaceMesh mesh;
-  if (n == 0) {
-    if (opt.scalars) mesh.point_fields.push_back(Field{grid.name, 1, {}});
-    if (opt.normals != generate::ContourNormals::None) mesh.point_fields.push_back(Field{"Normals", 3, {}});
-    return mesh;
+// After stage 1's scan: the isovalue's triangles, and the first triangle of
+// every 4th voxel slab. Waits for the stream.
+struct TriangleOffsets {
+  Id triangles = 0;
+  std::vector<std::uint32_t> slab_first;
+};
+
+TriangleOffsets download_offsets(const VoxelCases& v, const GridShape& s, Id voxels, cudaStream_t stream) {
+  std::uint32_t last_offset = 0, last_count = 0;
+  check(cudaMemcpyAsync(&last_offset, v.offsets.get() + voxels - 1, 4, cudaMemcpyDeviceToHost, stream), "downloading");
+  check(cudaMemcpyAsync(&last_count, v.counts.get() + voxels - 1, 4, cudaMemcpyDeviceToHost, stream), "downloading");
+  TriangleOffsets out;
+  for (Id k = 0; k < s.nz - 1; k += 4) out.slab_first.push_back(0);
+  for (std::size_t b = 0; b < out.slab_first.size(); ++b)
+    check(cudaMemcpyAsync(&out.slab_first[b], v.offsets.get() + Id(b) * 4 * (s.ny - 1) * (s.nx - 1), 4,
+                          cudaMemcpyDeviceToHost, stream),
+          "downloading");
+  check(cudaStreamSynchronize(stream), "classify");
+  out.triangles = Id{last_offset} + Id{last_count};
+  return out;
+}
+
+// Stages 1 and 2 for one isovalue: classify the voxels, scan their triangle
+// counts, and emit this isovalue's part of the soup (keys + key_offset),
+// appended to `parts` with its slab blocks.
+template <class K, class T>
+void emit_isovalue(const T* samples, const GridShape& s, Id voxels, double isovalue, K key_offset, VoxelCases& v,
+                   SoupParts<K>& parts, cudaStream_t stream) {
+  const generate::InsideTest<T> test(isovalue);
+  classify_kernel<T><<<grid_for(voxels), kThreads, 0, stream>>>(samples, s, test.threshold,
+                                                                 test.all ? 2 : (test.none ? 1 : 0), v.cases.get(),
+                                                                 v.counts.get(), voxels);
+  check(cudaGetLastError(), "classify");
+  // The scan's storage is freed when this isovalue is done, after its part is allocated.
+  std::size_t temp_bytes = 0;
+  cub::DeviceScan::ExclusiveSum(nullptr, temp_bytes, v.counts.get(), v.offsets.get(), static_cast<int>(voxels), stream);
+  DeviceArray<std::uint8_t> temp(temp_bytes, stream);
+  check(cub::DeviceScan::ExclusiveSum(temp.get(), temp_bytes, v.counts.get(), v.offsets.get(),
+                                      static_cast<int>(voxels), stream),
+        "scanning triangle counts");
+  const TriangleOffsets counted = download_offsets(v, s, voxels, stream);
+  const Id triangles = counted.triangles;
+  if (parts.corners + 3 * triangles > Id{std::numeric_limits<int>::max()})
+    throw LimitError("--backend cuda: " + std::to_string((parts.corners + 3 * triangles) / 3) +
+                     " triangles exceed the device sort's 2^31 - 1 corners (use the CPU backend)");
+  for (std::uint32_t first : counted.slab_first) parts.blocks.push_back(parts.corners + 3 * Id{first});
+  parts.keys.push_back(std::make_unique<DeviceArray<K>>(static_cast<std::size_t>(3 * triangles), stream));
+  DeviceArray<K>* part = parts.keys.back().get();
+  parts.size.push_back(3 * triangles);
+  if (triangles > 0) {
+    emit_kernel<K><<<grid_for(voxels), kThreads, 0, stream>>>(v.cases.get(), v.offsets.get(), s, key_offset,
+                                                              part->get(), voxels);
+    check(cudaGetLastError(), "emit");
   }
-  DeviceArray<std::uint32_t> pair_in(static_cast<std::size_t>(n), stream), perm(static_cast<std::size_t>(n), stream);
-  DeviceArray<K> sorted(static_cast<std::size_t>(n), stream);
+  parts.corners += 3 * triangles;
+}
+
+// One soup: the parts end to end, then the parts freed.
+template <class K>
+void join_parts(SoupParts<K>& parts, DeviceArray<K>& soup, cudaStream_t stream) {
+  Id at = 0;
+  for (std::size_t k = 0; k < parts.keys.size(); ++k) {
+    if (parts.size[k])
+      check(cudaMemcpyAsync(soup.get() + at, parts.keys[k]->get(), parts.size[k] * sizeof(K),
+                            cudaMemcpyDeviceToDevice, stream),
+            "joining the soup");
+    at += parts.size[k];
+  }
+  parts.keys.clear();
+}
+
+// Stage 3a: the pairs (key, pair index) sorted by key, stably, on the keys'
+// significant bits: `sorted` the keys, `perm` the pair indices.
+template <class K>
+void sort_soup(const DeviceArray<K>& soup, K key_range, DeviceArray<std::uint32_t>& pair_in, DeviceArray<K>& sorted,
+               DeviceArray<std::uint32_t>& perm, int n, cudaStream_t stream) {
   iota_kernel<<<grid_for(n), kThreads, 0, stream>>>(pair_in.get(), n);
   int end_bit = 0;
   while (end_bit < int(sizeof(K) * 8) && ((key_range - 1) >> end_bit) != 0) ++end_bit;
-  {
-    std::size_t temp_bytes = 0;
-    cub::DeviceRadixSort::SortPairs(nullptr, temp_bytes, soup.get(), sorted.get(), pair_in.get(), perm.get(), n, 0,
-                                    std::max(end_bit, 1), stream);
-    DeviceArray<std::uint8_t> temp(temp_bytes, stream);
-    check(cub::DeviceRadixSort::SortPairs(temp.get(), temp_bytes, soup.get(), sorted.get(), pair_in.get(), perm.get(),
-                                          n, 0, std::max(end_bit, 1), stream),
-          "sorting the soup");
-  }
-  DeviceArray<std::uint32_t> heads(static_cast<std::size_t>(n), stream), scanned(static_cast<std::size_t>(n), stream);
+  std::size_t temp_bytes = 0;
+  cub::DeviceRadixSort::SortPairs(nullptr, temp_bytes, soup.get(), sorted.get(), pair_in.get(), perm.get(), n, 0,
+                                  std::max(end_bit, 1), stream);
+  DeviceArray<std::uint8_t> temp(temp_bytes, stream);
+  check(cub::DeviceRadixSort::SortPairs(temp.get(), temp_bytes, soup.get(), sorted.get(), pair_in.get(), perm.get(),
+                                        n, 0, std::max(end_bit, 1), stream),
+        "sorting the soup");
+}
+
+// Stage 3b: 1 where a run of equal sorted keys starts, scanned inclusively
+// (each position's group + 1); returns the number of groups. Waits for the stream.
+template <class K>
+Id count_groups(const DeviceArray<K>& sorted, DeviceArray<std::uint32_t>& heads, DeviceArray<std::uint32_t>& scanned,
+                int n, cudaStream_t stream) {
   heads_kernel<K><<<grid_for(n), kThreads, 0, stream>>>(sorted.get(), heads.get(), n);
   {
     std::size_t temp_bytes = 0;
@@ -308,39 +323,41 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const ge
   std::uint32_t groups = 0;
   check(cudaMemcpyAsync(&groups, scanned.get() + n - 1, 4, cudaMemcpyDeviceToHost, stream), "downloading");
   check(cudaStreamSynchronize(stream), "KEY-REDUCE");
-  const Id points = groups;
-  DeviceArray<K> unique_keys(static_cast<std::size_t>(points), stream);
-  DeviceArray<std::uint32_t> group_begin(static_cast<std::size_t>(points), stream);
-  DeviceArray<std::uint32_t> index_map(static_cast<std::size_t>(n), stream);
-  groups_kernel<K><<<grid_for(n), kThreads, 0, stream>>>(sorted.get(), perm.get(), scanned.get(), unique_keys.get(),
-                                                         group_begin.get(), index_map.get(), n);
-  check(cudaGetLastError(), "grouping");
-  check(cudaStreamSynchronize(stream), "KEY-REDUCE");
-  st.weld += seconds_since(t0);
+  return groups;
+}
 
-  // Stage 4 and 5: points and fields.
-  t0 = Clock::now();
-  const EdgeInterpolator<T> interp{samples.get(), s, isovalues.get(), static_cast<Id>(keys_per_iso)};
-  DeviceArray<float> xyz(static_cast<std::size_t>(3 * points), stream);
-  DeviceArray<float> scalar(opt.scalars ? static_cast<std::size_t>(points) : 0, stream);
-  DeviceArray<float> normal(opt.normals != generate::ContourNormals::None ? static_cast<std::size_t>(3 * points) : 0,
-                            stream);
-  points_kernel<T, K><<<grid_for(points), kThreads, 0, stream>>>(
-      interp, unique_keys.get(), xyz.get(), opt.scalars ? scalar.get() : nullptr,
-      opt.normals == generate::ContourNormals::Gradient ? normal.get() : nullptr, points);
-  check(cudaGetLastError(), "points");
-  if (average) {
-    const Id triangles = n / 3;
-    DeviceArray<Vec3f> face(static_cast<std::size_t>(triangles), stream);
-    face_kernel<<<grid_for(triangles), kThreads, 0, stream>>>(xyz.get(), index_map.get(), face.get(), triangles);
-    DeviceArray<Id> d_blocks(blocks.size(), stream);
-    d_blocks.upload(blocks.data(), blocks.size());
-    average_kernel<<<grid_for(points), kThreads, 0, stream>>>(perm.get(), group_begin.get(), n, face.get(),
-                                                              d_blocks.get(), static_cast<Id>(blocks.size()) - 1,
-                                                              normal.get(), points);
-    check(cudaGetLastError(), "averaging normals");
-    check(cudaStreamSynchronize(stream), "averaging normals");
-  }
+// Stage 5: averaged normals, each point's triangles' face normals summed in
+// the CPU's slab-block order and normalised into `normal`. Waits for the stream.
+void average_normals(const DeviceArray<float>& xyz, const DeviceArray<std::uint32_t>& index_map,
+                     const DeviceArray<std::uint32_t>& perm, const DeviceArray<std::uint32_t>& group_begin,
+                     const std::vector<Id>& blocks, int n, Id points, DeviceArray<float>& normal,
+                     cudaStream_t stream) {
+  const Id triangles = n / 3;
+  DeviceArray<Vec3f> face(static_cast<std::size_t>(triangles), stream);
+  face_kernel<<<grid_for(triangles), kThreads, 0, stream>>>(xyz.get(), index_map.get(), face.get(), triangles);
+  DeviceArray<Id> d_blocks(blocks.size(), stream);
+  d_blocks.upload(blocks.data(), blocks.size());
+  average_kernel<<<grid_for(points), kThreads, 0, stream>>>(perm.get(), group_begin.get(), n, face.get(),
+                                                            d_blocks.get(), static_cast<Id>(blocks.size()) - 1,
+                                                            normal.get(), points);
+  check(cudaGetLastError(), "averaging normals");
+  check(cudaStreamSynchronize(stream), "averaging normals");
+}
+
+// The mesh of an empty soup: no points, the fields asked for, empty.
+SurfaceMesh empty_mesh(const ImageGrid& grid, const generate::ContourOptions& opt) {
+  SurfaceMesh mesh;
+  if (opt.scalars) mesh.point_fields.push_back(Field{grid.name, 1, {}});
+  if (opt.normals != generate::ContourNormals::None) mesh.point_fields.push_back(Field{"Normals", 3, {}});
+  return mesh;
+}
+
+// The device's points, triangles (the index map) and fields into a mesh.
+// Waits for the stream.
+SurfaceMesh download_mesh(const ImageGrid& grid, const generate::ContourOptions& opt, Id points, int n,
+                          const DeviceArray<float>& xyz, const DeviceArray<std::uint32_t>& index_map,
+                          const DeviceArray<float>& scalar, const DeviceArray<float>& normal, cudaStream_t stream) {
+  SurfaceMesh mesh;
   mesh.points.resize(static_cast<std::size_t>(3 * points));
   mesh.connectivity.resize(static_cast<std::size_t>(n));
   xyz.download(mesh.points.data(), mesh.points.size());
@@ -356,6 +373,75 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const ge
     mesh.point_fields.push_back(std::move(f));
   }
   check(cudaStreamSynchronize(stream), "downloading the mesh");
+  return mesh;
+}
+
+// The stages in order. Every device array lives to the end, as the stages
+// allocate them (the pool's high-water mark is the report's peak).
+template <class K, class T>
+SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const generate::ContourOptions& opt,
+                          generate::ContourStats& st, cudaStream_t stream) {
+  const GridShape s = shape_of(grid);
+  const Id voxels = voxels_of(s);
+  const Id n_iso = static_cast<Id>(opt.isovalues.size());
+  const K keys_per_iso = static_cast<K>(3 * s.n);
+  const K key_range = static_cast<K>(n_iso) * keys_per_iso;
+  st.key_bits = static_cast<int>(sizeof(K) * 8);
+
+  auto t0 = Clock::now();
+  DeviceArray<T> samples(static_cast<std::size_t>(s.n), stream);
+  samples.upload(host_samples, static_cast<std::size_t>(s.n));
+  DeviceArray<double> isovalues(opt.isovalues.size(), stream);
+  isovalues.upload(opt.isovalues.data(), opt.isovalues.size());
+  check(cudaMemcpyToSymbolAsync(d_table, &generate::marching_cubes_table(opt.reversed_axes),
+                                sizeof(generate::MarchingCubesTable), 0, cudaMemcpyHostToDevice, stream),
+        "uploading the case table");
+
+  // Stages 1 and 2, per isovalue; the soup grows iso after iso, as on the CPU.
+  VoxelCases cases(voxels, stream);
+  SoupParts<K> parts;
+  for (Id iso_index = 0; iso_index < n_iso; ++iso_index)
+    emit_isovalue<K, T>(samples.get(), s, voxels, opt.isovalues[iso_index], static_cast<K>(iso_index) * keys_per_iso,
+                        cases, parts, stream);
+  parts.blocks.push_back(parts.corners);
+  st.soup_points = parts.corners;
+  DeviceArray<K> soup(static_cast<std::size_t>(parts.corners), stream);
+  join_parts(parts, soup, stream);
+  check(cudaStreamSynchronize(stream), "generate");
+  st.generate += seconds_since(t0);
+
+  // Stage 3: KEY-REDUCE, sort plan.
+  t0 = Clock::now();
+  const int n = static_cast<int>(parts.corners);
+  if (n == 0) return empty_mesh(grid, opt);
+  DeviceArray<std::uint32_t> pair_in(static_cast<std::size_t>(n), stream), perm(static_cast<std::size_t>(n), stream);
+  DeviceArray<K> sorted(static_cast<std::size_t>(n), stream);
+  sort_soup(soup, key_range, pair_in, sorted, perm, n, stream);
+  DeviceArray<std::uint32_t> heads(static_cast<std::size_t>(n), stream), scanned(static_cast<std::size_t>(n), stream);
+  const Id points = count_groups(sorted, heads, scanned, n, stream);
+  DeviceArray<K> unique_keys(static_cast<std::size_t>(points), stream);
+  DeviceArray<std::uint32_t> group_begin(static_cast<std::size_t>(points), stream);
+  DeviceArray<std::uint32_t> index_map(static_cast<std::size_t>(n), stream);
+  groups_kernel<K><<<grid_for(n), kThreads, 0, stream>>>(sorted.get(), perm.get(), scanned.get(), unique_keys.get(),
+                                                         group_begin.get(), index_map.get(), n);
+  check(cudaGetLastError(), "grouping");
+  check(cudaStreamSynchronize(stream), "KEY-REDUCE");
+  st.weld += seconds_since(t0);
+
+  // Stages 4 and 5: points and fields.
+  t0 = Clock::now();
+  const EdgeInterpolator<T> interp{samples.get(), s, isovalues.get(), static_cast<Id>(keys_per_iso)};
+  DeviceArray<float> xyz(static_cast<std::size_t>(3 * points), stream);
+  DeviceArray<float> scalar(opt.scalars ? static_cast<std::size_t>(points) : 0, stream);
+  DeviceArray<float> normal(opt.normals != generate::ContourNormals::None ? static_cast<std::size_t>(3 * points) : 0,
+                            stream);
+  points_kernel<T, K><<<grid_for(points), kThreads, 0, stream>>>(
+      interp, unique_keys.get(), xyz.get(), opt.scalars ? scalar.get() : nullptr,
+      opt.normals == generate::ContourNormals::Gradient ? normal.get() : nullptr, points);
+  check(cudaGetLastError(), "points");
+  if (opt.normals == generate::ContourNormals::Average)
+    average_normals(xyz, index_map, perm, group_begin, parts.blocks, n, points, normal, stream);
+  SurfaceMesh mesh = download_mesh(grid, opt, points, n, xyz, index_map, scalar, normal, stream);
   st.fields += seconds_since(t0);
   return mesh;
 }
