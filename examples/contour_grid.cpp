@@ -13,20 +13,13 @@
 #include <cstring>
 
 #include "keymesh/analyze/topology.hpp"
-#include "keymesh/generate/contour.hpp"
+#include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/mesh/image_grid.hpp"
 
-using namespace keymesh;
+#include "expect.hpp"
 
-// The example's checks: a message and exit status 1 when one fails.
-#define EXPECT(condition)                                                \
-  do {                                                                   \
-    if (!(condition)) {                                                  \
-      std::fprintf(stderr, "%s:%d: failed: %s\n", __FILE__, __LINE__, #condition); \
-      return 1;                                                          \
-    }                                                                    \
-  } while (0)
+using namespace keymesh;
 
 static bool same_floats(const Array<float>& a, const Array<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;

@@ -21,16 +21,10 @@
 #include "keymesh/keyreduce/reduce.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
 
+#include "expect.hpp"
+
 using namespace keymesh;
 using Xyz = std::array<float, 3>;
-
-#define EXPECT(condition)                                                          \
-  do {                                                                             \
-    if (!(condition)) {                                                            \
-      std::fprintf(stderr, "%s:%d: failed: %s\n", __FILE__, __LINE__, #condition); \
-      return 1;                                                                    \
-    }                                                                              \
-  } while (0)
 
 // Cube corner c sits at (c & 1, c >> 1 & 1, c >> 2 & 1).
 static Xyz corner_position(unsigned c) { return {float(c & 1), float(c >> 1 & 1), float(c >> 2 & 1)}; }

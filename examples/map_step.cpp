@@ -12,7 +12,7 @@
 //                       reduce: each point's position from its key, once per group
 //
 // The generator writes only the keys of the elements its outputs come from; nothing compares
-// coordinates (docs/DESIGN-NOTES.md, "A new generator is its map step").
+// coordinates (docs/ARCHITECTURE.md, "A new generator is its map step").
 #include <bit>
 #include <cstdint>
 #include <cstdio>
@@ -25,15 +25,9 @@
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/scan.hpp"
 
-using namespace keymesh;
+#include "expect.hpp"
 
-#define EXPECT(condition)                                                          \
-  do {                                                                             \
-    if (!(condition)) {                                                            \
-      std::fprintf(stderr, "%s:%d: failed: %s\n", __FILE__, __LINE__, #condition); \
-      return 1;                                                                    \
-    }                                                                              \
-  } while (0)
+using namespace keymesh;
 
 // A voxel's faces (-x, +x, -y, +y, -z, +z), each as 4 of its corners
 // (corner c = dx + 2 dy + 4 dz), wound so that the quad faces out of the voxel.

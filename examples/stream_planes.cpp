@@ -13,19 +13,13 @@
 #include <cstring>
 
 #include "keymesh/analyze/topology.hpp"
-#include "keymesh/generate/contour.hpp"
-#include "keymesh/generate/contour_stream.hpp"
+#include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/generate/contour/contour_stream.hpp"
 #include "keymesh/mesh/plane_source.hpp"
 
-using namespace keymesh;
+#include "expect.hpp"
 
-#define EXPECT(condition)                                                          \
-  do {                                                                             \
-    if (!(condition)) {                                                            \
-      std::fprintf(stderr, "%s:%d: failed: %s\n", __FILE__, __LINE__, #condition); \
-      return 1;                                                                    \
-    }                                                                              \
-  } while (0)
+using namespace keymesh;
 
 // A torus' distance field, computed a plane at a time: each sample is its
 // distance (in voxels) from a circle of radius 24 around the grid's centre.
