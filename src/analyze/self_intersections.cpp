@@ -192,14 +192,22 @@ bool boxes_overlap(const Box& a, const Box& b) {
   return true;
 }
 
-}  // namespace
 
-SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::size_t max_listed) {
-  SelfIntersectionReport report;
-  const Id points = mesh.num_points(), cells = mesh.num_cells();
-  // Fan triangles of every cell with area.
+// The mesh's cells as fan triangles, each with its cell; point ids and
+// coordinates checked.
+struct FanTriangles {
   std::vector<std::array<PointIndex, 3>> tris;
-  std::vector<Id> tri_cell;
+  std::vector<Id> cell;
+  const float* xyz = nullptr;
+
+  Tri corners(std::size_t t) const {
+    return Tri{xyz + 3 * std::size_t(tris[t][0]), xyz + 3 * std::size_t(tris[t][1]), xyz + 3 * std::size_t(tris[t][2])};
+  }
+};
+
+FanTriangles fan_triangles(const SurfaceMesh& mesh) {
+  FanTriangles f;
+  const Id points = mesh.num_points(), cells = mesh.num_cells();
   for (Id c = 0; c < cells; ++c) {
     const std::uint64_t b = mesh.cell_begin(c), e = mesh.cell_end(c);
     for (std::uint64_t k = b; k < e; ++k)
@@ -207,78 +215,98 @@ SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::siz
         throw InputError("cell " + std::to_string(c) + " refers to point " + std::to_string(mesh.connectivity[k]) +
                          " of " + std::to_string(points));
     for (std::uint64_t k = b + 1; k + 1 < e; ++k) {
-      tris.push_back({mesh.connectivity[b], mesh.connectivity[k], mesh.connectivity[k + 1]});
-      tri_cell.push_back(c);
+      f.tris.push_back({mesh.connectivity[b], mesh.connectivity[k], mesh.connectivity[k + 1]});
+      f.cell.push_back(c);
     }
   }
-  report.triangles = static_cast<Id>(tris.size());
-  const float* xyz = mesh.points.data();
+  f.xyz = mesh.points.data();
   for (Id p = 0; p < 3 * points; ++p)
-    if (!std::isfinite(xyz[p]))
+    if (!std::isfinite(f.xyz[p]))
       throw InputError("point " + std::to_string(p / 3) + " has a coordinate that is not finite");
-  auto corners = [&](std::size_t t) {
-    return Tri{xyz + 3 * std::size_t(tris[t][0]), xyz + 3 * std::size_t(tris[t][1]), xyz + 3 * std::size_t(tris[t][2])};
-  };
-  std::vector<signed char> axis(tris.size());  // projection axis, -1 without area
-  parallel::for_each(static_cast<Id>(tris.size()),
-                     [&](Id t) { axis[t] = static_cast<signed char>(projection_axis(corners(t))); });
-  std::vector<std::uint32_t> live;
-  for (std::size_t t = 0; t < tris.size(); ++t)
-    if (axis[t] >= 0) live.push_back(static_cast<std::uint32_t>(t));
-  report.zero_area_triangles = report.triangles - static_cast<Id>(live.size());
-  if (tris.size() > std::numeric_limits<std::uint32_t>::max())
-    throw LimitError("self-intersection check: more than 2^32 - 1 triangles");
+  return f;
+}
 
-  std::vector<Box> boxes(live.size());
-  parallel::for_each(static_cast<Id>(live.size()), [&](Id i) {
-    const Tri t = corners(live[i]);
-    for (int k = 0; k < 3; ++k) {
-      boxes[i].lo[k] = std::min({t[0][k], t[1][k], t[2][k]});
-      boxes[i].hi[k] = std::max({t[0][k], t[1][k], t[2][k]});
-    }
-  });
-  const Broad grid = make_broad(boxes);
-  // Every (grid cell, triangle) a triangle's box covers, sorted by cell.
+// Every (grid cell, box) pair a box covers, sorted by grid cell, and where
+// each grid cell's run of boxes starts (run_start ends with the pair count).
+struct CellRuns {
+  std::vector<std::uint64_t> keys;
+  std::vector<std::uint32_t> members;
+  std::vector<std::uint64_t> run_start;
+};
+
+CellRuns cell_runs(const Broad& grid, const std::vector<Box>& boxes) {
+  CellRuns r;
   std::vector<std::uint64_t> count(boxes.size() + 1, 0);
   parallel::for_each(static_cast<Id>(boxes.size()), [&](Id i) {
     const auto lo = grid.cell_of(boxes[i].lo), hi = grid.cell_of(boxes[i].hi);
     count[i] = std::uint64_t(hi[0] - lo[0] + 1) * std::uint64_t(hi[1] - lo[1] + 1) * std::uint64_t(hi[2] - lo[2] + 1);
   });
   const std::uint64_t entries = parallel::exclusive_scan(count);
-  std::vector<std::uint64_t> keys(entries);
-  std::vector<std::uint32_t> members(entries);
+  r.keys.resize(entries);
+  r.members.resize(entries);
   parallel::for_each(static_cast<Id>(boxes.size()), [&](Id i) {
     const auto lo = grid.cell_of(boxes[i].lo), hi = grid.cell_of(boxes[i].hi);
     std::uint64_t at = count[i];
     for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
       for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
         for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-          keys[at] = grid.key({x, y, z});
-          members[at++] = static_cast<std::uint32_t>(i);
+          r.keys[at] = grid.key({x, y, z});
+          r.members[at++] = static_cast<std::uint32_t>(i);
         }
   });
-  parallel::sort_pairs(keys, members, parallel::bits_needed(grid.key({grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1})));
-  std::vector<std::uint64_t> run_start;
+  parallel::sort_pairs(r.keys, r.members,
+                       parallel::bits_needed(grid.key({grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1})));
   for (std::uint64_t e = 0; e < entries; ++e)
-    if (e == 0 || keys[e] != keys[e - 1]) run_start.push_back(e);
-  run_start.push_back(entries);
+    if (e == 0 || r.keys[e] != r.keys[e - 1]) r.run_start.push_back(e);
+  r.run_start.push_back(entries);
+  return r;
+}
 
+}  // namespace
+
+SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::size_t max_listed) {
+  SelfIntersectionReport report;
+  const FanTriangles fan = fan_triangles(mesh);
+  report.triangles = static_cast<Id>(fan.tris.size());
+  std::vector<signed char> axis(fan.tris.size());  // projection axis, -1 without area
+  parallel::for_each(static_cast<Id>(fan.tris.size()),
+                     [&](Id t) { axis[t] = static_cast<signed char>(projection_axis(fan.corners(t))); });
+  std::vector<std::uint32_t> live;
+  for (std::size_t t = 0; t < fan.tris.size(); ++t)
+    if (axis[t] >= 0) live.push_back(static_cast<std::uint32_t>(t));
+  report.zero_area_triangles = report.triangles - static_cast<Id>(live.size());
+  if (fan.tris.size() > std::numeric_limits<std::uint32_t>::max())
+    throw LimitError("self-intersection check: more than 2^32 - 1 triangles");
+
+  std::vector<Box> boxes(live.size());
+  parallel::for_each(static_cast<Id>(live.size()), [&](Id i) {
+    const Tri t = fan.corners(live[i]);
+    for (int k = 0; k < 3; ++k) {
+      boxes[i].lo[k] = std::min({t[0][k], t[1][k], t[2][k]});
+      boxes[i].hi[k] = std::max({t[0][k], t[1][k], t[2][k]});
+    }
+  });
+  const Broad grid = make_broad(boxes);
+  const CellRuns runs = cell_runs(grid, boxes);
+
+  // Each pair of boxes is tested once, in the grid cell holding the low
+  // corner of their overlap.
   const int threads = parallel::thread_count();
   std::vector<std::vector<std::array<Id, 2>>> found(static_cast<std::size_t>(threads));
-  const Id runs = static_cast<Id>(run_start.size()) - 1;
+  const Id run_count = static_cast<Id>(runs.run_start.size()) - 1;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
-  for (Id r = 0; r < runs; ++r) {
+  for (Id r = 0; r < run_count; ++r) {
     auto& mine = found[static_cast<std::size_t>(omp_get_thread_num())];
-    const std::uint64_t b = run_start[r], e = run_start[r + 1];
+    const std::uint64_t b = runs.run_start[r], e = runs.run_start[r + 1];
     for (std::uint64_t i = b; i < e; ++i)
       for (std::uint64_t j = i + 1; j < e; ++j) {
-        const std::uint32_t u = members[i], v = members[j];
-        const Id cu = tri_cell[live[u]], cv = tri_cell[live[v]];
+        const std::uint32_t u = runs.members[i], v = runs.members[j];
+        const Id cu = fan.cell[live[u]], cv = fan.cell[live[v]];
         if (cu == cv || !boxes_overlap(boxes[u], boxes[v])) continue;
         std::array<float, 3> low{};
         for (int k = 0; k < 3; ++k) low[k] = std::max(boxes[u].lo[k], boxes[v].lo[k]);
-        if (grid.key(grid.cell_of(low)) != keys[b]) continue;  // tested in another grid cell
-        if (cross_projected(corners(live[u]), corners(live[v]), axis[live[u]], axis[live[v]]))
+        if (grid.key(grid.cell_of(low)) != runs.keys[b]) continue;  // tested in another grid cell
+        if (cross_projected(fan.corners(live[u]), fan.corners(live[v]), axis[live[u]], axis[live[v]]))
           mine.push_back({std::min(cu, cv), std::max(cu, cv)});
       }
   }
