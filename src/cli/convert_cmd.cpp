@@ -2,8 +2,11 @@
 // (unstructured grid, surface mesh or volume), as the format table
 // (io/formats.hpp) says.
 #include <cstdio>
+#include <filesystem>
+#include <system_error>
 
 #include "command.hpp"
+#include "keymesh/core/error.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
@@ -63,6 +66,9 @@ int run_convert(const ConvertCli& o) {
   const int threads = apply_threads(o.common);
   const Kind in = kind_of(o.input, false), out = kind_of(o.output, true);
   if (in == Kind::Unknown) {
+    // A missing input is that, whatever its name would make it.
+    std::error_code missing;
+    if (!std::filesystem::exists(o.input, missing)) throw InputError(o.input + ": no such file");
     std::fprintf(stderr, "keymesh: convert: %s: unknown input format\n", o.input.c_str());
     return 2;
   }
