@@ -37,6 +37,10 @@ std::string temporary_name(const std::string& path, int counter) {
   const std::size_t name_begin = slash == std::string::npos ? 0 : slash + 1;
   const std::size_t limit = name_max(directory);
   std::string name = path.substr(name_begin);
+  // Said now, not by the rename after all the work.
+  if (name.size() > limit)
+    throw InputError(path + ": cannot write: File name too long (" + std::to_string(name.size()) +
+                     " bytes, the file system allows " + std::to_string(limit) + ")");
   if (name.size() + suffix.size() > limit) name.resize(limit > suffix.size() ? limit - suffix.size() : 0);
   return path.substr(0, name_begin) + name + suffix;
 }

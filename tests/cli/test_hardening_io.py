@@ -306,7 +306,8 @@ MESH = vtp_with_fields("plain.vtp", [("f", 1, "1 2 3")])
 def long_output_names_written():
     """A 249-byte file name (valid up to 255) was refused: its temporary name
     "<name>.tmp-<pid>-<n>" passed 255 bytes. 249 and 255 bytes are written,
-    no temporary left; 256 bytes is refused by the file system, by name."""
+    no temporary left; 256 bytes is refused before any work (not by the
+    rename at the end), by name."""
     folder = path("long")
     os.makedirs(folder, exist_ok=True)
     for length in (249, 255):
@@ -314,7 +315,8 @@ def long_output_names_written():
         run("convert", MESH, "-o", os.path.join(folder, name), "-q")
         assert os.listdir(folder) == [name], os.listdir(folder)
         os.remove(os.path.join(folder, name))
-    refused(["convert", MESH, "-o", os.path.join(folder, "n" * 252 + ".ply"), "-q"], "File name too long")
+    refused(["convert", MESH, "-o", os.path.join(folder, "n" * 252 + ".ply"), "-q"],
+            "cannot write: File name too long (256 bytes")
     assert os.listdir(folder) == []
 
 
