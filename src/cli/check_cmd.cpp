@@ -60,9 +60,9 @@ int run_check(const CheckCli& o, CommandRun& run) {
   if (!o.expect_closed || (t.closed_manifold && crossing == 0)) return 0;
   // The check itself ran: its report is written though the exit is 1.
   if (io::OutputTransaction* outputs = io::OutputTransaction::current()) outputs->commit();
-  if (!t.closed_manifold) std::fprintf(stderr, "keymesh: %s is not a closed 2-manifold\n", o.input.c_str());
+  if (!t.closed_manifold) std::fprintf(stderr, "keymesh: %s is not a closed 2-manifold\n", printable(o.input).c_str());
   if (crossing != 0)
-    std::fprintf(stderr, "keymesh: %s crosses itself (%lld pairs of cells)\n", o.input.c_str(), (long long)crossing);
+    std::fprintf(stderr, "keymesh: %s crosses itself (%lld pairs of cells)\n", printable(o.input).c_str(), (long long)crossing);
   return 1;
 }
 

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "keymesh/core/printable.hpp"
 #include "keymesh/core/work_estimate.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/input_file.hpp"
@@ -97,7 +98,7 @@ int require_cpu_backend(const CommonOptions& common, const char* what) {
 int apply_threads(const CommonOptions& common) { return parallel::set_thread_count(common.threads); }
 
 void Progress::say(const std::string& line) const {
-  if (enabled_) std::fprintf(stderr, "keymesh: %s\n", line.c_str());
+  if (enabled_) std::fprintf(stderr, "keymesh: %s\n", printable(line).c_str());
 }
 
 long long file_size(const std::string& path) {
@@ -134,28 +135,39 @@ std::vector<std::pair<std::string, std::string>> given_paths(const CLI::App& cmd
 }
 
 std::string error_line(const CLI::App* cmd, const std::string& message) {
-  if (!cmd) return message;
+  // One line, whatever bytes the file names in it hold.
+  if (!cmd) return printable(message);
   const auto paths = given_paths(*cmd, true);
   for (const auto& [option, path] : paths)
-    if (message.find(path) != std::string::npos) return message;
+    if (message.find(path) != std::string::npos) return printable(message);
   // The input it concerns; a command with none (generate) names its output.
-  return paths.empty() ? message : paths.front().second + ": " + message;
+  return printable(paths.empty() ? message : paths.front().second + ": " + message);
 }
+
+namespace {
+// Why `path` cannot be written, as the file system would say it before any
+// work is done; empty when it can be (as far as can be told).
+std::string unwritable_because(const std::string& path) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  const std::string dir = parent.empty() ? std::string(".") : parent.string();
+  struct stat st {};
+  if (path.empty() || path.back() == '/') return "not a file name";
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) return "is a directory";
+  // access() on a regular file says "Permission denied" (no search
+  // permission): the cause is that it is no directory.
+  if (::stat(dir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode)) return dir + " is not a directory";
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) return std::strerror(errno);
+  return "";
+}
+}  // namespace
 
 int refuse_unwritable_outputs(const CLI::App& cmd) {
   for (const char* name : {"--output", "--report"})
     if (const CLI::Option* opt = cmd.get_option_no_throw(name))
       for (const std::string& path : opt->results()) {
         if (is_device(path)) continue;
-        const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-        const std::string dir = parent.empty() ? std::string(".") : parent.string();
-        const char* why = nullptr;
-        struct stat st {};
-        if (path.empty() || path.back() == '/') why = "not a file name";
-        else if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) why = "is a directory";
-        else if (::access(dir.c_str(), W_OK | X_OK) != 0) why = std::strerror(errno);
-        if (why) {
-          std::fprintf(stderr, "keymesh: %s: cannot write: %s\n", path.c_str(), why);
+        if (const std::string why = unwritable_because(path); !why.empty()) {
+          std::fprintf(stderr, "keymesh: %s: cannot write: %s\n", printable(path).c_str(), printable(why).c_str());
           return 1;
         }
       }
@@ -170,8 +182,8 @@ int refuse_shared_paths(const CLI::App& cmd) {
     for (std::size_t j = i + 1; j < paths.size(); ++j)
       if (io::same_file(paths[i].second, paths[j].second)) {
         std::fprintf(stderr, "keymesh %s: %s %s and %s %s name the same file\n", cmd.get_name().c_str(),
-                     paths[i].first.c_str(), paths[i].second.c_str(), paths[j].first.c_str(),
-                     paths[j].second.c_str());
+                     paths[i].first.c_str(), printable(paths[i].second).c_str(), paths[j].first.c_str(),
+                     printable(paths[j].second).c_str());
         return 2;
       }
   return 0;

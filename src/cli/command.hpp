@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "keymesh/core/printable.hpp"  // file names in messages: one line whatever they hold
 #include "keymesh/core/progress.hpp"
 #include "keymesh/core/work_estimate.hpp"
 #include "keymesh/generate/option_names.hpp"

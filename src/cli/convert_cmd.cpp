@@ -2,8 +2,11 @@
 // (unstructured grid, surface mesh or volume), as the format table
 // (io/formats.hpp) says.
 #include <cstdio>
+#include <filesystem>
+#include <system_error>
 
 #include "command.hpp"
+#include "keymesh/core/error.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/mesh_io.hpp"
@@ -63,16 +66,19 @@ int run_convert(const ConvertCli& o) {
   const int threads = apply_threads(o.common);
   const Kind in = kind_of(o.input, false), out = kind_of(o.output, true);
   if (in == Kind::Unknown) {
-    std::fprintf(stderr, "keymesh: convert: %s: unknown input format\n", o.input.c_str());
+    // A missing input is that, whatever its name would make it.
+    std::error_code missing;
+    if (!std::filesystem::exists(o.input, missing)) throw InputError(o.input + ": no such file");
+    std::fprintf(stderr, "keymesh: convert: %s: unknown input format\n", printable(o.input).c_str());
     return 2;
   }
   if (out == Kind::Unknown) {
-    std::fprintf(stderr, "keymesh: convert: %s: unknown output format\n", o.output.c_str());
+    std::fprintf(stderr, "keymesh: convert: %s: unknown output format\n", printable(o.output).c_str());
     return 2;
   }
   if (in != out) {
     std::fprintf(stderr, "keymesh: convert: %s is %s and %s would be %s; convert keeps the kind of data\n",
-                 o.input.c_str(), kind_name(in), o.output.c_str(), kind_name(out));
+                 printable(o.input).c_str(), kind_name(in), printable(o.output).c_str(), kind_name(out));
     return 2;
   }
   StageTimer timer;

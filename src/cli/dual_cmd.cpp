@@ -34,7 +34,7 @@ int run_dual(const DualCli& o, CommandRun& run) {
   // them; a format that is no surface mesh is refused before the work.
   const io::Format* out = io::format_by_name(o.output);
   if (!out || out->kind != io::DataKind::Surface || !out->writable()) {
-    std::fprintf(stderr, "keymesh dual: %s: write the dual as %s\n", o.output.c_str(),
+    std::fprintf(stderr, "keymesh dual: %s: write the dual as %s\n", printable(o.output).c_str(),
                  io::extensions_of(io::DataKind::Surface, true).c_str());
     return 2;
   }
@@ -44,7 +44,7 @@ int run_dual(const DualCli& o, CommandRun& run) {
   run.stage("write", [&] { io::write_mesh(d, o.output); });
   if (!o.common.quiet) {
     std::fprintf(stderr, "keymesh: %lld points, %lld polygons -> %s\n", (long long)d.num_points(),
-                 (long long)d.num_cells(), o.output.c_str());
+                 (long long)d.num_cells(), printable(o.output).c_str());
     if (st.boundary_fans || st.nonmanifold_points || st.skipped_fans)
       std::fprintf(stderr, "keymesh: %lld boundary fans, %lld non-manifold points, %lld fans skipped\n",
                    (long long)st.boundary_fans, (long long)st.nonmanifold_points, (long long)st.skipped_fans);

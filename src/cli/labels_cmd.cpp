@@ -107,12 +107,13 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
   const std::string ext = std::filesystem::path(job.output).extension().string();
   if (ext != ".vtp" && ext != ".ply" && !job.common.quiet)
     std::fprintf(stderr, "keymesh: warning: %s: %s files have no cell data; boundary_labels is not written "
-                         "(use .vtp or .ply)\n", job.output.c_str(), ext.c_str());
+                         "(use .vtp or .ply)\n", printable(job.output).c_str(),
+                 printable(ext).c_str());
   timer.run("write", [&] { io::write_mesh(mesh, job.output); });
   if (!job.common.quiet)
     std::fprintf(stderr, "keymesh: %lld labels, %lld points, %lld triangles -> %s\n",
                  static_cast<long long>(stats.surfaces), static_cast<long long>(mesh.num_points()),
-                 static_cast<long long>(mesh.num_cells()), job.output.c_str());
+                 static_cast<long long>(mesh.num_cells()), printable(job.output).c_str());
   if (job.common.report_path.empty()) return;
   const generate::LabelOptions& opt = job.options;
   r.update({{"input", job.input}, {"output", job.output}, {"method", job.method}, {"per_label", opt.per_label},

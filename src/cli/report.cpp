@@ -63,7 +63,7 @@ void finish_report(const CommonOptions& common, nlohmann::json report, int threa
 void say_written(const CommonOptions& common, long long points, long long cells, const char* cells_word,
                  const std::string& output) {
   if (!common.quiet)
-    std::fprintf(stderr, "keymesh: %lld points, %lld %s -> %s\n", points, cells, cells_word, output.c_str());
+    std::fprintf(stderr, "keymesh: %lld points, %lld %s -> %s\n", points, cells, cells_word, printable(output).c_str());
 }
 
 }  // namespace keymesh::cli

@@ -48,7 +48,7 @@ int run_subdivide(const SubdivideCli& o, CommandRun& run) {
   opt.weld = generate::parse_option<generate::SubdivideWeld>(o.weld);
   const bool grid_in = io::is_grid_file(o.input);
   if (grid_in ? is_mesh_path(o.output) : !is_mesh_path(o.output)) {
-    std::fprintf(stderr, "keymesh subdivide: %s: a %s subdivides into a %s\n", o.output.c_str(),
+    std::fprintf(stderr, "keymesh subdivide: %s: a %s subdivides into a %s\n", printable(o.output).c_str(),
                  grid_in ? "tet grid" : "surface",
                  (grid_in ? "grid (" + io::extensions_of(io::DataKind::Grid, true) + ")"
                           : "surface (" + io::extensions_of(io::DataKind::Surface, true) + ")")

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -256,6 +257,11 @@ class SeriesScan {
     if (const char* pos = value(f, kPosition)) {
       auto p = numbers(pos, 3);
       if (!p) throw fail(f, std::string("bad ImagePositionPatient '") + pos + "'");
+      // A grid's coordinates are float32: a slice at z = 1e300 is refused
+      // here, by name, before its distance to the others is measured.
+      for (int a = 0; a < 3; ++a)
+        if (!(std::abs((*p)[a]) <= std::numeric_limits<float>::max()))
+          throw fail(f, std::string("ImagePositionPatient '") + pos + "': " + "xyz"[a] + " lies past float32's range");
       slice.position = {(*p)[0], (*p)[1], (*p)[2]};
     } else if (files > 1) {
       throw fail(f, "no ImagePositionPatient: the slices cannot be ordered");
@@ -310,7 +316,11 @@ double order_slices(std::vector<Slice>& slices, const std::array<double, 3>& nor
   std::size_t worst = 1;
   auto gap = [&](std::size_t k) { return slices[k].along_normal - slices[k - 1].along_normal; };
   for (std::size_t k = 1; k < n; ++k) {
-    if (gap(k) <= 1e-6 * std::max(1.0, std::abs(step)))
+    // Equal within the decimal strings' rounding, relative to the positions
+    // themselves (not to the mean step: one slice far off the others makes
+    // that step huge, and then the others' gaps are uneven, not repeated).
+    const double scale = std::max({1.0, std::abs(slices[k].along_normal), std::abs(slices[k - 1].along_normal)});
+    if (gap(k) <= 1e-6 * scale)
       throw InputError(folder + ": " + name_of(slices[k - 1].file) + " and " + name_of(slices[k].file) +
                        " lie at the same position (two series, or a repeated slice)");
     if (std::abs(gap(k) - step) > std::abs(gap(worst) - step)) worst = k;
@@ -337,6 +347,8 @@ class DicomPlanes : public PlaneSource {
     if (!format.spacing.empty()) {
       auto p = numbers(format.spacing.c_str(), 2);
       if (!p || !((*p)[0] > 0) || !((*p)[1] > 0)) throw scan.fail(first, "bad PixelSpacing '" + format.spacing + "'");
+      if (std::max((*p)[0], (*p)[1]) > std::numeric_limits<float>::max())
+        throw scan.fail(first, "PixelSpacing '" + format.spacing + "' lies past float32's range");
       pixel = {(*p)[0], (*p)[1]};
     }
     const long bits = format.bits;
@@ -392,6 +404,13 @@ class DicomPlanes : public PlaneSource {
       throw InputError(folder_ + ": " + name_of(s.file) + ": GDCM cannot read its pixel data");
     if (decoded == kKeymeshGdcmTruncated)
       throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data ends early (a truncated file)");
+    // GDCM reads a native PixelData element shorter than the plane without
+    // a word and zero-fills the rest: [100, 0, 0, ...] from 2 of 60 bytes.
+    if (decoded != kKeymeshGdcmUnreadable && image.native && image.stored_bytes < bytes)
+      throw InputError(folder_ + ": " + name_of(s.file) + ": PixelData holds " + std::to_string(image.stored_bytes) +
+                       " bytes, " + std::to_string(head_.dims[0]) + " columns x " + std::to_string(head_.dims[1]) +
+                       " rows x " + std::to_string(scalar_size(stored_)) + " bytes need " + std::to_string(bytes) +
+                       " (a short or damaged slice)");
     if (image.columns != head_.dims[0] || image.rows != head_.dims[1] || image.samples_per_pixel != 1 ||
         image.bits_allocated != 8 * scalar_size(stored_) || image.buffer_bytes != bytes)
       throw InputError(folder_ + ": " + name_of(s.file) + ": pixel data of " + std::to_string(image.buffer_bytes) +

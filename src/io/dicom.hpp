@@ -11,7 +11,9 @@
 // is refused naming the two files that differ. Slices are ordered by their
 // ImagePositionPatient projected on the slice normal (row cosine x column
 // cosine), not by file name or InstanceNumber; the gaps between positions
-// must be equal (within 0.1 %), two slices at one position are refused.
+// must be equal (within 0.1 %), two slices at one position are refused, as
+// a position past float32's range. Each slice's uncompressed PixelData must
+// hold its whole plane (GDCM zero-fills a short one).
 // Grid: x along the rows (spacing = PixelSpacing's column spacing, its
 // second value), y down the columns, z along the normal at the position
 // step; origin = the first slice's ImagePositionPatient. The direction

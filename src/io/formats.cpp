@@ -1,7 +1,11 @@
 #include "keymesh/io/formats.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 
 #include "keymesh/core/error.hpp"
@@ -174,6 +178,12 @@ std::string accepted_volumes(bool written) {
 }
 
 void refuse_format(const std::string& path, DataKind kind, bool written) {
+  // An input that is not there at all: that is the cause, whatever its name says.
+  struct stat st {};
+  if (!written && ::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) throw InputError(path + ": no such file");
+    throw InputError(path + ": cannot open: " + std::strerror(errno));
+  }
   switch (kind) {
     case K::Surface:
       throw InputError(path + ": unknown mesh file extension '" + file_extension(path) + "' (accepted: " +

@@ -3,13 +3,16 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/core/printable.hpp"
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/mesh/unit_normals.hpp"
 #include "mesh_bytes.hpp"
@@ -35,6 +38,32 @@ std::string attribute_name(const std::string& field) {
   std::string out = "_";
   for (unsigned char c : field) out += std::isalnum(c) ? static_cast<char>(std::toupper(c)) : '_';
   return out;
+}
+
+// The attribute name of a field, once per primitive: glTF keys attributes
+// by name, so a second field of the same name ("a b" and "a-b" both give
+// _A_B; a second "Normals") would replace the first and leave its accessor
+// unused. It is written as _A_B_2 (_3, ...) instead, with a warning.
+std::string unique_attribute(const std::string& wanted, const nlohmann::json& attributes, const Field& f,
+                             const std::string& path) {
+  if (!attributes.contains(wanted)) return wanted;
+  std::string name;
+  for (int n = 2; name.empty() || attributes.contains(name); ++n) name = wanted + "_" + std::to_string(n);
+  std::fprintf(stderr, "keymesh: warning: %s: point field '%s' written as glTF attribute %s (%s is another field's)\n",
+               printable(path).c_str(), printable(f.name).c_str(), name.c_str(), wanted.c_str());
+  return name;
+}
+
+// glTF forbids NaN and infinity in accessor data, and its min and max are
+// JSON numbers: a field holding one is refused by name rather than written
+// as "min":[null] (the Khronos validator's ACCESSOR_INVALID_FLOAT).
+void require_finite(const Array<float>& values, int components, const std::string& field, const std::string& path) {
+  std::size_t i = 0;
+  while (i < values.size() && std::isfinite(values[i])) ++i;
+  if (i == values.size()) return;
+  throw InputError(path + ": point field '" + field + "' holds " + std::to_string(values[i]) + " at point " +
+                   std::to_string(i / static_cast<std::size_t>(components)) +
+                   ": glTF allows only finite numbers (write .ply or .vtp to keep it)");
 }
 
 const char* accessor_type(int components) {
@@ -93,7 +122,8 @@ struct GlbContent {
 // ACCESSOR_VECTOR3_NON_UNIT): normals that are not (zero where a contour's
 // triangles have zero area or its gradient vanishes, NaN from NaN data) are
 // written as make_unit_normals (mesh/unit_normals.hpp) defines them.
-void describe_mesh(const SurfaceMesh& mesh, const Array<PointIndex>& indices, GlbContent& glb) {
+void describe_mesh(const SurfaceMesh& mesh, const Array<PointIndex>& indices, GlbContent& glb,
+                   const std::string& path) {
   nlohmann::json& doc = glb.doc;
   doc["nodes"] = nlohmann::json::array({{{"mesh", 0}}});
   nlohmann::json accessors = nlohmann::json::array(), views = nlohmann::json::array();
@@ -116,13 +146,16 @@ void describe_mesh(const SurfaceMesh& mesh, const Array<PointIndex>& indices, Gl
   attributes["POSITION"] = add_float_attribute(mesh.points, 3);
   for (const Field& f : mesh.point_fields) {
     if (f.components < 1 || f.components > 4) continue;  // glTF has no wider vector accessor
-    const bool normals = f.name == "Normals" && f.components == 3;
+    // The first 3-component "Normals" is NORMAL; another is an attribute as any field.
+    const bool normals = f.name == "Normals" && f.components == 3 && !attributes.contains("NORMAL");
     const Array<float>* values = &f.values;
     if (normals) {
       glb.unit_normals = f.values;
       if (make_unit_normals(mesh, glb.unit_normals.data()) > 0) values = &glb.unit_normals;
     }
-    attributes[normals ? std::string("NORMAL") : attribute_name(f.name)] = add_float_attribute(*values, f.components);
+    require_finite(*values, f.components, f.name, path);
+    const std::string name = unique_attribute(normals ? std::string("NORMAL") : attribute_name(f.name), attributes, f, path);
+    attributes[name] = add_float_attribute(*values, f.components);
   }
   const int index_view = add_array(indices.data(), indices.size() * sizeof(PointIndex), kElementArrayBuffer);
   const auto [lo, hi] = std::minmax_element(indices.begin(), indices.end());
@@ -187,7 +220,7 @@ void write_gltf_binary(const SurfaceMesh& mesh, const std::string& path) {
   // Points no triangle uses would make an accessor of a mesh without a
   // primitive: an empty mesh is one empty node.
   if (indices.empty() || mesh.num_points() == 0) glb.doc["nodes"] = nlohmann::json::array({nlohmann::json::object()});
-  else describe_mesh(mesh, indices, glb);
+  else describe_mesh(mesh, indices, glb, path);
   write_glb(glb, path);
 }
 

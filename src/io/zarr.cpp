@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -18,6 +19,7 @@
 #include "mesh_bytes.hpp"
 #include "volume_formats.hpp"
 #include "whole_inflate.hpp"
+#include "zarr_chunk_listing.hpp"
 
 #include "type_names.hpp"
 
@@ -105,6 +107,13 @@ class ZarrPlanes : public PlaneSource {
     // Sized by the first chunk stored on disk: absent chunks are filled in
     // place, so an array of fill_value allocates no chunk at all.
     std::vector<std::byte> chunk;
+    if (listing_->none_stored()) {  // an array of fill_value: no chunk key to build and look up
+      const std::size_t total = static_cast<std::size_t>(count * nx * ny) * size;
+      for (std::size_t i = 0; i < total; i += size) std::memcpy(out + i, fill_.data(), size);
+      if (swap_)
+        for (std::size_t i = 0; i < total; i += size) std::reverse(out + i, out + i + size);
+      return;
+    }
     for (Id iz = first / cz; iz * cz < first + count; ++iz)
       for (Id iy = 0; iy * cy < ny; ++iy)
         for (Id ix = 0; ix * cx < nx; ++ix) {
@@ -164,6 +173,7 @@ class ZarrPlanes : public PlaneSource {
       }
     }
     array_ = array.string();
+    listing_.emplace(array_, folder);
     parse_zarray(read_json((array / ".zarray").string(), folder));
 
     // Spacing and origin of the last three axes from the OME transforms.
@@ -311,19 +321,32 @@ class ZarrPlanes : public PlaneSource {
     if (swap_) std::reverse(fill_.begin(), fill_.end());  // read_planes swaps every sample back
   }
 
+  // A listed chunk's bytes. A listed name that cannot be read (a link loop,
+  // a dangling link, a directory) is refused naming the chunk: only an
+  // absent chunk holds fill_value.
+  template <class Bad>
+  mesh_bytes::FileBytes read_chunk_file(const std::string& key, const Bad& bad) const {
+    const std::string file = (fs::path(array_) / key).string();
+    try {
+      return mesh_bytes::read_whole_file(file);
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      throw bad(what.rfind(file + ": ", 0) == 0 ? what.substr(file.size() + 2) : what);
+    }
+  }
+
   // The chunk (z, y, x) of the last three axes (index 0 on the others),
   // decoded into `out` (resized to chunk_bytes_); false, `out` untouched,
   // when its file is absent (the chunk holds fill_value). The chunk's bytes
   // on disk must be able to hold it before `out` is sized: a file of a few
   // bytes cannot make the reader allocate a chunk of a gigabyte.
-  bool decode_chunk(std::array<Id, 3> index, std::vector<std::byte>& out) const {
+  bool decode_chunk(std::array<Id, 3> index, std::vector<std::byte>& out) {
     std::string key;
     for (std::size_t a = 0; a + 3 < shape_.size(); ++a) key += std::string("0") + separator_;
     key += std::to_string(index[0]) + separator_ + std::to_string(index[1]) + separator_ + std::to_string(index[2]);
-    const fs::path file = fs::path(array_) / key;
-    if (!path_exists(file)) return false;
-    const mesh_bytes::FileBytes data = mesh_bytes::read_whole_file(file.string());
+    if (!listing_->present(key, separator_)) return false;
     auto bad = [&](const std::string& what) { return InputError(folder_ + ": chunk " + key + ": " + what); };
+    const mesh_bytes::FileBytes data = read_chunk_file(key, bad);
     switch (codec_) {
       case Codec::None:
         if (data.size() != chunk_bytes_)
@@ -381,6 +404,7 @@ class ZarrPlanes : public PlaneSource {
   bool swap_ = false;
   std::uint64_t chunk_bytes_ = 0;
   std::vector<std::byte> fill_;
+  std::optional<ZarrChunkListing> listing_;  // set once the array's folder is known
   ImageGrid head_;
 };
 

@@ -8,7 +8,9 @@
 // Arrays: C order, 3 dimensions or more with every axis before the last
 // three of size 1 (OME's t and c), dtypes u1 i1 u2 i2 i4 f4 f8 (either byte
 // order), compressor none, zlib, gzip or blosc (any of its codecs), no
-// filters, '.' or '/' dimension separator; absent chunks hold fill_value.
+// filters, '.' or '/' dimension separator; absent chunks hold fill_value
+// (absent from the listing of their directory: a chunk file that is there
+// but cannot be read, a link loop, is refused naming the chunk).
 // The last axis is x (fastest in memory), then y, then z: the bytes of a
 // C-order (z, y, x) array are the grid's samples in order. Spacing and
 // origin come from the OME scale and translation transforms of the level

@@ -42,6 +42,17 @@ std::string errors_doc() {
   return text.str();
 }
 
+// An empty file of that name in a folder of this test's own: a missing file
+// is refused as missing, whatever its name (below).
+std::string existing_file(const std::string& name) {
+  const std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / ("keymesh-formats-test-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(folder);
+  const std::string path = (folder / name).string();
+  std::ofstream(path).put('x');
+  return path;
+}
+
 // The variant alternative a reader or writer of `kind` must be (0: none).
 std::size_t alternative_of(DataKind kind) {
   return kind == DataKind::Surface ? 1 : kind == DataKind::Grid ? 2 : 3;
@@ -92,15 +103,16 @@ TEST(FormatTable, UnknownNamesAreRefusedListingTheTablesExtensions) {
   SurfaceMesh mesh;
   UnstructuredGrid grid;
   ImageGrid volume;
-  const std::string mesh_read = message_of([] { read_mesh("x.xyz"); });
-  const std::string mesh_write = message_of([&] { write_mesh(mesh, "x.xyz"); });
-  const std::string grid_read = message_of([] { read_grid("x.xyz"); });
-  const std::string grid_write = message_of([&] { write_grid(grid, "x.xyz"); });
-  const std::string volume_read = message_of([] { read_volume("x.xyz"); });
-  const std::string volume_write = message_of([&] { write_volume(volume, "x.xyz"); });
-  const std::string planes = message_of([] { open_volume_planes("x.xyz", nullptr); });
+  const std::string x = existing_file("x.xyz");
+  const std::string mesh_read = message_of([&] { read_mesh(x); });
+  const std::string mesh_write = message_of([&] { write_mesh(mesh, x); });
+  const std::string grid_read = message_of([&] { read_grid(x); });
+  const std::string grid_write = message_of([&] { write_grid(grid, x); });
+  const std::string volume_read = message_of([&] { read_volume(x); });
+  const std::string volume_write = message_of([&] { write_volume(volume, x); });
+  const std::string planes = message_of([&] { open_volume_planes(x, nullptr); });
   for (const std::string* m : {&mesh_read, &mesh_write, &grid_read, &grid_write, &volume_read, &volume_write, &planes})
-    EXPECT_EQ(m->rfind("x.xyz: ", 0), 0u) << *m;
+    EXPECT_EQ(m->rfind(x + ": ", 0), 0u) << *m;
   for (const Format& f : formats()) {
     for (std::string_view e : f.extensions) {
       if (e.empty()) continue;
@@ -122,7 +134,14 @@ TEST(FormatTable, UnknownNamesAreRefusedListingTheTablesExtensions) {
   }
   // A format keymesh only reads is refused for writing, and the other way round.
   EXPECT_NE(message_of([&] { write_mesh(mesh, "x.pvtp"); }).find("unknown mesh file extension '.pvtp'"), std::string::npos);
-  EXPECT_NE(message_of([] { read_mesh("x.glb"); }).find("unknown mesh file extension '.glb'"), std::string::npos);
+  EXPECT_NE(message_of([] { read_mesh(existing_file("x.glb")); }).find("unknown mesh file extension '.glb'"),
+            std::string::npos);
+  // A missing input: that is the cause, whatever its name says.
+  for (const char* missing : {"missing.xyz", "missing.glb"}) {
+    const std::string m = message_of([&] { read_mesh(missing); });
+    EXPECT_EQ(m, std::string(missing) + ": no such file");
+  }
+  EXPECT_EQ(message_of([] { read_volume("missing.xyz"); }), "missing.xyz: no such file");
   EXPECT_NE(message_of([&] { write_volume(volume, "x.nii.gz"); }).find("cannot write this volume format"),
             std::string::npos);
   EXPECT_NE(message_of([] { read_volume("x.raw"); }).find("needs --dims"), std::string::npos);

@@ -622,8 +622,11 @@ with open('vtk_truth.txt', 'w') as f:
 // ---------------------------------------------------------------- dispatch
 
 TEST(MeshIoTest, UnknownExtensionNamesFileAndFormats) {
+  TempDir dir;
+  std::ofstream(dir.file("some_mesh.xyz")) << "x";  // a missing one is refused as missing
+  EXPECT_THROW(io::read_mesh(dir.file("missing.xyz")), InputError);
   try {
-    io::read_mesh("/tmp/some_mesh.xyz");
+    io::read_mesh(dir.file("some_mesh.xyz"));
     FAIL();
   } catch (const InputError& e) {
     const std::string msg = e.what();

@@ -14,7 +14,9 @@ namespace keymesh::io {
 
 class AtomicFile {
  public:
-  // Opens "<path>.tmp-<pid>-<n>"; throws InputError naming path on failure.
+  // Creates "<path>.tmp-<pid>-<n>" (its name's head cut when that would pass
+  // the file system's name limit); opens an existing FIFO without waiting
+  // for a reader (none: refused). Throws InputError naming path on failure.
   explicit AtomicFile(std::string path);
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;

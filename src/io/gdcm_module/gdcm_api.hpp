@@ -16,7 +16,7 @@ extern "C" {
 
 // Bumped with every change of this file: a module of another keymesh build
 // is refused by name rather than called through a table of another shape.
-inline constexpr std::uint32_t kKeymeshGdcmApiVersion = 1;
+inline constexpr std::uint32_t kKeymeshGdcmApiVersion = 2;
 
 // A DICOM tag as (group << 16) | element.
 using KeymeshGdcmTag = std::uint32_t;
@@ -29,6 +29,14 @@ using KeymeshGdcmTagValue = void (*)(void* context, std::size_t index, const cha
 struct KeymeshGdcmImage {
   unsigned columns = 0, rows = 0, samples_per_pixel = 0, bits_allocated = 0;
   std::size_t buffer_bytes = 0;  // the decoded pixel data's length
+  // Whether the PixelData element is stored uncompressed (native, not
+  // encapsulated fragments, whose codec checks their length), and the
+  // bytes it then holds. GDCM's buffer_bytes is what the header declares
+  // (rows x columns x samples x bits); of a shorter element GDCM copies
+  // what there is and leaves the rest of the plane as it was (zeros), so
+  // the reader compares the two.
+  unsigned native = 0;
+  std::size_t stored_bytes = 0;
 };
 
 enum KeymeshGdcmDecoded : int {

@@ -54,6 +54,9 @@ int decode(const char* file, KeymeshGdcmImage* image, void* out, std::size_t out
   image->samples_per_pixel = pf.GetSamplesPerPixel();
   image->bits_allocated = pf.GetBitsAllocated();
   image->buffer_bytes = img.GetBufferLength();
+  const gdcm::DataElement& pixels = img.GetDataElement();
+  image->native = pixels.GetSequenceOfFragments() == nullptr;
+  if (const gdcm::ByteValue* stored = pixels.GetByteValue()) image->stored_bytes = stored->GetLength();
   if (image->buffer_bytes != out_bytes) return kKeymeshGdcmOtherSize;
   return img.GetBuffer(static_cast<char*>(out)) ? kKeymeshGdcmDecoded : kKeymeshGdcmUndecodable;
 }
