@@ -37,8 +37,9 @@ void refuse_out_of_range_integers(CLI::App& cmd) {
     const std::string base = type.substr(0, type.find(':'));
     if (base != "INT" && base != "UINT") continue;
     const bool is_unsigned = base == "UINT";
-    // No description: the option's help keeps its type as it was.
-    opt->check(CLI::Validator([is_unsigned](std::string& text) { return integer_text_error(text, is_unsigned); }, ""));
+    // A transform (checks may not rewrite the text), run before the
+    // option's own checks; no description: its help keeps its type as it was.
+    opt->transform(CLI::Validator([is_unsigned](std::string& text) { return integer_text_error(text, is_unsigned); }, ""));
   }
 }
 
