@@ -21,7 +21,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import KEYMESH, check, finish, report, run, tempdir  # noqa: E402
+from kmtest import check, finish, mpirun_command, report, run, tempdir  # noqa: E402
 
 try:
     import numpy as np
@@ -37,15 +37,9 @@ HANG_LIMIT = 90  # seconds: each run below takes about one
 def mpi(P, *args, timeout=HANG_LIMIT):
     """`mpirun -np P keymesh args` in a session of its own: (exit, stderr).
     Past `timeout` the whole session is killed and the check fails (a hang)."""
-    cmd = [MPIRUN, "--oversubscribe", "-np", str(P)]
-    if os.geteuid() == 0:
-        cmd.insert(1, "--allow-run-as-root")
-    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1",
-               OMPI_MCA_btl_vader_single_copy_mechanism="none")
-    if "ASAN_OPTIONS" in env:
-        env["ASAN_OPTIONS"] += ":detect_leaks=0"
-    p = subprocess.Popen(cmd + [KEYMESH, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         stdin=subprocess.DEVNULL, text=True, env=env, start_new_session=True)
+    cmd, env = mpirun_command(P, *args)
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+                         env=env, start_new_session=True)
     try:
         _, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -134,6 +128,16 @@ def one_rank_read_error(command, path, *extra):
     return fn
 
 
+def pieces_not_left():
+    zarr = os.path.join(D, "labels.zarr")
+    out = os.path.join(D, "pieces", "p.pvtp")
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    rc, err = mpi(3, "contour", zarr, "--iso", 0.5, "-o", out)
+    assert rc == 1, err
+    said_once(err, "labels.zarr")
+    assert os.listdir(os.path.dirname(out)) == [], os.listdir(os.path.dirname(out))
+
+
 def unwritable_output_said_once():
     raw = LABELRAW
     dims = ["--dims", 10, 9, 8, "--type", "int16"]
@@ -168,12 +172,15 @@ def mpi_checks():
     if why:
         print(f"skipped (mpirun part): {why}")
         return
-    check("labels and contour under mpirun: a corrupt top Zarr chunk (one rank's) ends every rank, said once",
+    check("labels under mpirun: a corrupt top Zarr chunk (one rank's) ends every rank, said once",
           one_rank_read_error("labels", zarr_with_corrupt_top_chunk()))
     check("the same with --memory-limit 1K (labels streams its rows)",
           one_rank_read_error("labels", os.path.join(D, "labels.zarr"), "--memory-limit", "1K"))
     check("contour of the same Zarr under mpirun: said once, exit 1",
           one_rank_read_error("contour", os.path.join(D, "labels.zarr")))
+    check("contour --balance (the ranks read, then share their counts): said once, exit 1",
+          one_rank_read_error("contour", os.path.join(D, "labels.zarr"), "--balance"))
+    check("contour into .pvtp pieces: said once, exit 1, no piece left", pieces_not_left)
     try:
         import pydicom  # noqa: F401
         series = dicom_with_truncated_last_slice()
