@@ -198,10 +198,10 @@ def mpi_checks():
         check("contour of the same series: said once, exit 1", error_said_once("contour", series))
     except ImportError:
         print("skipped (DICOM part): no pydicom")
-    return None
     check("an unwritable -o or --report under mpirun: one line, exit 1 (labels and contour)",
           unwritable_output_said_once)
     check("usage errors and --max-memory under mpirun: said once", usage_errors_said_once)
+    return None
 
 
 # ---------------------------------------------------------------- one process
