@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <exception>
 #include <new>
+#include <iostream>
 #include <ostream>
+#include <string>
 
 #include "command.hpp"
 #include "integer_options.hpp"
