@@ -45,8 +45,13 @@ def check(name, fn):
         _results["failed"] += 1
 
 
-def finish():
+def finish(skipped=None):
+    """Exits 0 when every check passed, 1 otherwise; 77 (skipped) when all
+    passed but `skipped` says why a part could not run here."""
     print(f"{_results['passed']} passed, {_results['failed']} failed")
+    if _results["failed"] == 0 and skipped:
+        print(f"skipped: {skipped}")
+        sys.exit(77)
     sys.exit(0 if _results["failed"] == 0 else 1)
 
 
@@ -186,8 +191,8 @@ def nearest_distances(a, b):
     return d
 
 
-def mpirun(P, *args, expect=0, program=None):
-    """Runs `mpirun -np P keymesh args` (or `program`); asserts the exit code."""
+def mpirun_command(P, *args, program=None):
+    """The command line and environment of `mpirun -np P keymesh args` (or `program`)."""
     cmd = [shutil.which("mpirun"), "--oversubscribe", "-np", str(P)]
     if os.geteuid() == 0:
         cmd.insert(1, "--allow-run-as-root")
@@ -199,8 +204,13 @@ def mpirun(P, *args, expect=0, program=None):
         # make sanitize: OpenMPI's own allocations (MCA components, op tables)
         # are never freed; keymesh's leaks are checked by every other test.
         env["ASAN_OPTIONS"] += ":detect_leaks=0"
-    p = subprocess.run(cmd + [program or KEYMESH, *map(str, args)], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                       timeout=300, env=env)
+    return cmd + [program or KEYMESH, *map(str, args)], env
+
+
+def mpirun(P, *args, expect=0, program=None):
+    """Runs `mpirun -np P keymesh args` (or `program`); asserts the exit code."""
+    cmd, env = mpirun_command(P, *args, program=program)
+    p = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300, env=env)
     if expect is not None and p.returncode != expect:
         raise AssertionError(f"mpirun -np {P} keymesh {' '.join(map(str, args))}: exit {p.returncode}, "
                              f"expected {expect}\nstdout: {p.stdout}\nstderr: {p.stderr}")

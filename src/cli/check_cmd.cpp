@@ -32,6 +32,9 @@ void add_check_options(CLI::App& cmd, CheckCli& o) {
 
 int run_check(const CheckCli& o, CommandRun& run) {
   const SurfaceMesh mesh = run.stage("read", [&] { return io::read_mesh(o.input); });
+  // The mesh, and the check's edge table: a (key, value) pair of 16 bytes per corner.
+  check_memory(o.common, saturating_add(bytes_held(mesh), saturating_mul(mesh.connectivity.size(), 16)),
+               o.input + ": check: the mesh and its edges");
   const analyze::TopologyReport t = run.stage("check", [&] { return analyze::check_topology(mesh); });
   std::printf(
       "%s: %lld points, %lld cells, %lld edges\n"

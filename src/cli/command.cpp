@@ -13,6 +13,7 @@
 
 #include "keymesh/core/printable.hpp"
 #include "keymesh/core/work_estimate.hpp"
+#include "keymesh/distributed/mpi.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/input_file.hpp"
 #include "keymesh/parallel/threads.hpp"
@@ -37,7 +38,8 @@ void add_common_options(CLI::App& cmd, CommonOptions& common) {
 int refuse_non_finite_isovalues(const char* command, const std::vector<double>& isovalues) {
   for (double iso : isovalues)
     if (!std::isfinite(iso)) {
-      std::fprintf(stderr, "keymesh %s: --iso %g is not a finite number\n", command, iso);
+      if (distributed::rank() == 0)  // every rank refuses alike; said once
+        std::fprintf(stderr, "keymesh %s: --iso %g is not a finite number\n", command, iso);
       return 2;
     }
   return 0;
@@ -89,9 +91,35 @@ std::uint64_t field_components(const std::vector<Field>& fields) {
   return n;
 }
 
+namespace {
+std::uint64_t field_bytes(const std::vector<Field>& fields) {
+  std::uint64_t n = 0;
+  for (const Field& f : fields) n = saturating_add(n, saturating_mul(f.values.size(), sizeof(float)));
+  return n;
+}
+}  // namespace
+
+std::uint64_t bytes_held(const SurfaceMesh& m) {
+  return saturating_add(saturating_add(m.points.size() * sizeof(float), m.connectivity.size() * sizeof(PointIndex)),
+                        saturating_add(m.offsets.size() * sizeof(std::uint64_t),
+                                       saturating_add(field_bytes(m.point_fields), field_bytes(m.cell_fields))));
+}
+
+std::uint64_t bytes_held(const UnstructuredGrid& g) {
+  return saturating_add(
+      saturating_add(g.points.size() * sizeof(float), g.connectivity.size() * (g.connectivity.wide() ? 8u : 4u)),
+      saturating_add(g.offsets.size() * sizeof(std::uint64_t) + g.cell_types.size(),
+                     saturating_add(field_bytes(g.point_fields), field_bytes(g.cell_fields))));
+}
+
+void check_memory(const CommonOptions& common, std::uint64_t bytes, const std::string& what) {
+  keymesh::check_memory(bytes, memory_budget(common), what);
+}
+
 int require_cpu_backend(const CommonOptions& common, const char* what) {
   if (common.backend == "cpu") return 0;
-  std::fprintf(stderr, "keymesh: --backend cuda: %s is not available on the GPU yet (use --backend cpu)\n", what);
+  if (distributed::rank() == 0)  // every rank refuses alike; said once
+    std::fprintf(stderr, "keymesh: --backend cuda: %s is not available on the GPU yet (use --backend cpu)\n", what);
   return 1;
 }
 
@@ -161,32 +189,27 @@ std::string unwritable_because(const std::string& path) {
 }
 }  // namespace
 
-int refuse_unwritable_outputs(const CLI::App& cmd) {
+Refusal refuse_unwritable_outputs(const CLI::App& cmd) {
   for (const char* name : {"--output", "--report"})
     if (const CLI::Option* opt = cmd.get_option_no_throw(name))
       for (const std::string& path : opt->results()) {
         if (is_device(path)) continue;
-        if (const std::string why = unwritable_because(path); !why.empty()) {
-          std::fprintf(stderr, "keymesh: %s: cannot write: %s\n", printable(path).c_str(), printable(why).c_str());
-          return 1;
-        }
+        if (const std::string why = unwritable_because(path); !why.empty())
+          return {1, "keymesh: " + printable(path) + ": cannot write: " + printable(why)};
       }
-  return 0;
+  return {};
 }
 
-int refuse_shared_paths(const CLI::App& cmd) {
+Refusal refuse_shared_paths(const CLI::App& cmd) {
   std::vector<std::pair<std::string, std::string>> paths;  // (option, path)
   for (auto& [option, path] : given_paths(cmd, true))
     if (!is_device(path)) paths.emplace_back(option, path);
   for (std::size_t i = 0; i < paths.size(); ++i)
     for (std::size_t j = i + 1; j < paths.size(); ++j)
-      if (io::same_file(paths[i].second, paths[j].second)) {
-        std::fprintf(stderr, "keymesh %s: %s %s and %s %s name the same file\n", cmd.get_name().c_str(),
-                     paths[i].first.c_str(), printable(paths[i].second).c_str(), paths[j].first.c_str(),
-                     printable(paths[j].second).c_str());
-        return 2;
-      }
-  return 0;
+      if (io::same_file(paths[i].second, paths[j].second))
+        return {2, "keymesh " + cmd.get_name() + ": " + paths[i].first + " " + printable(paths[i].second) + " and " +
+                       paths[j].first + " " + printable(paths[j].second) + " name the same file"};
+  return {};
 }
 
 std::vector<Command>& registry() {

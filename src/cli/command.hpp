@@ -16,6 +16,7 @@
 #include "keymesh/core/work_estimate.hpp"
 #include "keymesh/generate/option_names.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
+#include "keymesh/mesh/unstructured_grid.hpp"
 #include "report.hpp"
 
 namespace keymesh::cli {
@@ -41,6 +42,15 @@ std::uint64_t field_components(const std::vector<Field>& fields);
 
 // Bytes the command may use: --max-memory, or default_memory_budget().
 std::uint64_t memory_budget(const CommonOptions& common);
+
+// Bytes a mesh or grid holds in memory: its arrays.
+std::uint64_t bytes_held(const SurfaceMesh& mesh);
+std::uint64_t bytes_held(const UnstructuredGrid& grid);
+
+// --max-memory for work whose size is known only from what it holds (a
+// mesh read, a volume's planes): LimitError "<what> need about B, more than
+// the L of --max-memory" when `bytes` pass memory_budget(common).
+void check_memory(const CommonOptions& common, std::uint64_t bytes, const std::string& what);
 
 // For subcommands with no GPU path yet: 0 when --backend is cpu, otherwise
 // prints why and returns 1 (refused by name, as the backend contract says).
@@ -93,18 +103,25 @@ bool is_mesh_path(const std::string& path);
 // the table's volume extensions and folder formats.
 std::string volume_inputs();
 
+// A command refused before its work: the exit code (0: not refused) and the
+// line to print; the caller prints it (under mpirun: rank 0, once).
+struct Refusal {
+  int code = 0;
+  std::string line;
+};
+
 // Refuses (exit 2, one line) a command whose input, -o/--output and --report
 // name the same file in any pair: compared by device and inode, and for
 // outputs that do not exist yet by resolved directory and name. Looks for
 // the options by name (positional "input", "mesh" or "file"; "--output",
 // "--report"), so a new subcommand that uses these names is covered.
-int refuse_shared_paths(const CLI::App& cmd);
+Refusal refuse_shared_paths(const CLI::App& cmd);
 
 // Refuses (exit 1, one line "<path>: cannot write: <errno text>") a command
 // whose -o/--report lies in a directory that does not exist or cannot be
 // written, before any work: a report that cannot be written would otherwise
 // fail only after the whole run (and after its summary line).
-int refuse_unwritable_outputs(const CLI::App& cmd);
+Refusal refuse_unwritable_outputs(const CLI::App& cmd);
 
 // The error line for a failure of `cmd`: the message as it is when it names
 // one of the command's paths, otherwise prefixed with the input path

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "contour_cli.hpp"
+#include "keymesh/core/error.hpp"
 #include "keymesh/distributed/contour_distributed.hpp"
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/io/mesh_io.hpp"
@@ -35,24 +36,23 @@ nlohmann::json rank_json(const distributed::RankStats& s) {
           {"output", s.output}};
 }
 
-// This rank's planes, once every rank has made the checks all make alike:
-// a failure is said once (by rank 0), with no MPI_Abort. Null on failure.
+// This rank's planes, once every rank has opened the volume and made the
+// checks all make alike: an error on any rank is every rank's (SharedError,
+// said once by rank 0), with no MPI_Abort.
 std::unique_ptr<PlaneSource> open_slab_source(const ContourCli& o, const generate::ContourOptions& options) {
-  try {
+  std::unique_ptr<PlaneSource> source;
+  distributed::agreed([&] {
     const io::RawOptions raw = o.raw_input.given() ? o.raw_input.options() : io::RawOptions{};
-    auto source = io::open_volume_planes(o.input, o.raw_input.given() ? &raw : nullptr);
+    source = io::open_volume_planes(o.input, o.raw_input.given() ? &raw : nullptr);
     distributed::require_distributable(source->header(), options, distributed::size());
-    return source;
-  } catch (const std::exception& e) {
-    if (distributed::rank() == 0) std::fprintf(stderr, "keymesh: %s\n", e.what());
-    return nullptr;
-  }
+  });
+  return source;
 }
 
 // Every rank writes its piece (its triangles, then the ghost cells it
 // carries for its neighbours); rank 0 writes the index once all exist, so a
-// failure anywhere leaves no index and no pieces. True when all succeeded.
-bool write_pieces(distributed::ContourPiece& piece, const std::string& output) {
+// failure anywhere leaves no index and no pieces.
+void write_pieces(distributed::ContourPiece& piece, const std::string& output) {
   namespace fs = std::filesystem;
   const int rank = distributed::rank(), ranks = distributed::size();
   const fs::path index(output);
@@ -64,52 +64,42 @@ bool write_pieces(distributed::ContourPiece& piece, const std::string& output) {
   // marks them: per-piece filters see across the shared planes (issue 33).
   distributed::GhostedPiece ghosted = distributed::ghosted_piece(piece);
   const io::PieceGhosts ghosts{std::move(ghosted.point_ghosts), std::move(ghosted.cell_ghosts)};
-  bool ok = true;
+  // Any rank's failure is every rank's (SharedError): no piece and no index is left.
   try {
-    io::write_vtp(ghosted.mesh, mine.string(), &ghosted.ids, &ghosts);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "keymesh: rank %d: %s\n", rank, e.what());
-    ok = false;
-  }
-  ok = distributed::all_ok(ok);
-  if (ok && rank == 0) {
-    std::vector<std::string> names;
-    for (int q = 0; q < ranks; ++q) names.push_back(piece_name(q));
-    try {
+    distributed::agreed([&] {
+      try {
+        io::write_vtp(ghosted.mesh, mine.string(), &ghosted.ids, &ghosts);
+      } catch (const std::exception& e) {
+        throw InputError("rank " + std::to_string(rank) + ": " + e.what());
+      }
+    });
+    distributed::agreed([&] {
+      if (rank != 0) return;
+      std::vector<std::string> names;
+      for (int q = 0; q < ranks; ++q) names.push_back(piece_name(q));
       io::write_pvtp(output, ghosted.mesh, names, true, true);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "keymesh: %s\n", e.what());
-      ok = false;
-    }
-  }
-  ok = distributed::all_ok(ok);
-  if (!ok) {
+    });
+  } catch (const distributed::SharedError&) {
     std::error_code ec;
     fs::remove(mine, ec);
+    throw;
   }
   piece.stats.output = seconds_since(t0);
-  return ok;
 }
 
 // The whole mesh gathered on rank 0 (coarsened there with --coarsen), which
-// writes it. True when it was written. `coarsening` receives rank 0's
-// coarsening report keys.
-bool write_gathered(const ContourCli& o, distributed::ContourPiece& piece, StageTimer& timer,
+// writes it; its failure is every rank's (SharedError). `coarsening`
+// receives rank 0's coarsening report keys.
+void write_gathered(const ContourCli& o, distributed::ContourPiece& piece, StageTimer& timer,
                     nlohmann::json& coarsening) {
   const SurfaceMesh whole = timer.run("gather", [&] { return distributed::gather(piece); });
-  bool ok = true;
-  if (distributed::rank() == 0) {
-    try {
-      if (o.coarsen) coarsening = coarsening_report(o, whole, piece.triangles_before_coarsening, timer);
-      const auto t0 = std::chrono::steady_clock::now();
-      timer.run("write", [&] { io::write_mesh(whole, o.output); });
-      piece.stats.output += seconds_since(t0);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "keymesh: %s\n", e.what());
-      ok = false;
-    }
-  }
-  return distributed::all_ok(ok);
+  distributed::agreed([&] {
+    if (distributed::rank() != 0) return;
+    if (o.coarsen) coarsening = coarsening_report(o, whole, piece.triangles_before_coarsening, timer);
+    const auto t0 = std::chrono::steady_clock::now();
+    timer.run("write", [&] { io::write_mesh(whole, o.output); });
+    piece.stats.output += seconds_since(t0);
+  });
 }
 
 // Rank 0's summary line and report, from every rank's statistics.
@@ -174,14 +164,14 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
   }
   StageTimer timer;
   const std::unique_ptr<PlaneSource> source = open_slab_source(o, options);
-  if (!source) return 1;
   distributed::ContourPiece piece =
       timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance); });
   const double total_points = static_cast<double>(piece.numbering.total);
   nlohmann::json coarsening;
-  const bool written = pieces ? timer.run("write", [&] { return write_pieces(piece, o.output); })
-                              : write_gathered(o, piece, timer, coarsening);
-  if (!written) return 1;
+  if (pieces)
+    timer.run("write", [&] { write_pieces(piece, o.output); });
+  else
+    write_gathered(o, piece, timer, coarsening);
   const std::vector<distributed::RankStats> all = distributed::gather_stats(piece.stats);
   if (distributed::rank() != 0) return 0;
   report_distributed(o, *source, total_points, all, threads, timer, coarsening,

@@ -89,16 +89,19 @@ int run_convert(const ConvertCli& o) {
   if (in == Kind::Grid) {
     const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
     points = g.num_points(), cells = g.num_cells();
+    check_memory(o.common, bytes_held(g), o.input + ": convert: the data read");
     progress.say("writing " + o.output);
     timer.run("write", [&] { io::write_grid(g, o.output); });
   } else if (in == Kind::Surface) {
     const SurfaceMesh m = timer.run("read", [&] { return io::read_mesh(o.input); });
     points = m.num_points(), cells = m.num_cells();
+    check_memory(o.common, bytes_held(m), o.input + ": convert: the data read");
     progress.say("writing " + o.output);
     timer.run("write", [&] { io::write_mesh(m, o.output); });
   } else {
     const ImageGrid v = timer.run("read", [&] { return io::read_volume(o.input); });
     points = v.num_points();
+    check_memory(o.common, v.byte_count(), o.input + ": convert: the samples read");
     r["dims"] = v.dims;
     progress.say("writing " + o.output);
     timer.run("write", [&] { io::write_volume(v, o.output); });

@@ -39,6 +39,8 @@ int run_dual(const DualCli& o, CommandRun& run) {
     return 2;
   }
   const SurfaceMesh m = run.stage("read", [&] { return io::read_mesh(o.input); });
+  check_work(estimate_dual(m.num_points(), m.num_cells(), m.connectivity.size(), field_components(m.point_fields)),
+             memory_budget(o.common), o.input + ": dual");
   generate::DualStats st;
   const SurfaceMesh d = run.stage("dual", [&] { return generate::dual(m, &st); });
   run.stage("write", [&] { io::write_mesh(d, o.output); });

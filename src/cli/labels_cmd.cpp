@@ -1,4 +1,5 @@
 // keymesh labels IN -o OUT [...]: welded surfaces of a label map.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -54,10 +55,13 @@ LabelsJob job_of(const LabelsCli& o) {
   return job;
 }
 
+Id held_rows(const ImageGrid& header) { return generate::LabelSlabs::total_rows(header); }
+
 // --memory-limit: the volume streamed in slabs of z-planes. Returns the
 // mesh; `r` gets the keys only this path reports.
 SurfaceMesh labels_streamed(const LabelsJob& job, StageTimer& timer, generate::LabelStats& stats, nlohmann::json& r) {
   auto source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
+  check_labels_memory(job, source->header(), {0, held_rows(source->header())});
   generate::LabelStreamStats ss;
   SurfaceMesh mesh = timer.run("labels", [&] {
     return naming_input(job, [&] {
@@ -79,6 +83,7 @@ SurfaceMesh labels_in_memory(const LabelsJob& job, StageTimer& timer, Progress& 
   progress.say("reading " + job.input);
   const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
   const ImageGrid grid = timer.run("read", [&] { return io::read_volume(job.input, raw); });
+  check_labels_memory(job, grid, {0, held_rows(grid)});
   progress.enable_if(grid.num_points() > (1ll << 25));
   r["dims"] = grid.dims;
   r["scalar_type"] = scalar_type_name(grid.type);
@@ -101,6 +106,21 @@ int run_labels(const LabelsJob& job) {
 }
 
 }  // namespace
+
+void check_labels_memory(const LabelsJob& job, const ImageGrid& header, std::pair<Id, Id> rows) {
+  const auto nx = static_cast<std::uint64_t>(header.dims[0]), ny = static_cast<std::uint64_t>(header.dims[1]);
+  // A padded row: a plane of samples and a plane of label indices with a border of one.
+  const std::uint64_t row = saturating_add(saturating_mul(saturating_mul(nx, ny), scalar_size(header.type)),
+                                           saturating_mul(saturating_mul(nx + 2, ny + 2), 2));
+  const auto count = static_cast<std::uint64_t>(std::max<Id>(rows.second - rows.first, 0));
+  std::uint64_t bytes = saturating_mul(row, count);
+  const bool slab = job.memory_limit && job.memory_limit < bytes;
+  if (slab) bytes = job.memory_limit;
+  check_memory(job.common, bytes,
+               job.input + ": labels: " +
+                   (slab ? std::string("a --memory-limit slab of samples and label indices")
+                         : "the samples and label indices of " + std::to_string(count) + " planes"));
+}
 
 void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
                           nlohmann::json r, StageTimer& timer) {

@@ -35,6 +35,27 @@ std::pair<Id, Id> rows_of(Id rows, int q, int ranks) {
   return {rows * q / ranks, rows * (q + 1) / ranks};
 }
 
+// Rank 0: every rank's pieces merged by key, smoothed and written.
+void write_merged(const LabelsJob& job, generate::LabelSlabs& slabs, const ImageGrid& header,
+                  const std::vector<std::vector<std::byte>>& pieces, StageTimer& timer) {
+  const int ranks = static_cast<int>(pieces.size());
+  const Id total_rows = generate::LabelSlabs::total_rows(header);
+  for (int q = 1; q < ranks; ++q) slabs.add_pieces(pieces[static_cast<std::size_t>(q)]);
+  const SurfaceMesh mesh = slabs.finish();
+  nlohmann::json r;
+  r["dims"] = header.dims;
+  r["scalar_type"] = scalar_type_name(header.type);
+  if (job.memory_limit) r["memory_limit"] = job.memory_limit;
+  nlohmann::json per_rank = nlohmann::json::array();
+  for (int q = 0; q < ranks; ++q) {
+    const auto [b, e] = rows_of(total_rows, q, ranks);
+    per_rank.push_back({{"first_row", b}, {"rows", e - b}, {"piece_bytes", pieces[static_cast<std::size_t>(q)].size()}});
+  }
+  r["ranks"] = ranks;
+  r["distributed"] = {{"ranks", ranks}, {"output", "gathered"}, {"per_rank", per_rank}};
+  write_labels_outputs(job, mesh, slabs.stats(), std::move(r), timer);
+}
+
 }  // namespace
 
 int run_distributed_labels(const LabelsJob& job) {
@@ -47,72 +68,43 @@ int run_distributed_labels(const LabelsJob& job) {
     return 2;
   }
   StageTimer timer;
-  // Each step on every rank, then the ranks share their errors: any error
-  // ends every rank alike, and rank 0 prints the first one (lowest rank).
-  bool ok = true;
+  // Each step is this rank's own work, then the ranks agree
+  // (distributed::agreed): an error on any rank, a slice only the last rank
+  // reads included, ends every rank at the same step, said once by rank 0
+  // (main.cpp). The collectives run between the steps, never inside one.
   auto step = [&](const char* name, auto&& f) {
-    std::string error;
-    if (ok) {
-      try {
-        timer.run(name, [&] { naming_input(job, f); });
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-    }
-    const auto* b = reinterpret_cast<const std::byte*>(error.data());
-    for (const auto& e : distributed::all_gather_bytes(std::vector<std::byte>(b, b + error.size())))
-      if (ok && !e.empty()) {
-        if (rank == 0) std::fprintf(stderr, "keymesh: %.*s\n", static_cast<int>(e.size()), reinterpret_cast<const char*>(e.data()));
-        ok = false;
-      }
-    return ok;
+    distributed::agreed([&] { timer.run(name, [&] { naming_input(job, f); }); });
   };
   std::unique_ptr<PlaneSource> source;
   std::unique_ptr<generate::LabelSlabs> slabs;
   Id total_rows = 0;
-  std::vector<std::vector<std::byte>> pieces;
-  const bool done =
-      step("open",
-           [&] {
-             source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
-             total_rows = generate::LabelSlabs::total_rows(source->header());
-             const std::size_t limit = job.memory_limit ? job.memory_limit : std::numeric_limits<std::size_t>::max();
-             slabs = std::make_unique<generate::LabelSlabs>(*source, job.options, limit,
-                                                            rows_of(total_rows, rank, ranks));
-           }) &&
-      step("scan",
-           [&] {
-             std::vector<std::vector<std::int64_t>> all;
-             for (const auto& b : distributed::all_gather_bytes(bytes_of(slabs->distinct_labels())))
-               all.push_back(labels_of(b));
-             slabs->set_labels(all);
-             slabs->set_counts(distributed::all_gather_bytes(slabs->count_labels()));
-           }) &&
-      step("labels",
-           [&] {
-             slabs->generate();
-             pieces = distributed::gather_bytes(slabs->pieces_bytes());
-           });
-  if (!done) return 1;
-  // Rank 0 merges, smooths and writes; the others wait for its vote.
-  if (rank != 0) return step("merge", [] {}) ? 0 : 1;
-  const bool written = step("merge", [&] {
-    for (int q = 1; q < ranks; ++q) slabs->add_pieces(pieces[static_cast<std::size_t>(q)]);
-    const SurfaceMesh mesh = slabs->finish();
-    nlohmann::json r;
-    r["dims"] = source->header().dims;
-    r["scalar_type"] = scalar_type_name(source->header().type);
-    if (job.memory_limit) r["memory_limit"] = job.memory_limit;
-    nlohmann::json per_rank = nlohmann::json::array();
-    for (int q = 0; q < ranks; ++q) {
-      const auto [b, e] = rows_of(total_rows, q, ranks);
-      per_rank.push_back({{"first_row", b}, {"rows", e - b}, {"piece_bytes", pieces[static_cast<std::size_t>(q)].size()}});
-    }
-    r["ranks"] = ranks;
-    r["distributed"] = {{"ranks", ranks}, {"output", "gathered"}, {"per_rank", per_rank}};
-    write_labels_outputs(job, mesh, slabs->stats(), std::move(r), timer);
+  step("open", [&] {
+    source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
+    total_rows = generate::LabelSlabs::total_rows(source->header());
+    const std::size_t limit = job.memory_limit ? job.memory_limit : std::numeric_limits<std::size_t>::max();
+    check_labels_memory(job, source->header(), rows_of(total_rows, rank, ranks));
+    slabs = std::make_unique<generate::LabelSlabs>(*source, job.options, limit, rows_of(total_rows, rank, ranks));
   });
-  return written ? 0 : 1;
+  std::vector<std::int64_t> mine;
+  step("scan", [&] { mine = slabs->distinct_labels(); });
+  std::vector<std::vector<std::int64_t>> all;
+  for (const auto& b : distributed::all_gather_bytes(bytes_of(mine))) all.push_back(labels_of(b));
+  step("scan", [&] { slabs->set_labels(all); });
+  std::vector<std::byte> counts;
+  step("scan", [&] { counts = slabs->count_labels(); });
+  const std::vector<std::vector<std::byte>> all_counts = distributed::all_gather_bytes(counts);
+  step("scan", [&] { slabs->set_counts(all_counts); });
+  std::vector<std::byte> my_pieces;
+  step("labels", [&] {
+    slabs->generate();
+    my_pieces = slabs->pieces_bytes();
+  });
+  const std::vector<std::vector<std::byte>> pieces = distributed::gather_bytes(my_pieces);
+  // Rank 0 merges, smooths and writes; the others wait for its vote.
+  step("merge", [&] {
+    if (rank == 0) write_merged(job, *slabs, source->header(), pieces, timer);
+  });
+  return 0;
 }
 
 }  // namespace keymesh::cli

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 #include "command.hpp"
 #include "keymesh/generate/labels/labels.hpp"
@@ -34,6 +35,12 @@ decltype(auto) naming_input(const LabelsJob& job, F&& f) {
     throw;
   }
 }
+
+// --max-memory: the samples and 16-bit label indices of padded rows
+// [rows.first, rows.second) that the run holds (a --memory-limit slab at
+// most), checked before they are allocated (LimitError). The surfaces come
+// on top: their size is known only once they are made.
+void check_labels_memory(const LabelsJob& job, const ImageGrid& header, std::pair<Id, Id> rows);
 
 // Writes the mesh, the summary line and the report (`r` holds what the run
 // adds: dims, scalar_type, stream, distributed).

@@ -35,6 +35,7 @@ SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& 
   opt.curvature = o.curvature;
   opt.backend = generate::parse_option<generate::Backend>(o.common.backend);
   opt.normals = generate::parse_option<generate::ContourNormals>(o.normals);
+  opt.max_output_bytes = memory_budget(o.common);  // the contour checks its output's size as it counts it
   SurfaceMesh mesh;
   if (io::is_grid_file(o.input)) {
     const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
@@ -48,8 +49,15 @@ SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& 
     generate::SubdivideOptions so;
     so.levels = o.subdivide;
     so.scheme = generate::parse_option<generate::SubdivideScheme>(o.scheme);
+    check_work(estimate_subdivide_triangles(mesh.num_points(), mesh.num_cells(), o.subdivide,
+                                            field_components(mesh.point_fields)),
+               memory_budget(o.common), o.input + ": pipeline --subdivide " + std::to_string(o.subdivide));
     mesh = timer.run("subdivide", [&] { return generate::subdivide(mesh, so); });
   }
+  if (o.dual)
+    check_work(estimate_dual(mesh.num_points(), mesh.num_cells(), mesh.connectivity.size(),
+                             field_components(mesh.point_fields)),
+               memory_budget(o.common), o.input + ": pipeline --dual");
   if (o.dual) mesh = timer.run("dual", [&] { return generate::dual(mesh); });
   return mesh;
 }

@@ -24,6 +24,7 @@ void add_quality_options(CLI::App& cmd, QualityCli& o) {
 
 int run_quality(const QualityCli& o, CommandRun& run) {
   const SurfaceMesh mesh = run.stage("read", [&] { return io::read_mesh(o.input); });
+  check_memory(o.common, bytes_held(mesh), o.input + ": quality: the mesh");
   const analyze::QualityReport q = run.stage("quality", [&] { return analyze::quality(mesh); });
   std::printf("%s: %lld triangles\n  Q min %.4f, median %.4f, mean %.4f, Q > 0.6: %.1f%%\n", o.input.c_str(),
               (long long)q.triangles, q.min, q.median, q.mean, 100.0 * q.fraction_above_0_6);

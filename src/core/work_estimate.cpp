@@ -18,9 +18,16 @@ std::uint64_t point_bytes(std::uint64_t field_components) {
   return saturating_mul(2, saturating_add(12, saturating_mul(4, field_components)));
 }
 
-std::string mib(std::uint64_t bytes) {
+// A size with the unit that shows it: bytes below 1 KiB, otherwise KiB,
+// MiB ... with four significant digits.
+std::string size_text(std::uint64_t bytes) {
+  if (bytes < 1024) return std::to_string(bytes) + (bytes == 1 ? " byte" : " bytes");
+  static const char* const units[] = {"KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  double v = static_cast<double>(bytes) / 1024;
+  int u = 0;
+  while (v >= 1024 && u < 5) v /= 1024, ++u;
   char b[64];
-  std::snprintf(b, sizeof b, "%.0f MiB", static_cast<double>(bytes) / (1 << 20));
+  std::snprintf(b, sizeof b, "%.4g %s", v, units[u]);  // v < 1024: never an exponent
   return b;
 }
 
@@ -51,9 +58,16 @@ void check_work(const WorkEstimate& work, std::uint64_t budget, const std::strin
   if (work.cells > max_cells)
     throw LimitError(what + ": " + sizes + ": more than the " + std::to_string(max_cells) +
                      " cells the index type holds");
-  if (work.bytes > budget)
-    throw LimitError(what + ": " + sizes + " need about " + mib(work.bytes) + ", more than the " + mib(budget) +
-                     " of --max-memory (default: this machine's memory or ulimit -v)");
+  check_memory(work.bytes, budget, what + ": " + sizes);
+}
+
+void check_memory(std::uint64_t bytes, std::uint64_t budget, const std::string& what) {
+  if (bytes <= budget) return;
+  std::string need = size_text(bytes), have = size_text(budget);
+  if (need == have)  // close enough to print alike: the exact counts
+    need = std::to_string(bytes) + " bytes", have = std::to_string(budget) + " bytes";
+  throw LimitError(what + " need about " + need + ", more than the " + have +
+                   " of --max-memory (default: this machine's memory or ulimit -v)");
 }
 
 namespace {
@@ -86,6 +100,17 @@ WorkEstimate estimate_subdivide_tets(std::uint64_t points, std::uint64_t tets, i
                                      std::uint64_t field_components) {
   // 4 ids of 8 bytes, a type byte and an 8-byte offset per tet.
   return estimate_subdivide(points, tets, levels, 6, 8, 41, field_components);
+}
+
+WorkEstimate estimate_dual(std::uint64_t points, std::uint64_t cells, std::uint64_t corners,
+                           std::uint64_t field_components) {
+  // A point per cell (its fields averaged), a polygon per point whose
+  // corners are that point's cells: as many corners as the input's, with
+  // an 8-byte offset per polygon.
+  WorkEstimate w{cells, points, 0};
+  w.bytes = saturating_add(saturating_mul(cells, point_bytes(field_components)),
+                           saturating_add(saturating_mul(corners, 4), saturating_mul(points, 8)));
+  return w;
 }
 
 WorkEstimate estimate_tetrahedralize(std::uint64_t points, std::uint64_t hexes, int tets_per_hex,

@@ -15,6 +15,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
+#include "keymesh/distributed/mpi.hpp"
 #include "keymesh/generate/coarsen/coarsen.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/mesh/normals.hpp"
@@ -136,11 +137,16 @@ HeldSlab balance(PlaneSource& source, const generate::ContourOptions& options, s
   HeldSlab held;
   held.lo = bounds[r];
   held.hi = bounds[r + 1];
-  held.grid = new_slab(head, held.hi - held.lo + 1);
-  source.read_planes(held.lo, held.hi - held.lo + 1, held.grid.bytes.data());
-  st.read = seconds_since(t0);
-  t0 = Clock::now();
-  const std::vector<Id> mine = generate::triangles_per_layer(held.grid, options);
+  std::vector<Id> mine;
+  // This rank's reading and counting, then the ranks agree: a slab one
+  // rank cannot read ends every rank here (SharedError), none left waiting.
+  agreed([&] {
+    held.grid = new_slab(head, held.hi - held.lo + 1);
+    source.read_planes(held.lo, held.hi - held.lo + 1, held.grid.bytes.data());
+    st.read = seconds_since(t0);
+    t0 = Clock::now();
+    mine = generate::triangles_per_layer(held.grid, options);
+  });
   std::vector<long long> counts(mine.begin(), mine.end()), all(static_cast<std::size_t>(head.dims[2] - 1));
   std::vector<int> sizes(static_cast<std::size_t>(P)), displs(static_cast<std::size_t>(P));
   for (int q = 0; q < P; ++q) {
@@ -173,6 +179,41 @@ ImageGrid read_slab(PlaneSource& source, HeldSlab held, Id first, Id last) {
   if (keep_hi < last)
     source.read_planes(keep_hi + 1, last - keep_hi, slab.bytes.data() + plane * static_cast<std::size_t>(keep_hi + 1 - first));
   return slab;
+}
+
+// This rank's slab, planes [first, last] of which `below` and `above` are
+// ghost planes, read and contoured into `piece` (its mesh and keys, and how
+// the gather treats them); with averaged normals, `normal_sums` gets
+// KEY-REDUCE's merge over this rank's triangles.
+void contour_slab(PlaneSource& source, HeldSlab held, const generate::ContourOptions& options, ContourPiece& piece,
+                  Id first, Id last, Id below, Id above, std::vector<Vec3f>& normal_sums) {
+  const ImageGrid& head = source.header();
+  const Id nz = head.dims[2], nxy = head.dims[0] * head.dims[1];
+  RankStats& st = piece.stats;
+  auto t0 = Clock::now();
+  ImageGrid slab = read_slab(source, std::move(held), first, last);
+  st.read += seconds_since(t0);
+  t0 = Clock::now();
+  generate::ContourOptions opt = options;
+  opt.first_plane = first;
+  opt.total_planes = nz;
+  opt.ghost_below = below;
+  opt.ghost_above = above;
+  // Coarsening averages a grid point's crossings, which two ranks may share:
+  // the fine pieces are gathered with their nearest grid points and rank 0
+  // coarsens the whole (gather()); averaged normals then come from the
+  // coarse mesh there.
+  piece.coarsen = options.coarsen;
+  piece.average_after_coarsening = options.coarsen && options.normals == generate::ContourNormals::Average;
+  piece.coarse_range = static_cast<std::uint64_t>(nxy * nz) * options.isovalues.size();
+  opt.coarsen = false;
+  piece.average = options.normals == generate::ContourNormals::Average && !options.coarsen;
+  piece.layer_grid = generate::LayerGrid{static_cast<std::uint64_t>(nxy), nz - 1, static_cast<Id>(options.isovalues.size())};
+  if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
+  piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
+  free_storage(slab.bytes);
+  if (piece.average) normal_sums = point_normal_sums(piece.mesh);
+  st.contour = seconds_since(t0);
 }
 
 // The distributed KEY-REDUCE of the piece's keys. Keys are isovalue-major
@@ -224,7 +265,6 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   for (int q = 0; q <= P; ++q) bounds[q] = (nz - 1) * q / P;
   HeldSlab held;
   if (balance_work && P > 1) held = balance(source, options, bounds, r, st);
-  auto t0 = Clock::now();
   const Id lo = bounds[r], hi = bounds[r + 1];
   st.first_plane = static_cast<double>(lo);
   st.planes = static_cast<double>(hi - lo + 1);
@@ -232,41 +272,18 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   // slab's border: a ghost plane on either side (where the grid has one).
   const bool ghosts = options.normals == generate::ContourNormals::Gradient || options.curvature;
   const Id below = ghosts && lo > 0 ? 1 : 0, above = ghosts && hi < nz - 1 ? 1 : 0;
-  ImageGrid slab = read_slab(source, std::move(held), lo - below, hi + above);
-  st.read += seconds_since(t0);
-
-  t0 = Clock::now();
-  generate::ContourOptions opt = options;
-  opt.first_plane = lo - below;
-  opt.total_planes = nz;
-  opt.ghost_below = below;
-  opt.ghost_above = above;
-  // Coarsening averages a grid point's crossings, which two ranks may share:
-  // the fine pieces are gathered with their nearest grid points and rank 0
-  // coarsens the whole (gather()); averaged normals then come from the
-  // coarse mesh there.
-  piece.coarsen = options.coarsen;
-  piece.average_after_coarsening = options.coarsen && options.normals == generate::ContourNormals::Average;
-  piece.coarse_range = static_cast<std::uint64_t>(nxy * nz) * options.isovalues.size();
-  opt.coarsen = false;
-  const bool average = options.normals == generate::ContourNormals::Average && !options.coarsen;
-  piece.average = average;
-  piece.layer_grid = generate::LayerGrid{static_cast<std::uint64_t>(nxy), nz - 1, static_cast<Id>(options.isovalues.size())};
-  if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
-  piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
-  free_storage(slab.bytes);
-  // Averaged normals, KEY-REDUCE's merge over this rank's triangles first.
+  // This rank's reading and contouring, then the ranks agree (the
+  // exchange's start: its wait for the slowest rank is the load imbalance,
+  // timed apart): an error on any rank ends every rank here.
   std::vector<Vec3f> normal_sums;
-  if (average) normal_sums = point_normal_sums(piece.mesh);
-  st.contour = seconds_since(t0);
-
-  // The exchange starts when the slowest rank is done: that wait is the
-  // load imbalance, timed apart from the exchange.
-  t0 = Clock::now();
-  mpi().Barrier(mpi().comm_world);
+  const std::string error = error_of([&] {
+    contour_slab(source, std::move(held), options, piece, lo - below, hi + above, below, above, normal_sums);
+  });
+  auto t0 = Clock::now();
+  share(error);
   st.wait = seconds_since(t0);
   t0 = Clock::now();
-  number_piece(piece, options, bounds, nxy, nz, average ? &normal_sums : nullptr);
+  number_piece(piece, options, bounds, nxy, nz, piece.average ? &normal_sums : nullptr);
   st.exchange = seconds_since(t0);
   return piece;
 }

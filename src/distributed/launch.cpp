@@ -24,4 +24,10 @@ int launched_size() {
   return n > 0 ? static_cast<int>(n) : 1;
 }
 
+int launched_rank() {
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "MPI_LOCALRANKID"})
+    if (const char* v = std::getenv(name)) return static_cast<int>(std::strtol(v, nullptr, 10));
+  return 0;
+}
+
 }  // namespace keymesh::distributed

@@ -105,6 +105,14 @@ std::vector<std::vector<std::byte>> all_gather_bytes(const std::vector<std::byte
   return out;
 }
 
+std::string first_error(const std::string& mine) {
+  if (!initialized()) return mine;
+  const auto* b = reinterpret_cast<const std::byte*>(mine.data());
+  for (const auto& e : all_gather_bytes(std::vector<std::byte>(b, b + mine.size())))
+    if (!e.empty()) return std::string(reinterpret_cast<const char*>(e.data()), e.size());
+  return {};
+}
+
 std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine) {
   if (!initialized()) return {mine};
   const int me = rank(), ranks = size();

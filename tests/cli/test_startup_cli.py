@@ -104,7 +104,8 @@ def without_mpi_module_mpirun_refused_by_name():
     p = mpirun(2, "--version", expect=None, program=alone)
     assert p.returncode != 0, p.stdout
     message = f"keymesh: a run under an MPI launcher needs keymesh's module {os.path.join(D, 'alone', MPI_MODULE)}"
-    assert p.stderr.count(message) == 2 and "missing" in p.stderr, p.stderr  # once per rank, no crash
+    # Every rank meets it alike: said once, by rank 0 (issue 34), no crash.
+    assert p.stderr.count(message) == 1 and "missing" in p.stderr, p.stderr
 
 
 def execs(env):
@@ -140,7 +141,7 @@ if not shutil.which("mpirun") or not os.path.exists(os.path.join(os.path.dirname
 elif mpirun(2, expect=None, program=shutil.which("true") or "/bin/true").returncode != 0:
     print("        (MPI module check skipped: mpirun -np 2 true fails here)")
 else:
-    check("MPI module missing: mpirun refused naming the file on every rank", without_mpi_module_mpirun_refused_by_name)
+    check("MPI module missing: mpirun refused naming the file, said once", without_mpi_module_mpirun_refused_by_name)
 if SANITIZED:
     print("        (re-exec checks skipped: sanitizer builds never re-exec)")
 elif not shutil.which("strace"):
