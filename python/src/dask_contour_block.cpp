@@ -23,6 +23,7 @@
 //    triangles keep their table order.
 // Points stay in the box's key order, which is the whole grid's key order
 // restricted to the box: the merge needs no more.
+#include <algorithm>
 #include <cmath>
 
 #include "common.hpp"
@@ -97,34 +98,63 @@ struct BlockPiece {
   std::vector<Field> fields;
 };
 
+// Which triangles and points the piece keeps (all of them unless the box has
+// ghost planes): the kept ones' indices, in order, and each point's new id.
+struct Kept {
+  std::vector<Id> triangles, points;
+  std::vector<PointIndex> new_id;
+};
+
+Kept kept_elements(const SurfaceMesh& mesh, const std::vector<TriangleVoxel>& voxel) {
+  const Id n = mesh.num_points(), m = mesh.num_cells();
+  Kept k;
+  k.new_id.assign(static_cast<std::size_t>(n), 0);
+  for (Id t = 0; t < m; ++t)
+    if (voxel[t].owned) {
+      k.triangles.push_back(t);
+      for (int c = 0; c < 3; ++c) k.new_id[mesh.connectivity[3 * t + c]] = 1;
+    }
+  for (Id p = 0; p < n; ++p)
+    if (k.new_id[p]) {
+      k.new_id[p] = static_cast<PointIndex>(k.points.size());
+      k.points.push_back(p);
+    }
+  return k;
+}
+
 BlockPiece owned_piece(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys,
                        const std::vector<std::uint64_t>& nearest, const BoxFrame& f) {
-  BlockPiece out;
-  const Id n = mesh.num_points(), m = mesh.num_cells();
-  std::vector<PointIndex> new_id(static_cast<std::size_t>(n), 0);
-  for (Id t = 0; t < m; ++t) {
+  std::vector<TriangleVoxel> voxel(static_cast<std::size_t>(mesh.num_cells()));
+  parallel::for_each(mesh.num_cells(), [&](Id t) {
     const PointIndex* c = mesh.connectivity.data() + 3 * t;
     const std::uint64_t corner_keys[3] = {keys[c[0]], keys[c[1]], keys[c[2]]};
-    const TriangleVoxel v = triangle_voxel(f, corner_keys);
-    if (!v.owned) continue;
-    out.rank.push_back(v.rank);
-    for (int k = 0; k < 3; ++k) new_id[c[k]] = 1, out.cells.push_back(c[k]);
-  }
-  PointIndex kept = 0;
-  for (Id p = 0; p < n; ++p) new_id[p] = new_id[p] ? kept++ : PointIndex(-1);
-  for (PointIndex& c : out.cells) c = new_id[c];
-  for (const Field& fd : mesh.point_fields) out.fields.push_back(Field{fd.name, fd.components, {}});
-  for (Id p = 0; p < n; ++p) {
-    if (new_id[p] == PointIndex(-1)) continue;
-    out.keys.push_back(f.global_edge_key(keys[p]));
-    if (!nearest.empty()) out.nearest.push_back(f.global_point_key(nearest[p]));
-    out.points.insert(out.points.end(), mesh.points.begin() + 3 * p, mesh.points.begin() + 3 * p + 3);
-    for (std::size_t i = 0; i < out.fields.size(); ++i) {
-      const Field& fd = mesh.point_fields[i];
-      out.fields[i].values.insert(out.fields[i].values.end(), fd.values.begin() + fd.components * p,
-                                  fd.values.begin() + fd.components * (p + 1));
+    voxel[t] = triangle_voxel(f, corner_keys);
+  });
+  const Kept k = kept_elements(mesh, voxel);
+  const Id n = static_cast<Id>(k.points.size()), m = static_cast<Id>(k.triangles.size());
+  BlockPiece out;
+  out.rank.resize(static_cast<std::size_t>(m));
+  out.cells.resize(static_cast<std::size_t>(3 * m));
+  parallel::for_each(m, [&](Id i) {
+    const Id t = k.triangles[i];
+    out.rank[i] = voxel[t].rank;
+    for (int c = 0; c < 3; ++c) out.cells[3 * i + c] = k.new_id[mesh.connectivity[3 * t + c]];
+  });
+  out.keys.resize(static_cast<std::size_t>(n));
+  out.nearest.resize(nearest.empty() ? 0 : static_cast<std::size_t>(n));
+  out.points.resize(static_cast<std::size_t>(3 * n));
+  for (const Field& fd : mesh.point_fields)
+    out.fields.push_back(Field{fd.name, fd.components, Array<float>(static_cast<std::size_t>(n * fd.components))});
+  parallel::for_each(n, [&](Id i) {
+    const Id p = k.points[i];
+    out.keys[i] = f.global_edge_key(keys[p]);
+    if (!nearest.empty()) out.nearest[i] = f.global_point_key(nearest[p]);
+    std::copy_n(mesh.points.begin() + 3 * p, 3, out.points.begin() + 3 * i);
+    for (std::size_t j = 0; j < out.fields.size(); ++j) {
+      const int c = out.fields[j].components;
+      std::copy_n(mesh.point_fields[j].values.begin() + c * p, c, out.fields[j].values.begin() + c * i);
     }
-  }
+  });
   return out;
 }
 
@@ -161,10 +191,9 @@ py::tuple contour_block(const py::object& block, const std::vector<double>& isov
   const auto n = static_cast<py::ssize_t>(piece.keys.size()), m = static_cast<py::ssize_t>(piece.rank.size());
   py::list fields;
   for (Field& fd : piece.fields) {
-    std::vector<float> values(fd.values.begin(), fd.values.end());
     std::vector<py::ssize_t> shape{n};
     if (fd.components > 1) shape.push_back(fd.components);
-    fields.append(py::make_tuple(fd.name, adopt(std::move(values), shape)));
+    fields.append(py::make_tuple(fd.name, adopt(std::move(fd.values), shape)));
   }
   const bool with_nearest = coarse_keys;
   return py::make_tuple(adopt(std::move(piece.keys), {n}), with_nearest ? py::object(adopt(std::move(piece.nearest), {n})) : py::none(),

@@ -86,15 +86,21 @@ struct WholeGrid {
   std::uint64_t voxels() const { return (nx - 1) * (ny - 1) * (nz - 1); }
 };
 
+// KEY-REDUCE's partition of keys below key_range: the dense plan (a bitmap
+// of the range, no sort) where the bitmap takes no more than a word per
+// key, else the sort plan; both give the same groups.
+keyreduce::Groups<std::uint64_t> partition(const std::vector<std::uint64_t>& keys, std::uint64_t key_range) {
+  const Id n = static_cast<Id>(keys.size());
+  if (key_range / 64 <= keys.size()) return keyreduce::partition_dense(keys.data(), n, key_range, keyreduce::Order::Build);
+  return keyreduce::partition_sort(keys.data(), n, parallel::bits_needed<std::uint64_t>(key_range - 1),
+                                   keyreduce::Order::Build);
+}
+
 SurfaceMesh weld(const Concatenated& all, const WholeGrid& w, std::vector<std::uint64_t>& point_keys,
                  std::vector<std::uint64_t>& nearest) {
-  const Id n = static_cast<Id>(all.keys.size()), m = static_cast<Id>(all.rank.size());
-  const auto g = keyreduce::partition_sort(all.keys.data(), n,
-                                           parallel::bits_needed<std::uint64_t>(3 * w.points() * w.isovalues - 1),
-                                           keyreduce::Order::Build);
-  const auto tri = keyreduce::partition_sort(all.rank.data(), m,
-                                             parallel::bits_needed<std::uint64_t>(w.voxels() * w.isovalues - 1),
-                                             keyreduce::Order::Build);
+  const Id m = static_cast<Id>(all.rank.size());
+  const auto g = partition(all.keys, 3 * w.points() * w.isovalues);
+  const auto tri = partition(all.rank, w.voxels() * w.isovalues);
   SurfaceMesh mesh;
   const Id unique = g.num_groups();
   mesh.points.resize(static_cast<std::size_t>(3 * unique));
