@@ -109,6 +109,16 @@ def test_distributed_local_cluster():
     assert_same(got_labels, keymesh.contour_labels(labels))
 
 
+def test_distributed_worker_processes():
+    """Workers in processes of their own: the tasks and their pieces are pickled."""
+    distributed = pytest.importorskip("distributed")
+    vol = sphere_field((16, 15, 14), center=(7.4, 7.1, 6.6)).astype(np.float32)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster):
+        got = keymesh.dask.contour(da.from_array(vol, chunks=(6, 8, 5)), 4.5, coarsen=True)
+    assert_same(got, keymesh.contour(vol, 4.5, coarsen=True))
+
+
 def test_compute_false_gives_a_delayed():
     vol = sphere_field((12, 11, 10), center=(5.5, 5.2, 4.9))
     lazy = keymesh.dask.contour(da.from_array(vol, chunks=4), 3.0, compute=False)
