@@ -378,3 +378,12 @@ Volume.to_vtk = _volume_to_vtk
 
 from ._labels import LabelMesh, contour_labels  # noqa: E402  (label maps: python/keymesh/_labels.py)
 __all__ += ["contour_labels", "LabelMesh"]
+
+
+def __getattr__(name: str):
+    # keymesh.dask (contours of chunked Dask arrays) is imported on first use:
+    # it needs dask, which plain keymesh does not.
+    if name == "dask":
+        import importlib
+        return importlib.import_module(".dask", __name__)
+    raise AttributeError(f"module 'keymesh' has no attribute {name!r}")

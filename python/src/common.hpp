@@ -19,6 +19,10 @@
 #include "keymesh/mesh/unstructured_grid.hpp"
 #include "keymesh/parallel/threads.hpp"
 
+namespace keymesh::generate {
+struct LabelOptions;  // keymesh/generate/labels/labels.hpp
+}  // namespace keymesh::generate
+
 namespace keymesh::python {
 
 namespace py = pybind11;
@@ -208,6 +212,18 @@ void check_volume_geometry(const ImageGrid& grid, const char* command);
 // as float32, ValueError (naming `what`) unless each has `rows` rows.
 py::dict fields_to_python(std::vector<Field>& fields, py::ssize_t rows);
 std::vector<Field> fields_from_python(const py::object& data, py::ssize_t rows, const char* what);
+
+// contour_labels' arguments as the library's options (labels.cpp);
+// ValueError for an unknown method.
+generate::LabelOptions label_options(const std::string& method, const std::vector<std::int64_t>& labels,
+                                     std::int64_t background, bool per_label, int smoothing_iterations,
+                                     double relaxation, bool coarsen);
+
+// A mesh contoured over a C-ordered array's reversed axes (VolumeOrder::
+// CAsReversedAxes) mirrored back into the array's frame: x <-> z in points
+// and 3-component point fields, two corners of every triangle swapped so
+// that it still faces lower values (contour.cpp).
+void mirror_axes(SurfaceMesh& mesh);
 
 // SurfaceMesh <-> (points, cells, offsets, point_data, cell_data) of a Python Mesh.
 // to_python moves every array into numpy without a copy; triangle meshes

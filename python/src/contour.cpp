@@ -38,12 +38,6 @@ void swap_x_z(float* p, Id n) {
 void swap_corners(PointIndex* c, Id m) {
   parallel::for_each(m, [c](Id t) { std::swap(c[3 * t + 1], c[3 * t + 2]); });
 }
-void swap_x_z(SurfaceMesh& mesh) {
-  swap_x_z(mesh.points.data(), mesh.num_points());
-  for (Field& f : mesh.point_fields)
-    if (f.components == 3) swap_x_z(f.values.data(), mesh.num_points());
-  swap_corners(mesh.connectivity.data(), mesh.num_cells());
-}
 
 // The output of a contour with positions and triangles (and the scalar)
 // only, in arrays the module allocates itself (ContourOptions::
@@ -143,7 +137,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
       swap_x_z(own.xyz.data(), own.points);
       swap_corners(own.connectivity.data(), own.triangles);
     } else if (view.reversed) {
-      swap_x_z(mesh);
+      mirror_axes(mesh);
     }
     mirror_s = seconds_since(t0);
     progress::report("contour", 1.0);
@@ -153,6 +147,13 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
 }
 
 }  // namespace
+
+void mirror_axes(SurfaceMesh& mesh) {
+  swap_x_z(mesh.points.data(), mesh.num_points());
+  for (Field& f : mesh.point_fields)
+    if (f.components == 3) swap_x_z(f.values.data(), mesh.num_points());
+  swap_corners(mesh.connectivity.data(), mesh.num_cells());
+}
 
 void register_contour(py::module_& m) {
   m.def("contour", &contour, py::arg("volume"), py::arg("isovalues"), py::arg("spacing") = py::none(),

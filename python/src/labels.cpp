@@ -25,14 +25,8 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
                          std::int64_t background, bool per_label, int smoothing_iterations, double relaxation,
                          bool coarsen, int threads) {
   check_threads(threads);
-  generate::LabelOptions opt;
-  opt.method = parse_method(method);
-  opt.labels = labels;
-  opt.background = background;
-  opt.per_label = per_label;
-  opt.smooth_iterations = smoothing_iterations;
-  opt.relaxation = relaxation;
-  opt.coarsen = coarsen;
+  const generate::LabelOptions opt =
+      label_options(method, labels, background, per_label, smoothing_iterations, relaxation, coarsen);
   const ImageGrid* grid = nullptr;
   ArrayVolume view;
   if (py::isinstance<Volume>(volume)) {
@@ -53,6 +47,20 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
 }
 
 }  // namespace
+
+generate::LabelOptions label_options(const std::string& method, const std::vector<std::int64_t>& labels,
+                                     std::int64_t background, bool per_label, int smoothing_iterations,
+                                     double relaxation, bool coarsen) {
+  generate::LabelOptions opt;
+  opt.method = parse_method(method);
+  opt.labels = labels;
+  opt.background = background;
+  opt.per_label = per_label;
+  opt.smooth_iterations = smoothing_iterations;
+  opt.relaxation = relaxation;
+  opt.coarsen = coarsen;
+  return opt;
+}
 
 void register_labels(py::module_& m) {
   m.def("contour_labels", &contour_labels, py::arg("volume"), py::arg("spacing") = py::none(),

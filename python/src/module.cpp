@@ -84,6 +84,9 @@ void register_errors(py::module_& m) {
 }
 
 void register_labels(py::module_& m);  // labels.cpp
+void register_dask_contour_block(py::module_& m);  // dask_contour_block.cpp
+void register_dask_contour_merge(py::module_& m);  // dask_contour_merge.cpp
+void register_dask_labels(py::module_& m);         // dask_labels.cpp
 
 }  // namespace keymesh::python
 
@@ -99,6 +102,9 @@ PYBIND11_MODULE(_keymesh, m) {
   kp::register_marching_cubes(m);
   kp::register_operations(m);
   kp::register_labels(m);
+  kp::register_dask_contour_block(m);
+  kp::register_dask_contour_merge(m);
+  kp::register_dask_labels(m);
   m.def("thread_count", &keymesh::parallel::thread_count,
         "Worker threads the library uses when a call passes threads=0 (all cores).");
   m.def("release_memory", &keymesh::retained_blocks::release_all,

@@ -9,8 +9,8 @@ SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& optio
   if (options.backend != generate::Backend::Cuda) return generate::contour(grid, options, stats);
   // The input is refused as the CPU refuses it, before the GPU is asked for.
   generate::check_contour_input(grid, options);
-  if (options.total_planes)
-    throw InputError("--backend cuda: streamed (slab) contouring is not available on the GPU yet");
+  if (options.total_planes || options.position_offset[0] || options.position_offset[1] || options.position_offset[2])
+    throw InputError("--backend cuda: streamed (slab) or block contouring is not available on the GPU yet");
   return cuda::contour(grid, options, stats);
 }
 

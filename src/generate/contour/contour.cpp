@@ -56,6 +56,9 @@ GridShape shape_of(const ImageGrid& g, const ContourOptions& opt) {
   s.stride[0] = 1;
   s.stride[1] = s.nx;
   s.stride[2] = s.nxy;
+  // Positions in the larger grid's indices: a slab's planes, a block's box.
+  for (int a = 0; a < 3; ++a) s.offset[a] = opt.position_offset[a];
+  if (opt.total_planes) s.offset[2] += opt.first_plane;
   return s;
 }
 
@@ -285,7 +288,7 @@ PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& gri
   if (opt.curvature) w.out.curvature = field("mean_curvature", 1);
   // Global keys: the slab's edges and points renumbered as those of the whole grid.
   w.points_per_iso = static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(opt.total_planes ? opt.total_planes : s.nz);
-  w.point_shift = static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(s.k_offset);
+  w.point_shift = static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(opt.total_planes ? opt.first_plane : 0);
   w.total_per_iso = 3 * w.points_per_iso;
   w.key_shift = 3 * w.point_shift;
   if (point_keys) {
@@ -699,7 +702,6 @@ template <class T>
 SurfaceMesh contour_rows(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
                          std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys) {
   GridShape s = shape_of(grid, opt);
-  s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
   const EdgeInterpolator<T> interp{samples, s, opt.isovalues.data(), 3 * s.n};
   const Id kb = opt.ghost_below, ke = s.nz - 1 - opt.ghost_above;
@@ -772,7 +774,6 @@ template <class K, class T>
 SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourOptions& opt, ContourStats& st,
                          std::vector<std::uint64_t>* point_keys, std::vector<std::uint64_t>* nearest_keys) {
   GridShape s = shape_of(grid, opt);
-  s.k_offset = opt.total_planes ? opt.first_plane : 0;
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
   const K keys_per_iso = static_cast<K>(3 * s.n);
   const K key_range = static_cast<K>(n_iso) * keys_per_iso;

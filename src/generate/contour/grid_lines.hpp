@@ -18,7 +18,7 @@ namespace keymesh::generate {
 // index c (slab-local along z) to c + 1: EdgeInterpolator::position()'s
 // expression.
 [[gnu::always_inline]] inline float grid_coordinate(const GridShape& s, int axis, Id c, double t) {
-  const double u = static_cast<double>(c + (axis == 2 ? s.k_offset : 0)) + t;
+  const double u = static_cast<double>(c + s.offset[axis]) + t;
   return static_cast<float>(s.origin[axis] + s.spacing[axis] * u);
 }
 
@@ -27,11 +27,11 @@ struct GridLines {
   std::vector<float> line[3];
 
   explicit GridLines(const GridShape& shape) : s(shape) {
-    const Id n[3] = {s.nx, s.ny, s.nz}, offset[3] = {0, 0, s.k_offset};
+    const Id n[3] = {s.nx, s.ny, s.nz};
     for (int a = 0; a < 3; ++a) {
       line[a].resize(static_cast<std::size_t>(n[a]));
       for (Id c = 0; c < n[a]; ++c)
-        line[a][c] = static_cast<float>(s.origin[a] + s.spacing[a] * static_cast<double>(c + offset[a]));
+        line[a][c] = static_cast<float>(s.origin[a] + s.spacing[a] * static_cast<double>(c + s.offset[a]));
     }
   }
 

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <array>
 #include <random>
+#include <set>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
@@ -182,4 +184,32 @@ TEST(ContourStream, CoarseningStreamedEqualsInMemory) {
       EXPECT_EQ(st.triangles_before_coarsening, whole_stats.triangles_before_coarsening);
     }
   }
+}
+
+// A box of the grid contoured on its own with position_offset (a Dask
+// chunk's task, python/src/dask_contour_block.cpp) gives its points the
+// bits of the whole grid's: every box point is a whole-grid point.
+TEST(ContourStream, BoxWithPositionOffsetGivesTheWholeGridsPositions) {
+  ImageGrid g = generate::spherical_distance(30);
+  g.origin = {-3.5, 2.25, 10.125};
+  g.spacing = {0.5, 1.5, 0.3};
+  ContourOptions o;
+  o.isovalues = {9.75};
+  const SurfaceMesh whole = generate::contour(g, o);
+  const Id first[3] = {7, 11, 5}, dims[3] = {9, 6, 13};
+  ImageGrid box;
+  box.spacing = g.spacing, box.origin = g.origin;
+  box.allocate({dims[0], dims[1], dims[2]}, g.type);
+  for (Id k = 0; k < dims[2]; ++k)
+    for (Id j = 0; j < dims[1]; ++j)
+      std::memcpy(box.bytes.data() + sizeof(float) * static_cast<std::size_t>(dims[0] * (j + dims[1] * k)),
+                  g.bytes.data() + sizeof(float) * static_cast<std::size_t>(first[0] + 30 * (first[1] + j + 30 * (first[2] + k))),
+                  sizeof(float) * static_cast<std::size_t>(dims[0]));
+  for (int a = 0; a < 3; ++a) o.position_offset[a] = first[a];
+  const SurfaceMesh part = generate::contour(box, o);
+  ASSERT_GT(part.num_points(), 50);
+  std::set<std::array<float, 3>> all;
+  for (Id p = 0; p < whole.num_points(); ++p) all.insert({whole.points[3 * p], whole.points[3 * p + 1], whole.points[3 * p + 2]});
+  for (Id p = 0; p < part.num_points(); ++p)
+    EXPECT_TRUE(all.count({part.points[3 * p], part.points[3 * p + 1], part.points[3 * p + 2]})) << p;
 }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdlib>
@@ -99,4 +100,29 @@ TEST(MarchingCubesTable, NoCaseHasCrossingTrianglesForAnySampleValues) {
   }
   // The sweep ran: the cases with two triangles or more, most with every corner moving.
   EXPECT_GT(configurations, 8000000L);
+}
+
+// keymesh.dask (python/src/dask_contour_block.cpp) finds a triangle's cube
+// from its corners' edges alone: along each axis, the least grid coordinate
+// of the three edges' first points. That is the cube's own coordinate unless
+// the three edges all lie on one face of the cube (none along that axis, all
+// at the same offset): no triangle of either table does.
+TEST(MarchingCubesTable, NoTriangleHasItsThreeEdgesOnOneFace) {
+  for (bool reversed : {false, true}) {
+    const auto& t = generate::marching_cubes_table(reversed);
+    for (int c = 0; c < 256; ++c)
+      for (int tri = 0; tri < t.triangle_count[c]; ++tri)
+        for (int axis = 0; axis < 3; ++axis) {
+          bool along = false;
+          int lo = 1, hi = 0;
+          for (int k = 0; k < 3; ++k) {
+            const generate::CubeEdge& e = t.edges[t.triangle_edges[c][3 * tri + k]];
+            const int offset = axis == 0 ? e.dx : (axis == 1 ? e.dy : e.dz);
+            along = along || e.axis == axis;
+            lo = std::min(lo, offset), hi = std::max(hi, offset);
+          }
+          EXPECT_TRUE(along || lo != hi) << "case " << c << " triangle " << tri << " axis " << axis << " reversed "
+                                         << reversed;
+        }
+  }
 }

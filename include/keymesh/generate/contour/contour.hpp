@@ -80,6 +80,12 @@ struct ContourOptions {
   // global edge ids of the whole grid (see contour_stream.hpp).
   Id first_plane = 0;
   Id total_planes = 0;
+  // Voxel grids: the grid is a box of a larger grid whose first grid point
+  // is the larger grid's point (position_offset[0], [1], [2]): positions
+  // are computed from the larger grid's indices, the same bits as there.
+  // Keys stay the box's own (a Dask block, python/src/dask_contour.cpp,
+  // renumbers them); derivatives see the box's borders as the grid's.
+  Id position_offset[3] = {0, 0, 0};
   // Slabs only: the grid's first `ghost_below` and last `ghost_above` planes
   // (0 or 1 each) are ghosts: samples the derivatives need (gradient
   // normals, curvature: central differences across the slab's border), in

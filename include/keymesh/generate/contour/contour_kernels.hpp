@@ -55,10 +55,11 @@ struct GridShape {
   Id nx, ny, nz, nxy, n;
   double origin[3], spacing[3];
   Id stride[3];
-  // When the grid is a slab of planes [k_offset, k_offset + nz) of a larger
-  // grid (streamed contouring): z positions are computed from the global
-  // plane index, so a slab gives the bits the whole grid gives.
-  Id k_offset;
+  // When the grid is a box of a larger grid, starting at its grid point
+  // (offset[0], offset[1], offset[2]) (a streamed slab: offset[2] only; a
+  // Dask block: any): positions are computed from the larger grid's
+  // indices, so the box gives the bits the whole grid gives.
+  Id offset[3];
   // The case table: marching_cubes_table(reversed_axes), as
   // ContourOptions::reversed_axes asks (coarsening's tables follow it).
   const MarchingCubesTable* table;
@@ -130,8 +131,8 @@ struct EdgeInterpolator {
   KEYMESH_HD void position(const Point& p, float* xyz) const {
     // Grid coordinates: the edge's first grid point moved by t along the
     // edge's axis (the other two stay whole numbers).
-    double u[3] = {static_cast<double>(p.ijk[0]), static_cast<double>(p.ijk[1]),
-                   static_cast<double>(p.ijk[2] + s.k_offset)};
+    double u[3] = {static_cast<double>(p.ijk[0] + s.offset[0]), static_cast<double>(p.ijk[1] + s.offset[1]),
+                   static_cast<double>(p.ijk[2] + s.offset[2])};
     u[p.axis] += p.t;
     for (int a = 0; a < 3; ++a) xyz[a] = static_cast<float>(s.origin[a] + s.spacing[a] * u[a]);
   }
