@@ -98,6 +98,16 @@ def tempdir():
     return tempfile.mkdtemp(prefix="keymesh-test-")
 
 
+def require_numpy():
+    """numpy, or the test exits 77 (skipped) without it."""
+    try:
+        import numpy
+    except ImportError as e:
+        print(f"skipped: {e}")
+        sys.exit(77)
+    return numpy
+
+
 def require_vtk():
     try:
         import vtk  # noqa: F401

@@ -23,7 +23,7 @@ for var in ("ASAN_OPTIONS", "UBSAN_OPTIONS"):
 env.setdefault("KEYMESH_HUGE_PAGES", "0")
 
 failed = []
-for script in ("cli/test_hardening.py", "cli/test_contour_cli.py", "cli/test_formats_cli.py"):
+for script in ("cli/test_hardening.py", "cli/test_hardening_io.py", "cli/test_contour_cli.py", "cli/test_formats_cli.py"):
     p = subprocess.run([sys.executable, os.path.join(HERE, script), KEYMESH], env=env, stdin=subprocess.DEVNULL,
                        capture_output=True, text=True, timeout=900)
     last = (p.stdout.strip().splitlines() or ["(no output)"])[-1]

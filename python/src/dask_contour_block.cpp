@@ -166,7 +166,7 @@ py::tuple contour_block(const py::object& block, const std::vector<double>& isov
                         bool coarse_keys, int threads) {
   check_threads(threads);
   const ArrayVolume view = view_array_volume(block, spacing, origin, VolumeOrder::CAsReversedAxes,
-                                             "dask_contour_block: the chunk must be a 3-D numpy array");
+                                             {"dask_contour_block", 1, "dask_contour_block: the chunk must be a 3-D numpy array"});
   BoxFrame f;
   f.first = to_library(first, view.reversed);
   f.whole = to_library(whole, view.reversed);

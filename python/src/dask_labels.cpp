@@ -34,7 +34,7 @@ class SlabSource final : public PlaneSource {
     if (!slab.is_none()) {
       held_ = true;
       view_ = view_array_volume(slab, spacing, origin, VolumeOrder::Fortran,
-                                "dask_labels: the slab must be a 3-D numpy array");
+                                {"dask_labels", 1, "dask_labels: the slab must be a 3-D numpy array"});
       header_ = view_.grid;
       header_.external = nullptr;
     }

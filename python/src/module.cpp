@@ -93,18 +93,12 @@ void register_dask_labels(py::module_& m);         // dask_labels.cpp
 PYBIND11_MODULE(_keymesh, m) {
   namespace kp = keymesh::python;
   m.doc() = "keymesh's compiled core (use the `keymesh` package, which wraps it).";
-  kp::register_errors(m);
-  kp::register_volume(m);
-  kp::register_contour(m);
-  kp::register_key_reduce(m);
-  kp::register_io(m);
-  kp::register_check(m);
-  kp::register_marching_cubes(m);
-  kp::register_operations(m);
-  kp::register_labels(m);
-  kp::register_dask_contour_block(m);
-  kp::register_dask_contour_merge(m);
-  kp::register_dask_labels(m);
+  // Each file's bindings, the error types first.
+  for (auto* add : {&kp::register_errors, &kp::register_volume, &kp::register_contour, &kp::register_key_reduce,
+                    &kp::register_io, &kp::register_check, &kp::register_marching_cubes, &kp::register_operations,
+                    &kp::register_labels, &kp::register_dask_contour_block, &kp::register_dask_contour_merge,
+                    &kp::register_dask_labels})
+    add(m);
   m.def("thread_count", &keymesh::parallel::thread_count,
         "Worker threads the library uses when a call passes threads=0 (all cores).");
   m.def("release_memory", &keymesh::retained_blocks::release_all,

@@ -360,21 +360,48 @@ SurfaceMesh gather(ContourPiece& piece) {
   return out;
 }
 
-GhostedPiece ghosted_piece(ContourPiece& piece) {
-  int P = 1, r = 0;
-  mpi().Comm_size(mpi().comm_world, &P);
-  mpi().Comm_rank(mpi().comm_world, &r);
-  GhostedPiece out;
-  out.mesh = std::move(piece.mesh);
-  out.ids = std::move(piece.numbering.ids);
-  const SurfaceMesh& m = out.mesh;
-  const std::vector<std::uint64_t>& ids = out.ids;
-  const Id n = m.num_points(), cells = m.num_cells();
-  out.point_ghosts.resize(static_cast<std::size_t>(n));
-  out.cell_ghosts.assign(static_cast<std::size_t>(cells), 0);
-  for (Id p = 0; p < n; ++p) out.point_ghosts[p] = piece.numbering.owned[p] ? 0 : 1;
-  if (P == 1) return out;
-  if (!m.all_triangles()) throw InputError("distributed contour: ghost cells of a piece with polygons");
+namespace {
+
+// The bytes of one triangle sent as a ghost: per corner its global id, its
+// position and its point field values, then the cell field values.
+struct GhostRecord {
+  std::size_t corner_bytes = 0, bytes = 0;
+  explicit GhostRecord(const SurfaceMesh& m) {
+    std::size_t point_values = 3, cell_values = 0;
+    for (const Field& f : m.point_fields) point_values += static_cast<std::size_t>(f.components);
+    for (const Field& f : m.cell_fields) cell_values += static_cast<std::size_t>(f.components);
+    corner_bytes = 8 + 4 * point_values;
+    bytes = 3 * corner_bytes + 4 * cell_values;
+  }
+};
+
+void append_ghost_record(const SurfaceMesh& m, const std::vector<std::uint64_t>& ids, Id t, const GhostRecord& record,
+                         std::vector<char>& buf) {
+  std::size_t at = buf.size();
+  buf.resize(at + record.bytes);
+  for (int c = 0; c < 3; ++c) {
+    const PointIndex p = m.connectivity[3 * t + c];
+    std::memcpy(buf.data() + at, &ids[p], 8);
+    std::memcpy(buf.data() + at + 8, m.points.data() + 3 * static_cast<std::size_t>(p), 12);
+    at += 20;
+    for (const Field& f : m.point_fields) {
+      const auto k = static_cast<std::size_t>(f.components);
+      std::memcpy(buf.data() + at, f.values.data() + k * p, 4 * k);
+      at += 4 * k;
+    }
+  }
+  for (const Field& f : m.cell_fields) {
+    const auto k = static_cast<std::size_t>(f.components);
+    std::memcpy(buf.data() + at, f.values.data() + k * static_cast<std::size_t>(t), 4 * k);
+    at += 4 * k;
+  }
+}
+
+// The triangles rank r sends to its neighbours r - 1 and r + 1: those with a
+// point on the plane that neighbour shares (lo below, hi above).
+std::vector<std::vector<char>> ghost_records_to_send(const ContourPiece& piece, const SurfaceMesh& m,
+                                                     const std::vector<std::uint64_t>& ids, int P, int r,
+                                                     const GhostRecord& record) {
   // A point's plane and axis from its key (isovalue * per_iso + 3 * grid point + axis):
   // rank r - 1 holds the in-plane crossings of plane lo, rank r + 1 those of plane hi.
   const std::uint64_t nxy = piece.layer_grid.nxy;
@@ -387,43 +414,22 @@ GhostedPiece ghosted_piece(ContourPiece& piece) {
     const std::uint64_t z = k / 3 / nxy;
     return z == lo || z == hi ? z : ~std::uint64_t{0};
   };
-  // One record per triangle sent: per corner its global id and position
-  // and point field values, then the cell field values.
-  std::size_t point_values = 3, cell_values = 0;
-  for (const Field& f : m.point_fields) point_values += static_cast<std::size_t>(f.components);
-  for (const Field& f : m.cell_fields) cell_values += static_cast<std::size_t>(f.components);
-  const std::size_t corner_bytes = 8 + 4 * point_values, record = 3 * corner_bytes + 4 * cell_values;
   std::vector<std::vector<char>> to(static_cast<std::size_t>(P));
-  for (Id t = 0; t < cells; ++t) {
+  for (Id t = 0; t < m.num_cells(); ++t) {
     bool below = false, above = false;
     for (int c = 0; c < 3; ++c) {
       const std::uint64_t z = shared_plane(m.connectivity[3 * t + c]);
       below = below || (z == lo && r > 0);
       above = above || (z == hi && r + 1 < P);
     }
-    for (int q : {r - 1, r + 1}) {
-      if (!(q == r - 1 ? below : above)) continue;
-      std::vector<char>& buf = to[static_cast<std::size_t>(q)];
-      std::size_t at = buf.size();
-      buf.resize(at + record);
-      for (int c = 0; c < 3; ++c) {
-        const PointIndex p = m.connectivity[3 * t + c];
-        std::memcpy(buf.data() + at, &ids[p], 8);
-        std::memcpy(buf.data() + at + 8, m.points.data() + 3 * static_cast<std::size_t>(p), 12);
-        at += 20;
-        for (const Field& f : m.point_fields) {
-          const auto k = static_cast<std::size_t>(f.components);
-          std::memcpy(buf.data() + at, f.values.data() + k * p, 4 * k);
-          at += 4 * k;
-        }
-      }
-      for (const Field& f : m.cell_fields) {
-        const auto k = static_cast<std::size_t>(f.components);
-        std::memcpy(buf.data() + at, f.values.data() + k * static_cast<std::size_t>(t), 4 * k);
-        at += 4 * k;
-      }
-    }
+    if (below) append_ghost_record(m, ids, t, record, to[static_cast<std::size_t>(r - 1)]);
+    if (above) append_ghost_record(m, ids, t, record, to[static_cast<std::size_t>(r + 1)]);
   }
+  return to;
+}
+
+// Every rank's buffers to every other, in rank order: one Alltoallv.
+std::vector<char> exchange_bytes(const std::vector<std::vector<char>>& to, int P) {
   std::vector<int> send_counts(static_cast<std::size_t>(P)), recv_counts(static_cast<std::size_t>(P));
   std::vector<int> send_displs(static_cast<std::size_t>(P)), recv_displs(static_cast<std::size_t>(P));
   std::vector<char> sent;
@@ -441,16 +447,30 @@ GhostedPiece ghosted_piece(ContourPiece& piece) {
   std::vector<char> got(static_cast<std::size_t>(checked_int(received, "ghost cells")));
   mpi().Alltoallv(sent.data(), send_counts.data(), send_displs.data(), mpi().byte, got.data(), recv_counts.data(),
                   recv_displs.data(), mpi().byte, mpi().comm_world);
-  // Keep the triangles that use a point this rank holds; their other
-  // points join the piece once each, in the order received.
+  return got;
+}
+
+// Reads `count` float values at v into `values`; returns v past them.
+const char* append_floats(const char* v, int count, Array<float>& values) {
+  for (int k = 0; k < count; ++k, v += 4) {
+    float value;
+    std::memcpy(&value, v, 4);
+    values.push_back(value);
+  }
+  return v;
+}
+
+// Keeps the received triangles that use a point this rank holds (one of its
+// first n); their other points join the piece once each, in the order received.
+void append_ghosts(GhostedPiece& out, Id n, const std::vector<char>& got, const GhostRecord& record) {
   std::unordered_map<std::uint64_t, PointIndex> local;
-  for (Id p = 0; p < n; ++p) local.emplace(ids[p], static_cast<PointIndex>(p));
+  for (Id p = 0; p < n; ++p) local.emplace(out.ids[p], static_cast<PointIndex>(p));
   SurfaceMesh& o = out.mesh;
-  for (std::size_t at = 0; at + record <= got.size(); at += record) {
+  for (std::size_t at = 0; at + record.bytes <= got.size(); at += record.bytes) {
     std::uint64_t id[3];
     bool touches = false;
     for (int c = 0; c < 3; ++c) {
-      std::memcpy(&id[c], got.data() + at + c * corner_bytes, 8);
+      std::memcpy(&id[c], got.data() + at + c * record.corner_bytes, 8);
       const auto it = local.find(id[c]);
       touches = touches || (it != local.end() && static_cast<Id>(it->second) < n);
     }
@@ -458,31 +478,38 @@ GhostedPiece ghosted_piece(ContourPiece& piece) {
     for (int c = 0; c < 3; ++c) {
       auto [it, added] = local.emplace(id[c], static_cast<PointIndex>(o.num_points()));
       if (added) {
-        const char* v = got.data() + at + c * corner_bytes + 8;
-        float x[3];
-        std::memcpy(x, v, 12);
-        o.points.insert(o.points.end(), x, x + 3);
-        v += 12;
-        for (Field& f : o.point_fields)
-          for (int k = 0; k < f.components; ++k, v += 4) {
-            float value;
-            std::memcpy(&value, v, 4);
-            f.values.push_back(value);
-          }
+        const char* v = got.data() + at + c * record.corner_bytes + 8;
+        v = append_floats(v, 3, o.points);
+        for (Field& f : o.point_fields) v = append_floats(v, f.components, f.values);
         out.ids.push_back(id[c]);
         out.point_ghosts.push_back(1);
       }
       o.connectivity.push_back(it->second);
     }
-    const char* v = got.data() + at + 3 * corner_bytes;
-    for (Field& f : o.cell_fields)
-      for (int k = 0; k < f.components; ++k, v += 4) {
-        float value;
-        std::memcpy(&value, v, 4);
-        f.values.push_back(value);
-      }
+    const char* v = got.data() + at + 3 * record.corner_bytes;
+    for (Field& f : o.cell_fields) v = append_floats(v, f.components, f.values);
     out.cell_ghosts.push_back(1);
   }
+}
+
+}  // namespace
+
+GhostedPiece ghosted_piece(ContourPiece& piece) {
+  int P = 1, r = 0;
+  mpi().Comm_size(mpi().comm_world, &P);
+  mpi().Comm_rank(mpi().comm_world, &r);
+  GhostedPiece out;
+  out.mesh = std::move(piece.mesh);
+  out.ids = std::move(piece.numbering.ids);
+  const Id n = out.mesh.num_points(), cells = out.mesh.num_cells();
+  out.point_ghosts.resize(static_cast<std::size_t>(n));
+  out.cell_ghosts.assign(static_cast<std::size_t>(cells), 0);
+  for (Id p = 0; p < n; ++p) out.point_ghosts[p] = piece.numbering.owned[p] ? 0 : 1;
+  if (P == 1) return out;
+  if (!out.mesh.all_triangles()) throw InputError("distributed contour: ghost cells of a piece with polygons");
+  const GhostRecord record(out.mesh);
+  const std::vector<char> got = exchange_bytes(ghost_records_to_send(piece, out.mesh, out.ids, P, r, record), P);
+  append_ghosts(out, n, got, record);
   return out;
 }
 

@@ -22,13 +22,9 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, mpirun_command, report, run, tempdir  # noqa: E402
+from kmtest import check, finish, mpirun_command, report, require_numpy, run, tempdir  # noqa: E402
 
-try:
-    import numpy as np
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(77)
+np = require_numpy()
 
 D = tempdir()
 MPIRUN = shutil.which("mpirun")
