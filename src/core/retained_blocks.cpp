@@ -73,6 +73,7 @@ struct Pool {
   double seconds = 10;
   std::condition_variable changed;  // wakes the reaper: a block kept, the limits changed
   bool reaper_running = false;
+  int keeping_nothing = 0;     // KeepNothing scopes alive
   bool forked_child = false;  // a fork's child starts no thread (blocks there go on calls)
 
   Pool() {
@@ -100,12 +101,13 @@ struct Pool {
     return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::min(seconds, 1e7)));
   }
 
-  // Unmaps the oldest blocks while past the size limit, and those kept
-  // `seconds` or longer.
+  // Unmaps the oldest blocks while past the size limit (0 in a KeepNothing
+  // scope), and those kept `seconds` or longer.
   void expire() noexcept {
     const auto now = Clock::now();
+    const std::size_t bound = keeping_nothing > 0 ? 0 : limit;
     std::size_t n = 0;
-    for (; n < kept.size() && (kept_bytes > limit || now - kept[n].freed >= keep_for()); ++n) {
+    for (; n < kept.size() && (kept_bytes > bound || now - kept[n].freed >= keep_for()); ++n) {
       ::munmap(kept[n].data, kept[n].size);
       kept_bytes -= kept[n].size;
     }
@@ -183,7 +185,7 @@ void release(void* block, std::size_t bytes) noexcept {
   const std::size_t size = it != p.lent.end() ? it->second : block_size(bytes);
   if (it != p.lent.end()) p.lent.erase(it);
   // A block past the limit alone would push every other block out.
-  bool keep = size <= p.limit;
+  bool keep = size <= p.limit && p.keeping_nothing == 0;
   if (keep) try {
       p.kept.push_back({block, size, Clock::now()});
       p.kept_bytes += size;
@@ -229,6 +231,19 @@ void set_limits(std::size_t bytes, double seconds) noexcept {
   p.limit = bytes, p.seconds = seconds;
   p.expire();
   p.changed.notify_one();  // a sleeping reaper's due time may have moved
+}
+
+void begin_keep_nothing() noexcept {
+  Pool& p = Pool::pool();
+  std::lock_guard lock(p.mutex);
+  ++p.keeping_nothing;
+  p.expire();
+}
+
+void end_keep_nothing() noexcept {
+  Pool& p = Pool::pool();
+  std::lock_guard lock(p.mutex);
+  if (p.keeping_nothing > 0) --p.keeping_nothing;
 }
 
 }  // namespace keymesh::retained_blocks

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <thread>
 #include <vector>
 
@@ -180,6 +181,29 @@ TEST_F(RetainedBlocks, NothingIsKeptWhileAKeepNothingLives) {
   void* r = rb::acquire(8 * kMiB);
   rb::release(r, 8 * kMiB);
   EXPECT_EQ(rb::stats().kept_blocks, 1u);
+}
+
+// keymesh.dask runs streamed label slabs on several threads at once: scopes
+// that end out of order once left the limit at 0 (each saved the other's 0).
+TEST_F(RetainedBlocks, OverlappingKeepNothingScopesLeaveTheLimitsAlone) {
+  auto first = std::make_unique<rb::KeepNothing>();
+  auto second = std::make_unique<rb::KeepNothing>();
+  first.reset();  // the first ends before the second
+  void* q = rb::acquire(8 * kMiB);
+  rb::release(q, 8 * kMiB);
+  EXPECT_EQ(rb::stats().kept_blocks, 0u);  // the second still keeps nothing
+  second.reset();
+  EXPECT_EQ(rb::limit(), std::size_t{1} << 30);
+  EXPECT_EQ(rb::limit_seconds(), 3600);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([] {
+      for (int round = 0; round < 200; ++round) const rb::KeepNothing scope;
+    });
+  for (auto& t : threads) t.join();
+  void* r = rb::acquire(8 * kMiB);
+  rb::release(r, 8 * kMiB);
+  EXPECT_EQ(rb::stats().kept_blocks, 1u);  // kept again once every scope ended
 }
 
 TEST_F(RetainedBlocks, ThreadsNeverShareABlock) {

@@ -65,20 +65,20 @@ std::size_t limit() noexcept;
 double limit_seconds() noexcept;
 void set_limits(std::size_t bytes, double seconds) noexcept;
 
-// While one lives, nothing is kept (the limit is 0; the earlier limits come
-// back after): a run held to a memory budget (--memory-limit's streamed
-// contour and label surfaces) counts what it maps, and a kept block would
-// be memory the budget does not see.
+// While one lives, nothing is kept (what was kept is unmapped; limit() and
+// limit_seconds() are left as they are): a run held to a memory budget
+// (--memory-limit's streamed contour and label surfaces) counts what it
+// maps, and a kept block would be memory the budget does not see. Scopes
+// are counted, not saved and restored, so they may overlap in any order on
+// any threads (keymesh.dask runs several streamed label slabs at once).
+void begin_keep_nothing() noexcept;
+void end_keep_nothing() noexcept;
 class KeepNothing {
  public:
-  KeepNothing() noexcept : bytes_(limit()), seconds_(limit_seconds()) { set_limits(0, seconds_); }
-  ~KeepNothing() { set_limits(bytes_, seconds_); }
+  KeepNothing() noexcept { begin_keep_nothing(); }
+  ~KeepNothing() { end_keep_nothing(); }
   KeepNothing(const KeepNothing&) = delete;
   KeepNothing& operator=(const KeepNothing&) = delete;
-
- private:
-  std::size_t bytes_;
-  double seconds_;
 };
 
 }  // namespace keymesh::retained_blocks
