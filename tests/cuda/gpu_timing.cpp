@@ -46,17 +46,21 @@ struct Args {
 
 Args parse(int argc, char** argv) {
   Args a;
-  if (argc < 3) throw InputError("usage: keymesh_gpu_timing sphere|checkerboard N [--repeat R] [--warmup W] [--no-cpu]");
+  if (argc < 3)
+    throw InputError("usage: keymesh_gpu_timing sphere|checkerboard N [--repeat R] [--warmup W] [--no-cpu]");
   a.what = argv[1];
   a.n = std::stoll(argv[2]);
   for (int i = 3; i < argc; ++i) {
     const std::string o = argv[i];
-    if (o == "--no-cpu") a.cpu = false;
-    else if ((o == "--repeat" || o == "--warmup") && i + 1 < argc) (o == "--repeat" ? a.repeat : a.warmup) = std::stoi(argv[++i]);
-    else throw InputError("keymesh_gpu_timing: unknown option " + o);
+    if (o == "--no-cpu")
+      a.cpu = false;
+    else if ((o == "--repeat" || o == "--warmup") && i + 1 < argc)
+      (o == "--repeat" ? a.repeat : a.warmup) = std::stoi(argv[++i]);
+    else
+      throw InputError("unknown option " + o);
   }
   if ((a.what != "sphere" && a.what != "checkerboard") || a.n < 2 || a.repeat < 1 || a.warmup < 0)
-    throw InputError("keymesh_gpu_timing: sphere|checkerboard N (N >= 2), --repeat >= 1, --warmup >= 0");
+    throw InputError("sphere|checkerboard N (N >= 2), --repeat >= 1, --warmup >= 0");
   return a;
 }
 
@@ -71,13 +75,14 @@ bool identical(const SurfaceMesh& a, const SurfaceMesh& b) {
     return false;
   if (a.point_fields.size() != b.point_fields.size()) return false;
   for (std::size_t i = 0; i < a.point_fields.size(); ++i)
-    if (a.point_fields[i].name != b.point_fields[i].name || !same_bits(a.point_fields[i].values, b.point_fields[i].values))
+    if (a.point_fields[i].name != b.point_fields[i].name ||
+        !same_bits(a.point_fields[i].values, b.point_fields[i].values))
       return false;
   return true;
 }
 
 void check_cuda(cudaError_t e, const char* what) {
-  if (e != cudaSuccess) throw InputError(std::string("keymesh_gpu_timing: ") + what + ": " + cudaGetErrorString(e));
+  if (e != cudaSuccess) throw InputError(std::string(what) + ": " + cudaGetErrorString(e));
 }
 
 // One GPU contour timed with CUDA events, in milliseconds.
@@ -141,7 +146,8 @@ int checkerboard(const Args& a) {
   o.scalars = false;
   o.backend = generate::Backend::Cuda;
   std::ostringstream js;
-  js << "{\"case\": \"checkerboard\", \"size\": " << a.n << ", \"expected_triangles\": " << 4 * (a.n - 1) * (a.n - 1) * (a.n - 1);
+  js << "{\"case\": \"checkerboard\", \"size\": " << a.n
+     << ", \"expected_triangles\": " << 4 * (a.n - 1) * (a.n - 1) * (a.n - 1);
   int rc = 0;
   try {
     const SurfaceMesh gpu = backend::contour(g, o);
@@ -160,7 +166,8 @@ int checkerboard(const Args& a) {
 
 int main(int argc, char** argv) {
   if (argc == 2 && std::string(argv[1]) == "--help") {
-    std::cout << "keymesh_gpu_timing sphere|checkerboard N [--repeat R] [--warmup W] [--no-cpu] (tests/cuda/gpu_timing.cpp)\n";
+    std::cout << "keymesh_gpu_timing sphere|checkerboard N [--repeat R] [--warmup W] [--no-cpu] "
+                 "(tests/cuda/gpu_timing.cpp)\n";
     return 0;
   }
   try {
