@@ -77,6 +77,13 @@ step() {
   fi
 }
 skip() { record "$1" skip 0 "$2"; }
+# After a step of keymesh_gpu_timing: where nvidia-smi lists a GPU, the
+# program saying it found none ({"skipped": ...}, exit 0) is a failure.
+expect_device() {
+  if [ "$BACKEND" = cuda ] && [ $HAVE_GPU = 1 ] && grep -q '"skipped"' "$STEP_OUT"; then
+    record "$1: the GPU is usable" fail 0 "$(grep -o '"skipped": "[^"]*"' "$STEP_OUT" | head -n 1)"
+  fi
+}
 
 # ---- the machine -------------------------------------------------------------
 GLIBC=$(ldd --version 2>/dev/null | head -n 1 | grep -oE '[0-9]+\.[0-9]+$' || echo unknown)
@@ -135,7 +142,9 @@ fi
 # ---- the CUDA tests ----------------------------------------------------------
 if [ -n "$TESTS" ]; then
   step "CUDA tests (keymesh_cuda_tests)" 120 "$TESTS" --gtest_brief=1
-  grep -E '^\[  (PASSED|SKIPPED|FAILED) ' "$STEP_OUT" | tee -a "$LOG" >/dev/null
+  if [ "$BACKEND" = cuda ] && [ $HAVE_GPU = 1 ] && grep -qE 'no usable CUDA device|no CUDA device' "$STEP_OUT"; then
+    record "CUDA tests: the GPU is usable" fail 0 "$(grep -m 1 -E 'no usable CUDA device|no CUDA device' "$STEP_OUT")"
+  fi
 else
   skip "CUDA tests (keymesh_cuda_tests)" "the test program does not run here"
 fi
@@ -226,6 +235,7 @@ fi
 # ---- past 2^32 triangles, in its own process ------------------------------------
 if [ -n "$TIMING" ]; then
   gpu_step "checkerboard 1040^3 uint8 (4,486,489,276 triangles): refused or right" 90 "$TIMING" checkerboard 1040
+  expect_device "checkerboard"
   cat "$STEP_OUT" >"$OUT/checkerboard.json"
 else
   skip "checkerboard 1040^3" "the timing program does not run here"
@@ -235,6 +245,7 @@ fi
 : >"$OUT/timing.jsonl"
 if [ -n "$TIMING" ]; then
   gpu_step "timing sphere 512^3 (CUDA events, median of 7, CPU compared)" 60 "$TIMING" sphere 512 --warmup 2 --repeat 7
+  expect_device "timing 512^3"
   cat "$STEP_OUT" >>"$OUT/timing.jsonl"
   gpu_step "timing sphere 1024^3 (CUDA events, median of 5, CPU compared)" 90 "$TIMING" sphere 1024 --warmup 1 --repeat 5
   cat "$STEP_OUT" >>"$OUT/timing.jsonl"
