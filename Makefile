@@ -20,7 +20,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
 # and those `make bench` adds for its peers, plots and pictures.
 BENCH_PACKAGES = libthrust-dev libtbb-dev libvtk9-dev python3-openvdb python3-matplotlib xvfb hyperfine
 
-.PHONY: all deps build demo test bench scaling cli-docs clean sanitize sanitize-quick fuzz fuzz-build fuzz-run gltf-validator
+.PHONY: all deps build gpu-check-build demo test bench scaling cli-docs clean sanitize sanitize-quick fuzz fuzz-build fuzz-run gltf-validator
 
 all: build
 
@@ -43,6 +43,16 @@ deps:
 build: deps
 	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
+
+# The GPU check's self-contained programs (docs/gpu-check.md): the command,
+# the CUDA tests and the timing program in build-gpucheck/, needing only libc,
+# libm and the driver's libcuda; scripts/gpu_check.sh runs them on a GPU machine.
+GPU_CHECK_DIR = build-gpucheck
+GPU_CHECK_PROGRAMS = keymesh keymesh_cuda_tests keymesh_gpu_timing
+gpu-check-build:
+	@cmake -S . -B $(GPU_CHECK_DIR) -G Ninja -C cmake/gpu_check.cmake $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(GPU_CHECK_DIR) -j $(JOBS) --target $(GPU_CHECK_PROGRAMS)
+	@cd $(GPU_CHECK_DIR) && strip $(GPU_CHECK_PROGRAMS) && $(PYTHON) ../scripts/gpu_check_linkage.py $(GPU_CHECK_PROGRAMS)
 
 demo: build
 	@$(PYTHON) scripts/demo.py --keymesh $(BUILD_DIR)/keymesh --out out

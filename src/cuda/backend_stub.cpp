@@ -4,6 +4,7 @@
 
 #if !defined(KEYMESH_HAVE_CUDA)
 
+#include "contour_limits.hpp"
 #include "keymesh/core/error.hpp"
 
 namespace keymesh::cuda {
@@ -15,7 +16,8 @@ bool available(std::string* why) {
   return false;
 }
 
-SurfaceMesh contour(const ImageGrid&, const generate::ContourOptions&, generate::ContourStats*) {
+SurfaceMesh contour(const ImageGrid&, const generate::ContourOptions& options, generate::ContourStats*) {
+  check_gpu_options(options);  // as the GPU build refuses them, before the device is considered
   throw InputError("--backend cuda: keymesh was built without the CUDA backend (KEYMESH_CUDA=OFF or no nvcc)");
 }
 

@@ -28,6 +28,7 @@ namespace {
 // GDCM, through keymesh's module (gdcm_module/gdcm_api.hpp), opened by the
 // first DICOM read: before any fork, so that every child process inherits it.
 const KeymeshGdcmApi& gdcm() {
+#if defined(KEYMESH_GDCM_MODULE_FILE)
   static const KeymeshGdcmApi* const api = [] {
     const auto& table = loadable_module_table<KeymeshGdcmApi>(KEYMESH_GDCM_MODULE_FILE, kKeymeshGdcmEntry,
                                                               kKeymeshGdcmApiVersion, "reading a DICOM series");
@@ -35,6 +36,9 @@ const KeymeshGdcmApi& gdcm() {
     return &table;
   }();
   return *api;
+#else  // a build without GDCM (KEYMESH_GDCM=OFF, as the GPU check's): no module to open
+  throw InputError("reading a DICOM series: keymesh was built without GDCM (KEYMESH_GDCM=OFF)");
+#endif
 }
 
 constexpr KeymeshGdcmTag tag(std::uint16_t group, std::uint16_t element) {

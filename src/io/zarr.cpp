@@ -1,6 +1,8 @@
 #include "zarr.hpp"
 
+#if defined(KEYMESH_HAVE_BLOSC)
 #include <blosc.h>
+#endif
 #include <zlib.h>
 
 #include <algorithm>
@@ -276,7 +278,11 @@ class ZarrPlanes : public PlaneSource {
     const json& c = z["compressor"];
     const std::string id = c.is_object() ? c.value("id", std::string()) : std::string();
     if (id == "zlib" || id == "gzip") codec_ = Codec::Zlib;
+#if defined(KEYMESH_HAVE_BLOSC)
     else if (id == "blosc") codec_ = Codec::Blosc;
+#else
+    else if (id == "blosc") fail("compressor 'blosc': keymesh was built without blosc (KEYMESH_BLOSC=OFF)");
+#endif
     else fail("compressor '" + id + "' is not supported (none, zlib, gzip, blosc)");
   }
 
@@ -382,6 +388,9 @@ class ZarrPlanes : public PlaneSource {
         return true;
       }
       case Codec::Blosc: {
+#if !defined(KEYMESH_HAVE_BLOSC)
+        throw bad("blosc data in a build without blosc");  // not reached: parse_compressor refuses blosc
+#else
         std::size_t nbytes = 0;
         if (blosc_cbuffer_validate(data.data(), data.size(), &nbytes) != 0) throw bad("corrupt blosc data");
         if (nbytes != chunk_bytes_)
@@ -391,6 +400,7 @@ class ZarrPlanes : public PlaneSource {
         if (blosc_decompress_ctx(data.data(), out.data(), out.size(), 1) != static_cast<int>(out.size()))
           throw bad("corrupt blosc data");
         return true;
+#endif
       }
     }
     return false;  // not reached: every codec returns

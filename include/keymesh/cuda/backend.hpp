@@ -18,7 +18,11 @@ bool available(std::string* why = nullptr);
 // same fixed merge order for averaged normals). Supports KeyReduce and
 // KeyReduceSort welds, normals none / gradient / average, scalars and
 // several isovalues; throws InputError naming what it does not support yet
-// (VERTEX-WELD, coarsening, curvature) and when no device is usable.
+// (VERTEX-WELD, coarsening, curvature, output arrays, slabs, ghost planes:
+// src/cuda/contour_limits.hpp) and when no device is usable, LimitError past
+// its sizes, past options.max_output_bytes (the CPU's check and message) and
+// when the device runs out of memory. After a fault that leaves the CUDA
+// context unusable, available() is false, saying why.
 SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& options,
                     generate::ContourStats* stats = nullptr);
 

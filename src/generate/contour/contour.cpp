@@ -843,6 +843,10 @@ SurfaceMesh contour_soup(const ImageGrid& grid, const T* samples, const ContourO
 
 }  // namespace
 
+void check_contour_output(const ContourOptions& options, Id points, Id triangles) {
+  check_output_size(options, points, triangles);
+}
+
 void check_contour_input(const ImageGrid& grid, const ContourOptions& options) {
   if (options.isovalues.empty()) throw InputError("contour: no isovalue given");
   for (double iso : options.isovalues)

@@ -132,6 +132,12 @@ struct ContourStats {
 // need: the input checks of contour() on voxels, whichever backend runs it.
 void check_contour_input(const ImageGrid& grid, const ContourOptions& options);
 
+// Throws LimitError when an output of `points` points and `triangles`
+// triangles passes options.max_output_bytes or 2^32 - 1 corners: the check
+// contour() makes before it allocates its output, for the GPU path to make
+// with its own counts (the same message).
+void check_contour_output(const ContourOptions& options, Id points, Id triangles);
+
 // Runs on the CPU: options.backend must be Backend::Cpu (keymesh/backend/contour.hpp
 // chooses between the CPU and the GPU).
 // Throws InputError for an empty isovalue list, a non-finite isovalue or a
