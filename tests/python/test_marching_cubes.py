@@ -64,6 +64,11 @@ need_mc33 = pytest.mark.skipif(_skimage_compat._mc33_tables() is None,
 METHODS = ["lewiner", "lorensen"]
 
 
+def assert_same_as_skimage(v, level, **kwargs):
+    """keymesh.marching_cubes and scikit-image's on the same arguments."""
+    assert_same(keymesh.marching_cubes(v, level, **kwargs), measure.marching_cubes(v, level, **kwargs))
+
+
 def assert_same(ours, theirs, exact_normals=False):
     names = ("verts", "faces", "normals", "values")
     for name, a, b in zip(names, ours, theirs):
@@ -84,9 +89,7 @@ def assert_same(ours, theirs, exact_normals=False):
 def test_identical_to_skimage(name, spacing, direction, method):
     make, level = VOLUMES[name]
     v = make()
-    ours = keymesh.marching_cubes(v, level, spacing=spacing, gradient_direction=direction, method=method)
-    theirs = measure.marching_cubes(v, level, spacing=spacing, gradient_direction=direction, method=method)
-    assert_same(ours, theirs)
+    assert_same_as_skimage(v, level, spacing=spacing, gradient_direction=direction, method=method)
 
 
 @need_table
@@ -97,9 +100,7 @@ def test_identical_to_skimage(name, spacing, direction, method):
 def test_step_size(name, step, method):
     make, level = VOLUMES[name]
     v = make()
-    ours = keymesh.marching_cubes(v, level, step_size=step, method=method)
-    theirs = measure.marching_cubes(v, level, step_size=step, method=method)
-    assert_same(ours, theirs)
+    assert_same_as_skimage(v, level, step_size=step, method=method)
 
 
 @need_table
@@ -113,9 +114,7 @@ def test_mask(name, step, method):
     rng = np.random.default_rng(17)
     mask = rng.random(v.shape) < 0.6
     mask[: v.shape[0] // 3] = False          # an open cut as well as random holes
-    ours = keymesh.marching_cubes(v, level, mask=mask, step_size=step, method=method)
-    theirs = measure.marching_cubes(v, level, mask=mask, step_size=step, method=method)
-    assert_same(ours, theirs)
+    assert_same_as_skimage(v, level, mask=mask, step_size=step, method=method)
 
 
 @need_table
@@ -126,9 +125,7 @@ def test_level_none_and_no_degenerate(name, method):
     make, level = VOLUMES[name]
     v = make()
     assert_same(keymesh.marching_cubes(v, method=method), measure.marching_cubes(v, method=method))
-    ours = keymesh.marching_cubes(v, level, spacing=(1, 2, 3), allow_degenerate=False, method=method)
-    theirs = measure.marching_cubes(v, level, spacing=(1, 2, 3), allow_degenerate=False, method=method)
-    assert_same(ours, theirs)
+    assert_same_as_skimage(v, level, spacing=(1, 2, 3), allow_degenerate=False, method=method)
 
 
 @pytest.mark.parametrize("name", ["gyroid", "blobs"])  # no sample equals the level: points are distinct
