@@ -2,6 +2,7 @@
 // Exit codes: 0 success, 1 bad input or failed operation, 2 bad usage.
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -78,6 +79,9 @@ int run_command(const CLI::App* cmd, const std::function<int()>& run) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A pipe or FIFO whose reader goes away is a write error (EPIPE) that the
+  // writers report by name and exit 1 on, not a death by signal.
+  std::signal(SIGPIPE, SIG_IGN);
   // Under mpirun: MPI for the whole run (a no-op otherwise).
   try {
     dist::init(&argc, &argv);

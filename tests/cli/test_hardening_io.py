@@ -24,6 +24,7 @@ import shutil
 import subprocess
 import sys
 import threading
+import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from kmtest import KEYMESH, SOURCE_DIR, check, finish, mpirun, parse_glb, run, tempdir  # noqa: E402
@@ -364,10 +365,32 @@ def fifo_without_reader_refused():
     assert received and received[0].startswith(b"ply\n"), received
 
 
+
+def fifo_reader_gone_named():
+    """A FIFO whose reader closes partway: keymesh died by SIGPIPE; now the
+    write fails by name (Broken pipe) and exits 1."""
+    big = path("big.ply")
+    run("generate", "sphere", "--size", "96", "-o", path("s96.vti"), "-q")
+    run("contour", path("s96.vti"), "-o", big, "--iso", "40.5", "-q")
+    assert os.path.getsize(big) > 1 << 20  # well past a pipe's 64 KiB buffer
+    fifo = path("partway.ply")
+    os.mkfifo(fifo)
+
+    def read_a_little():
+        with open(fifo, "rb") as f:
+            f.read(100)
+
+    reader = threading.Thread(target=read_a_little, daemon=True)
+    reader.start()
+    time.sleep(0.2)  # the reader is waiting in open() before keymesh opens the FIFO
+    refused(["convert", big, "-o", fifo, "-q"], fifo, "Broken pipe", timeout=60)
+    reader.join(20)
+
 check("issue 34: output names of 249 and 255 bytes written (the temporary name fits NAME_MAX)",
       long_output_names_written)
 check("issue 34: -o under a regular file says 'not a directory'", output_under_a_file_named)
 check("issue 34: a missing input of an unknown extension says 'no such file'", missing_input_named_missing)
 check("issue 34: a newline in a file name is escaped: one error line", newline_in_file_names_escaped)
 check("issue 34: -o a FIFO with no reader refused at once, not a hang", fifo_without_reader_refused)
+check("issue 34: a FIFO whose reader leaves partway: the write fails by name, no SIGPIPE", fifo_reader_gone_named)
 finish()
