@@ -3,7 +3,6 @@
 // which the next use turns into a segfault), integers past 64 bits, paths
 // holding a NUL byte.
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
 #include "common.hpp"
@@ -16,15 +15,6 @@ std::string shape_text(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-std::string byte_text(long double bytes) {
-  const char* units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB", "YiB"};
-  int u = 0;
-  while (bytes >= 1024 && u < 8) bytes /= 1024, ++u;
-  char b[48];
-  std::snprintf(b, sizeof b, u == 0 ? "%.0Lf %s" : "%.3Lg %s", bytes, units[u]);
-  return b;
-}
-
 namespace {
 
 bool has_layout(const py::array& a, int flags) {
@@ -35,7 +25,7 @@ bool has_layout(const py::array& a, int flags) {
 // "a C-ordered float32 copy of volume (shape (700, 700, 700), 1.28 GiB)"
 std::string copy_text(const py::array& a, const py::dtype& dtype, int flags, const char* what, long double bytes) {
   return std::string((flags & py::array::c_style) ? "a C-ordered " : "a Fortran-ordered ") + dtype_name(dtype) +
-         " copy of " + what + " (shape " + shape_text(a) + ", " + byte_text(bytes) + ")";
+         " copy of " + what + " (shape " + shape_text(a) + ", " + size_text(bytes) + ")";
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "keymesh/core/progress.hpp"
+#include "keymesh/core/work_estimate.hpp"
 #include "keymesh/mesh/image_grid.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
 #include "keymesh/mesh/unstructured_grid.hpp"
@@ -136,8 +137,6 @@ py::array_t<T, Flags> checked_array(const py::handle& obj, const char* what) {
 }
 // "(700, 700, 700)"
 std::string shape_text(const py::array& a);
-// "1.28 GiB", "512 bytes"
-std::string byte_text(long double bytes);
 // A copy of the module's own (into a std::vector, a library Array): `fill`
 // runs and a std::bad_alloc it throws becomes OutOfMemory naming `what` and
 // the `bytes` it needed.
@@ -146,7 +145,7 @@ void allocating(const char* what, long double bytes, F&& fill) {
   try {
     fill();
   } catch (const std::bad_alloc&) {
-    throw OutOfMemory(std::string("out of memory: the copy of ") + what + " needs " + byte_text(bytes));
+    throw OutOfMemory(std::string("out of memory: the copy of ") + what + " needs " + size_text(bytes));
   }
 }
 

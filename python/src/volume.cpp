@@ -37,7 +37,7 @@ std::shared_ptr<Volume> zeros(const py::handle& shape, const py::handle& dtype, 
     v->grid.allocate({dims[0], dims[1], dims[2]}, type);
   } catch (const std::bad_alloc&) {
     throw OutOfMemory("out of memory: a Volume of shape (" + std::to_string(dims[0]) + ", " + std::to_string(dims[1]) +
-                      ", " + std::to_string(dims[2]) + ") " + scalar_type_name(type) + " needs " + byte_text(bytes));
+                      ", " + std::to_string(dims[2]) + ") " + scalar_type_name(type) + " needs " + size_text(bytes));
   }
   v->grid.name = name;
   return v;

@@ -18,20 +18,23 @@ std::uint64_t point_bytes(std::uint64_t field_components) {
   return saturating_mul(2, saturating_add(12, saturating_mul(4, field_components)));
 }
 
-// A size with the unit that shows it: bytes below 1 KiB, otherwise KiB,
-// MiB ... with four significant digits.
-std::string size_text(std::uint64_t bytes) {
-  if (bytes < 1024) return std::to_string(bytes) + (bytes == 1 ? " byte" : " bytes");
-  static const char* const units[] = {"KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
-  double v = static_cast<double>(bytes) / 1024;
+}  // namespace
+
+// Bytes below 1 KiB, otherwise KiB, MiB ... with four significant digits;
+// long double so that a size past 2^64 (a zero-stride view's claim) prints.
+std::string size_text(long double bytes) {
+  if (bytes < 1024) {
+    const auto n = static_cast<unsigned long long>(bytes);
+    return std::to_string(n) + (n == 1 ? " byte" : " bytes");
+  }
+  static const char* const units[] = {"KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB", "YiB"};
+  long double v = bytes / 1024;
   int u = 0;
-  while (v >= 1024 && u < 5) v /= 1024, ++u;
+  while (v >= 1024 && u < 7) v /= 1024, ++u;
   char b[64];
-  std::snprintf(b, sizeof b, "%.4g %s", v, units[u]);  // v < 1024: never an exponent
+  std::snprintf(b, sizeof b, "%.4Lg %s", v, units[u]);
   return b;
 }
-
-}  // namespace
 
 std::uint64_t saturating_mul(std::uint64_t a, std::uint64_t b) {
   if (a != 0 && b > UINT64_MAX / a) return UINT64_MAX;

@@ -30,6 +30,10 @@ std::uint64_t default_memory_budget();
 void check_work(const WorkEstimate& work, std::uint64_t budget, const std::string& what,
                 std::uint64_t max_points = UINT64_MAX, std::uint64_t max_cells = UINT64_MAX);
 
+// A size with the unit that shows it: "512 bytes", "22.69 KiB", "1.278 GiB"
+// (four significant digits), for every message that names a size.
+std::string size_text(long double bytes);
+
 // Throws LimitError "<what> need about B, more than the L of --max-memory
 // ..." when `bytes` pass `budget`; sizes in bytes, KiB, MiB ... as they
 // show the two apart.
