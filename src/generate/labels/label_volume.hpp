@@ -25,6 +25,7 @@ struct LabelVolume {
   std::vector<LabelIndex> index;
   Id first_plane = 0;
   bool window = false;  // generators then also keep each point's key (LabelSurface::keys)
+  bool keep_keys = false;  // the same in memory (multilod chunks need every point's key)
   // --coarsen: generators give every point its coarse key (LabelSurface::coarse).
   bool coarse_keys = false;
   bool per_label = false;
@@ -113,6 +114,9 @@ struct LabelSurface {
   std::vector<std::uint64_t> keys;
   // Per point, its coarse key (LabelVolume::coarse_keys).
   std::vector<std::uint64_t> coarse;
+  // Per point (optional): 1 keeps its coarse point even where no face is
+  // left on it (a chunk's face points, labels_multilod.hpp).
+  std::vector<std::uint8_t> keep;
 };
 
 // Appends the parts (their own points each) to `out`, in order.
@@ -144,7 +148,8 @@ SurfaceMesh finish_label_mesh(LabelSurface& surface, const LabelVolume& volume, 
 // --coarsen (label_coarsen.cpp): merges the points by coarse key, averaging
 // their positions; drops faces that collapse and cancels faces of one label
 // pair on the same three points facing opposite ways. Keeps each face's pair
-// and cell fields.
+// and cell fields. Leaves `keys` the coarse keys of the points kept
+// (increasing).
 void coarsen_label_surface(LabelSurface& surface, LabelStats& stats);
 
 // Smooths the surface's points in place (label_smoothing.cpp): Jacobi

@@ -139,7 +139,7 @@ void weld_and_append(const LabelVolume& vol, const std::vector<std::uint64_t>& c
     out.junction[at] = n >= 3;
     if (vol.coarse_keys) out.coarse[at] = vol.part_key(static_cast<std::uint64_t>(p), part_label);
   }, 1024);
-  if (vol.window) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
+  if (vol.window || vol.keep_keys) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
 }
 
 }  // namespace

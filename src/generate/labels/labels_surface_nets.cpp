@@ -452,7 +452,7 @@ void weld_and_append(const LabelVolume& vol, const Box& box, int only, Soup<K>& 
                      [&](Id i) { out.mesh.connectivity[c0 + static_cast<std::size_t>(i)] = base + groups.index_map[i]; });
   out.pair.insert(out.pair.end(), soup.pair.begin(), soup.pair.end());
   append_points(vol, box, only, groups.unique_keys, out);
-  if (vol.window) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
+  if (vol.window || vol.keep_keys) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
 }
 
 Box whole(const LabelVolume& vol) { return Box{{0, 0, 0}, vol.dims}; }

@@ -1,0 +1,116 @@
+#pragma once
+// Multi-resolution label surfaces cut into chunks (issue 37): for every
+// segment (selected label) and every lod-0 chunk, the piece of the segment's
+// surface inside the chunk at each level of detail. The io layer writes them
+// as Neuroglancer's "neuroglancer_multilod_draco" (io/neuroglancer.hpp); the
+// pieces here are its ChunkPiece, field for field.
+//
+// Coordinates ("stored model" space): grid index space, sample i at i. The
+// surfaces of labels.hpp reach half a spacing past the grid (the padding),
+// so the chunk grid starts one sample before it: lod-0 chunk (i, j, k) is
+// the box  -1 + [i, j, k] * chunk_shape ... + chunk_shape, and
+// chunks = ceil((dims + 1) / chunk_shape) per axis cover [-1, dims].
+//
+// Level 0: each segment's own closed surface (LabelOptions::per_label),
+// welded and smoothed as contour_labels makes it, then clipped at the chunk
+// planes. A coordinate of a surface point that falls exactly on a chunk
+// plane (surface nets clamps points onto sample planes) is moved one float
+// step down first, so a point lies on a plane only where a triangle crosses
+// it. A point made by clipping is computed from the segment's points in key
+// order (an edge's two ends, or a triangle's three points for a point on a
+// chunk edge line), so every chunk that has it computes the same bits; so
+// two neighbouring chunks have the same points on their common face.
+//
+// Level k >= 1: the chunk's level k-1 piece, points merged by one KEY-REDUCE
+// (label_coarsen.cpp: positions averaged in key order, collapsed faces
+// dropped, opposite faces on the same points cancelled) over keys = the
+// nearest point of the grid of spacing 2^k (relative to the chunk's corner),
+// except that points on a face of the chunk merge only with points on that
+// face (rounded within it) and points on a box edge only along that edge.
+// Points on the chunk's faces are kept even when no triangle is left on
+// them, so two neighbouring chunks have the same points on their common face
+// at every level, with no data from each other.
+//
+// Point keys (unique within a segment and level, equal in every chunk that
+// has the point; bits 61-63 a class):
+//   level 0, class 0: the generator's point. Surface nets (per label):
+//     ((z << 36 | y << 18 | x) << 4) | s with (x, y, z) the padded grid cell,
+//     s the loop (0-3) or 4 + 2 * axis + arc for a face point; discrete MC:
+//     ((z << 36 | y << 18 | x) << 2) | axis, the padded grid edge.
+//   level 0, classes 1-3: made on a chunk plane normal to axis class-1;
+//     4-6: on a chunk edge line along axis class-4. Then
+//     (cz << 43 | cy << 25 | cx << 7) | rank: the unit cell of the padded
+//     grid holding the point (floor), and its rank among that cell's points
+//     of the class, by the points they are made from.
+//   level k >= 1: class 0 inside the chunk, 1-3 on a face normal to
+//     axis class-1, 4-6 on a chunk edge line along axis class-4; then three
+//     20-bit fields (z << 40 | y << 20 | x): along a free axis
+//     chunk * (R + 1) + round((coordinate - chunk corner) / 2^k) with
+//     R = ceil(chunk_shape / 2^k), along a plane's axis plane * (R + 1).
+// So volumes are limited to 2^18 - 2 samples along an axis (LimitError).
+//
+// Chunk tasks: multilod_chunk_pieces meshes the chunk's box grown by
+// multilod_halo samples, enough that every point the chunk's triangles use
+// is smoothed exactly as in the whole volume (a smoothing step moves a point
+// from its neighbours, at most one cell away; the arithmetic runs over
+// neighbours in key order, which any sub-volume keeps), so its pieces equal
+// multilod_pieces' for that chunk bit for bit.
+//
+// Refused (InputError): coarsen (the levels coarsen), negative labels
+// (segment ids are unsigned), a chunk shape below 2 or a level count below 1,
+// chunks outside the grid.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "keymesh/generate/labels/labels.hpp"
+#include "keymesh/mesh/image_grid.hpp"
+
+namespace keymesh::generate {
+
+struct MultilodOptions {
+  LabelOptions labels;  // method, selection, background, smoothing (per_label implied)
+  std::array<Id, 3> chunk_shape{32, 32, 32};
+  int lods = 3;
+};
+
+// The chunk grid of a volume of `dims` samples.
+struct MultilodGrid {
+  std::array<Id, 3> chunk_shape{32, 32, 32};
+  std::array<Id, 3> chunks{1, 1, 1};
+  std::array<double, 3> grid_origin{-1, -1, -1};  // stored model coordinates of chunk (0, 0, 0)
+  int lods = 1;
+  double plane(int axis, Id index) const { return grid_origin[axis] + static_cast<double>(index * chunk_shape[axis]); }
+};
+
+// One lod-0 chunk's share of one segment's surface at one level of detail
+// (io::neuroglancer::ChunkPiece).
+struct LabelPiece {
+  std::uint64_t segment = 0;
+  std::uint32_t lod = 0;
+  std::array<std::uint32_t, 3> chunk{0, 0, 0};
+  std::vector<std::uint64_t> point_keys;  // increasing
+  std::vector<float> points;              // x,y,z per point, inside the chunk's box
+  std::vector<std::uint32_t> triangles;   // 3 per triangle, outward normals
+};
+
+MultilodGrid multilod_grid(const std::array<Id, 3>& dims, const MultilodOptions& options);
+
+// Samples a chunk task reads past its chunk's box along each axis.
+Id multilod_halo(const MultilodOptions& options);
+
+// Every chunk's pieces, meshing the whole volume once; sorted by (segment,
+// lod, chunk z, y, x). Pieces with no points are left out.
+std::vector<LabelPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options);
+
+// One chunk's pieces (a chunk task), from the chunk's box and its halo of
+// `grid` only: equal to the pieces of multilod_pieces for that chunk.
+std::vector<LabelPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
+                                              const std::array<Id, 3>& chunk);
+
+// The chunks whose pieces can change when the samples inside `changed`
+// chunks change: those within the halo's reach, in increasing (z, y, x).
+std::vector<std::array<Id, 3>> multilod_affected_chunks(const MultilodGrid& grid, const MultilodOptions& options,
+                                                        const std::vector<std::array<Id, 3>>& changed);
+
+}  // namespace keymesh::generate

@@ -1,0 +1,266 @@
+// A segment's surface cut into lod-0 chunk pieces (see
+// keymesh/generate/labels/labels_multilod.hpp): every triangle that meets a
+// chunk's box is clipped to it (Sutherland-Hodgman over the box's six
+// planes); a point the clipping makes is named by what it is made from (an
+// edge of the triangle and a plane, or the triangle and two planes: a point
+// on a chunk edge line) and placed from those points in key order, so every
+// chunk that makes it gets the same bits. Sides are decided on these
+// positions, and no point lies on a plane it was not made on (the surface's
+// points were moved off the planes, and a made coordinate landing on one
+// moves one float step down), so the chunks on either side of a plane cut a
+// triangle at the same points.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <tuple>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/keyreduce/groups.hpp"
+#include "label_chunks.hpp"
+
+namespace keymesh::generate::detail {
+
+namespace {
+
+constexpr int kClassShift = 61;
+constexpr int kCellBits = 18;
+constexpr int kRankBits = 7;
+
+// A point of a clipped polygon: what it is made from, and where it lies.
+struct ClipPoint {
+  int kind = 0;                           // 0 a surface point, 1 an edge cut by a plane, 2 a triangle by two planes
+  int axis[2] = {0, 0};                   // the planes' axes (kind 2: increasing)
+  double plane[2] = {0, 0};               // their coordinates
+  std::uint64_t from[3] = {0, 0, 0};      // keys of the surface points it is made from, increasing
+  float p[3] = {0, 0, 0};
+  auto name() const { return std::tie(kind, axis[0], axis[1], plane[0], plane[1], from[0], from[1], from[2]); }
+};
+
+// Where a polygon side runs: along an edge of the triangle (its ends), or
+// along a plane it was cut at.
+struct Side {
+  bool on_plane = false;
+  int axis = 0;
+  double plane = 0;
+  std::uint32_t a = 0, b = 0;
+};
+
+struct Clipper {
+  const SegmentSurface& s;
+  const MultilodGrid& grid;
+  std::uint32_t tri[3];  // the triangle's points, in key order
+
+  const float* at(std::uint32_t i) const { return s.points.data() + 3 * static_cast<std::size_t>(i); }
+
+  float settle(int axis, double v) const {
+    const float f = static_cast<float>(v);
+    return on_chunk_plane(grid, axis, f) ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+  }
+
+  ClipPoint surface_point(std::uint32_t i) const {
+    ClipPoint c;
+    c.from[0] = s.keys[i];
+    std::copy_n(at(i), 3, c.p);
+    return c;
+  }
+
+  // Edge (a, b) cut by the plane `axis` = x.
+  ClipPoint edge_cut(std::uint32_t a, std::uint32_t b, int axis, double x) const {
+    if (s.keys[b] < s.keys[a]) std::swap(a, b);
+    ClipPoint c;
+    c.kind = 1;
+    c.axis[0] = c.axis[1] = axis;
+    c.plane[0] = c.plane[1] = x;
+    c.from[0] = s.keys[a], c.from[1] = s.keys[b];
+    const float *pa = at(a), *pb = at(b);
+    const double t = (x - pa[axis]) / (static_cast<double>(pb[axis]) - pa[axis]);
+    for (int d = 0; d < 3; ++d)
+      c.p[d] = d == axis ? static_cast<float>(x) : settle(d, pa[d] + t * (static_cast<double>(pb[d]) - pa[d]));
+    return c;
+  }
+
+  // The triangle cut by the planes axis0 = x0 and axis1 = x1 (a point on a
+  // chunk edge line).
+  ClipPoint line_point(int axis0, double x0, int axis1, double x1) const {
+    if (axis1 < axis0) std::swap(axis0, axis1), std::swap(x0, x1);
+    ClipPoint c;
+    c.kind = 2;
+    c.axis[0] = axis0, c.axis[1] = axis1;
+    c.plane[0] = x0, c.plane[1] = x1;
+    for (int m = 0; m < 3; ++m) c.from[m] = s.keys[tri[m]];
+    const float *a = at(tri[0]), *b = at(tri[1]), *q = at(tri[2]);
+    double e1[3], e2[3];
+    for (int d = 0; d < 3; ++d) e1[d] = static_cast<double>(b[d]) - a[d], e2[d] = static_cast<double>(q[d]) - a[d];
+    const double r0 = x0 - a[axis0], r1 = x1 - a[axis1];
+    const double det = e1[axis0] * e2[axis1] - e2[axis0] * e1[axis1];
+    const int f = 3 - axis0 - axis1;
+    double v = (static_cast<double>(a[f]) + b[f] + q[f]) / 3.0;  // a triangle along the line: its centroid's
+    if (det != 0.0) {
+      const double u = (r0 * e2[axis1] - e2[axis0] * r1) / det, w = (e1[axis0] * r1 - r0 * e1[axis1]) / det;
+      v = a[f] + u * e1[f] + w * e2[f];
+    }
+    c.p[axis0] = static_cast<float>(x0), c.p[axis1] = static_cast<float>(x1), c.p[f] = settle(f, v);
+    return c;
+  }
+
+  // Keeps the part of the polygon on one side of the plane axis = x (below:
+  // coordinates <= x), in place.
+  void clip(std::vector<ClipPoint>& poly, std::vector<Side>& sides, int axis, double x, bool below) const {
+    auto inside = [&](const ClipPoint& c) { return below ? c.p[axis] <= x : c.p[axis] >= x; };
+    std::vector<ClipPoint> out;
+    std::vector<Side> out_sides;
+    const std::size_t n = poly.size();
+    for (std::size_t j = 0; j < n; ++j) {
+      const ClipPoint& P = poly[j];
+      const ClipPoint& Q = poly[(j + 1) % n];
+      const Side& side = sides[j];
+      const bool in_p = inside(P), in_q = inside(Q);
+      if (in_p) out.push_back(P), out_sides.push_back(side);
+      if (in_p == in_q) continue;
+      out.push_back(side.on_plane ? line_point(side.axis, side.plane, axis, x) : edge_cut(side.a, side.b, axis, x));
+      Side next = side;
+      if (in_p) next = Side{true, axis, x, 0, 0};
+      out_sides.push_back(next);
+    }
+    poly.swap(out);
+    sides.swap(out_sides);
+  }
+};
+
+std::uint64_t cell_key(const ClipPoint& c, const MultilodGrid& grid) {
+  const int cls = c.kind == 1 ? 1 + c.axis[0] : 4 + (3 - c.axis[0] - c.axis[1]);
+  std::uint64_t key = static_cast<std::uint64_t>(cls) << kClassShift;
+  for (int d = 0; d < 3; ++d) {
+    const double cell = std::floor(static_cast<double>(c.p[d]) - grid.grid_origin[d]);
+    if (!(cell >= 0 && cell < static_cast<double>(1 << kCellBits)))
+      throw LimitError("labels: a surface point at " + std::to_string(c.p[d]) + " is past the supported " +
+                       std::to_string((1 << kCellBits) - 2) + " samples along an axis of a multilod output");
+    key |= static_cast<std::uint64_t>(cell) << (kRankBits + kCellBits * d);
+  }
+  return key;
+}
+
+// Keys of the corners: a surface point's own; a made point its cell's key
+// and its rank there among the distinct made points by name.
+std::vector<std::uint64_t> corner_keys(const std::vector<ClipPoint>& corners, const MultilodGrid& grid) {
+  std::vector<std::uint64_t> keys(corners.size());
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> made;  // (cell key, corner)
+  for (std::size_t c = 0; c < corners.size(); ++c) {
+    if (corners[c].kind == 0) {
+      keys[c] = corners[c].from[0];
+    } else {
+      made.emplace_back(cell_key(corners[c], grid), static_cast<std::uint32_t>(c));
+    }
+  }
+  std::sort(made.begin(), made.end(), [&](const auto& x, const auto& y) {
+    return x.first != y.first ? x.first < y.first : corners[x.second].name() < corners[y.second].name();
+  });
+  std::uint64_t rank = 0;
+  for (std::size_t m = 0; m < made.size(); ++m) {
+    if (m > 0) {
+      const bool same_cell = made[m].first == made[m - 1].first;
+      const bool same_point = same_cell && corners[made[m].second].name() == corners[made[m - 1].second].name();
+      rank = !same_cell ? 0 : same_point ? rank : rank + 1;
+    }
+    if (rank >= (1u << kRankBits))
+      throw LimitError("labels: more than 128 points made by clipping in one cell of a multilod output");
+    keys[made[m].second] = made[m].first | rank;
+  }
+  return keys;
+}
+
+}  // namespace
+
+bool on_chunk_plane(const MultilodGrid& grid, int axis, float v) {
+  const double d = (static_cast<double>(v) - grid.grid_origin[axis]) / static_cast<double>(grid.chunk_shape[axis]);
+  return d == std::floor(d);
+}
+
+void move_off_chunk_planes(SegmentSurface& surface, const MultilodGrid& grid) {
+  for (std::size_t i = 0; i < surface.points.size(); ++i) {
+    const int axis = static_cast<int>(i % 3);
+    float& v = surface.points[i];
+    if (on_chunk_plane(grid, axis, v)) v = std::nextafter(v, -std::numeric_limits<float>::infinity());
+  }
+}
+
+ChunkTriangles triangles_by_chunk(const SegmentSurface& s, const MultilodGrid& grid) {
+  std::vector<std::uint64_t> chunk_of;  // one pair per (chunk, triangle)
+  std::vector<std::uint32_t> triangle_of;
+  const Id triangles = static_cast<Id>(s.triangles.size() / 3);
+  for (Id t = 0; t < triangles; ++t) {
+    Id lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      float mn = std::numeric_limits<float>::infinity(), mx = -mn;
+      for (int m = 0; m < 3; ++m) {
+        const float v = s.points[3 * static_cast<std::size_t>(s.triangles[3 * t + m]) + d];
+        mn = std::min(mn, v), mx = std::max(mx, v);
+      }
+      auto index = [&](float v) {
+        const double c = std::floor((static_cast<double>(v) - grid.grid_origin[d]) / static_cast<double>(grid.chunk_shape[d]));
+        return std::clamp<Id>(static_cast<Id>(c), 0, grid.chunks[d] - 1);
+      };
+      lo[d] = index(mn), hi[d] = index(mx);
+    }
+    for (Id z = lo[2]; z <= hi[2]; ++z)
+      for (Id y = lo[1]; y <= hi[1]; ++y)
+        for (Id x = lo[0]; x <= hi[0]; ++x) {
+          chunk_of.push_back(static_cast<std::uint64_t>(x + grid.chunks[0] * (y + grid.chunks[1] * z)));
+          triangle_of.push_back(static_cast<std::uint32_t>(t));
+        }
+  }
+  ChunkTriangles out;
+  const std::uint64_t top = chunk_of.empty() ? 0 : *std::max_element(chunk_of.begin(), chunk_of.end());
+  const auto g = keyreduce::partition_dense(chunk_of.data(), static_cast<Id>(chunk_of.size()), top + 1,
+                                            keyreduce::Order::Build);
+  out.offsets.assign(g.offsets.begin(), g.offsets.end());
+  if (out.offsets.empty()) out.offsets.push_back(0);
+  for (std::uint64_t c : g.unique_keys) out.chunk.push_back(static_cast<Id>(c));
+  out.triangles.resize(triangle_of.size());
+  for (std::size_t j = 0; j < g.order.size(); ++j) out.triangles[j] = triangle_of[g.order[j]];
+  return out;
+}
+
+LabelPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
+                         const std::uint32_t* triangles, Id count) {
+  double lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) lo[d] = grid.plane(d, chunk[d]), hi[d] = grid.plane(d, chunk[d] + 1);
+  std::vector<ClipPoint> corners;
+  std::vector<ClipPoint> poly;
+  std::vector<Side> sides;
+  for (Id j = 0; j < count; ++j) {
+    const std::uint32_t* t = s.triangles.data() + 3 * static_cast<std::size_t>(triangles[j]);
+    Clipper clipper{s, grid, {t[0], t[1], t[2]}};
+    std::sort(clipper.tri, clipper.tri + 3, [&](std::uint32_t a, std::uint32_t b) { return s.keys[a] < s.keys[b]; });
+    poly.clear(), sides.clear();
+    bool inside = true;
+    for (int m = 0; m < 3; ++m) {
+      poly.push_back(clipper.surface_point(t[m]));
+      sides.push_back(Side{false, 0, 0, t[m], t[(m + 1) % 3]});
+      for (int d = 0; d < 3; ++d) inside = inside && poly.back().p[d] > lo[d] && poly.back().p[d] < hi[d];
+    }
+    for (int d = 0; d < 3 && !inside; ++d) {
+      clipper.clip(poly, sides, d, lo[d], false);
+      clipper.clip(poly, sides, d, hi[d], true);
+    }
+    for (std::size_t m = 1; m + 1 < poly.size(); ++m) {  // a fan from the first point
+      corners.push_back(poly[0]);
+      corners.push_back(poly[m]);
+      corners.push_back(poly[m + 1]);
+    }
+  }
+  LabelPiece piece;
+  piece.segment = s.segment;
+  for (int d = 0; d < 3; ++d) piece.chunk[d] = static_cast<std::uint32_t>(chunk[d]);
+  if (corners.empty()) return piece;
+  const std::vector<std::uint64_t> keys = corner_keys(corners, grid);
+  const auto g = keyreduce::partition_sort(keys.data(), static_cast<Id>(keys.size()), 64, keyreduce::Order::Skip);
+  piece.point_keys = g.unique_keys;
+  piece.points.resize(3 * piece.point_keys.size());
+  for (std::size_t c = 0; c < corners.size(); ++c) std::copy_n(corners[c].p, 3, piece.points.begin() + 3 * g.index_map[c]);
+  piece.triangles.assign(g.index_map.begin(), g.index_map.end());
+  return piece;
+}
+
+}  // namespace keymesh::generate::detail

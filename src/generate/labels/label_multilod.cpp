@@ -1,0 +1,262 @@
+// Multilod label surfaces (see keymesh/generate/labels/labels_multilod.hpp):
+// every segment's surface made once on the volume (or on a chunk task's
+// box and halo), smoothed, keyed globally, then cut into chunks and
+// coarsened per chunk (label_chunk_clip.cpp, label_chunk_lods.cpp).
+#include "keymesh/generate/labels/labels_multilod.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <tuple>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/parallel/for_each.hpp"
+#include "label_chunks.hpp"
+#include "label_volume.hpp"
+
+namespace keymesh::generate {
+
+namespace {
+
+using detail::LabelSurface;
+using detail::LabelVolume;
+using detail::SegmentSurface;
+
+constexpr int kCellBits = 18;
+
+void check_multilod_options(const MultilodOptions& o) {
+  detail::check_label_options(o.labels);
+  if (o.labels.coarsen)
+    throw InputError("labels: coarsening does not apply to a multilod output (its levels of detail coarsen)");
+  if (o.lods < 1 || o.lods > 20) throw InputError("labels: " + std::to_string(o.lods) + " levels of detail (1 to 20)");
+  for (int a = 0; a < 3; ++a)
+    if (o.chunk_shape[a] < 2)
+      throw InputError("labels: chunk shape " + std::to_string(o.chunk_shape[a]) + " along " + "xyz"[a] +
+                       " is below 2 samples");
+}
+
+// Padded grid coordinates packed for a point key (labels_multilod.hpp).
+std::uint64_t pack(const Id g[3]) {
+  std::uint64_t key = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (g[a] < 0 || g[a] >= (Id{1} << kCellBits))
+      throw LimitError("labels: a multilod output holds at most " + std::to_string((1 << kCellBits) - 2) +
+                       " samples along an axis");
+    key |= static_cast<std::uint64_t>(g[a]) << (kCellBits * a);
+  }
+  return key;
+}
+
+// The global key of every point of label part s (its keys are those of
+// the label's box, surface nets, or of the view's padded grid, discrete MC);
+// `offset`: the view's padded point 0 in the volume's padded grid.
+std::vector<std::uint64_t> global_keys(const LabelSurface& part, const LabelVolume& vol, std::size_t s,
+                                       LabelMethod method, const std::array<Id, 3>& offset) {
+  std::vector<std::uint64_t> out(part.keys.size());
+  Id lo[3], dims[3];
+  for (int a = 0; a < 3; ++a) lo[a] = vol.box[s][a] - 1, dims[a] = vol.box[s][3 + a] - vol.box[s][a] + 3;
+  const Id cx = dims[0] - 1, cy = dims[1] - 1, cells = cx * cy * (dims[2] - 1);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const Id key = static_cast<Id>(part.keys[i]);
+    Id g[3];
+    if (method == LabelMethod::DiscreteMarchingCubes) {
+      const Id p = key / 3;
+      const Id at[3] = {p % vol.dims[0], (p / vol.dims[0]) % vol.dims[1], p / vol.nxy};
+      for (int a = 0; a < 3; ++a) g[a] = at[a] + offset[a];
+      out[i] = pack(g) << 2 | static_cast<std::uint64_t>(key % 3);
+      continue;
+    }
+    const bool face = key >= 4 * cells;
+    const Id fk = key - 4 * cells;
+    const Id cell = face ? fk / 6 : key / 4;
+    const Id sub = face ? 4 + fk % 6 : key % 4;  // face keys: 2 * (3 * cell + axis) + arc
+    const Id at[3] = {cell % cx, (cell / cx) % cy, cell / (cx * cy)};
+    for (int a = 0; a < 3; ++a) g[a] = lo[a] + at[a] + offset[a];
+    out[i] = pack(g) << 4 | static_cast<std::uint64_t>(sub);
+  }
+  return out;
+}
+
+// Every selected label's closed surface, welded and smoothed as
+// contour_labels(per_label) makes it, with global keys.
+std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelOptions& options,
+                                             const std::array<Id, 3>& offset) {
+  LabelOptions opt = options;
+  opt.per_label = true;
+  LabelVolume vol = detail::scan_labels(view, opt);
+  vol.per_label = true;
+  vol.keep_keys = true;
+  for (detail::LabelIndex l : vol.selected)
+    if (vol.values[l] < 0)
+      throw InputError("labels: label " + std::to_string(vol.values[l]) +
+                       " is negative; Neuroglancer segment ids are unsigned");
+  LabelStats stats;
+  const std::pair<Id, Id> rows{0, vol.dims[2]};
+  std::vector<LabelSurface> parts = opt.method == LabelMethod::SurfaceNets
+                                        ? detail::surface_nets_rows(vol, true, rows, stats)
+                                        : detail::discrete_marching_cubes_rows(vol, rows, stats);
+  std::vector<SegmentSurface> out(parts.size());
+  for (std::size_t s = 0; s < parts.size(); ++s) {
+    detail::smooth_label_surface(parts[s], vol, opt.method, opt.smooth_iterations, opt.relaxation);
+    out[s].segment = static_cast<std::uint64_t>(vol.values[vol.selected[s]]);
+    out[s].keys = global_keys(parts[s], vol, s, opt.method, offset);
+    out[s].points.assign(parts[s].mesh.points.begin(), parts[s].mesh.points.end());
+    out[s].triangles.assign(parts[s].mesh.connectivity.begin(), parts[s].mesh.connectivity.end());
+    parts[s] = LabelSurface{};
+  }
+  return out;
+}
+
+std::array<Id, 3> chunk_index(const MultilodGrid& grid, Id id) {
+  return {id % grid.chunks[0], (id / grid.chunks[0]) % grid.chunks[1], id / (grid.chunks[0] * grid.chunks[1])};
+}
+
+// The pieces of one segment in one chunk, every level.
+std::vector<LabelPiece> chunk_levels(const SegmentSurface& s, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
+                                     const std::uint32_t* triangles, Id count) {
+  std::vector<LabelPiece> out;
+  out.push_back(detail::clip_to_chunk(s, grid, chunk, triangles, count));
+  if (out.back().point_keys.empty()) return {};
+  for (int lod = 1; lod < grid.lods; ++lod) out.push_back(detail::coarser_piece(out.back(), grid));
+  return out;
+}
+
+void sort_pieces(std::vector<LabelPiece>& pieces) {
+  auto order = [](const LabelPiece& p) { return std::tuple(p.segment, p.lod, p.chunk[2], p.chunk[1], p.chunk[0]); };
+  std::sort(pieces.begin(), pieces.end(), [&](const LabelPiece& a, const LabelPiece& b) { return order(a) < order(b); });
+  pieces.erase(std::remove_if(pieces.begin(), pieces.end(), [](const LabelPiece& p) { return p.point_keys.empty(); }),
+               pieces.end());
+}
+
+// A copy of the samples [lo, lo + dims) of `grid`, placed in index space
+// (sample i of the copy at lo + i).
+ImageGrid crop(const ImageGrid& grid, const std::array<Id, 3>& lo, const std::array<Id, 3>& dims) {
+  ImageGrid out;
+  out.allocate(dims, grid.type);
+  out.name = grid.name;
+  const std::size_t size = scalar_size(grid.type);
+  const auto* in = static_cast<const std::byte*>(grid.data());
+  for (Id k = 0; k < dims[2]; ++k)
+    for (Id j = 0; j < dims[1]; ++j)
+      std::memcpy(out.bytes.data() + static_cast<std::size_t>((k * dims[1] + j) * dims[0]) * size,
+                  in + static_cast<std::size_t>(lo[0] + grid.dims[0] * ((lo[1] + j) + grid.dims[1] * (lo[2] + k))) * size,
+                  static_cast<std::size_t>(dims[0]) * size);
+  for (int a = 0; a < 3; ++a) out.origin[a] = static_cast<double>(lo[a]), out.spacing[a] = 1.0;
+  return out;
+}
+
+}  // namespace
+
+MultilodGrid multilod_grid(const std::array<Id, 3>& dims, const MultilodOptions& options) {
+  check_multilod_options(options);
+  MultilodGrid g;
+  g.chunk_shape = options.chunk_shape;
+  g.lods = options.lods;
+  for (int a = 0; a < 3; ++a) g.chunks[a] = (dims[a] + options.chunk_shape[a]) / options.chunk_shape[a];
+  return g;
+}
+
+Id multilod_halo(const MultilodOptions& options) {
+  const Id steps = options.labels.smooth_iterations * (options.labels.method == LabelMethod::SurfaceNets ? 1 : 2);
+  return steps + 4;  // a point of the chunk's triangles is a cell outside at most; stencils read 2 more samples
+}
+
+std::vector<LabelPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options) {
+  const MultilodGrid mg = multilod_grid(grid.dims, options);
+  ImageGrid view;
+  view.dims = grid.dims;
+  view.type = grid.type;
+  view.name = grid.name;
+  view.external = static_cast<const std::byte*>(grid.data());
+  std::vector<SegmentSurface> segments = segment_surfaces(view, options.labels, {0, 0, 0});
+  struct Task {
+    std::size_t segment;
+    Id chunk, first, count;
+  };
+  std::vector<Task> tasks;
+  std::vector<detail::ChunkTriangles> by_chunk(segments.size());
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    detail::move_off_chunk_planes(segments[s], mg);
+    by_chunk[s] = detail::triangles_by_chunk(segments[s], mg);
+    for (std::size_t c = 0; c < by_chunk[s].chunk.size(); ++c)
+      tasks.push_back({s, by_chunk[s].chunk[c], by_chunk[s].offsets[c], by_chunk[s].offsets[c + 1] - by_chunk[s].offsets[c]});
+  }
+  std::vector<std::vector<LabelPiece>> results(tasks.size());
+  parallel::for_each_dynamic(static_cast<Id>(tasks.size()), [&](Id t) {
+    const Task& task = tasks[static_cast<std::size_t>(t)];
+    results[static_cast<std::size_t>(t)] =
+        chunk_levels(segments[task.segment], mg, chunk_index(mg, task.chunk),
+                     by_chunk[task.segment].triangles.data() + task.first, task.count);
+  }, 1);
+  std::vector<LabelPiece> pieces;
+  for (auto& r : results)
+    for (auto& p : r) pieces.push_back(std::move(p));
+  sort_pieces(pieces);
+  return pieces;
+}
+
+std::vector<LabelPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
+                                              const std::array<Id, 3>& chunk) {
+  const MultilodGrid mg = multilod_grid(grid.dims, options);
+  for (int a = 0; a < 3; ++a)
+    if (chunk[a] < 0 || chunk[a] >= mg.chunks[a])
+      throw InputError("labels: chunk " + std::to_string(chunk[0]) + " " + std::to_string(chunk[1]) + " " +
+                       std::to_string(chunk[2]) + " is outside the grid of " + std::to_string(mg.chunks[0]) + " x " +
+                       std::to_string(mg.chunks[1]) + " x " + std::to_string(mg.chunks[2]) + " chunks");
+  const Id halo = multilod_halo(options);
+  std::array<Id, 3> lo{}, dims{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max<Id>(static_cast<Id>(mg.plane(a, chunk[a])) - halo, 0);
+    const Id hi = std::min<Id>(static_cast<Id>(mg.plane(a, chunk[a] + 1)) + halo, grid.dims[a] - 1);
+    dims[a] = hi - lo[a] + 1;
+  }
+  const ImageGrid sub = crop(grid, lo, dims);
+  LabelOptions opt = options.labels;
+  if (!opt.labels.empty()) {  // the selected labels the sub-volume holds
+    const std::vector<std::int64_t> held = detail::distinct_labels(sub);
+    std::erase_if(opt.labels, [&](std::int64_t v) { return !std::binary_search(held.begin(), held.end(), v); });
+    if (opt.labels.empty()) return {};
+  }
+  std::vector<SegmentSurface> segments = segment_surfaces(sub, opt, lo);
+  const Id id = chunk[0] + mg.chunks[0] * (chunk[1] + mg.chunks[1] * chunk[2]);
+  std::vector<LabelPiece> pieces;
+  for (SegmentSurface& s : segments) {
+    detail::move_off_chunk_planes(s, mg);
+    const detail::ChunkTriangles by_chunk = detail::triangles_by_chunk(s, mg);
+    const auto at = std::lower_bound(by_chunk.chunk.begin(), by_chunk.chunk.end(), id);
+    if (at == by_chunk.chunk.end() || *at != id) continue;
+    const std::size_t c = static_cast<std::size_t>(at - by_chunk.chunk.begin());
+    for (auto& p : chunk_levels(s, mg, chunk, by_chunk.triangles.data() + by_chunk.offsets[c],
+                                by_chunk.offsets[c + 1] - by_chunk.offsets[c]))
+      pieces.push_back(std::move(p));
+  }
+  sort_pieces(pieces);
+  return pieces;
+}
+
+std::vector<std::array<Id, 3>> multilod_affected_chunks(const MultilodGrid& grid, const MultilodOptions& options,
+                                                        const std::vector<std::array<Id, 3>>& changed) {
+  const Id halo = multilod_halo(options);
+  std::vector<std::array<Id, 3>> out;
+  for (const auto& c : changed) {
+    Id lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] < 0 || c[a] >= grid.chunks[a])
+        throw InputError("labels: changed chunk " + std::to_string(c[0]) + " " + std::to_string(c[1]) + " " +
+                         std::to_string(c[2]) + " is outside the grid of " + std::to_string(grid.chunks[0]) + " x " +
+                         std::to_string(grid.chunks[1]) + " x " + std::to_string(grid.chunks[2]) + " chunks");
+      const Id reach = 1 + halo / grid.chunk_shape[a];
+      lo[a] = std::max<Id>(c[a] - reach, 0), hi[a] = std::min<Id>(c[a] + reach, grid.chunks[a] - 1);
+    }
+    for (Id z = lo[2]; z <= hi[2]; ++z)
+      for (Id y = lo[1]; y <= hi[1]; ++y)
+        for (Id x = lo[0]; x <= hi[0]; ++x) out.push_back({x, y, z});
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    return std::tie(a[2], a[1], a[0]) < std::tie(b[2], b[1], b[0]);
+  });
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+}  // namespace keymesh::generate
