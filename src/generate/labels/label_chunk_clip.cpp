@@ -53,9 +53,22 @@ struct Clipper {
 
   const float* at(std::uint32_t i) const { return s.points.data() + 3 * static_cast<std::size_t>(i); }
 
+  const double* lo;  // the chunk's box
+  const double* hi;
+  int stage = 0;  // the axis being clipped
+
+  // A made coordinate along `axis`: within the box's open slab along the
+  // axes clipped before (the point lies on a side between points inside it,
+  // and every chunk that makes the point has that slab), one float step down
+  // from a chunk plane along the others (decided later, by its value alone).
   float settle(int axis, double v) const {
     const float f = static_cast<float>(v);
-    return on_chunk_plane(grid, axis, f) ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    if (axis < stage) {
+      const float low = static_cast<float>(lo[axis]), high = static_cast<float>(hi[axis]);
+      return f <= low ? std::nextafter(low, inf) : f >= high ? std::nextafter(high, -inf) : f;
+    }
+    return on_chunk_plane(grid, axis, f) ? std::nextafter(f, -inf) : f;
   }
 
   ClipPoint surface_point(std::uint32_t i) const {
@@ -106,7 +119,8 @@ struct Clipper {
 
   // Keeps the part of the polygon on one side of the plane axis = x (below:
   // coordinates <= x), in place.
-  void clip(std::vector<ClipPoint>& poly, std::vector<Side>& sides, int axis, double x, bool below) const {
+  void clip(std::vector<ClipPoint>& poly, std::vector<Side>& sides, int axis, double x, bool below) {
+    stage = axis;
     auto inside = [&](const ClipPoint& c) { return below ? c.p[axis] <= x : c.p[axis] >= x; };
     std::vector<ClipPoint> out;
     std::vector<Side> out_sides;
@@ -231,7 +245,7 @@ LabelPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, cons
   std::vector<Side> sides;
   for (Id j = 0; j < count; ++j) {
     const std::uint32_t* t = s.triangles.data() + 3 * static_cast<std::size_t>(triangles[j]);
-    Clipper clipper{s, grid, {t[0], t[1], t[2]}};
+    Clipper clipper{s, grid, {t[0], t[1], t[2]}, lo, hi};
     std::sort(clipper.tri, clipper.tri + 3, [&](std::uint32_t a, std::uint32_t b) { return s.keys[a] < s.keys[b]; });
     poly.clear(), sides.clear();
     bool inside = true;

@@ -89,7 +89,7 @@ void expect_chunks_agree(const std::vector<LabelPiece>& pieces, const generate::
     for (std::size_t i = 0; i < p.point_keys.size(); ++i) {
       if (i > 0) ASSERT_LT(p.point_keys[i - 1], p.point_keys[i]);
       for (int a = 0; a < 3; ++a) {
-        ASSERT_GE(p.points[3 * i + a], grid.plane(a, p.chunk[a]));
+        ASSERT_GE(p.points[3 * i + a], grid.plane(a, p.chunk[a])) << "class " << (p.point_keys[i] >> 61) << " lod " << p.lod << " axis " << a << " " << p.points[3*i] << " " << p.points[3*i+1] << " " << p.points[3*i+2];
         ASSERT_LE(p.points[3 * i + a], grid.plane(a, p.chunk[a] + 1));
       }
     }
@@ -272,4 +272,17 @@ TEST(LabelsMultilod, Refusals) {
   s.allocate({4, 4, 4}, ScalarType::Int8);
   reinterpret_cast<std::int8_t*>(s.data())[21] = -3;
   EXPECT_THROW(generate::multilod_pieces(s, o), InputError);
+}
+
+// Many noise volumes, chunk shapes that 2^lod does not divide, both methods.
+TEST(LabelsMultilod, NoiseStress) {
+  for (unsigned seed = 3; seed < 15; ++seed)
+    for (auto method : {generate::LabelMethod::SurfaceNets, generate::LabelMethod::DiscreteMarchingCubes}) {
+      const ImageGrid g = noise(13 + seed % 5, seed);
+      MultilodOptions o = options(method, seed % 2 ? 16 : 5, 4 + seed % 4, 4);
+      o.chunk_shape[1] = 5;
+      const auto pieces = generate::multilod_pieces(g, o);
+      expect_chunks_agree(pieces, generate::multilod_grid(g.dims, o));
+      for (std::uint32_t lod = 0; lod < 4; ++lod) expect_closed(pieces, lod);
+    }
 }
