@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <memory>
 
 #include "command.hpp"
@@ -33,6 +35,15 @@ struct LabelsCli {
   bool coarsen = false;
   RawInputCli raw_input;
   CommonOptions common;
+  // --format precomputed and its options (labels_precomputed.cpp).
+  std::string format;
+  int lods = 3;
+  std::vector<long long> chunk_shape{32, 32, 32};
+  bool sharded = false;
+  std::vector<long long> chunk;
+  bool assemble = false;
+  std::string update;
+  std::vector<CLI::Option*> precomputed_only;  // refused without --format precomputed
 };
 
 LabelsJob job_of(const LabelsCli& o) {
@@ -52,7 +63,69 @@ LabelsJob job_of(const LabelsCli& o) {
   opt.coarsen = o.coarsen;
   if (!o.memory_limit.empty()) parse_size(o.memory_limit, job.memory_limit);  // checked by its validator
   job.common = o.common;
+  PrecomputedJob& pc = job.precomputed;
+  pc.on = o.format == "precomputed";
+  pc.lods = o.lods;
+  for (int a = 0; a < 3; ++a) pc.chunk_shape[a] = o.chunk_shape[static_cast<std::size_t>(a)];
+  pc.sharded = o.sharded;
+  pc.chunk_given = !o.chunk.empty();
+  for (std::size_t a = 0; a < o.chunk.size() && a < 3; ++a) pc.chunk[a] = o.chunk[a];
+  pc.assemble = o.assemble;
   return job;
+}
+
+// --update CHUNKS: "I,J,K;I,J,K..." or @FILE (one "I J K" or "I,J,K" a
+// line, # comments). False, with `why`, for anything else.
+bool parse_chunk_list(const std::string& text, std::vector<std::array<Id, 3>>& out, std::string& why) {
+  std::string list = text;
+  if (!text.empty() && text[0] == '@') {
+    std::ifstream in(text.substr(1));
+    if (!in) return why = "cannot read the chunk list " + text.substr(1), false;
+    std::ostringstream all;
+    for (std::string line; std::getline(in, line);) all << line.substr(0, line.find('#')) << ';';
+    list = all.str();
+  }
+  std::istringstream items(list);
+  for (std::string item; std::getline(items, item, ';');) {
+    std::replace(item.begin(), item.end(), ',', ' ');
+    std::istringstream in(item);
+    std::array<Id, 3> c{};
+    std::string rest;
+    if (item.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (!(in >> c[0] >> c[1] >> c[2]) || (in >> rest))
+      return why = "'" + item + "' is not a chunk I,J,K", false;
+    out.push_back(c);
+  }
+  if (out.empty()) return why = "'" + text + "' names no chunk", false;
+  return true;
+}
+
+// The options --format precomputed refuses, and those only it takes; the
+// exit code (0, or 2 after the message).
+int check_precomputed(const LabelsCli& o, LabelsJob& job) {
+  auto refuse = [](const std::string& why) {
+    std::fprintf(stderr, "keymesh labels: %s\n", printable(why).c_str());
+    return 2;
+  };
+  if (o.format.empty()) {
+    for (const CLI::Option* opt : o.precomputed_only)
+      if (opt->count() > 0) return refuse(opt->get_name() + " needs --format precomputed");
+    return 0;
+  }
+  const std::string not_here = " does not apply to --format precomputed";
+  if (o.coarsen) return refuse("--coarsen" + not_here + " (its levels of detail coarsen)");
+  if (!o.memory_limit.empty()) return refuse("--memory-limit" + not_here + " (run --chunk tasks instead)");
+  if (distributed::size() > 1) return refuse("mpirun" + not_here + " (run --chunk tasks instead)");
+  if ((o.chunk.empty() ? 0 : 1) + (o.assemble ? 1 : 0) + (o.update.empty() ? 0 : 1) > 1)
+    return refuse("--chunk, --assemble and --update exclude each other");
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(o.output, ec) && !fs::is_directory(o.output, ec))
+    return refuse("-o " + o.output + " is not a directory (--format precomputed writes a directory)");
+  if (is_mesh_path(o.output)) return refuse("-o " + o.output + " names a mesh file; --format precomputed writes a directory");
+  std::string why;
+  if (!o.update.empty() && !parse_chunk_list(o.update, job.precomputed.update, why)) return refuse("--update: " + why);
+  return 0;
 }
 
 Id held_rows(const ImageGrid& header) { return generate::LabelSlabs::total_rows(header); }
@@ -158,6 +231,38 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
 
 namespace {
 
+void add_precomputed_options(CLI::App& cmd, LabelsCli& o) {
+  cmd.add_option("--format", o.format,
+                 "output format: omitted, a mesh file named by -o's extension; precomputed: -o is a directory of "
+                 "Neuroglancer multi-resolution meshes (neuroglancer_multilod_draco), one segment per label (its "
+                 "closed surface, as --per-label), cut into chunks with --lods levels of detail; DIR/chunks keeps "
+                 "every chunk's pieces for --chunk tasks, --assemble and --update")
+      ->check(CLI::IsMember({"precomputed"}));
+  o.precomputed_only = {
+      cmd.add_option("--lods", o.lods,
+                     "levels of detail (default 3): level k merges each chunk's points to the grid of spacing 2^k, "
+                     "points on a chunk face only within that face, so neighbouring chunks agree on it")
+          ->check(CLI::Range(1, 20)),
+      cmd.add_option("--chunk-shape", o.chunk_shape,
+                     "samples per lod-0 chunk along x y z (default 32 32 32, at least 2); chunk (i, j, k) covers "
+                     "sample coordinates -1 + (i, j, k) * shape to -1 + (i + 1, j + 1, k + 1) * shape")
+          ->expected(3)
+          ->check(CLI::Range(2LL, 1LL << 20)),
+      cmd.add_flag("--sharded", o.sharded,
+                   "the sharded layout (neuroglancer_uint64_sharded_v1): a few files for many segments"),
+      cmd.add_option("--chunk", o.chunk,
+                     "a chunk task: mesh chunk I J K only (from its box and a halo of samples around it) into "
+                     "DIR/chunks; run --assemble once every chunk is done (the output equals one call's)")
+          ->expected(3)
+          ->check(CLI::NonNegativeNumber),
+      cmd.add_flag("--assemble", o.assemble,
+                   "the final step after the --chunk tasks: write DIR's meshes from every chunk's pieces in DIR/chunks"),
+      cmd.add_option("--update", o.update,
+                     "re-mesh an edit: IN differs from the earlier run's volume only inside CHUNKS ('I,J,K;I,J,K' or "
+                     "@FILE with one 'I J K' a line); recomputes the chunks the edit can reach and rewrites the "
+                     "segments they held or hold in DIR (needs its DIR/chunks); equal to a full run on IN")};
+}
+
 void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   cmd.description("surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys");
   cmd.add_option("input", o.input,
@@ -196,6 +301,7 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
                  "(not streamed: the output mesh); byte-identical to one in-memory run; " +
                      io::accepted_plane_sources() + "; under mpirun -np P each rank streams its own rows")
       ->check(size_validator());
+  add_precomputed_options(cmd, o);
   add_common_options(cmd, o.common);
 }
 
@@ -203,6 +309,8 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
 int run_labels_command(const LabelsCli& o, CommandRun& run) {
   LabelsJob job = job_of(o);
   job.threads = run.threads();
+  if (int rc = check_precomputed(o, job)) return rc;
+  if (job.precomputed.on) return run_labels_precomputed(job);
   if (distributed::size() > 1) return run_distributed_labels(job);
   return run_labels(job);
 }

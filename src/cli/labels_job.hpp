@@ -2,16 +2,30 @@
 // `keymesh labels`: what a run needs once the options are parsed, shared by
 // the single-process command (labels_cmd.cpp) and the ranks of
 // `mpirun -np P keymesh labels` (labels_distributed.cpp).
+#include <array>
 #include <cstddef>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "command.hpp"
 #include "keymesh/generate/labels/labels.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::cli {
+
+// --format precomputed (labels_precomputed.cpp).
+struct PrecomputedJob {
+  bool on = false;
+  int lods = 3;
+  std::array<Id, 3> chunk_shape{32, 32, 32};
+  bool sharded = false;
+  bool chunk_given = false;  // --chunk I J K
+  std::array<Id, 3> chunk{0, 0, 0};
+  bool assemble = false;
+  std::vector<std::array<Id, 3>> update;  // --update: the chunks changed
+};
 
 struct LabelsJob {
   std::string input, output;
@@ -22,6 +36,7 @@ struct LabelsJob {
   std::size_t memory_limit = 0;  // 0: the volume in memory (one process) or a rank's whole slab
   CommonOptions common;
   int threads = 1;
+  PrecomputedJob precomputed;
 };
 
 // Runs f(), naming the input file in the generator's refusals ("labels: ..."
@@ -46,6 +61,10 @@ void check_labels_memory(const LabelsJob& job, const ImageGrid& header, std::pai
 // adds: dims, scalar_type, stream, distributed).
 void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
                           nlohmann::json r, StageTimer& timer);
+
+// --format precomputed: Neuroglancer's multi-resolution meshes in the
+// directory job.output (one call, a chunk task, the assembly or an update).
+int run_labels_precomputed(const LabelsJob& job);
 
 // Collective over the ranks: returns the exit code (every rank the same).
 int run_distributed_labels(const LabelsJob& job);

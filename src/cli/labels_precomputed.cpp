@@ -1,0 +1,186 @@
+// keymesh labels IN -o DIR --format precomputed: Neuroglancer's
+// multi-resolution meshes (generate/labels/labels_multilod.hpp cuts and
+// coarsens the surfaces, io/neuroglancer.hpp writes them). Four routes:
+//   one call           every chunk's pieces, kept under DIR/chunks/, and the output;
+//   --chunk I J K      one chunk's pieces into DIR/chunks/ (a task);
+//   --assemble         the output from every chunk's kept pieces (after the tasks);
+//   --update CHUNKS    the chunks an edit inside CHUNKS can reach recomputed,
+//                      then the segments they held before or hold now rewritten.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "keymesh/core/error.hpp"
+#include "keymesh/generate/labels/labels_multilod.hpp"
+#include "keymesh/generate/labels/labels_stream.hpp"
+#include "keymesh/io/neuroglancer.hpp"
+#include "keymesh/io/volume_io.hpp"
+#include "labels_job.hpp"
+
+namespace keymesh::cli {
+
+namespace {
+
+namespace ng = io::neuroglancer;
+
+generate::MultilodOptions multilod_options(const LabelsJob& job) {
+  generate::MultilodOptions o;
+  o.labels = job.options;
+  o.chunk_shape = job.precomputed.chunk_shape;
+  o.lods = job.precomputed.lods;
+  return o;
+}
+
+ng::MultilodLayout layout_of(const ImageGrid& grid, const generate::MultilodGrid& g, bool sharded) {
+  ng::MultilodLayout layout;
+  for (int a = 0; a < 3; ++a) {
+    layout.chunk_shape[a] = static_cast<std::uint32_t>(g.chunk_shape[a]);
+    layout.chunks[a] = static_cast<std::uint32_t>(g.chunks[a]);
+    layout.grid_origin[a] = static_cast<float>(g.grid_origin[a]);
+    // Stored model coordinates are sample indices: model = origin + spacing * index.
+    layout.transform[4 * a + a] = grid.spacing[a];
+    layout.transform[4 * a + 3] = grid.origin[a];
+  }
+  layout.lods = static_cast<std::uint32_t>(g.lods);
+  layout.sharded = sharded;
+  return layout;
+}
+
+std::vector<ng::ChunkPiece> to_io(std::vector<generate::LabelPiece>&& pieces) {
+  std::vector<ng::ChunkPiece> out(pieces.size());
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    generate::LabelPiece& p = pieces[i];
+    out[i].segment = p.segment;
+    out[i].lod = p.lod;
+    out[i].chunk = p.chunk;
+    out[i].point_keys = std::move(p.point_keys);
+    out[i].points = std::move(p.points);
+    out[i].triangles = std::move(p.triangles);
+  }
+  return out;
+}
+
+std::array<std::uint32_t, 3> to_u32(const std::array<Id, 3>& c) {
+  return {static_cast<std::uint32_t>(c[0]), static_cast<std::uint32_t>(c[1]), static_cast<std::uint32_t>(c[2])};
+}
+
+// The pieces grouped by chunk (they come sorted by segment first).
+std::map<std::array<std::uint32_t, 3>, std::vector<ng::ChunkPiece>> by_chunk(std::vector<ng::ChunkPiece>&& pieces) {
+  std::map<std::array<std::uint32_t, 3>, std::vector<ng::ChunkPiece>> out;
+  for (ng::ChunkPiece& p : pieces) out[p.chunk].push_back(std::move(p));
+  return out;
+}
+
+struct Counts {
+  std::size_t pieces = 0, chunks = 0;
+  std::set<std::uint64_t> segments;
+};
+
+// One call: every chunk's pieces kept (for a later --update), then the output.
+Counts write_everything(const LabelsJob& job, const ImageGrid& grid, const ng::MultilodLayout& layout,
+                        StageTimer& timer) {
+  const auto o = multilod_options(job);
+  std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
+    return naming_input(job, [&] { return generate::multilod_pieces(grid, o); });
+  }));
+  Counts n;
+  n.pieces = pieces.size();
+  for (const auto& p : pieces) n.segments.insert(p.segment);
+  timer.run("write", [&] {
+    ng::write_multilod(job.output, layout, pieces);
+    auto chunks = by_chunk(std::move(pieces));
+    const generate::MultilodGrid g = generate::multilod_grid(grid.dims, o);
+    for (Id z = 0; z < g.chunks[2]; ++z)  // every chunk, empty ones too: the store is complete
+      for (Id y = 0; y < g.chunks[1]; ++y)
+        for (Id x = 0; x < g.chunks[0]; ++x) {
+          const auto c = to_u32({x, y, z});
+          const auto at = chunks.find(c);
+          ng::write_chunk_pieces(job.output, layout, c, at == chunks.end() ? std::vector<ng::ChunkPiece>{} : at->second);
+          ++n.chunks;
+        }
+  });
+  return n;
+}
+
+// --chunk I J K: the chunk's pieces from its box and halo.
+Counts write_one_chunk(const LabelsJob& job, const ImageGrid& grid, const ng::MultilodLayout& layout,
+                       StageTimer& timer) {
+  const std::array<Id, 3> c = job.precomputed.chunk;
+  std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
+    return naming_input(job, [&] { return generate::multilod_chunk_pieces(grid, multilod_options(job), c); });
+  }));
+  Counts n;
+  n.pieces = pieces.size();
+  n.chunks = 1;
+  for (const auto& p : pieces) n.segments.insert(p.segment);
+  timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, to_u32(c), pieces); });
+  return n;
+}
+
+// --update CHUNKS: the reachable chunks recomputed, their segments rewritten.
+Counts update_chunks(const LabelsJob& job, const ImageGrid& grid, const ng::MultilodLayout& layout,
+                     StageTimer& timer) {
+  if (!std::filesystem::is_directory(std::filesystem::path(job.output) / "chunks"))
+    throw InputError(job.output + ": no chunk store (" + job.output +
+                     "/chunks) of an earlier --format precomputed run to update");
+  const auto o = multilod_options(job);
+  const auto affected = naming_input(job, [&] {
+    return generate::multilod_affected_chunks(generate::multilod_grid(grid.dims, o), o, job.precomputed.update);
+  });
+  Counts n;
+  for (const auto& c : affected) {
+    for (const ng::ChunkPiece& p : ng::read_chunk_pieces(job.output, to_u32(c))) n.segments.insert(p.segment);
+    std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
+      return naming_input(job, [&] { return generate::multilod_chunk_pieces(grid, o, c); });
+    }));
+    for (const auto& p : pieces) n.segments.insert(p.segment);
+    n.pieces += pieces.size();
+    timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, to_u32(c), pieces); });
+    ++n.chunks;
+  }
+  timer.run("assemble", [&] {
+    if (!n.segments.empty())
+      ng::assemble_multilod(job.output, layout, std::vector<std::uint64_t>(n.segments.begin(), n.segments.end()));
+  });
+  return n;
+}
+
+}  // namespace
+
+int run_labels_precomputed(const LabelsJob& job) {
+  StageTimer timer;
+  const PrecomputedJob& pc = job.precomputed;
+  const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
+  const ImageGrid grid = timer.run("read", [&] { return io::read_volume(job.input, raw); });
+  check_labels_memory(job, grid, {0, generate::LabelSlabs::total_rows(grid)});
+  const auto o = multilod_options(job);
+  const generate::MultilodGrid g = naming_input(job, [&] { return generate::multilod_grid(grid.dims, o); });
+  const ng::MultilodLayout layout = layout_of(grid, g, pc.sharded);
+  Counts n;
+  const char* route = "one call";
+  if (pc.chunk_given) {
+    n = write_one_chunk(job, grid, layout, timer), route = "chunk";
+  } else if (pc.assemble) {
+    timer.run("assemble", [&] { ng::assemble_multilod(job.output, layout, {}); });
+    route = "assemble";
+  } else if (!pc.update.empty()) {
+    n = update_chunks(job, grid, layout, timer), route = "update";
+  } else {
+    n = write_everything(job, grid, layout, timer);
+  }
+  if (!job.common.quiet)
+    std::fprintf(stderr, "keymesh: %s: %zu segments, %zu pieces of %zu chunks, %d levels of detail -> %s\n", route,
+                 n.segments.size(), n.pieces, n.chunks, pc.lods, printable(job.output).c_str());
+  nlohmann::json r;
+  r.update({{"input", job.input}, {"output", job.output}, {"format", "precomputed"}, {"route", route},
+            {"method", job.method}, {"smooth", job.options.smooth_iterations}, {"lods", pc.lods},
+            {"chunk_shape", g.chunk_shape}, {"chunks", g.chunks}, {"halo", generate::multilod_halo(o)},
+            {"sharded", pc.sharded}, {"segments", n.segments.size()}, {"pieces", n.pieces},
+            {"chunks_written", n.chunks}, {"dims", grid.dims}});
+  finish_report(job.common, std::move(r), job.threads, timer, PeakRss::Include);
+  return 0;
+}
+
+}  // namespace keymesh::cli
