@@ -57,18 +57,18 @@ struct Clipper {
   const double* hi;
   int stage = 0;  // the axis being clipped
 
-  // A made coordinate along `axis`: within the box's open slab along the
-  // axes clipped before (the point lies on a side between points inside it,
-  // and every chunk that makes the point has that slab), one float step down
-  // from a chunk plane along the others (decided later, by its value alone).
+  // A made coordinate along `axis`: the margin inside the box's slab along
+  // the axes clipped before (the point lies on a side between points inside
+  // it, and every chunk that makes the point has that slab), off the chunk
+  // planes along the others (decided later, by its value alone).
   float settle(int axis, double v) const {
     const float f = static_cast<float>(v);
-    constexpr float inf = std::numeric_limits<float>::infinity();
+    const double margin = grid.margin(axis, 0);
     if (axis < stage) {
-      const float low = static_cast<float>(lo[axis]), high = static_cast<float>(hi[axis]);
-      return f <= low ? std::nextafter(low, inf) : f >= high ? std::nextafter(high, -inf) : f;
+      const float low = static_cast<float>(lo[axis] + margin), high = static_cast<float>(hi[axis] - margin);
+      return f < low ? low : f > high ? high : f;
     }
-    return on_chunk_plane(grid, axis, f) ? std::nextafter(f, -inf) : f;
+    return off_chunk_planes(grid, axis, f, margin);
   }
 
   ClipPoint surface_point(std::uint32_t i) const {
@@ -186,16 +186,18 @@ std::vector<std::uint64_t> corner_keys(const std::vector<ClipPoint>& corners, co
 
 }  // namespace
 
-bool on_chunk_plane(const MultilodGrid& grid, int axis, float v) {
-  const double d = (static_cast<double>(v) - grid.grid_origin[axis]) / static_cast<double>(grid.chunk_shape[axis]);
-  return d == std::floor(d);
+float off_chunk_planes(const MultilodGrid& grid, int axis, float v, double margin) {
+  const double cs = static_cast<double>(grid.chunk_shape[axis]);
+  const double plane = grid.grid_origin[axis] + cs * std::round((static_cast<double>(v) - grid.grid_origin[axis]) / cs);
+  const double d = static_cast<double>(v) - plane;
+  if (std::abs(d) >= margin) return v;
+  return static_cast<float>(d > 0 ? plane + margin : plane - margin);
 }
 
 void move_off_chunk_planes(SegmentSurface& surface, const MultilodGrid& grid) {
   for (std::size_t i = 0; i < surface.points.size(); ++i) {
     const int axis = static_cast<int>(i % 3);
-    float& v = surface.points[i];
-    if (on_chunk_plane(grid, axis, v)) v = std::nextafter(v, -std::numeric_limits<float>::infinity());
+    surface.points[i] = off_chunk_planes(grid, axis, surface.points[i], grid.margin(axis, 0));
   }
 }
 

@@ -19,12 +19,13 @@ struct SegmentSurface {
   std::vector<std::uint32_t> triangles;
 };
 
-// Moves every coordinate that lies exactly on a chunk plane one float step
-// down (towards -inf): a point then lies on a chunk plane only where a
-// triangle is cut there.
+// v (along `axis`) at least `margin` from every chunk plane: one closer
+// moves to that distance on its side (one on a plane: below it). A point
+// then lies on a chunk plane only where it was made there, and never rounds
+// onto one in the writer's quantization.
+float off_chunk_planes(const MultilodGrid& grid, int axis, float v, double margin);
+// Every coordinate of the surface's points off the chunk planes (level 0's margin).
 void move_off_chunk_planes(SegmentSurface& surface, const MultilodGrid& grid);
-// Whether v (along `axis`) lies exactly on a chunk plane.
-bool on_chunk_plane(const MultilodGrid& grid, int axis, float v);
 
 // The segment's triangles grouped by the lod-0 chunks their bounding boxes
 // meet: chunk ids (x + chunks_x * (y + chunks_y * z)), increasing, and for
@@ -44,5 +45,16 @@ LabelPiece clip_to_chunk(const SegmentSurface& surface, const MultilodGrid& grid
 
 // The piece one level coarser (lod + 1), from `finer`.
 LabelPiece coarser_piece(const LabelPiece& finer, const MultilodGrid& grid);
+
+// A coarse piece's points on the chunk's box kept there only where the
+// piece's boundary (the directed edges its triangles leave unpaired) holds
+// them: they end a boundary edge on a face of the box. Any other box point
+// (its triangles close up around it: a tube across the face shrunk to a
+// point) moves into the chunk by the level's margin, with a key of its own.
+// A point on an edge line sits at its key's grid point along the line (the
+// four chunks around the line may merge different points into it, so no
+// average). Then every other coordinate keeps the margin from the chunk
+// planes.
+void settle_box_points(LabelPiece& piece, const MultilodGrid& grid);
 
 }  // namespace keymesh::generate::detail

@@ -120,8 +120,6 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
   // cancelled) are dropped, the others renumbered in coarse-key order.
   std::vector<Id> used(static_cast<std::size_t>(m + 1), 0);
   parallel::for_each(3 * faces_out, [&](Id k) { used[conn[static_cast<std::size_t>(k)]] = 1; });
-  for (std::size_t p = 0; p < s.keep.size(); ++p)
-    if (s.keep[p]) used[g.index_map[p]] = 1;
   const Id m_used = parallel::exclusive_scan(used.data(), used.data(), m + 1);
   Array<float> compact(static_cast<std::size_t>(3 * m_used));
   parallel::for_each(m, [&](Id p) {
@@ -144,7 +142,6 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
     if (used[static_cast<std::size_t>(p + 1)] != used[static_cast<std::size_t>(p)])
       s.keys[static_cast<std::size_t>(used[static_cast<std::size_t>(p)])] = g.unique_keys[static_cast<std::size_t>(p)];
   s.coarse.clear();
-  s.keep.clear();
   st.coarsen = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 

@@ -28,6 +28,9 @@ void check_multilod_options(const MultilodOptions& o) {
   detail::check_label_options(o.labels);
   if (o.labels.coarsen)
     throw InputError("labels: coarsening does not apply to a multilod output (its levels of detail coarsen)");
+  if (o.vertex_quantization_bits != 10 && o.vertex_quantization_bits != 16)
+    throw InputError("labels: vertex quantization of " + std::to_string(o.vertex_quantization_bits) +
+                     " bits (Neuroglancer's are 10 and 16)");
   if (o.lods < 1 || o.lods > 20) throw InputError("labels: " + std::to_string(o.lods) + " levels of detail (1 to 20)");
   for (int a = 0; a < 3; ++a)
     if (o.chunk_shape[a] < 2)
@@ -152,6 +155,7 @@ MultilodGrid multilod_grid(const std::array<Id, 3>& dims, const MultilodOptions&
   MultilodGrid g;
   g.chunk_shape = options.chunk_shape;
   g.lods = options.lods;
+  g.vertex_quantization_bits = options.vertex_quantization_bits;
   for (int a = 0; a < 3; ++a) g.chunks[a] = (dims[a] + options.chunk_shape[a]) / options.chunk_shape[a];
   return g;
 }

@@ -114,9 +114,6 @@ struct LabelSurface {
   std::vector<std::uint64_t> keys;
   // Per point, its coarse key (LabelVolume::coarse_keys).
   std::vector<std::uint64_t> coarse;
-  // Per point (optional): 1 keeps its coarse point even where no face is
-  // left on it (a chunk's face points, labels_multilod.hpp).
-  std::vector<std::uint8_t> keep;
 };
 
 // Appends the parts (their own points each) to `out`, in order.

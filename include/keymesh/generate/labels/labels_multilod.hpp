@@ -60,6 +60,7 @@
 // (segment ids are unsigned), a chunk shape below 2 or a level count below 1,
 // chunks outside the grid.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -72,6 +73,10 @@ struct MultilodOptions {
   LabelOptions labels;  // method, selection, background, smoothing (per_label implied)
   std::array<Id, 3> chunk_shape{32, 32, 32};
   int lods = 3;
+  // The writer's quantization (io::neuroglancer::MultilodLayout): a point
+  // not on a chunk plane keeps two quantization steps of its level's node
+  // away from every chunk plane, so that it never rounds onto a node's face.
+  int vertex_quantization_bits = 16;
 };
 
 // The chunk grid of a volume of `dims` samples.
@@ -80,7 +85,13 @@ struct MultilodGrid {
   std::array<Id, 3> chunks{1, 1, 1};
   std::array<double, 3> grid_origin{-1, -1, -1};  // stored model coordinates of chunk (0, 0, 0)
   int lods = 1;
+  int vertex_quantization_bits = 16;
   double plane(int axis, Id index) const { return grid_origin[axis] + static_cast<double>(index * chunk_shape[axis]); }
+  // The distance a point off the chunk planes keeps from them at `lod`: two
+  // quantization steps of a node (chunk_shape * 2^lod).
+  double margin(int axis, int lod) const {
+    return std::ldexp(2.0 * static_cast<double>(chunk_shape[axis]), lod) / (std::ldexp(1.0, vertex_quantization_bits) - 1);
+  }
 };
 
 // One lod-0 chunk's share of one segment's surface at one level of detail
