@@ -16,7 +16,7 @@ DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
   pybind11-dev python3-dev python3-pytest python3-skimage python3-meshio \
   clang-14 libfuzzer-14-dev libclang-rt-14-dev libopenmpi-dev openmpi-bin \
   libgdcm-dev libblosc-dev libdeflate-dev libgmp-dev libtinygltf-dev python3-pydicom python3-zarr \
-  python3-open3d python3-dask python3-distributed
+  python3-open3d python3-dask python3-distributed libdraco-dev draco
 # and those `make bench` adds for its peers, plots and pictures.
 BENCH_PACKAGES = libthrust-dev libtbb-dev libvtk9-dev python3-openvdb python3-matplotlib xvfb hyperfine
 

@@ -34,11 +34,14 @@ void OutputTransaction::stage(std::string temporary, std::string destination) {
   staged_.emplace_back(std::move(temporary), std::move(destination));
 }
 
+void OutputTransaction::stage_removal(std::string destination) { removals_.push_back(std::move(destination)); }
+
 void OutputTransaction::commit() {
   if (done_) return;
   done_ = true;
   if (enclosing_) {
     for (auto& [temporary, destination] : staged_) enclosing_->stage(std::move(temporary), std::move(destination));
+    for (auto& destination : removals_) enclosing_->stage_removal(std::move(destination));
     return;
   }
   // Renames within one directory do not fail short of a vanished directory;
@@ -50,6 +53,9 @@ void OutputTransaction::commit() {
       for (std::size_t j = i; j < staged_.size(); ++j) std::remove(staged_[j].first.c_str());
       throw InputError(staged_[i].second + ": cannot rename temporary file into place: " + why);
     }
+  for (const std::string& destination : removals_)
+    if (std::remove(destination.c_str()) != 0 && errno != ENOENT)
+      throw InputError(destination + ": cannot remove the obsolete output: " + std::strerror(errno));
 }
 
 }  // namespace keymesh::io

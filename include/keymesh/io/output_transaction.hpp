@@ -42,8 +42,14 @@ class OutputTransaction {
   // (two outputs of one command naming the same file).
   void stage(std::string temporary, std::string destination);
 
+  // An output the command makes obsolete (a Neuroglancer segment edited
+  // away): removed at the outermost commit(), after every rename, so that a
+  // failed command leaves it in place. A missing file is no error.
+  void stage_removal(std::string destination);
+
  private:
   std::vector<std::pair<std::string, std::string>> staged_;  // (temporary, destination)
+  std::vector<std::string> removals_;
   OutputTransaction* enclosing_ = nullptr;
   bool done_ = false;
 };
