@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <string>
 
+#include "keymesh/core/error.hpp"
 #include "keymesh/distributed/mpi.hpp"
 
 namespace keymesh::distributed {
@@ -127,6 +129,11 @@ void take_cells(const SurfaceMesh& m, const Share& share, const std::vector<Poin
 }  // namespace
 
 OwnPiece own_piece(const HaloMesh& h, std::pair<Id, Id> rows) {
+  if (h.ghost_face.size() != static_cast<std::size_t>(h.mesh.num_cells()) ||
+      h.order_key.size() != static_cast<std::size_t>(h.mesh.num_points()) || h.row.size() != h.order_key.size())
+    throw InputError("distributed pieces: marks for " + std::to_string(h.ghost_face.size()) + " triangles and " +
+                     std::to_string(h.order_key.size()) + " points, not " + std::to_string(h.mesh.num_cells()) +
+                     " and " + std::to_string(h.mesh.num_points()) + " (internal error)");
   const Share share = share_of(h, rows);
   std::vector<std::uint64_t> keys;
   for (std::size_t p = 0; p < share.held.size(); ++p)
