@@ -5,9 +5,12 @@
 // (distributed/halo_piece.hpp: its triangles, ghost cells, its points
 // numbered by the distributed KEY-REDUCE). Rank 0 writes the index and the
 // report from every rank's entry.
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "labels_job.hpp"
 #include "piece_files.hpp"
@@ -18,6 +21,47 @@
 namespace keymesh::cli {
 
 namespace {
+
+// This rank's share of the report's label pairs, [first, second, points,
+// faces] each: its own triangles of the pair, and the points it owns that a
+// triangle of the pair uses (its halo holds every triangle at such a point).
+// Every point has one owner, so the ranks' shares add up to the one
+// process's counts (generate::label_pair_counts).
+nlohmann::json pair_shares(const generate::LabelPiece& piece, std::pair<Id, Id> rows) {
+  const Field* f = piece.mesh.find_cell_field("boundary_labels");
+  std::map<std::pair<long long, long long>, std::pair<std::vector<PointIndex>, long long>> pairs;
+  const SurfaceMesh& m = piece.mesh;
+  for (Id c = 0; f && c < m.num_cells(); ++c) {
+    auto& [points, faces] = pairs[{static_cast<long long>(f->values[2 * c]), static_cast<long long>(f->values[2 * c + 1])}];
+    faces += piece.ghost_face[static_cast<std::size_t>(c)] ? 0 : 1;
+    for (std::uint64_t k = m.cell_begin(c); k < m.cell_end(c); ++k) {
+      const PointIndex p = m.connectivity[k];
+      if (rows.first <= piece.row[p] && piece.row[p] < rows.second) points.push_back(p);
+    }
+  }
+  nlohmann::json out = nlohmann::json::array();
+  for (auto& [labels, share] : pairs) {
+    std::sort(share.first.begin(), share.first.end());
+    const auto points = std::unique(share.first.begin(), share.first.end()) - share.first.begin();
+    if (points || share.second) out.push_back({labels.first, labels.second, points, share.second});
+  }
+  return out;
+}
+
+// The report's pairs: every rank's shares summed, in increasing pair order.
+nlohmann::json summed_pairs(const nlohmann::json& per_rank) {
+  std::map<std::pair<long long, long long>, std::pair<long long, long long>> sum;
+  for (const auto& e : per_rank)
+    for (const auto& p : e["pairs"]) {
+      auto& [points, faces] = sum[{p[0].get<long long>(), p[1].get<long long>()}];
+      points += p[2].get<long long>();
+      faces += p[3].get<long long>();
+    }
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const auto& [labels, n] : sum)
+    pairs.push_back({{"labels", {labels.first, labels.second}}, {"points", n.first}, {"faces", n.second}});
+  return pairs;
+}
 
 // Rank 0: the summary line and the report, from every rank's own entry.
 void report_pieces(const LabelsJob& job, const ImageGrid& header, const generate::LabelStats& stats,
@@ -44,6 +88,8 @@ void report_pieces(const LabelsJob& job, const ImageGrid& header, const generate
                       {"dims", header.dims}, {"scalar_type", scalar_type_name(header.type)}, {"ranks", ranks}};
   if (job.memory_limit) r["memory_limit"] = job.memory_limit;
   if (opt.coarsen) r["triangles_after"] = triangles;
+  r["pairs"] = summed_pairs(per_rank);
+  for (auto& e : per_rank) e.erase("pairs");
   r["distributed"] = {{"ranks", ranks}, {"output", "pieces"}, {"halo_rows", halo},
                       {"bytes_exchanged", bytes}, {"per_rank", per_rank}};
   r["seconds"] = timer.seconds();
@@ -53,8 +99,8 @@ void report_pieces(const LabelsJob& job, const ImageGrid& header, const generate
 
 // This rank's entry of the report.
 std::vector<std::byte> rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& slabs,
-                                  const distributed::OwnPiece& w, const StageTimer& timer) {
-  const nlohmann::json e = {{"first_row", rows.first}, {"rows", rows.second - rows.first},
+                                  const distributed::OwnPiece& w, nlohmann::json pairs, const StageTimer& timer) {
+  const nlohmann::json e = {{"pairs", std::move(pairs)},{"first_row", rows.first}, {"rows", rows.second - rows.first},
                             {"halo_rows", slabs.stream_stats().halo_rows}, {"slabs", slabs.stream_stats().slabs},
                             {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
                             {"triangles", w.own_triangles},
@@ -85,11 +131,12 @@ void write_labels_pieces(const LabelsJob& job, generate::LabelSlabs& slabs, cons
   distributed::OwnPiece w = timer.run("number", [&] {
     return distributed::own_piece({piece.mesh, piece.ghost_face, piece.order_key, piece.row, piece.segments}, rows);
   });
+  nlohmann::json pairs = job.common.report_path.empty() ? nlohmann::json::array() : pair_shares(piece, rows);
   piece = generate::LabelPiece{};
   timer.run("write", [&] {
     write_piece_files(w.mesh, w.ids, io::PieceGhosts{std::move(w.point_ghosts), std::move(w.cell_ghosts)}, job.output);
   });
-  const auto entries = distributed::gather_bytes(rank_entry(rows, slabs, w, timer));
+  const auto entries = distributed::gather_bytes(rank_entry(rows, slabs, w, std::move(pairs), timer));
   if (distributed::rank() == 0) report_pieces(job, header, slabs.stats(), w.total_points, entries, halo, timer);
 }
 

@@ -9,7 +9,8 @@ the halos, so that no rank sees the whole: P pieces and one index are
 written; VTK's reader gives the pieces, and welded by their GlobalPointIds
 they hold the one process's points in its order with the same bits, and its
 triangles with the same cell fields (the pieces' triangles run rank by rank);
-keymesh's own .pvtp reader welds them the same way; the report says
+keymesh's own .pvtp reader welds them the same way; the report's label pairs
+(faces, distinct points), summed from the ranks' shares, are one process's; the report says
 "output": "pieces" with every rank's peak memory and bytes sent and no
 gather stage; a rank without rows writes an empty piece; a piece that cannot
 be written ends every rank with one message, and no index. Surface nets and
@@ -93,7 +94,8 @@ def welded_by_vtk(index, P, n_points):
 def pieces_equal_one_process(args, ranks=(2, 3), extra=()):
     def fn():
         ref_path = os.path.join(D, "ref.vtp")
-        run("labels", VOL, *RAW, *args, "-o", ref_path, "-q")
+        run("labels", VOL, *RAW, *args, "-o", ref_path, "-q", "--report", ref_path + ".json")
+        ref_pairs = report(ref_path + ".json")["pairs"]
         ref = read_polydata(ref_path)
         ref_pts = ns.vtk_to_numpy(ref.GetPoints().GetData()).astype(np.float32)
         ref_rows = cell_rows(ref, triangles(ref))
@@ -110,6 +112,7 @@ def pieces_equal_one_process(args, ranks=(2, 3), extra=()):
             d = r["distributed"]
             assert d["output"] == "pieces" and d["ranks"] == P and len(d["per_rank"]) == P, d
             assert r["points"] == len(ref_pts) and r["cells"] == len(ref_rows), (r["points"], r["cells"])
+            assert r["pairs"] == ref_pairs and len(ref_pairs) > 3, (r["pairs"], ref_pairs)
             assert "gather" not in r["seconds"] and "merge" not in r["seconds"], r["seconds"]
             for q in d["per_rank"]:
                 assert q["peak_rss_mib"] > 0 and q["bytes_sent"] >= 0 and q["halo_rows"] > 0, q
