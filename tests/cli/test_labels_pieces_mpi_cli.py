@@ -143,6 +143,30 @@ check("--memory-limit on every rank (one row per slab), surface nets per label: 
       pieces_equal_one_process(["--per-label", "--smooth", "3"], (3,), ["--memory-limit", 3 * plane]))
 
 
+def default_smoothing_on_a_tall_volume():
+    """Default smoothing (16 steps: halos of 20 rows, 36 for discrete-mc's
+    Taubin steps) on 162 padded rows over 3 ranks: no rank sees them all."""
+    tall = os.path.join(D, "tall.raw")
+    big = np.concatenate([vol, vol[:, :, ::-1], vol, vol[:, :, ::-1]], axis=2)
+    with open(tall, "wb") as f:
+        f.write(big.tobytes(order="F"))
+    raw = ["--dims", SHAPE[0], SHAPE[1], big.shape[2], "--type", "int16"]
+    for method in ("surfacenets", "discrete-mc"):
+        ref, index = os.path.join(D, f"tall_{method}.vtp"), os.path.join(D, f"tall_{method}.pvtp")
+        run("labels", tall, *raw, "--method", method, "-o", ref, "-q")
+        mpirun(3, "labels", tall, *raw, "--method", method, "-o", index, "-q", "--report", index + ".json")
+        d = report(index + ".json")["distributed"]
+        assert max(q["rows"] + q["halo_rows"] for q in d["per_rank"]) < big.shape[2] + 2, d["per_rank"]
+        a = read_polydata(ref)
+        pts, rows = welded_by_vtk(index, 3, a.GetNumberOfPoints())
+        assert np.array_equal(pts.view(np.uint32), ns.vtk_to_numpy(a.GetPoints().GetData()).view(np.uint32)), method
+        assert np.array_equal(rows, cell_rows(a, triangles(a))), method
+
+
+check("default smoothing (16 steps) on a taller volume, both methods, -np 3: pieces equal one process",
+      default_smoothing_on_a_tall_volume)
+
+
 def thin_volume_rank_without_rows():
     thin = os.path.join(D, "thin.raw")
     open(thin, "wb").write(vol[:, :, 5:6].tobytes(order="F"))
