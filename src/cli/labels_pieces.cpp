@@ -100,7 +100,7 @@ void report_pieces(const LabelsJob& job, const ImageGrid& header, const generate
 // This rank's entry of the report.
 std::vector<std::byte> rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& slabs,
                                   const distributed::OwnPiece& w, nlohmann::json pairs, const StageTimer& timer) {
-  const nlohmann::json e = {{"pairs", std::move(pairs)},{"first_row", rows.first}, {"rows", rows.second - rows.first},
+  const nlohmann::json e = {{"pairs", std::move(pairs)}, {"first_row", rows.first}, {"rows", rows.second - rows.first},
                             {"halo_rows", slabs.stream_stats().halo_rows}, {"slabs", slabs.stream_stats().slabs},
                             {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
                             {"triangles", w.own_triangles},
