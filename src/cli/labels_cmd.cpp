@@ -166,7 +166,9 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   cmd.add_option("-o,--output", o.output,
                  "output mesh (" + io::extensions_of(io::DataKind::Surface, true) +
                      "): .vtp (CellData) and .ply (face properties) keep the cell fields boundary_labels (and label), "
-                     "the others drop them")
+                     "the others drop them; under mpirun -np P, OUT.pvtp: every rank writes its own piece "
+                     "(OUT_<rank>.vtp, GlobalPointIds, ghost cells) and rank 0 the index, nothing gathered; "
+                     "any other file is gathered on rank 0")
       ->required();
   cmd.add_option("--method", o.method,
                  "surfacenets (a point per cell of mixed labels, a quad per edge between two labels, every "
