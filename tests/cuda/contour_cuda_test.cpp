@@ -166,7 +166,9 @@ TEST(BackendContour, GenerateRunsOnTheCpuAndTheBackendLayerChooses) {
 template <class T>
 std::vector<T> host_copy(const cuda::DeviceBuffer& b, Id n) {
   std::vector<T> out(static_cast<std::size_t>(n));
-  if (n) EXPECT_EQ(cudaMemcpy(out.data(), b.get(), out.size() * sizeof(T), cudaMemcpyDeviceToHost), cudaSuccess);
+  if (n) {
+    EXPECT_EQ(cudaMemcpy(out.data(), b.get(), out.size() * sizeof(T), cudaMemcpyDeviceToHost), cudaSuccess);
+  }
   return out;
 }
 
