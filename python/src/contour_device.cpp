@@ -72,8 +72,9 @@ py::tuple device_mesh_to_python(cuda::DeviceMesh&& m) {
   for (cuda::DeviceField& f : m.point_fields)
     point_data[py::str(f.name)] =
         f.components == 1 ? array(std::move(f.values), f4, {m.points}) : array(std::move(f.values), f4, {m.points, 3});
-  return py::make_tuple(array(std::move(m.xyz), f4, {m.points, 3}), array(std::move(m.connectivity), u4, {m.triangles, 3}),
-                        py::none(), point_data, py::dict());
+  py::object points = array(std::move(m.xyz), f4, {m.points, 3});
+  py::object cells = array(std::move(m.connectivity), u4, {m.triangles, 3});
+  return py::make_tuple(points, cells, py::none(), point_data, py::dict());
 }
 
 py::tuple contour_device(const py::object& source, const std::vector<double>& isovalues, const py::object& spacing,

@@ -108,7 +108,9 @@ void register_device_array(py::module_& m) {
       .def_property_readonly("dtype", [](const DeviceArray& a) { return a.dtype; })
       .def_property_readonly("__cuda_array_interface__", &cuda_array_interface)
       .def("__dlpack_device__",
-           [](const DeviceArray& a) { return py::make_tuple(static_cast<int>(a.device.device_type), a.device.device_id); })
+           [](const DeviceArray& a) {
+             return py::make_tuple(static_cast<int>(a.device.device_type), a.device.device_id);
+           })
       .def("__dlpack__", &to_dlpack, py::kw_only(), py::arg("stream") = py::none(),
            py::arg("max_version") = py::none(), py::arg("dl_device") = py::none(), py::arg("copy") = py::none())
       .def("__len__", [](const DeviceArray& a) { return a.shape.empty() ? 0 : a.shape[0]; })

@@ -118,7 +118,8 @@ class DeviceArray {
     if (memory == Memory::Pool)
       KEYMESH_CUDA_CHECK(cudaMallocAsync(reinterpret_cast<void**>(&p_), n * sizeof(T), s), "allocating device memory");
     else
-      KEYMESH_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&p_), n * sizeof(T)), "allocating the mesh's device memory");
+      KEYMESH_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&p_), n * sizeof(T)),
+                         "allocating the mesh's device memory");
   }
   DeviceArray(DeviceArray&& o) noexcept
       : p_(std::exchange(o.p_, nullptr)), n_(o.n_), s_(o.s_), memory_(o.memory_) {}

@@ -219,7 +219,8 @@ def test_backend_cuda_without_gpu_raises_cleanly():
 
 # A CUDA tensor fabricated over host memory: keymesh must refuse it before
 # any kernel reads it (no GPU: none usable; a GPU: not device memory).
-CUDA_REFUSAL = r"^backend='cuda': (no usable CUDA device|no CUDA device|keymesh was built without|.*not in device memory)"
+CUDA_REFUSAL = (r"^backend='cuda': "
+                r"(no usable CUDA device|no CUDA device|keymesh was built without|.*not in device memory)")
 
 
 def test_cuda_dlpack_tensor_is_refused_cleanly():
