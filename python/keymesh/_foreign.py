@@ -104,12 +104,28 @@ def _converter(library: Optional[str]):
     return convert
 
 
+def _torch_ids(convert):
+    """PyTorch imports no uint32 through DLPack before 2.3 (and has few
+    uint32 operations after): point ids come as int64, its index type,
+    widened by PyTorch on the array's device from an int32 view of the same
+    bytes (ids past 2^31 - 1 kept by the mask)."""
+    def convert_ids(array):
+        if np.dtype(array.dtype) != np.uint32:
+            return convert(array)
+        as_int32 = convert(array.view(np.int32))
+        return as_int32.to(dtype=sys.modules["torch"].int64) & 0xFFFFFFFF
+    return convert_ids
+
+
 def in_library(parts: tuple, library: Optional[str]) -> tuple:
     """contour's (points, cells, offsets, point_data, cell_data) as arrays of
-    ``library`` where it has from_dlpack (no copy), else as they are."""
+    ``library`` where it has from_dlpack (no copy; PyTorch's point ids
+    int64, _torch_ids), else as they are."""
     convert = _converter(library)
     if convert is None:
         return parts
+    if library == "torch":
+        convert = _torch_ids(convert)
     points, cells, offsets, point_data, cell_data = parts
     return (convert(points), convert(cells), offsets, {k: convert(v) for k, v in point_data.items()},
             {k: convert(v) for k, v in cell_data.items()})

@@ -114,6 +114,14 @@ void register_device_array(py::module_& m) {
       .def("__dlpack__", &to_dlpack, py::kw_only(), py::arg("stream") = py::none(),
            py::arg("max_version") = py::none(), py::arg("dl_device") = py::none(), py::arg("copy") = py::none())
       .def("__len__", [](const DeviceArray& a) { return a.shape.empty() ? 0 : a.shape[0]; })
+      .def("view", [](const DeviceArray& a, const py::object& dtype) {
+        // The same bytes as another type of the same size (uint32 ids as int32), as numpy's view.
+        const py::dtype to = py::dtype::from_args(dtype);
+        if (to.itemsize() != a.dtype.itemsize())
+          throw py::value_error("keymesh.DeviceArray.view: " + dtype_name(to) + " is not the size of " +
+                                dtype_name(a.dtype));
+        return DeviceArray{a.buffer, a.data, a.device, to, a.shape};
+      }, py::arg("dtype"))
       .def("__repr__", [](const DeviceArray& a) {
         return "keymesh.DeviceArray(shape=" + shape_text(a.shape) + ", dtype=" + dtype_name(a.dtype) +
                ", device=(" + std::to_string(a.device.device_type) + ", " + std::to_string(a.device.device_id) + "))";

@@ -272,6 +272,11 @@ def test_device_array_exports_dlpack_without_a_copy():
     del volume, exported, back
     gc.collect()
     assert watch() is None
+    ids = _ext._device_array_over(np.array([[1, 2**32 - 1]], np.uint32), 1, 0)
+    as_int32 = np.from_dlpack(ids.view(np.int32))
+    assert as_int32.dtype == np.int32 and as_int32.tolist() == [[1, -1]]
+    with pytest.raises(ValueError, match="not the size of"):
+        ids.view(np.float64)
     on_gpu = _ext._device_array_over(np.zeros((5, 3), np.uint32), 2, 1)
     assert on_gpu.__dlpack_device__() == (2, 1)
     cai = on_gpu.__cuda_array_interface__
@@ -281,12 +286,25 @@ def test_device_array_exports_dlpack_without_a_copy():
 def test_torch_cpu_tensor_gives_torch_tensors():
     torch = pytest.importorskip("torch", reason="PyTorch is not installed (not a keymesh dependency)")
     volume = field_of(np.float32)
-    mesh = keymesh.contour(torch.from_numpy(volume), 5.5)
+    tensor = torch.from_numpy(volume)
+    for view in (tensor.permute(2, 0, 1), tensor[::2, 1:], tensor.to(torch.int16)):  # strided, another dtype
+        got, want = keymesh.contour(view, 5.5), keymesh.contour(view.numpy(), 5.5)
+        np.testing.assert_array_equal(got.points.numpy(), want.points)
+        np.testing.assert_array_equal(got.cells.numpy(), want.cells)
+        np.testing.assert_array_equal(got.point_data["Normals"].numpy(), want.point_data["Normals"])
+    mesh = keymesh.contour(tensor, 5.5)
     expected = keymesh.contour(volume, 5.5)
     assert isinstance(mesh.points, torch.Tensor) and mesh.points.device.type == "cpu"
+    assert mesh.cells.dtype == torch.int64  # PyTorch's index type: it has no (usable) uint32
     np.testing.assert_array_equal(mesh.points.numpy(), expected.points)
     np.testing.assert_array_equal(mesh.cells.numpy(), expected.cells)
     np.testing.assert_array_equal(mesh.point_data["Normals"].numpy(), expected.point_data["Normals"])
+    # Ids past 2^31 - 1 stay what they are (an int32 view widened, masked).
+    from keymesh import _foreign
+    ids = np.array([[0, 2**31 - 1, 2**31], [7, 2**32 - 2, 2**32 - 1]], np.uint32)
+    widened = _foreign._torch_ids(torch.from_dlpack)(ids)
+    assert widened.dtype == torch.int64
+    np.testing.assert_array_equal(widened.numpy(), ids.astype(np.int64))
 
 
 # ---- on a GPU (scripts/gpu_check.sh runs these where one is) ----------------
@@ -329,7 +347,7 @@ def test_torch_cuda_round_trip():
     volume = field_of(np.int16)
     expected = keymesh.contour(volume, 40.5)
     mesh = keymesh.contour(torch.from_numpy(volume).cuda(), 40.5)
-    assert isinstance(mesh.points, torch.Tensor) and mesh.points.is_cuda
+    assert isinstance(mesh.points, torch.Tensor) and mesh.points.is_cuda and mesh.cells.dtype == torch.int64
     assert_device_mesh_equals(mesh, expected, lambda t: t.cpu().numpy())
     with pytest.raises(ValueError, match="C- or Fortran-contiguous"):
         keymesh.contour(torch.from_numpy(volume).cuda()[::2], 40.5)
