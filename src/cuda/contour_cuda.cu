@@ -163,7 +163,7 @@ class DeviceArray {
 
 // Stage times from CUDA events recorded on the stream around each stage's
 // launches: the device's clock (a host clock around asynchronous launches
-// would time the launches, classify's always 0). Read once the stream is done.
+// would time the launches, classify's always 0).
 class StageTimes {
  public:
   using Stage = double generate::ContourStats::*;
@@ -180,8 +180,9 @@ class StageTimes {
     KEYMESH_CUDA_CHECK(cudaEventRecord(marks_.back().begin, s_), "recording a timing event");
   }
   void end() { KEYMESH_CUDA_CHECK(cudaEventRecord(marks_.back().end, s_), "recording a timing event"); }
-  // Adds every stage's seconds to st; the stream must be synchronized.
+  // Adds every stage's seconds to st, once the stream is done.
   void add_to(generate::ContourStats& st) const {
+    KEYMESH_CUDA_CHECK(cudaStreamSynchronize(s_), "reading the stage times");
     for (const Mark& m : marks_) {
       float ms = 0;
       KEYMESH_CUDA_CHECK(cudaEventElapsedTime(&ms, m.begin, m.end), "reading a timing event");
@@ -563,9 +564,10 @@ void weld_soup(const DeviceArray<K>& soup, K key_range, int n, const generate::C
   KEYMESH_CUDA_LAUNCHED("grouping");
 }
 
-// The stages in order over device samples. Every device array lives to the
-// end, as the stages allocate them (the pool's high-water mark is the
-// report's peak); the mesh's arrays come from `out`.
+// The stages in order over device samples. The sort's buffers go when
+// weld_soup returns (stream-ordered frees, reused by the next stage's
+// allocations); the other arrays live to the end (the pool's high-water mark
+// is the report's peak); the mesh's arrays come from `out`.
 template <class K, class T>
 DeviceResult contour_typed(const ImageGrid& grid, const T* samples, const generate::ContourOptions& opt,
                            generate::ContourStats& st, Memory out, StageTimes& times, cudaStream_t stream) {
@@ -771,7 +773,10 @@ SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& opt, 
     samples.upload(static_cast<const T*>(grid.data()), samples.size());
     times.end();
     const DeviceResult r = contour_typed<K, T>(grid, samples.get(), opt, st, Memory::Pool, times, session.stream());
-    return download_mesh(grid, opt, r, session.stream());
+    times.begin(&generate::ContourStats::fields);  // the download counts in the fields stage, as it did
+    SurfaceMesh m = download_mesh(grid, opt, r, session.stream());
+    times.end();
+    return m;
   });
   times.add_to(st);
   st.device_peak_bytes = session.peak();
