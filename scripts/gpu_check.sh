@@ -290,4 +290,5 @@ ELAPSED=$(($(date +%s) - START))
 say ""
 say "GPU check: $FAILED failed, ${ELAPSED}s; $OUT/summary.json, $OUT/gpu_check.log"
 grep -hE '"gpu_ms_median"' "$OUT/timing.jsonl" 2>/dev/null | sed -E 's/.*"size": ([0-9]+).*"triangles": ([0-9]+).*"gpu_ms_median": ([0-9.e+-]+).*"gpu_ms_min": ([0-9.e+-]+).*/  sphere \1^3: \2 triangles, median \3 ms, min \4 ms (CUDA events)/' | tee -a "$LOG"
+grep -hE '"device_input_ms_median"' "$OUT/timing.jsonl" 2>/dev/null | sed -E 's/.*"size": ([0-9]+).*"device_input_ms_median": ([0-9.e+-]+).*"device_input_ms_min": ([0-9.e+-]+).*"device_input_identical": ([a-z]+).*/  sphere \1^3, device-resident input: median \2 ms, min \3 ms, same mesh: \4/' | tee -a "$LOG"
 [ $FAILED = 0 ]
