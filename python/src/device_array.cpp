@@ -35,7 +35,7 @@ DLDataType dlpack_type_of(const py::dtype& dtype) {
 // any thread, without the GIL.
 struct Export {
   DLManagedTensor managed{};
-  std::vector<std::int64_t> shape;
+  std::vector<std::int64_t> shape, strides;  // strides in elements, C order (given: DLPack 1.2 wants them)
   std::shared_ptr<void> keep;
 };
 
@@ -63,9 +63,12 @@ py::capsule to_dlpack(const DeviceArray& a, const py::object& /*stream*/, const 
   }
   auto* e = new Export;
   e->shape.assign(a.shape.begin(), a.shape.end());
+  e->strides.resize(e->shape.size());
+  std::int64_t stride = 1;
+  for (std::size_t d = e->shape.size(); d-- > 0;) e->strides[d] = stride, stride *= e->shape[d];
   e->keep = a.buffer;
   e->managed.dl_tensor = DLTensor{a.data, a.device, static_cast<int>(e->shape.size()), dlpack_type_of(a.dtype),
-                                  e->shape.data(), nullptr, 0};
+                                  e->shape.data(), e->strides.data(), 0};
   e->managed.manager_ctx = e;
   e->managed.deleter = [](DLManagedTensor* m) { delete static_cast<Export*>(m->manager_ctx); };
   PyObject* capsule = PyCapsule_New(&e->managed, "dltensor", unused_capsule_destructor);

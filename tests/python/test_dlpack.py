@@ -305,6 +305,10 @@ def test_torch_cpu_tensor_gives_torch_tensors():
     widened = _foreign._torch_ids(torch.from_dlpack)(ids)
     assert widened.dtype == torch.int64
     np.testing.assert_array_equal(widened.numpy(), ids.astype(np.int64))
+    # keymesh.DeviceArray's export as PyTorch reads it (on the GPU, the mesh's arrays go this way).
+    exported = torch.from_dlpack(_ext._device_array_over(expected.points, 1, 0))
+    assert exported.stride() == (3, 1) and exported.data_ptr() == expected.points.ctypes.data
+    np.testing.assert_array_equal(exported.numpy(), expected.points)
 
 
 # ---- on a GPU (scripts/gpu_check.sh runs these where one is) ----------------
