@@ -110,8 +110,7 @@ py::tuple contour_device(const py::object& source, const std::vector<double>& is
   return py::make_tuple(device_mesh_to_python(std::move(mesh)), info);
 }
 
-}  // namespace
-
+// The CLI's option names in a library message said as Python says them.
 std::string in_python_words(std::string message) {
   using Words = std::pair<std::string, std::string>;
   for (const auto& [cli, python] :
@@ -122,6 +121,8 @@ std::string in_python_words(std::string message) {
       message.replace(at, cli.size(), python);
   return message;
 }
+
+}  // namespace
 
 void rethrow_in_python_words() {
   try {
