@@ -88,15 +88,15 @@ ForeignTensor tensor_from_cuda_array_interface(const py::object& obj) {
   ForeignTensor t;
   t.device_type = static_cast<int>(TensorDevice::Cuda);
   t.dtype = py::dtype(field("typestr").cast<std::string>());
-  for (const py::handle d : field("shape").cast<py::tuple>()) t.shape.push_back(d.cast<py::ssize_t>());
-  t.data = reinterpret_cast<void*>(field("data").cast<py::tuple>()[0].cast<std::uintptr_t>());
+  for (const py::handle d : field("shape").cast<py::sequence>()) t.shape.push_back(d.cast<py::ssize_t>());
+  t.data = reinterpret_cast<void*>(field("data").cast<py::sequence>()[0].cast<std::uintptr_t>());
   py::object strides = py::none();
   if (cai.contains("strides")) strides = cai["strides"];
   t.strides.resize(t.shape.size());
   py::ssize_t compact = t.dtype.itemsize();
   for (auto d = static_cast<py::ssize_t>(t.shape.size()) - 1; d >= 0; --d) {
     const auto k = static_cast<std::size_t>(d);
-    t.strides[k] = strides.is_none() ? compact : strides.cast<py::tuple>()[k].cast<py::ssize_t>();
+    t.strides[k] = strides.is_none() ? compact : strides.cast<py::sequence>()[k].cast<py::ssize_t>();
     compact *= t.shape[k];
   }
   if (cai.contains("stream") && !cai["stream"].is_none()) t.ready_after = cai["stream"].cast<std::uintptr_t>();

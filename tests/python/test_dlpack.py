@@ -231,6 +231,8 @@ def test_cuda_dlpack_tensor_is_refused_cleanly():
         keymesh.contour(fake, 5.5)
     with pytest.raises(keymesh.Error, match=CUDA_REFUSAL):
         keymesh.contour(CudaInterfaceOnly(fake.__cuda_array_interface__, fake), 5.5)
+    with pytest.raises(keymesh.Error, match=CUDA_REFUSAL):  # lists where the interface has tuples
+        keymesh.contour(interface_of(volume, shape=list(volume.shape), strides=list(volume.strides)), 5.5)
     with pytest.raises(ValueError, match="backend='cpu' reads host memory"):
         keymesh.contour(fake, 5.5, backend="cpu")
     assert keymesh.contour(volume, 5.5).n_cells > 0
