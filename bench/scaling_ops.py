@@ -7,7 +7,7 @@ measured by `make scaling` (bench/scaling.py) beside the contour:
                  rows, nothing gathered);
   labels weak:   a banded label map 160 x 160 x (64 P + 1) (64 rows per rank),
                  both outputs;
-  coarsened contour: the sphere 256^3 with --coarsen --normals averaged,
+  coarsened contour: the sphere 256^3 with --coarsen --normals average,
                  gathered only (its pieces are refused: docs/decisions/labels-pieces-halo.md).
 
 Every gathered file is checked byte-identical to the single-process run and
@@ -90,7 +90,7 @@ def _labels_series(keymesh, name, volume, ranks, reps, work, rows, progress, mpi
 
 def _coarsen_series(keymesh, sphere, ranks, reps, work, rows, progress, mpirun_cmd):
     base = [keymesh, "contour", sphere, "--dims", "256", "256", "256", "--iso", "90.5", "--coarsen", "--normals",
-            "averaged", "--threads", "1", "--no-scalars", "-q"]
+            "average", "--threads", "1", "--no-scalars", "-q"]
     rep = os.path.join(work, "r.json")
     ref = os.path.join(work, "coarse_ref.ply")
     single = [_run(base + ["-o", ref, "--report", rep], rep, 0, mpirun_cmd) for _ in range(reps)]
@@ -152,7 +152,7 @@ def ops_doc(rows):
     for name, title in (("labels-strong", "Labels, strong: AAL atlas 181 x 217 x 181, 116 labels, "
                                           "surface nets, 16 smoothing steps"),
                         ("labels-weak", "Labels, weak: banded label map 160 x 160 x (64P + 1), 7 labels, 16 smoothing steps"),
-                        ("coarsen", "Coarsened contour: sphere 256^3, --coarsen --normals averaged (gathered)")):
+                        ("coarsen", "Coarsened contour: sphere 256^3, --coarsen --normals average (gathered)")):
         rs = [r for r in rows if r["series"] == name]
         if rs:
             L += [f"## {title}\n"] + _table(rs)
