@@ -93,7 +93,11 @@ TEST_P(NeuroglancerAssembly, UpdateOfTouchedSegmentsEqualsAFullWrite) {
     const auto& was = old_chunks.at(chunk);
     const bool same = now.size() == was.size() && std::equal(now.begin(), now.end(), was.begin(), same_piece);
     if (same) continue;
-    for (const auto& p : ng::read_chunk_pieces(updated.string(), chunk)) touched.insert(p.segment);
+    std::set<std::uint64_t> kept;
+    for (const auto& p : ng::read_chunk_pieces(updated.string(), chunk)) kept.insert(p.segment);
+    const auto listed = ng::kept_segments(updated.string(), chunk);
+    EXPECT_EQ(std::vector<std::uint64_t>(kept.begin(), kept.end()), listed);
+    touched.insert(listed.begin(), listed.end());
     for (const auto& p : now) touched.insert(p.segment);
     ng::write_chunk_pieces(updated.string(), layout, chunk, now);
     ++rerun;
@@ -103,6 +107,7 @@ TEST_P(NeuroglancerAssembly, UpdateOfTouchedSegmentsEqualsAFullWrite) {
   const auto untouched = updated / (GetParam() ? "0.shard" : "3.index");
   const ino_t untouched_inode = inode(untouched);
   ASSERT_GT(rerun, 0);
+  EXPECT_TRUE(ng::kept_segments(fresh.string(), {0, 0, 0}).empty()) << "no task ran there";
   ASSERT_LT(rerun, 36) << "the edit touches some chunks, not all";
   EXPECT_TRUE(touched.count(7)) << "the removed segment is among the touched ones";
   EXPECT_FALSE(touched.count(3));

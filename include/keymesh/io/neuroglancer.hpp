@@ -78,6 +78,12 @@ void write_chunk_pieces(const std::string& dir, const MultilodLayout& layout, co
                         const std::vector<ChunkPiece>& pieces);
 std::vector<ChunkPiece> read_chunk_pieces(const std::string& dir, const std::array<std::uint32_t, 3>& chunk);
 
+// The segments (increasing, once each) of a chunk's kept pieces, read without
+// their points; empty when the chunk's task has not run. Before `--update`
+// re-runs a chunk: these and its new pieces' segments are the `segments`
+// assemble_multilod must rewrite.
+std::vector<std::uint64_t> kept_segments(const std::string& dir, const std::array<std::uint32_t, 3>& chunk);
+
 // The final step: the output from every chunk's kept pieces, equal byte for
 // byte to write_multilod over the same pieces. With `segments` non-empty,
 // only those segments' manifests and data (or the shards holding them,
