@@ -178,7 +178,8 @@ def _decode(data, encoding):
     return gzip.decompress(data) if encoding == "gzip" else data
 
 
-def _shard_location(sharding, segment):
+def shard_location(sharding, segment):
+    """(shard file name, minishard number) of a segment under a sharding spec."""
     h = segment >> sharding["preshift_bits"]
     if sharding["hash"] == "murmurhash3_x86_128":
         h = sharding_hash(h)
@@ -223,7 +224,7 @@ def segment_ids(path):
         if name.endswith(".shard"):
             for minishard in range(1 << sharding["minishard_bits"]):
                 for segment in read_minishard(path, sharding, name, minishard):
-                    assert _shard_location(sharding, segment) == (name, minishard), \
+                    assert shard_location(sharding, segment) == (name, minishard), \
                         f"segment {segment} stored in {name} minishard {minishard}, its hash says otherwise"
                     ids.append(segment)
     return sorted(ids)
@@ -239,7 +240,7 @@ def read_segment_bytes(path, segment, info=None):
             data = f.read()
         return manifest, data
     sharding = info["sharding"]
-    name, minishard = _shard_location(sharding, segment)
+    name, minishard = shard_location(sharding, segment)
     entries = read_minishard(path, sharding, name, minishard)
     assert segment in entries, f"segment {segment} not in {name} minishard {minishard}"
     start, size = entries[segment]

@@ -26,11 +26,12 @@ OutputTransaction::~OutputTransaction() {
 OutputTransaction* OutputTransaction::current() { return g_current; }
 
 void OutputTransaction::stage(std::string temporary, std::string destination) {
-  for (const auto& [t, d] : staged_)
-    if (d == destination || same_file(d, destination)) {
-      std::remove(temporary.c_str());
-      throw InputError(destination + ": written twice by one command (two outputs name the same file)");
-    }
+  // One identity a destination (same_file's test, hashed): a command may
+  // stage a file per segment of a large Neuroglancer output.
+  if (!identities_.insert(file_identity(destination)).second) {
+    std::remove(temporary.c_str());
+    throw InputError(destination + ": written twice by one command (two outputs name the same file)");
+  }
   staged_.emplace_back(std::move(temporary), std::move(destination));
 }
 

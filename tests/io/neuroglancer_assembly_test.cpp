@@ -15,6 +15,8 @@
 #include "keymesh/io/neuroglancer.hpp"
 #include "keymesh/parallel/threads.hpp"
 
+#include <sys/stat.h>
+
 using namespace keymesh;
 using namespace keymesh::tests;
 namespace ng = keymesh::io::neuroglancer;
@@ -41,6 +43,13 @@ std::vector<neuroglancer_dataset::Box> edited_boxes() {
   boxes[1].hi = {15, 13, 14};
   boxes.pop_back();
   return boxes;
+}
+
+// A file's inode: a rewrite through AtomicFile (a rename) changes it.
+ino_t inode(const std::filesystem::path& path) {
+  struct stat st {};
+  EXPECT_EQ(::stat(path.c_str(), &st), 0) << path;
+  return st.st_ino;
 }
 
 bool same_piece(const ng::ChunkPiece& a, const ng::ChunkPiece& b) {
@@ -84,19 +93,32 @@ TEST_P(NeuroglancerAssembly, UpdateOfTouchedSegmentsEqualsAFullWrite) {
     const auto& was = old_chunks.at(chunk);
     const bool same = now.size() == was.size() && std::equal(now.begin(), now.end(), was.begin(), same_piece);
     if (same) continue;
-    for (const auto& p : ng::read_chunk_pieces(updated.string(), chunk)) touched.insert(p.segment);
+    std::set<std::uint64_t> kept;
+    for (const auto& p : ng::read_chunk_pieces(updated.string(), chunk)) kept.insert(p.segment);
+    const auto listed = ng::kept_segments(updated.string(), chunk);
+    EXPECT_EQ(std::vector<std::uint64_t>(kept.begin(), kept.end()), listed);
+    touched.insert(listed.begin(), listed.end());
     for (const auto& p : now) touched.insert(p.segment);
     ng::write_chunk_pieces(updated.string(), layout, chunk, now);
     ++rerun;
   }
+  // Segment 3 lies in chunks the edit leaves alone: an update that patches
+  // (rather than rewrites everything) leaves its files alone.
+  const auto untouched = updated / (GetParam() ? "0.shard" : "3.index");
+  const ino_t untouched_inode = inode(untouched);
   ASSERT_GT(rerun, 0);
+  EXPECT_TRUE(ng::kept_segments(fresh.string(), {0, 0, 0}).empty()) << "no task ran there";
   ASSERT_LT(rerun, 36) << "the edit touches some chunks, not all";
   EXPECT_TRUE(touched.count(7)) << "the removed segment is among the touched ones";
+  EXPECT_FALSE(touched.count(3));
   ng::assemble_multilod(updated.string(), layout, {touched.begin(), touched.end()});
   ng::write_multilod(fresh.string(), layout, after);
   EXPECT_EQ(neuroglancer_files::output_difference(updated, fresh), "");
   if (!GetParam()) {
     EXPECT_FALSE(std::filesystem::exists(updated / "7.index")) << "segment 7's files removed";
+    EXPECT_EQ(inode(untouched), untouched_inode) << "segment 3's manifest not rewritten";
+  } else {
+    EXPECT_NE(inode(untouched), untouched_inode) << "the one shard, holding touched segments, rebuilt";
   }
 }
 
@@ -143,6 +165,14 @@ TEST(NeuroglancerSharding, ManySegmentsFillSeveralShards) {
   EXPECT_NE(files.at("info").find("\"minishard_bits\": 3"), std::string::npos);
   run_chunk_tasks(tasks.string(), layout, pieces);
   ng::assemble_multilod(tasks.string(), layout, {});
+  EXPECT_EQ(neuroglancer_files::output_difference(one_call, tasks), "");
+  // --update of one segment rebuilds its shard only.
+  std::map<std::string, ino_t> before;
+  for (const char* shard : {"0.shard", "1.shard", "2.shard", "3.shard"}) before[shard] = inode(tasks / shard);
+  ng::assemble_multilod(tasks.string(), layout, {pieces.front().segment});
+  int rebuilt = 0;
+  for (const auto& [shard, ino] : before) rebuilt += inode(tasks / shard) != ino;
+  EXPECT_EQ(rebuilt, 1);
   EXPECT_EQ(neuroglancer_files::output_difference(one_call, tasks), "");
 }
 

@@ -28,6 +28,7 @@ using io::neuroglancer::MultilodLayout;
 struct Box {
   std::uint64_t segment;
   std::array<std::uint32_t, 3> lo, hi;  // sample coordinates, lo < hi
+  std::uint32_t max_lod = 31;           // no mesh at coarser lods (a small object coarsened away)
 };
 
 inline MultilodLayout layout(bool sharded = false) {
@@ -41,7 +42,10 @@ inline MultilodLayout layout(bool sharded = false) {
 }
 
 inline std::vector<Box> boxes() {
-  return {{1, {1, 2, 3}, {30, 20, 21}}, {2, {9, 9, 9}, {14, 14, 14}}, {3, {17, 1, 10}, {23, 7, 22}}, {7, {25, 17, 17}, {26, 18, 18}}};
+  // Segment 9 has a mesh at lod 0 only: its lod-1 and lod-2 nodes are listed
+  // empty, as parents; segment 7's vanishes at lod 2.
+  return {{1, {1, 2, 3}, {30, 20, 21}},      {2, {9, 9, 9}, {14, 14, 14}}, {3, {17, 1, 10}, {23, 7, 22}},
+          {9, {3, 12, 3}, {5, 14, 5}, 0}, {7, {25, 17, 17}, {26, 18, 18}, 1}};
 }
 
 // `count` small boxes scattered over the grid (for several shards).
@@ -91,7 +95,7 @@ struct PieceBuilder {
 inline std::vector<ChunkPiece> pieces(const MultilodLayout& l, const std::vector<Box>& bs) {
   std::map<std::tuple<std::uint64_t, std::uint32_t, std::array<std::uint32_t, 3>>, PieceBuilder> built;
   for (const Box& b : bs)
-    for (std::uint32_t lod = 0; lod < l.lods; ++lod)
+    for (std::uint32_t lod = 0; lod < l.lods && lod <= b.max_lod; ++lod)
       for (int axis = 0; axis < 3; ++axis)
         for (std::uint32_t side : {b.lo[axis], b.hi[axis]}) {
           const int u = (axis + 1) % 3, v = (axis + 2) % 3;

@@ -15,6 +15,7 @@
 // gets this by writing through AtomicFile as every writer does. Outside a
 // transaction (the Python module, tests) AtomicFile renames at once as before.
 #include <string>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -49,6 +50,7 @@ class OutputTransaction {
 
  private:
   std::vector<std::pair<std::string, std::string>> staged_;  // (temporary, destination)
+  std::unordered_set<std::string> identities_;                // file_identity of every staged destination
   std::vector<std::string> removals_;
   OutputTransaction* enclosing_ = nullptr;
   bool done_ = false;

@@ -133,6 +133,18 @@ std::vector<ChunkPiece> read_chunk_pieces(const std::string& dir, const std::arr
   return decode_chunk_pieces(chunk_pieces_path(dir, chunk), chunk);
 }
 
+std::vector<std::uint64_t> kept_segments(const std::string& dir, const std::array<std::uint32_t, 3>& chunk) {
+  const std::string path = chunk_pieces_path(dir, chunk);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return {};
+  std::set<std::uint64_t> segments;
+  decode_chunk_pieces(path, chunk, [&](std::uint64_t segment, std::uint64_t) {
+    segments.insert(segment);
+    return false;
+  });
+  return {segments.begin(), segments.end()};
+}
+
 void assemble_multilod(const std::string& dir, const MultilodLayout& layout, const std::vector<std::uint64_t>& segments,
                        const SegmentNames& names) {
   check_layout(layout);
