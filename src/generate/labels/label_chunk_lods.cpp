@@ -107,6 +107,7 @@ LabelPiece coarser_piece(const LabelPiece& finer, const MultilodGrid& grid) {
   s.mesh.points.assign(finer.points.begin(), finer.points.end());
   s.mesh.connectivity.assign(finer.triangles.begin(), finer.triangles.end());
   s.pair.assign(finer.triangles.size() / 3, 0);
+  s.keys = finer.point_keys;  // so that coarsening leaves the coarse keys of the points it keeps
   s.coarse.resize(points);
   for (std::size_t i = 0; i < points; ++i) s.coarse[i] = coarse_key(finer.points.data() + 3 * i, grid, finer.chunk, step);
   LabelStats stats;

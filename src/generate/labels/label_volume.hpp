@@ -114,6 +114,10 @@ struct LabelSurface {
   std::vector<std::uint64_t> keys;
   // Per point, its coarse key (LabelVolume::coarse_keys).
   std::vector<std::uint64_t> coarse;
+  // Per triangle, in a rank's surface grown by halo rows (LabelSlabs::
+  // generate_with_halo): 1 where a halo row made it (another rank's
+  // triangle). Empty otherwise. Kept through the merge and coarsening.
+  std::vector<std::uint8_t> ghost_face;
 };
 
 // Appends the parts (their own points each) to `out`, in order.
@@ -134,6 +138,14 @@ std::vector<LabelSurface> surface_nets_rows(const LabelVolume& window, bool per_
 std::vector<LabelSurface> discrete_marching_cubes_rows(const LabelVolume& window, std::pair<Id, Id> rows,
                                                        LabelStats& stats);
 
+// Per point of a finished surface of a streamed volume (its keys: fine, or
+// coarse after coarsening; `part_points`: the points of each part, per
+// label, before coarsening), the padded row it lies in and a key that
+// ascends in the output's point order: segment << 47 | key in the segment,
+// the row never decreasing within a segment. Returns the segments.
+int point_rows(const LabelVolume& vol, const LabelOptions& options, const std::vector<std::uint64_t>& keys,
+               const std::vector<Id>& part_points, std::vector<std::uint64_t>& order_key, std::vector<Id>& row);
+
 // Throws InputError for smoothing options out of range.
 void check_label_options(const LabelOptions& options);
 
@@ -145,8 +157,8 @@ SurfaceMesh finish_label_mesh(LabelSurface& surface, const LabelVolume& volume, 
 // --coarsen (label_coarsen.cpp): merges the points by coarse key, averaging
 // their positions; drops faces that collapse and cancels faces of one label
 // pair on the same three points facing opposite ways. Keeps each face's pair
-// and cell fields. Leaves `keys` the coarse keys of the points kept
-// (increasing).
+// and cell fields. A surface with point keys is left with the coarse keys of
+// the points kept (increasing).
 void coarsen_label_surface(LabelSurface& surface, LabelStats& stats);
 
 // Smooths the surface's points in place (label_smoothing.cpp): Jacobi
