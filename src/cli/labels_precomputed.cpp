@@ -131,7 +131,7 @@ Counts update_chunks(const LabelsJob& job, const ImageGrid& grid, const ng::Mult
   });
   Counts n;
   for (const auto& c : affected) {
-    for (const ng::ChunkPiece& p : ng::read_chunk_pieces(job.output, to_u32(c))) n.segments.insert(p.segment);
+    for (std::uint64_t s : ng::kept_segments(job.output, to_u32(c))) n.segments.insert(s);
     std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
       return naming_input(job, [&] { return generate::multilod_chunk_pieces(grid, o, c); });
     }));

@@ -253,9 +253,9 @@ TEST(LabelsMultilod, ChunkTaskEqualsOneCall) {
     const auto all = generate::multilod_pieces(g, o);
     const auto grid = generate::multilod_grid(g.dims, o);
     ASSERT_LT(8 + 2 * generate::multilod_halo(o), 40);  // the tasks read a part of the volume
-    for (Id z = 0; z < grid.chunks[2]; z += 2)
+    for (Id z = 0; z < grid.chunks[2]; ++z)
       for (Id y = 0; y < grid.chunks[1]; ++y)
-        for (Id x = 0; x < grid.chunks[0]; ++x)
+        for (Id x = (y + z) % 3; x < grid.chunks[0]; x += 3)  // a third of them, borders and inside
           expect_same_pieces(generate::multilod_chunk_pieces(g, o, {x, y, z}), of_chunk(all, {x, y, z}));
   }
 }

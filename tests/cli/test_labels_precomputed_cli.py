@@ -1,0 +1,186 @@
+"""`keymesh labels --format precomputed` end to end (issue 37), read back by the
+independent reader tests/neuroglancer_precomputed.py (its own murmurhash and
+gzip, Debian's draco_decoder for every fragment): the info's type, every
+fragment decoded, neighbouring nodes' decoded points equal on their common
+face at every level, chunk tasks plus --assemble byte-identical to one call,
+--update equal to a full run on the edited volume, and the refusals."""
+import filecmp
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from kmtest import check, finish, report, run, tempdir  # noqa: E402
+
+try:
+    import numpy as np
+except ImportError as e:
+    print(f"skipped: {e}")
+    sys.exit(77)
+import neuroglancer_precomputed as ngp  # noqa: E402
+
+if not ngp.DRACO_DECODER:
+    print("skipped: draco_decoder not found (Debian package draco)")
+    sys.exit(77)
+
+D = tempdir()
+
+
+def write_nrrd(path, volume):
+    """volume[x, y, z] (uint8) as a raw NRRD, x fastest."""
+    header = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: {volume.shape[0]} {volume.shape[1]} {volume.shape[2]}\n"
+              "spacings: 1 1 1\nencoding: raw\n\n")
+    with open(path, "wb") as f:
+        f.write(header.encode())
+        f.write(volume.astype(np.uint8).tobytes(order="F"))
+    return path
+
+
+def atlas(shape, seed):
+    """Balls of labels 1-6 that touch one another and the border, and a noisy slab (label 7/8)."""
+    rng = np.random.default_rng(seed)
+    x, y, z = np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")
+    v = np.zeros(shape, np.uint8)
+    for label in range(1, 7):
+        c = rng.uniform(0, 1, 3) * np.array(shape)
+        r = rng.uniform(5, 12)
+        v[(x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 <= r * r] = label
+    slab = (z >= 3) & (z < 9)
+    v[slab] = np.where(rng.random(v[slab].shape) < 0.5, 7, 8)
+    return v
+
+
+VOLUME = atlas((40, 36, 30), 1)
+IN = write_nrrd(os.path.join(D, "atlas.nrrd"), VOLUME)
+GRID = ["--lods", "3", "--chunk-shape", "16", "16", "16", "--smooth", "4"]
+
+
+def precomputed(out, *extra, volume=IN):
+    return run("labels", volume, "-o", out, "--format", "precomputed", *GRID, *extra)
+
+
+def same_tree(a, b):
+    """Every file of two directories byte for byte (names too)."""
+    files = []
+    for top in (a, b):
+        names = set()
+        for root, _, fs in os.walk(top):
+            names |= {os.path.relpath(os.path.join(root, f), top) for f in fs}
+        files.append(names)
+    assert files[0] == files[1], f"files differ: {sorted(files[0] ^ files[1])[:10]}"
+    for name in files[0]:
+        assert filecmp.cmp(os.path.join(a, name), os.path.join(b, name), shallow=False), f"{name} differs"
+
+
+ONE = os.path.join(D, "one")
+precomputed(ONE, "--report", os.path.join(D, "one.json"))
+
+
+def face_points(fragment, axis, plane, others):
+    """Decoded points of a fragment on the plane `axis` = plane; with `others`
+    (the node's box), only those inside the face, off its edge lines."""
+    p = fragment.points
+    on = p[:, axis] == plane
+    if others is not None:
+        lo, hi = others
+        for a in range(3):
+            if a != axis:
+                on &= (p[:, a] != lo[a]) & (p[:, a] != hi[a])
+    return {tuple(x) for x in p[on]}
+
+
+def test_info_and_fragments():
+    info = ngp.read_info(ONE)
+    assert info["@type"] == "neuroglancer_multilod_draco", info
+    assert info["lod_scale_multiplier"] == 1
+    r = report(os.path.join(D, "one.json"))
+    assert r["format"] == "precomputed" and r["lods"] == 3 and r["chunks"] == [3, 3, 2], r
+    segments = sorted(ngp.segment_ids(ONE))
+    assert segments == sorted(int(v) for v in np.unique(VOLUME) if v), segments
+    decoded = 0
+    for s in segments:
+        mesh = ngp.read_segment(ONE, s, info)
+        ngp.check_octree(mesh.manifest)
+        assert mesh.manifest.num_lods == 3
+        decoded += sum(1 for f in mesh.fragments if f.size)
+    assert decoded > 3 * len(segments)
+
+
+def test_faces_agree_in_decoded_output():
+    """At every level, two neighbouring nodes' decoded points on their common
+    face are the same; at level 0 the face's edge lines included."""
+    info = ngp.read_info(ONE)
+    compared = 0
+    for s in ngp.segment_ids(ONE):
+        mesh = ngp.read_segment(ONE, s, info)
+        nodes = {(f.lod, tuple(f.position)): f for f in mesh.fragments if f.size}
+        for (lod, pos), f in nodes.items():
+            origin, size = ngp.node_box(mesh.manifest, lod, pos)
+            for axis in range(3):
+                nxt = list(pos)
+                nxt[axis] += 1
+                g = nodes.get((lod, tuple(nxt)))
+                plane = origin[axis] + size[axis]
+                box = None if lod == 0 else (origin, origin + size)
+                mine = face_points(f, axis, plane, box)
+                theirs = face_points(g, axis, plane, box) if g else set()
+                assert mine == theirs, (f"segment {s} lod {lod} node {pos} axis {axis}: "
+                                        f"{len(mine ^ theirs)} of {len(mine | theirs)} points differ")
+                compared += len(mine)
+    assert compared > 100, compared
+
+
+def test_chunk_tasks_and_assembly_equal_one_call():
+    tasks = os.path.join(D, "tasks")
+    chunks = report(os.path.join(D, "one.json"))["chunks"]
+    for k in range(chunks[2]):
+        for j in range(chunks[1]):
+            for i in range(chunks[0]):
+                precomputed(tasks, "--chunk", i, j, k)
+    precomputed(tasks, "--assemble")
+    same_tree(ONE, tasks)
+
+
+def test_update_equals_full_run():
+    edited = VOLUME.copy()
+    edited[15:31, 15:31, 15:30] = 0  # chunk (1, 1, 1) covers samples 15 .. 30
+    edited[18:26, 18:26, 18:26] = 9  # a new label there
+    new = write_nrrd(os.path.join(D, "edited.nrrd"), edited)
+    updated = os.path.join(D, "updated")
+    precomputed(updated)
+    precomputed(updated, "--update", "1,1,1", "--report", os.path.join(D, "update.json"), volume=new)
+    full = os.path.join(D, "full")
+    precomputed(full, volume=new)
+    same_tree(full, updated)
+    r = report(os.path.join(D, "update.json"))
+    assert r["route"] == "update" and 9 in ngp.segment_ids(updated), r
+    assert r["chunks_written"] < 18, r  # not every chunk: 3 x 3 x 2 of them
+
+
+def test_refusals():
+    text = os.path.join(D, "a_file")
+    with open(text, "w") as f:
+        f.write("x")
+    for args, expect, words in [
+        (["-o", text, "--format", "precomputed"], 2, "not a directory"),
+        (["-o", os.path.join(D, "x.vtp"), "--format", "precomputed"], 2, "names a mesh file"),
+        (["-o", os.path.join(D, "c"), "--format", "precomputed", "--coarsen"], 2, "--coarsen does not apply"),
+        (["-o", os.path.join(D, "m"), "--format", "precomputed", "--memory-limit", "1M"], 2, "--memory-limit"),
+        (["-o", os.path.join(D, "l.vtp"), "--lods", "2"], 2, "--lods needs --format precomputed"),
+        (["-o", os.path.join(D, "e"), "--format", "precomputed", "--chunk", "0", "0", "0", "--assemble"], 2,
+         "exclude each other"),
+        (["-o", os.path.join(D, "u"), "--format", "precomputed", "--update", "1,x,2"], 2, "is not a chunk"),
+        (["-o", os.path.join(D, "u"), "--format", "precomputed", "--update", "1,1,1"], 1, "no chunk store"),
+        (["-o", os.path.join(D, "o"), "--format", "precomputed", "--chunk", "9", "0", "0"], 1, "outside the grid"),
+    ]:
+        p = run("labels", IN, *args, expect=expect)
+        assert words in p.stderr, (args, p.stderr)
+        assert len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not os.path.exists(os.path.join(D, "u")), "a refused --update wrote something"
+
+
+check("info declares the multilod format; every fragment decodes", test_info_and_fragments)
+check("neighbouring nodes agree on their common face in the decoded output", test_faces_agree_in_decoded_output)
+check("chunk tasks + --assemble are byte-identical to one call", test_chunk_tasks_and_assembly_equal_one_call)
+check("--update equals a full run on the edited volume", test_update_equals_full_run)
+check("refusals name the cause", test_refusals)
+finish()
