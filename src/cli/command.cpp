@@ -190,8 +190,11 @@ std::string unwritable_because(const std::string& path) {
 }  // namespace
 
 Refusal refuse_unwritable_outputs(const CLI::App& cmd) {
+  // `labels --format precomputed` writes a directory: its command checks -o.
+  const CLI::Option* format = cmd.get_option_no_throw("--format");
+  const bool directory = format && format->count() > 0 && format->results().front() == "precomputed";
   for (const char* name : {"--output", "--report"})
-    if (const CLI::Option* opt = cmd.get_option_no_throw(name))
+    if (const CLI::Option* opt = cmd.get_option_no_throw(name); opt && !(directory && name[2] == 'o'))
       for (const std::string& path : opt->results()) {
         if (is_device(path)) continue;
         if (const std::string why = unwritable_because(path); !why.empty())

@@ -48,10 +48,10 @@ ng::MultilodLayout layout_of(const ImageGrid& grid, const generate::MultilodGrid
   return layout;
 }
 
-std::vector<ng::ChunkPiece> to_io(std::vector<generate::LabelPiece>&& pieces) {
+std::vector<ng::ChunkPiece> to_io(std::vector<generate::MultilodPiece>&& pieces) {
   std::vector<ng::ChunkPiece> out(pieces.size());
   for (std::size_t i = 0; i < pieces.size(); ++i) {
-    generate::LabelPiece& p = pieces[i];
+    generate::MultilodPiece& p = pieces[i];
     out[i].segment = p.segment;
     out[i].lod = p.lod;
     out[i].chunk = p.chunk;

@@ -28,11 +28,21 @@ OutputTransaction* OutputTransaction::current() { return g_current; }
 void OutputTransaction::stage(std::string temporary, std::string destination) {
   // One identity a destination (same_file's test, hashed): a command may
   // stage a file per segment of a large Neuroglancer output.
-  if (!identities_.insert(file_identity(destination)).second) {
+  if (!identities_.emplace(file_identity(destination), staged_.size()).second) {
     std::remove(temporary.c_str());
     throw InputError(destination + ": written twice by one command (two outputs name the same file)");
   }
   staged_.emplace_back(std::move(temporary), std::move(destination));
+}
+
+bool OutputTransaction::staged(const std::string& destination) const {
+  return identities_.count(file_identity(destination)) > 0 || (enclosing_ && enclosing_->staged(destination));
+}
+
+std::string OutputTransaction::readable(const std::string& destination) const {
+  const auto at = identities_.find(file_identity(destination));
+  if (at != identities_.end()) return staged_[at->second].first;
+  return enclosing_ ? enclosing_->readable(destination) : destination;
 }
 
 void OutputTransaction::stage_removal(std::string destination) { removals_.push_back(std::move(destination)); }

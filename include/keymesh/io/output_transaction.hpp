@@ -15,7 +15,7 @@
 // gets this by writing through AtomicFile as every writer does. Outside a
 // transaction (the Python module, tests) AtomicFile renames at once as before.
 #include <string>
-#include <unordered_set>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -43,6 +43,13 @@ class OutputTransaction {
   // (two outputs of one command naming the same file).
   void stage(std::string temporary, std::string destination);
 
+  // Whether `destination` is staged here or in an enclosing transaction (a
+  // file this command writes, not on disk before the command commits).
+  bool staged(const std::string& destination) const;
+  // The file to read for `destination` while the command runs: its staged
+  // temporary (here or in an enclosing transaction), else `destination`.
+  std::string readable(const std::string& destination) const;
+
   // An output the command makes obsolete (a Neuroglancer segment edited
   // away): removed at the outermost commit(), after every rename, so that a
   // failed command leaves it in place. A missing file is no error.
@@ -50,7 +57,7 @@ class OutputTransaction {
 
  private:
   std::vector<std::pair<std::string, std::string>> staged_;  // (temporary, destination)
-  std::unordered_set<std::string> identities_;                // file_identity of every staged destination
+  std::unordered_map<std::string, std::size_t> identities_;   // file_identity of every staged destination -> staged_ index
   std::vector<std::string> removals_;
   OutputTransaction* enclosing_ = nullptr;
   bool done_ = false;

@@ -238,7 +238,7 @@ ChunkTriangles triangles_by_chunk(const SegmentSurface& s, const MultilodGrid& g
   return out;
 }
 
-LabelPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
+MultilodPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
                          const std::uint32_t* triangles, Id count) {
   double lo[3], hi[3];
   for (int d = 0; d < 3; ++d) lo[d] = grid.plane(d, chunk[d]), hi[d] = grid.plane(d, chunk[d] + 1);
@@ -266,7 +266,7 @@ LabelPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, cons
       corners.push_back(poly[m + 1]);
     }
   }
-  LabelPiece piece;
+  MultilodPiece piece;
   piece.segment = s.segment;
   for (int d = 0; d < 3; ++d) piece.chunk[d] = static_cast<std::uint32_t>(chunk[d]);
   if (corners.empty()) return piece;

@@ -77,7 +77,7 @@ std::uint64_t coarse_key(const float* p, const MultilodGrid& grid, const std::ar
 // both chunks' triangles end on the same cut), so both hold the same points
 // of its inside; a box point off every boundary edge has its edges paired
 // within the chunk, and moving it keeps every segment a closed 2-cycle.
-std::vector<char> held_by_boundary(const LabelPiece& piece, const std::vector<OnBox>& box) {
+std::vector<char> held_by_boundary(const MultilodPiece& piece, const std::vector<OnBox>& box) {
   // Net directed edges between box points (smaller index first, +1 along).
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> net;
   for (std::size_t t = 0; t < piece.triangles.size(); t += 3)
@@ -96,8 +96,8 @@ std::vector<char> held_by_boundary(const LabelPiece& piece, const std::vector<On
 
 }  // namespace
 
-LabelPiece coarser_piece(const LabelPiece& finer, const MultilodGrid& grid) {
-  LabelPiece out;
+MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid) {
+  MultilodPiece out;
   out.segment = finer.segment;
   out.lod = finer.lod + 1;
   out.chunk = finer.chunk;
@@ -119,7 +119,7 @@ LabelPiece coarser_piece(const LabelPiece& finer, const MultilodGrid& grid) {
   return out;
 }
 
-void settle_box_points(LabelPiece& piece, const MultilodGrid& grid) {
+void settle_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
   const std::size_t n = piece.point_keys.size();
   std::vector<OnBox> box(n);
   for (std::size_t i = 0; i < n; ++i) box[i] = on_box(piece.points.data() + 3 * i, grid, piece.chunk);
@@ -155,7 +155,7 @@ void settle_box_points(LabelPiece& piece, const MultilodGrid& grid) {
   std::vector<std::uint32_t> order(n), rank(n);
   for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return piece.point_keys[a] < piece.point_keys[b]; });
-  LabelPiece sorted = piece;
+  MultilodPiece sorted = piece;
   for (std::size_t r = 0; r < n; ++r) {
     rank[order[r]] = static_cast<std::uint32_t>(r);
     sorted.point_keys[r] = piece.point_keys[order[r]];

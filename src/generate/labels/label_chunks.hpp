@@ -40,11 +40,11 @@ ChunkTriangles triangles_by_chunk(const SegmentSurface& surface, const MultilodG
 // The level-0 piece of `chunk` from the given triangles: each clipped to the
 // chunk's box (points made on its planes keyed and placed canonically),
 // welded by key. Empty when nothing of the triangles lies in the box.
-LabelPiece clip_to_chunk(const SegmentSurface& surface, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
+MultilodPiece clip_to_chunk(const SegmentSurface& surface, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
                          const std::uint32_t* triangles, Id count);
 
 // The piece one level coarser (lod + 1), from `finer`.
-LabelPiece coarser_piece(const LabelPiece& finer, const MultilodGrid& grid);
+MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid);
 
 // A coarse piece's points on the chunk's box kept there only where the
 // piece's boundary (the directed edges its triangles leave unpaired) holds
@@ -55,6 +55,6 @@ LabelPiece coarser_piece(const LabelPiece& finer, const MultilodGrid& grid);
 // four chunks around the line may merge different points into it, so no
 // average). Then every other coordinate keeps the margin from the chunk
 // planes.
-void settle_box_points(LabelPiece& piece, const MultilodGrid& grid);
+void settle_box_points(MultilodPiece& piece, const MultilodGrid& grid);
 
 }  // namespace keymesh::generate::detail

@@ -115,19 +115,19 @@ std::array<Id, 3> chunk_index(const MultilodGrid& grid, Id id) {
 }
 
 // The pieces of one segment in one chunk, every level.
-std::vector<LabelPiece> chunk_levels(const SegmentSurface& s, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
+std::vector<MultilodPiece> chunk_levels(const SegmentSurface& s, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
                                      const std::uint32_t* triangles, Id count) {
-  std::vector<LabelPiece> out;
+  std::vector<MultilodPiece> out;
   out.push_back(detail::clip_to_chunk(s, grid, chunk, triangles, count));
   if (out.back().point_keys.empty()) return {};
   for (int lod = 1; lod < grid.lods; ++lod) out.push_back(detail::coarser_piece(out.back(), grid));
   return out;
 }
 
-void sort_pieces(std::vector<LabelPiece>& pieces) {
-  auto order = [](const LabelPiece& p) { return std::tuple(p.segment, p.lod, p.chunk[2], p.chunk[1], p.chunk[0]); };
-  std::sort(pieces.begin(), pieces.end(), [&](const LabelPiece& a, const LabelPiece& b) { return order(a) < order(b); });
-  pieces.erase(std::remove_if(pieces.begin(), pieces.end(), [](const LabelPiece& p) { return p.point_keys.empty(); }),
+void sort_pieces(std::vector<MultilodPiece>& pieces) {
+  auto order = [](const MultilodPiece& p) { return std::tuple(p.segment, p.lod, p.chunk[2], p.chunk[1], p.chunk[0]); };
+  std::sort(pieces.begin(), pieces.end(), [&](const MultilodPiece& a, const MultilodPiece& b) { return order(a) < order(b); });
+  pieces.erase(std::remove_if(pieces.begin(), pieces.end(), [](const MultilodPiece& p) { return p.point_keys.empty(); }),
                pieces.end());
 }
 
@@ -165,7 +165,7 @@ Id multilod_halo(const MultilodOptions& options) {
   return steps + 4;  // a point of the chunk's triangles is a cell outside at most; stencils read 2 more samples
 }
 
-std::vector<LabelPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options) {
+std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options) {
   const MultilodGrid mg = multilod_grid(grid.dims, options);
   ImageGrid view;
   view.dims = grid.dims;
@@ -185,21 +185,21 @@ std::vector<LabelPiece> multilod_pieces(const ImageGrid& grid, const MultilodOpt
     for (std::size_t c = 0; c < by_chunk[s].chunk.size(); ++c)
       tasks.push_back({s, by_chunk[s].chunk[c], by_chunk[s].offsets[c], by_chunk[s].offsets[c + 1] - by_chunk[s].offsets[c]});
   }
-  std::vector<std::vector<LabelPiece>> results(tasks.size());
+  std::vector<std::vector<MultilodPiece>> results(tasks.size());
   parallel::for_each_dynamic(static_cast<Id>(tasks.size()), [&](Id t) {
     const Task& task = tasks[static_cast<std::size_t>(t)];
     results[static_cast<std::size_t>(t)] =
         chunk_levels(segments[task.segment], mg, chunk_index(mg, task.chunk),
                      by_chunk[task.segment].triangles.data() + task.first, task.count);
   }, 1);
-  std::vector<LabelPiece> pieces;
+  std::vector<MultilodPiece> pieces;
   for (auto& r : results)
     for (auto& p : r) pieces.push_back(std::move(p));
   sort_pieces(pieces);
   return pieces;
 }
 
-std::vector<LabelPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
+std::vector<MultilodPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
                                               const std::array<Id, 3>& chunk) {
   const MultilodGrid mg = multilod_grid(grid.dims, options);
   for (int a = 0; a < 3; ++a)
@@ -223,7 +223,7 @@ std::vector<LabelPiece> multilod_chunk_pieces(const ImageGrid& grid, const Multi
   }
   std::vector<SegmentSurface> segments = segment_surfaces(sub, opt, lo);
   const Id id = chunk[0] + mg.chunks[0] * (chunk[1] + mg.chunks[1] * chunk[2]);
-  std::vector<LabelPiece> pieces;
+  std::vector<MultilodPiece> pieces;
   for (SegmentSurface& s : segments) {
     detail::move_off_chunk_planes(s, mg);
     const detail::ChunkTriangles by_chunk = detail::triangles_by_chunk(s, mg);

@@ -33,6 +33,15 @@ void check_chunk(const MultilodLayout& layout, const std::array<std::uint32_t, 3
                        std::to_string(layout.chunks[1]) + " x " + std::to_string(layout.chunks[2]) + " chunks");
 }
 
+// A chunk's kept pieces as this command sees them: the file it wrote itself
+// (staged until the command commits: --update re-runs chunks, then
+// assembles), else the one on disk.
+std::string kept_pieces_path(const std::string& dir, const std::array<std::uint32_t, 3>& chunk) {
+  const std::string path = chunk_pieces_path(dir, chunk);
+  const OutputTransaction* command = OutputTransaction::current();
+  return command ? command->readable(path) : path;
+}
+
 // The kept pieces of every chunk that `keep` accepts (all: an empty keep).
 // Every chunk of the grid must have been written by its task.
 std::vector<ChunkPiece> read_kept_pieces(const std::string& dir, const MultilodLayout& layout, const PieceFilter& keep) {
@@ -41,7 +50,7 @@ std::vector<ChunkPiece> read_kept_pieces(const std::string& dir, const MultilodL
   for (c[2] = 0; c[2] < layout.chunks[2]; ++c[2])
     for (c[1] = 0; c[1] < layout.chunks[1]; ++c[1])
       for (c[0] = 0; c[0] < layout.chunks[0]; ++c[0]) {
-        const std::string path = chunk_pieces_path(dir, c);
+        const std::string path = kept_pieces_path(dir, c);
         std::error_code ec;
         if (!fs::exists(path, ec))
           throw InputError(path + ": no such file (the task of chunk " + std::to_string(c[0]) + " " + std::to_string(c[1]) +
@@ -121,20 +130,23 @@ void write_chunk_pieces(const std::string& dir, const MultilodLayout& layout, co
   std::error_code ec;
   fs::create_directories(fs::path(dir) / "chunks", ec);
   if (ec) throw InputError((fs::path(dir) / "chunks").string() + ": cannot create it: " + ec.message());
+  // One command may keep several chunks (the one-call run and --update keep
+  // theirs): the record it staged reaches the disk only when it commits.
+  const OutputTransaction* command = OutputTransaction::current();
   if (fs::exists(layout_record_path(dir), ec))
     check_layout_record(dir, layout);
-  else
+  else if (!(command && command->staged(layout_record_path(dir))))
     write_file(layout_record_path(dir), layout_record(layout));
   write_file(chunk_pieces_path(dir, chunk), encode_chunk_pieces(chunk, pieces));
   outputs.commit();
 }
 
 std::vector<ChunkPiece> read_chunk_pieces(const std::string& dir, const std::array<std::uint32_t, 3>& chunk) {
-  return decode_chunk_pieces(chunk_pieces_path(dir, chunk), chunk);
+  return decode_chunk_pieces(kept_pieces_path(dir, chunk), chunk);
 }
 
 std::vector<std::uint64_t> kept_segments(const std::string& dir, const std::array<std::uint32_t, 3>& chunk) {
-  const std::string path = chunk_pieces_path(dir, chunk);
+  const std::string path = kept_pieces_path(dir, chunk);
   std::error_code ec;
   if (!fs::exists(path, ec)) return {};
   std::set<std::uint64_t> segments;

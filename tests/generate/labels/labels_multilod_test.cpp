@@ -10,24 +10,15 @@
 #include <tuple>
 
 #include "keymesh/core/error.hpp"
+#include "label_map.hpp"
 #include "mesh_measures.hpp"
 
 using namespace keymesh;
-using generate::LabelPiece;
+using generate::MultilodPiece;
 using generate::MultilodOptions;
+using test::label_map;
 
 namespace {
-
-template <class F>
-ImageGrid label_map(std::array<Id, 3> n, F&& f) {
-  ImageGrid g;
-  g.allocate(n, ScalarType::UInt8);
-  auto* v = reinterpret_cast<std::uint8_t*>(g.data());
-  for (Id k = 0; k < n[2]; ++k)
-    for (Id j = 0; j < n[1]; ++j)
-      for (Id i = 0; i < n[0]; ++i) v[i + n[0] * (j + n[1] * k)] = static_cast<std::uint8_t>(f(i, j, k));
-  return g;
-}
 
 // Two overlapping balls (labels 3 and 7, touching where they meet) and a
 // box of label 9 across a chunk corner.
@@ -59,7 +50,7 @@ MultilodOptions options(generate::LabelMethod method, int smooth, Id chunk, int 
 }
 
 using PieceId = std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t>;
-PieceId id_of(const LabelPiece& p) { return {p.segment, p.lod, p.chunk[0], p.chunk[1], p.chunk[2]}; }
+PieceId id_of(const MultilodPiece& p) { return {p.segment, p.lod, p.chunk[0], p.chunk[1], p.chunk[2]}; }
 
 std::uint32_t bits(float f) {
   std::uint32_t b;
@@ -71,7 +62,7 @@ std::uint32_t bits(float f) {
 // at level 0 all, at coarser levels those inside the face (a point on a
 // chunk edge line, shared by four chunks, may be left in some of them only:
 // see labels_multilod.hpp).
-std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>> on_plane(const LabelPiece* p, int axis,
+std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>> on_plane(const MultilodPiece* p, int axis,
                                                                                          double x) {
   std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>> out;
   if (!p) return out;
@@ -84,11 +75,11 @@ std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>>
 // Every piece inside its chunk's box, no repeated point in a triangle, keys
 // increasing; neighbouring chunks' pieces with the same points (keys and
 // bits) on their common face.
-void expect_chunks_agree(const std::vector<LabelPiece>& pieces, const generate::MultilodGrid& grid) {
-  std::map<PieceId, const LabelPiece*> by_id;
-  for (const LabelPiece& p : pieces) by_id[id_of(p)] = &p;
+void expect_chunks_agree(const std::vector<MultilodPiece>& pieces, const generate::MultilodGrid& grid) {
+  std::map<PieceId, const MultilodPiece*> by_id;
+  for (const MultilodPiece& p : pieces) by_id[id_of(p)] = &p;
   Id faces_with_points = 0;
-  for (const LabelPiece& p : pieces) {
+  for (const MultilodPiece& p : pieces) {
     for (std::size_t i = 0; i < p.point_keys.size(); ++i) {
       if (i > 0) ASSERT_LT(p.point_keys[i - 1], p.point_keys[i]);
       for (int a = 0; a < 3; ++a) {
@@ -123,7 +114,7 @@ void expect_chunks_agree(const std::vector<LabelPiece>& pieces, const generate::
       EXPECT_EQ(mine, theirs) << "segment " << p.segment << " lod " << p.lod << " chunk " << p.chunk[0] << " "
                               << p.chunk[1] << " " << p.chunk[2] << " axis " << a;
       {  // the boundaries on the face: opposite
-        auto boundary = [&](const LabelPiece* q, int sign) {
+        auto boundary = [&](const MultilodPiece* q, int sign) {
           std::map<std::pair<std::uint64_t, std::uint64_t>, int> net;
           if (!q) return net;
           for (std::size_t t = 0; t < q->triangles.size(); t += 3)
@@ -146,10 +137,10 @@ void expect_chunks_agree(const std::vector<LabelPiece>& pieces, const generate::
 
 // Each segment's pieces of one level, welded by key: a closed 2-cycle (every
 // directed edge as often as its reverse). Returns the enclosed volume per segment.
-std::map<std::uint64_t, double> expect_closed(const std::vector<LabelPiece>& pieces, std::uint32_t lod) {
+std::map<std::uint64_t, double> expect_closed(const std::vector<MultilodPiece>& pieces, std::uint32_t lod) {
   std::map<std::uint64_t, std::map<std::pair<std::uint64_t, std::uint64_t>, int>> edges;
   std::map<std::uint64_t, double> volume;
-  for (const LabelPiece& p : pieces) {
+  for (const MultilodPiece& p : pieces) {
     if (p.lod != lod) continue;
     auto& e = edges[p.segment];
     for (std::size_t t = 0; t < p.triangles.size(); t += 3) {
@@ -171,7 +162,7 @@ std::map<std::uint64_t, double> expect_closed(const std::vector<LabelPiece>& pie
   return volume;
 }
 
-void expect_same_pieces(const std::vector<LabelPiece>& a, const std::vector<LabelPiece>& b) {
+void expect_same_pieces(const std::vector<MultilodPiece>& a, const std::vector<MultilodPiece>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(id_of(a[i]), id_of(b[i]));
@@ -182,9 +173,9 @@ void expect_same_pieces(const std::vector<LabelPiece>& a, const std::vector<Labe
   }
 }
 
-std::vector<LabelPiece> of_chunk(const std::vector<LabelPiece>& pieces, const std::array<Id, 3>& c) {
-  std::vector<LabelPiece> out;
-  for (const LabelPiece& p : pieces)
+std::vector<MultilodPiece> of_chunk(const std::vector<MultilodPiece>& pieces, const std::array<Id, 3>& c) {
+  std::vector<MultilodPiece> out;
+  for (const MultilodPiece& p : pieces)
     if (p.chunk[0] == c[0] && p.chunk[1] == c[1] && p.chunk[2] == c[2]) out.push_back(p);
   return out;
 }
@@ -232,7 +223,7 @@ TEST(LabelsMultilod, LevelZeroIsThePerLabelSurface) {
       for (int m = 0; m < 3; ++m) points[s].insert(mesh.connectivity[3 * t + m]);
     }
     std::map<std::uint64_t, std::set<std::uint64_t>> surface_keys;  // class 0: the surface's own points
-    for (const LabelPiece& p : pieces)
+    for (const MultilodPiece& p : pieces)
       if (p.lod == 0)
         for (std::uint64_t k : p.point_keys)
           if (k >> 61 == 0) surface_keys[p.segment].insert(k);

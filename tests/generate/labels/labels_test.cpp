@@ -7,24 +7,14 @@
 #include "keymesh/analyze/topology.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "label_map.hpp"
 #include "mesh_measures.hpp"
 
 using namespace keymesh;
 using test::enclosed_volume;
+using test::label_map;
 
 namespace {
-
-// A uint8 label map of dims n, filled by f(i, j, k).
-template <class F>
-ImageGrid label_map(std::array<Id, 3> n, F&& f) {
-  ImageGrid g;
-  g.allocate(n, ScalarType::UInt8);
-  auto* v = reinterpret_cast<std::uint8_t*>(g.data());
-  for (Id k = 0; k < n[2]; ++k)
-    for (Id j = 0; j < n[1]; ++j)
-      for (Id i = 0; i < n[0]; ++i) v[i + n[0] * (j + n[1] * k)] = static_cast<std::uint8_t>(f(i, j, k));
-  return g;
-}
 
 generate::LabelOptions unsmoothed(generate::LabelMethod method = generate::LabelMethod::SurfaceNets) {
   generate::LabelOptions o;

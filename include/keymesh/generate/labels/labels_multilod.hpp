@@ -96,7 +96,7 @@ struct MultilodGrid {
 
 // One lod-0 chunk's share of one segment's surface at one level of detail
 // (io::neuroglancer::ChunkPiece).
-struct LabelPiece {
+struct MultilodPiece {
   std::uint64_t segment = 0;
   std::uint32_t lod = 0;
   std::array<std::uint32_t, 3> chunk{0, 0, 0};
@@ -112,11 +112,11 @@ Id multilod_halo(const MultilodOptions& options);
 
 // Every chunk's pieces, meshing the whole volume once; sorted by (segment,
 // lod, chunk z, y, x). Pieces with no points are left out.
-std::vector<LabelPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options);
+std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options);
 
 // One chunk's pieces (a chunk task), from the chunk's box and its halo of
 // `grid` only: equal to the pieces of multilod_pieces for that chunk.
-std::vector<LabelPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
+std::vector<MultilodPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
                                               const std::array<Id, 3>& chunk);
 
 // The chunks whose pieces can change when the samples inside `changed`
