@@ -75,16 +75,19 @@ ONE = os.path.join(D, "one")
 precomputed(ONE, "--report", os.path.join(D, "one.json"))
 
 
-def face_points(fragment, axis, plane, others):
-    """Decoded points of a fragment on the plane `axis` = plane; with `others`
-    (the node's box), only those inside the face, off its edge lines."""
+def face_points(fragment, axis, plane, chunk_shape):
+    """Decoded points of a fragment on the plane `axis` = plane; with
+    `chunk_shape`, only those off every lod-0 chunk edge line in the face
+    (points shared by four chunks: agreed at level 0 only, see
+    docs/decisions/labels-multilod-chunks.md)."""
     p = fragment.points
     on = p[:, axis] == plane
-    if others is not None:
-        lo, hi = others
+    if chunk_shape is not None:
         for a in range(3):
             if a != axis:
-                on &= (p[:, a] != lo[a]) & (p[:, a] != hi[a])
+                # lod-0 planes at -1 + k * shape (inside a node, quantized: within a step)
+                off = (p[:, a] + 1) / chunk_shape[a]
+                on &= np.abs(off - np.round(off)) * chunk_shape[a] > 1e-3
     return {tuple(x) for x in p[on]}
 
 
@@ -105,13 +108,14 @@ def test_info_and_fragments():
     assert decoded > 3 * len(segments)
 
 
-def test_faces_agree_in_decoded_output():
+def faces_agree(out):
     """At every level, two neighbouring nodes' decoded points on their common
-    face are the same; at level 0 the face's edge lines included."""
-    info = ngp.read_info(ONE)
+    face are the same; at level 0 the face's edge lines included. Returns how
+    many points were compared."""
+    info = ngp.read_info(out)
     compared = 0
-    for s in ngp.segment_ids(ONE):
-        mesh = ngp.read_segment(ONE, s, info)
+    for s in ngp.segment_ids(out):
+        mesh = ngp.read_segment(out, s, info)
         nodes = {(f.lod, tuple(f.position)): f for f in mesh.fragments if f.size}
         for (lod, pos), f in nodes.items():
             origin, size = ngp.node_box(mesh.manifest, lod, pos)
@@ -120,13 +124,29 @@ def test_faces_agree_in_decoded_output():
                 nxt[axis] += 1
                 g = nodes.get((lod, tuple(nxt)))
                 plane = origin[axis] + size[axis]
-                box = None if lod == 0 else (origin, origin + size)
-                mine = face_points(f, axis, plane, box)
-                theirs = face_points(g, axis, plane, box) if g else set()
+                lines = None if lod == 0 else mesh.manifest.chunk_shape
+                mine = face_points(f, axis, plane, lines)
+                theirs = face_points(g, axis, plane, lines) if g else set()
                 assert mine == theirs, (f"segment {s} lod {lod} node {pos} axis {axis}: "
-                                        f"{len(mine ^ theirs)} of {len(mine | theirs)} points differ")
+                                        f"{len(mine ^ theirs)} of {len(mine | theirs)} points differ: "
+                                        f"{sorted(mine - theirs)[:3]} / {sorted(theirs - mine)[:3]}")
                 compared += len(mine)
-    assert compared > 100, compared
+    return compared
+
+
+def test_faces_agree_in_decoded_output():
+    assert faces_agree(ONE) > 100
+
+
+def test_issue_settings_discrete_mc_sharded():
+    """The issue's check: 3 levels of detail, 32^3 chunks; here with discrete-mc and --sharded."""
+    big = write_nrrd(os.path.join(D, "big.nrrd"), atlas((70, 66, 60), 2))
+    out = os.path.join(D, "big")
+    run("labels", big, "-o", out, "--format", "precomputed", "--lods", "3", "--chunk-shape", "32", "32", "32",
+        "--method", "discrete-mc", "--sharded")
+    info = ngp.read_info(out)
+    assert info["@type"] == "neuroglancer_multilod_draco" and "sharding" in info, info
+    assert faces_agree(out) > 100
 
 
 def test_chunk_tasks_and_assembly_equal_one_call():
@@ -180,6 +200,7 @@ def test_refusals():
 
 check("info declares the multilod format; every fragment decodes", test_info_and_fragments)
 check("neighbouring nodes agree on their common face in the decoded output", test_faces_agree_in_decoded_output)
+check("3 levels, 32^3 chunks, discrete-mc, sharded: faces agree", test_issue_settings_discrete_mc_sharded)
 check("chunk tasks + --assemble are byte-identical to one call", test_chunk_tasks_and_assembly_equal_one_call)
 check("--update equals a full run on the edited volume", test_update_equals_full_run)
 check("refusals name the cause", test_refusals)
