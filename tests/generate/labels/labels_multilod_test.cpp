@@ -72,6 +72,23 @@ std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>>
   return out;
 }
 
+// The piece's boundary edges on the plane `axis` = x: net directed edges
+// (smaller key first, times `sign`) between points on it, zeros left out.
+std::map<std::pair<std::uint64_t, std::uint64_t>, int> face_boundary(const MultilodPiece* q, int axis, double x,
+                                                                    int sign) {
+  std::map<std::pair<std::uint64_t, std::uint64_t>, int> net;
+  if (!q) return net;
+  for (std::size_t t = 0; t < q->triangles.size(); t += 3)
+    for (int m = 0; m < 3; ++m) {
+      const auto u = q->triangles[t + m], v = q->triangles[t + (m + 1) % 3];
+      if (q->points[3 * u + axis] != x || q->points[3 * v + axis] != x) continue;
+      const auto ku = q->point_keys[u], kv = q->point_keys[v];
+      net[{std::min(ku, kv), std::max(ku, kv)}] += ku < kv ? sign : -sign;
+    }
+  for (auto e = net.begin(); e != net.end();) e = e->second == 0 ? net.erase(e) : std::next(e);
+  return net;
+}
+
 // Every piece inside its chunk's box, no repeated point in a triangle, keys
 // increasing; neighbouring chunks' pieces with the same points (keys and
 // bits) on their common face.
@@ -81,7 +98,9 @@ void expect_chunks_agree(const std::vector<MultilodPiece>& pieces, const generat
   Id faces_with_points = 0;
   for (const MultilodPiece& p : pieces) {
     for (std::size_t i = 0; i < p.point_keys.size(); ++i) {
-      if (i > 0) ASSERT_LT(p.point_keys[i - 1], p.point_keys[i]);
+      if (i > 0) {
+        ASSERT_LT(p.point_keys[i - 1], p.point_keys[i]);
+      }
       for (int a = 0; a < 3; ++a) {
         ASSERT_GE(p.points[3 * i + a], grid.plane(a, p.chunk[a])) << "class " << (p.point_keys[i] >> 61) << " lod " << p.lod << " axis " << a << " " << p.points[3*i] << " " << p.points[3*i+1] << " " << p.points[3*i+2];
         ASSERT_LE(p.points[3 * i + a], grid.plane(a, p.chunk[a] + 1));
@@ -113,22 +132,9 @@ void expect_chunks_agree(const std::vector<MultilodPiece>& pieces, const generat
       const auto theirs = on_plane(it == by_id.end() ? nullptr : it->second, a, x);
       EXPECT_EQ(mine, theirs) << "segment " << p.segment << " lod " << p.lod << " chunk " << p.chunk[0] << " "
                               << p.chunk[1] << " " << p.chunk[2] << " axis " << a;
-      {  // the boundaries on the face: opposite
-        auto boundary = [&](const MultilodPiece* q, int sign) {
-          std::map<std::pair<std::uint64_t, std::uint64_t>, int> net;
-          if (!q) return net;
-          for (std::size_t t = 0; t < q->triangles.size(); t += 3)
-            for (int m = 0; m < 3; ++m) {
-              auto u = q->triangles[t + m], v = q->triangles[t + (m + 1) % 3];
-              if (q->points[3 * u + a] != x || q->points[3 * v + a] != x) continue;
-              auto ku = q->point_keys[u], kv = q->point_keys[v];
-              net[{std::min(ku, kv), std::max(ku, kv)}] += (ku < kv ? sign : -sign);
-            }
-          for (auto it = net.begin(); it != net.end();) it = it->second == 0 ? net.erase(it) : std::next(it);
-          return net;
-        };
-        EXPECT_EQ(boundary(&p, 1), boundary(it == by_id.end() ? nullptr : it->second, -1)) << "boundary lod " << p.lod;
-      }
+      // The boundaries on the face: opposite.
+      EXPECT_EQ(face_boundary(&p, a, x, 1), face_boundary(it == by_id.end() ? nullptr : it->second, a, x, -1))
+          << "boundary lod " << p.lod;
       faces_with_points += mine.empty() ? 0 : 1;
     }
   }
