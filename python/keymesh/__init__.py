@@ -154,7 +154,7 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0),
             normals: Optional[str] = "average", weld: str = "keyreduce",
             coarsen: bool = False, curvature: bool = False, threads: int = 0,
-            progress: Optional[Any] = None, scalars: bool = True) -> Mesh:
+            progress: Optional[Any] = None, scalars: bool = True, history: bool = False) -> Mesh:
     """Isosurface of a 3-D volume: marching cubes, points welded by edge keys.
 
     Args:
@@ -203,6 +203,14 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             leaves it out (one float less to write per point), as
             vtkFlyingEdges3D's ComputeScalarsOff() does (VTK computes it by
             default).
+        history: add point_data["history_key"] (uint64: the point's grid
+            edge, ``3 * np.ravel_multi_index((i, j, k), volume.shape,
+            order="F") + axis + isovalue_index * 3 * volume.size``, (i, j, k)
+            the edge's lower end) and point_data["history_t"] (float32: t
+            along the edge from that end, which gives the point back:
+            ``np.float32(origin[axis] + spacing[axis] * (ijk[axis] +
+            np.float64(t)))``), as ``keymesh contour --history`` writes them
+            (docs/HISTORY.md). Not with coarsen (ValueError).
 
     Returns:
         Mesh with points (n, 3) float32, cells (m, 3) uint32 and point_data
@@ -234,7 +242,7 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         if origin is not None and tuple(map(float, origin)) == (0.0, 0.0, 0.0):
             origin = None
     parts, info = _ext.contour(volume, _isovalues(iso), spacing, origin, normals, weld, bool(coarsen),
-                               bool(curvature), _threads(threads), progress, bool(scalars))
+                               bool(curvature), _threads(threads), progress, bool(scalars), bool(history))
     last_contour_info.clear()
     last_contour_info.update(info)
     return _mesh(parts)

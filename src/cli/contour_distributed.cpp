@@ -92,12 +92,14 @@ void write_pieces(distributed::ContourPiece& piece, const std::string& output) {
 // receives rank 0's coarsening report keys.
 void write_gathered(const ContourCli& o, distributed::ContourPiece& piece, StageTimer& timer,
                     nlohmann::json& coarsening) {
-  const SurfaceMesh whole = timer.run("gather", [&] { return distributed::gather(piece); });
+  std::vector<std::uint64_t> history_key;
+  const SurfaceMesh whole =
+      timer.run("gather", [&] { return distributed::gather(piece, o.history ? &history_key : nullptr); });
   distributed::agreed([&] {
     if (distributed::rank() != 0) return;
     if (o.coarsen) coarsening = coarsening_report(o, whole, piece.triangles_before_coarsening, timer);
     const auto t0 = std::chrono::steady_clock::now();
-    timer.run("write", [&] { io::write_mesh(whole, o.output); });
+    timer.run("write", [&] { write_contour(o, whole, history_key); });
     piece.stats.output += seconds_since(t0);
   });
 }

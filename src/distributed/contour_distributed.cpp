@@ -79,6 +79,8 @@ void require_distributable(const ImageGrid& head, const generate::ContourOptions
   if (options.weld == generate::ContourWeld::VertexWeld)
     throw InputError("distributed contour: --weld vertexweld compares coordinates; across ranks only keys weld");
   if (options.backend != generate::Backend::Cpu) throw InputError("distributed contour: --backend cpu only so far");
+  if (options.history && options.coarsen)
+    throw InputError("distributed contour: --history with --coarsen: a coarsened point has no one edge and t");
   if (head.dims[2] - 1 < ranks)
     throw InputError("distributed contour: " + std::to_string(head.dims[2] - 1) + " voxel layers (z) for " +
                      std::to_string(ranks) + " ranks; each rank needs at least one (use fewer ranks)");
@@ -288,7 +290,7 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   return piece;
 }
 
-SurfaceMesh gather(ContourPiece& piece) {
+SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys) {
   const auto t0 = Clock::now();
   int P = 1, r = 0;
   mpi().Comm_size(mpi().comm_world, &P);
@@ -306,7 +308,7 @@ SurfaceMesh gather(ContourPiece& piece) {
     if (g.owned[p]) {
       xyz.insert(xyz.end(), m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3);
       if (piece.coarsen) nearest.push_back(piece.nearest[static_cast<std::size_t>(p)]);
-      if (piece.average) keys.push_back(piece.keys[static_cast<std::size_t>(p)]);
+      if (piece.average || point_keys) keys.push_back(piece.keys[static_cast<std::size_t>(p)]);
       for (std::size_t f = 0; f < fields.size(); ++f) {
         const Field& fd = m.point_fields[f];
         fields[f].insert(fields[f].end(), fd.values.begin() + fd.components * p, fd.values.begin() + fd.components * (p + 1));
@@ -336,13 +338,14 @@ SurfaceMesh gather(ContourPiece& piece) {
   }
   static_assert(sizeof(PointIndex) == 4, "the gather sends point ids as MPI_UINT32_T");
   gather_segments(conn, 3, mpi().uint32, tri_counts, S, out.connectivity);
-  if (piece.average) {
+  if (piece.average || point_keys) {
     std::vector<std::uint64_t> all_keys;
     gather_segments(keys, 1, mpi().uint64, g.counts, S, all_keys);
-    if (r == 0)
+    if (r == 0 && piece.average)
       for (Field& f : out.point_fields)
         if (f.name == "Normals")
           f = generate::blocked_average_normals(out, generate::layer_blocks(out, all_keys, piece.layer_grid));
+    if (point_keys) *point_keys = std::move(all_keys);
   }
   if (piece.coarsen) {
     // The fine mesh of one process, and its points' coarse keys: coarsened

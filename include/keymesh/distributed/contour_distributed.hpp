@@ -69,7 +69,9 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
 // triangles isovalue by isovalue in rank order: the single-process file;
 // with piece.coarsen, that mesh coarsened as one process coarsens it), the
 // others an empty one. Adds the gather's time to piece.stats.output.
-SurfaceMesh gather(ContourPiece& piece);
+// point_keys (given on every rank or none): rank 0 receives the whole
+// mesh's points' edge keys (history_key), in its point order.
+SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys = nullptr);
 
 // A rank's piece as VTK's parallel pipeline wants it: its triangles, then
 // one layer of ghost cells (the neighbouring ranks' triangles that use a
