@@ -47,8 +47,8 @@ nlohmann::json coarsening_report(const ContourCli& o, const SurfaceMesh& mesh, I
                                  StageTimer& timer);
 
 // --history's usage errors (exit 2, said on stderr when `say`): no
-// coarsening, no tetrahedral grid, a .vtp output (history_key is UInt64,
-// which the other formats cannot hold). 0 when none.
+// coarsening, a .vtp output (history_key is UInt64, which the other formats
+// cannot hold). 0 when none.
 int refuse_history_usage(const ContourCli& o, bool say);
 
 // The mesh written to o.output: with --history (.vtp, checked) its

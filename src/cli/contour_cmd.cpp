@@ -68,8 +68,6 @@ int refuse_history_usage(const ContourCli& o, bool say) {
   if (o.coarsen)
     why = "--history with --coarsen: a coarsened point merges crossings of several edges, so it has no one edge "
           "and t";
-  else if (!o.raw_input.given() && io::is_grid_file(o.input))
-    why = "--history is for volumes (marching cubes); " + o.input + " is a tetrahedral grid";
   else if (io::file_extension(o.output) != ".vtp")
     why = "--history writes history_key as UInt64, which only .vtp holds (" + o.output +
           (io::file_extension(o.output) == ".pvtp" ? ": write one gathered .vtp" : "") + ")";
@@ -152,7 +150,9 @@ ContourResult run_tets(const ContourCli& o, const generate::ContourOptions& opt,
       break;
     }
   progress.say("contouring " + std::to_string(grid.num_cells()) + " tetrahedra");
-  result.mesh = timer.run("contour", [&] { return generate::contour(grid, opt, &result.stats); });
+  result.mesh = timer.run("contour", [&] {
+    return generate::contour(grid, opt, &result.stats, opt.history ? &result.history_key : nullptr);
+  });
   result.facts["input_points"] = grid.num_points();
   result.facts["input_cells"] = grid.num_cells();
   result.facts["grid"] = "tetrahedra";
@@ -311,7 +311,8 @@ void add_contour_options(CLI::App& cmd, ContourCli& o) {
   cmd.add_flag("--history", o.history,
                "per point, where it came from: point arrays history_key (UInt64: its grid edge, 3 * point id + "
                "axis + isovalue index * 3N) and history_t (Float32: t along the edge from its lower end, which "
-               "gives the point's position back; docs/HISTORY.md); voxel grids, .vtp output, not with --coarsen");
+               "gives the point's position back; tet grids: the edge's two point ids; docs/HISTORY.md); .vtp "
+               "output, not with --coarsen");
   o.raw_input.add_options(cmd);
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "

@@ -19,12 +19,12 @@ namespace keymesh::generate {
 
 inline constexpr int kHistorySteps = 8;
 
-// The history_t of the crossing at t on the edge from grid index c (slab
-// local, as grid_coordinate takes it) along `axis`.
-inline float history_t(const GridShape& s, int axis, Id c, double t) {
-  const float written = grid_coordinate(s, axis, c, t);
+// The float in [0, 1] nearest t, within kHistorySteps float steps of it,
+// for which gives_back(float) holds; t's nearest float when none does.
+template <class GivesBack>
+float nearest_float_t(double t, const GivesBack& gives_back_at) {
   const float nearest = static_cast<float>(t);
-  auto gives_back = [&](float f) { return f >= 0.f && f <= 1.f && grid_coordinate(s, axis, c, f) == written; };
+  auto gives_back = [&](float f) { return f >= 0.f && f <= 1.f && gives_back_at(f); };
   if (gives_back(nearest)) return nearest;
   float below = nearest, above = nearest;
   for (int step = 0; step < kHistorySteps; ++step) {
@@ -36,6 +36,13 @@ inline float history_t(const GridShape& s, int axis, Id c, double t) {
     if (gives_back(below_first ? above : below)) return below_first ? above : below;
   }
   return nearest;
+}
+
+// The history_t of the crossing at t on the edge from grid index c (slab
+// local, as grid_coordinate takes it) along `axis`.
+inline float history_t(const GridShape& s, int axis, Id c, double t) {
+  const float written = grid_coordinate(s, axis, c, t);
+  return nearest_float_t(t, [&](float f) { return grid_coordinate(s, axis, c, f) == written; });
 }
 
 }  // namespace keymesh::generate
