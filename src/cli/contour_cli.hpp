@@ -48,8 +48,8 @@ nlohmann::json coarsening_report(const ContourCli& o, const SurfaceMesh& mesh, I
 
 // --history's usage errors (exit 2, said on stderr when `say`): no
 // coarsening, a .vtp output (history_key is UInt64, which the other formats
-// cannot hold). 0 when none.
-int refuse_history_usage(const ContourCli& o, bool say);
+// cannot hold; under mpirun also .pvtp pieces). 0 when none.
+int refuse_history_usage(const ContourCli& o, bool say, bool distributed);
 
 // The mesh written to o.output: with --history (.vtp, checked) its
 // history_key array beside the mesh's history_t field.

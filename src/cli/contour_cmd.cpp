@@ -62,15 +62,14 @@ nlohmann::json coarsening_report(const ContourCli& o, const SurfaceMesh& mesh, I
   return r;
 }
 
-int refuse_history_usage(const ContourCli& o, bool say) {
+int refuse_history_usage(const ContourCli& o, bool say, bool distributed) {
   if (!o.history) return 0;
   std::string why;
   if (o.coarsen)
     why = "--history with --coarsen: a coarsened point merges crossings of several edges, so it has no one edge "
           "and t";
-  else if (io::file_extension(o.output) != ".vtp")
-    why = "--history writes history_key as UInt64, which only .vtp holds (" + o.output +
-          (io::file_extension(o.output) == ".pvtp" ? ": write one gathered .vtp" : "") + ")";
+  else if (io::file_extension(o.output) != ".vtp" && !(distributed && io::file_extension(o.output) == ".pvtp"))
+    why = "--history writes history_key as UInt64, which only .vtp holds (" + o.output + ")";
   if (why.empty()) return 0;
   if (say) std::fprintf(stderr, "keymesh contour: %s (docs/HISTORY.md)\n", why.c_str());
   return 2;
@@ -262,10 +261,10 @@ int run_contour(const ContourCli& o) {
   const generate::ContourOptions opt = contour_options(o);
   if (runs_distributed(o)) {
     if (int rc = refuse_distributed_usage(o)) return rc;
-    if (int rc = refuse_history_usage(o, distributed::rank() == 0)) return rc;
+    if (int rc = refuse_history_usage(o, distributed::rank() == 0, true)) return rc;
     return run_distributed_contour(o, opt, threads);
   }
-  if (int rc = refuse_history_usage(o, true)) return rc;
+  if (int rc = refuse_history_usage(o, true, false)) return rc;
   ContourResult result;
   if (!o.memory_limit.empty()) {
     result = run_streamed(o, opt, timer);

@@ -52,7 +52,7 @@ std::unique_ptr<PlaneSource> open_slab_source(const ContourCli& o, const generat
 // Every rank writes its piece (its triangles, then the ghost cells it
 // carries for its neighbours); rank 0 writes the index once all exist, so a
 // failure anywhere leaves no index and no pieces.
-void write_pieces(distributed::ContourPiece& piece, const std::string& output) {
+void write_pieces(distributed::ContourPiece& piece, const std::string& output, bool history) {
   namespace fs = std::filesystem;
   const int rank = distributed::rank(), ranks = distributed::size();
   const fs::path index(output);
@@ -68,7 +68,9 @@ void write_pieces(distributed::ContourPiece& piece, const std::string& output) {
   try {
     distributed::agreed([&] {
       try {
-        io::write_vtp(ghosted.mesh, mine.string(), &ghosted.ids, &ghosts);
+        std::vector<io::UInt64PointArray> wide;
+        if (history) wide.push_back({"history_key", &ghosted.keys});
+        io::write_vtp(ghosted.mesh, mine.string(), &ghosted.ids, &ghosts, wide);
       } catch (const std::exception& e) {
         throw InputError("rank " + std::to_string(rank) + ": " + e.what());
       }
@@ -77,7 +79,8 @@ void write_pieces(distributed::ContourPiece& piece, const std::string& output) {
       if (rank != 0) return;
       std::vector<std::string> names;
       for (int q = 0; q < ranks; ++q) names.push_back(piece_name(q));
-      io::write_pvtp(output, ghosted.mesh, names, true, true);
+      io::write_pvtp(output, ghosted.mesh, names, true, true,
+                     history ? std::vector<std::string>{"history_key"} : std::vector<std::string>{});
     });
   } catch (const distributed::SharedError&) {
     std::error_code ec;
@@ -171,7 +174,7 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
   const double total_points = static_cast<double>(piece.numbering.total);
   nlohmann::json coarsening;
   if (pieces)
-    timer.run("write", [&] { write_pieces(piece, o.output); });
+    timer.run("write", [&] { write_pieces(piece, o.output, o.history); });
   else
     write_gathered(o, piece, timer, coarsening);
   const std::vector<distributed::RankStats> all = distributed::gather_stats(piece.stats);

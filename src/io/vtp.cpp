@@ -545,12 +545,14 @@ void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vec
 }
 
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
-                bool global_point_ids, bool ghosts) {
+                bool global_point_ids, bool ghosts, const std::vector<std::string>& uint64_arrays) {
   const std::string ghost_array = std::string("      <PDataArray type=\"UInt8\" Name=\"") + kGhostArray + "\"/>\n";
   std::string x = vtk_xml::file_header("PPolyData");
   x += std::string("  <PPolyData GhostLevel=\"") + (ghosts ? "1" : "0") + "\">\n";
   x += "    <PPointData" + point_data_attributes(like, global_point_ids) + ">\n";
   for (const Field& f : like.point_fields) x += declared_array(f);
+  for (const std::string& name : uint64_arrays)
+    x += "      <PDataArray type=\"UInt64\" Name=\"" + xml_escape(name) + "\"/>\n";
   if (global_point_ids) x += "      <PDataArray type=\"Int64\" Name=\"GlobalPointIds\"/>\n";
   if (ghosts) x += ghost_array;
   x += "    </PPointData>\n";

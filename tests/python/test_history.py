@@ -134,3 +134,25 @@ def test_equals_the_command_line():
     order = np.argsort(key)
     for a, b in zip(by_key(contour(v)), (key[order], t[order], points[order])):
         assert np.array_equal(a, b)
+
+
+def test_write_keeps_history_key_uint64():
+    vtk = pytest.importorskip("vtk")
+    from vtk.util import numpy_support as ns
+    m = contour(volume())
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "h.vtp")
+        keymesh.write(m, out)
+        reader = vtk.vtkXMLPolyDataReader()
+        reader.SetFileName(out)
+        reader.Update()
+        pd = reader.GetOutput().GetPointData()
+        key = ns.vtk_to_numpy(pd.GetArray("history_key"))
+        assert key.dtype == np.uint64
+        assert np.array_equal(key, m.point_data["history_key"])
+        assert np.array_equal(ns.vtk_to_numpy(pd.GetArray("history_t")), m.point_data["history_t"])
+        for ext in ("ply", "obj"):
+            path = os.path.join(d, "h." + ext)
+            with pytest.raises(ValueError, match="only .vtp"):
+                keymesh.write(m, path)
+            assert not os.path.exists(path)

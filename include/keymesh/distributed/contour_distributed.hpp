@@ -82,13 +82,14 @@ SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys =
 struct GhostedPiece {
   SurfaceMesh mesh;
   std::vector<std::uint64_t> ids;
+  std::vector<std::uint64_t> keys;  // every point's edge key (history_key)
   std::vector<std::uint8_t> point_ghosts, cell_ghosts;
 };
 
 // Collective: each rank sends its neighbours (the only ranks that hold its
 // points: the planes it shares with them) the triangles touching those
-// planes, with their points' ids, positions and fields; it keeps what it
-// receives that uses a point it holds. Moves the piece's mesh and ids into
+// planes, with their points' ids, keys, positions and fields; it keeps what it
+// receives that uses a point it holds. Moves the piece's mesh, ids and keys into
 // the result.
 GhostedPiece ghosted_piece(ContourPiece& piece);
 

@@ -46,8 +46,9 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
 // fields every piece has.
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
                 bool global_point_ids);
-// Pieces written with ghosts: GhostLevel 1 and the vtkGhostType arrays declared.
+// Pieces written with ghosts: GhostLevel 1 and the vtkGhostType arrays
+// declared; `uint64_arrays` names the pieces' UInt64 point arrays (write_vtp's).
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
-                bool global_point_ids, bool ghosts);
+                bool global_point_ids, bool ghosts, const std::vector<std::string>& uint64_arrays = {});
 
 }  // namespace keymesh::io
