@@ -347,7 +347,9 @@ def write(obj: Union[Mesh, Grid, Volume, np.ndarray], path: Any,
 
     A volume is a keymesh.Volume or a 3-D numpy array (axis 0 = x; spacing
     and origin per axis apply to arrays only). Files are written under a
-    temporary name and renamed when complete.
+    temporary name and renamed when complete. A Mesh's 1-D uint64 point
+    arrays (contour's history_key) are written as UInt64 arrays of a .vtp;
+    the other mesh formats would round them to float32 and raise ValueError.
     """
     if isinstance(obj, Volume):
         _ext.write_volume(obj, str(path))
