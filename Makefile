@@ -13,10 +13,10 @@ endif
 DEBIAN_PACKAGES = build-essential cmake ninja-build pkg-config \
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev zlib1g-dev \
   python3 python3-numpy python3-vtk9 libvolpack1-dev mricron-data \
-  pybind11-dev python3-dev python3-pytest python3-skimage python3-meshio \
+  pybind11-dev libdlpack-dev python3-dev python3-pytest python3-skimage python3-meshio \
   clang-14 libfuzzer-14-dev libclang-rt-14-dev libopenmpi-dev openmpi-bin \
   libgdcm-dev libblosc-dev libdeflate-dev libgmp-dev libtinygltf-dev python3-pydicom python3-zarr \
-  python3-open3d python3-dask python3-distributed
+  python3-open3d python3-dask python3-distributed libdraco-dev draco
 # and those `make bench` adds for its peers, plots and pictures.
 BENCH_PACKAGES = libthrust-dev libtbb-dev libvtk9-dev python3-openvdb python3-matplotlib xvfb hyperfine
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """`make scaling`: the distributed contour (mpirun -np P keymesh contour) for
-P = 1..8 on this machine, and docs/SCALING.md from the measurements.
+P = 1..8 on this machine, then labels and the coarsened contour
+(bench/scaling_ops.py), and docs/SCALING.md from the measurements.
 
 Two series, each rank with one OpenMP thread (ranks beyond the cores are
 oversubscribed, so wall time past P = cores measures time-sharing, not
@@ -28,6 +29,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 from run import machine  # noqa: E402
+from scaling_ops import ops_doc, run_ops  # noqa: E402
 
 
 def mpirun_cmd(P):
@@ -116,7 +118,7 @@ def fmt_ms(s):
 
 def write_doc(rows, mach, path, reps, elapsed):
     L = []
-    L.append("# Distributed contour: scaling on this machine\n")
+    L.append("# Distributed operations: scaling on this machine\n")
     L.append("Measured by `make scaling` (bench/scaling.py) on "
              f"{mach['date']}: {mach['cpu']}, {mach['cores']} cores, {mach['memory_gib']} GiB, {mach['compiler']}, "
              f"OpenMPI (shared-memory transport), one OpenMP thread per rank, median of {reps} runs; "
@@ -217,7 +219,8 @@ def write_doc(rows, mach, path, reps, elapsed):
                  "ParaView reads them in parallel, and GlobalPointIds name every shared point once.\n")
         L.append("Limits of this measurement: one machine, shared memory instead of a network, oversubscribed past "
                  f"{cores} cores; no figure here was taken on a cluster.\n")
-    L.append("Reproduce: `make scaling` (needs openmpi-bin; about "
+    L += ops_doc([r for r in rows if r["series"] not in ("strong", "weak")])
+    L.append("Reproduce: `make scaling` (needs openmpi-bin and mricron-data; about "
              f"{elapsed / 60:.0f} min on this machine).\n")
     with open(path, "w") as f:
         f.write("\n".join(L))
@@ -261,6 +264,7 @@ def main():
             return path, dims, 0.0
 
         series(keymesh, "weak", weak_volume, ranks, args.reps, work, rows, progress)
+        rows += run_ops(keymesh, ranks, args.reps, work, progress, mpirun_cmd)
     mach = machine()
     os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
     with open(os.path.join(HERE, "results", "scaling.jsonl"), "w") as f:

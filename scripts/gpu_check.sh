@@ -22,7 +22,8 @@
 # Environment: OUT, GPU_CHECK_BIN (default build-gpucheck), GPU_CHECK_BACKEND
 # (cpu: a dry run of the script where there is no GPU), GPU_CHECK_SIZES
 # (default "64 128 256 512 1024"), GPU_CHECK_BUDGET, GPU_CHECK_MAX_MEMORY
-# (default 96G), TMPDIR.
+# (default 96G), TMPDIR; GPU_CHECK_PYTHONPATH (a build's python folder:
+# runs tests/python/test_dlpack.py with GPU_CHECK_PYTHON, default python3).
 set -u
 OUT=${OUT:-./gpu-check-out}
 BIN=${GPU_CHECK_BIN:-build-gpucheck}
@@ -253,6 +254,21 @@ else
   skip "timing" "the timing program does not run here"
 fi
 
+# ---- Python: CUDA tensors in and out (optional) -----------------------------------
+# The GPU check's programs have no Python module; where one is importable
+# (a build's python folder in GPU_CHECK_PYTHONPATH, built for the machine's
+# python3), tests/python/test_dlpack.py runs its CuPy / PyTorch CUDA round
+# trips (they skip, saying why, where CuPy or PyTorch is missing).
+PY=${GPU_CHECK_PYTHON:-python3}
+if [ -z "${GPU_CHECK_PYTHONPATH:-}" ]; then
+  skip "Python: CUDA tensors in and out (test_dlpack.py)" "GPU_CHECK_PYTHONPATH not set (no keymesh Python module)"
+elif ! PYTHONPATH=$GPU_CHECK_PYTHONPATH "$PY" -c "import keymesh, pytest" >>"$LOG" 2>&1; then
+  skip "Python: CUDA tensors in and out (test_dlpack.py)" "keymesh or pytest does not import with $PY"
+else
+  gpu_step "Python: CUDA tensors in and out (test_dlpack.py)" 120 env PYTHONPATH="$GPU_CHECK_PYTHONPATH" \
+    "$PY" -m pytest -q -p no:cacheprovider -rs tests/python/test_dlpack.py
+fi
+
 # ---- summary ---------------------------------------------------------------------
 ELAPSED=$(($(date +%s) - START))
 {
@@ -274,4 +290,5 @@ ELAPSED=$(($(date +%s) - START))
 say ""
 say "GPU check: $FAILED failed, ${ELAPSED}s; $OUT/summary.json, $OUT/gpu_check.log"
 grep -hE '"gpu_ms_median"' "$OUT/timing.jsonl" 2>/dev/null | sed -E 's/.*"size": ([0-9]+).*"triangles": ([0-9]+).*"gpu_ms_median": ([0-9.e+-]+).*"gpu_ms_min": ([0-9.e+-]+).*/  sphere \1^3: \2 triangles, median \3 ms, min \4 ms (CUDA events)/' | tee -a "$LOG"
+grep -hE '"device_input_ms_median"' "$OUT/timing.jsonl" 2>/dev/null | sed -E 's/.*"size": ([0-9]+).*"device_input_ms_median": ([0-9.e+-]+).*"device_input_ms_min": ([0-9.e+-]+).*"device_input_identical": ([a-z]+).*/  sphere \1^3, device-resident input: median \2 ms, min \3 ms, same mesh: \4/' | tee -a "$LOG"
 [ $FAILED = 0 ]

@@ -26,9 +26,10 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from ._keymesh import Error, LimitError, Volume
+from ._keymesh import DeviceArray, Error, LimitError, Volume
 from ._arguments import INT32, int_arg as _int_arg
 from . import _keymesh as _ext
+from . import _foreign
 from ._grid import CellCounts, Grid, grid_from_parts as _grid
 from ._operations import coarsen, dual, incidence, quality, subdivide, tetrahedralize
 from ._skimage_compat import marching_cubes
@@ -36,7 +37,7 @@ from ._skimage_compat import marching_cubes
 __all__ = [
     "Mesh", "Volume", "Error", "LimitError", "Grid", "contour", "key_reduce", "check", "read", "write", "marching_cubes",
     "tetrahedralize", "subdivide", "dual", "quality", "coarsen", "incidence", "from_vtk", "from_meshio",
-    "release_memory", "retained_memory",
+    "release_memory", "retained_memory", "cuda_available", "DeviceArray",
 ]
 
 __version__ = "0.1.0"
@@ -154,7 +155,8 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0),
             normals: Optional[str] = "average", weld: str = "keyreduce",
             coarsen: bool = False, curvature: bool = False, threads: int = 0,
-            progress: Optional[Any] = None, scalars: bool = True, history: bool = False) -> Mesh:
+            progress: Optional[Any] = None, scalars: bool = True, backend: Optional[str] = None,
+            history: bool = False) -> Mesh:
     """Isosurface of a 3-D volume: marching cubes, points welded by edge keys.
 
     Args:
@@ -170,6 +172,12 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             non-native byte orders are made C-contiguous first;
             C and Fortran order give the same points, their triangulations
             may differ in such diagonals. A keymesh.Volume is read in place.
+            A tensor of another library that exposes DLPack
+            (``__dlpack__``, ``__dlpack_device__``) or
+            ``__cuda_array_interface__`` is read without a host copy: a
+            host tensor as the numpy array over its memory (the same mesh
+            as that numpy call), a CUDA tensor (C- or Fortran-contiguous)
+            on its GPU (see backend).
         iso: an isovalue or a sequence of them (finite). Inside means
             ``value >= iso``; NaN samples are outside. One point per grid
             edge whose samples straddle the isovalue.
@@ -203,6 +211,16 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             leaves it out (one float less to write per point), as
             vtkFlyingEdges3D's ComputeScalarsOff() does (VTK computes it by
             default).
+        backend: None (default: where the volume lies), "cpu" or "cuda"
+            (an NVIDIA GPU; the same mesh, bit for bit; weld "vertexweld",
+            coarsen and curvature are refused by name). A host volume on
+            "cuda" is uploaded and its mesh comes back as numpy arrays; a
+            CUDA tensor's mesh stays on its device, as tensors of its
+            library (CuPy in, CuPy out; PyTorch in, PyTorch out; a library
+            without ``from_dlpack``: keymesh.DeviceArray, which exports
+            DLPack and ``__cuda_array_interface__``). A CUDA tensor with
+            backend="cpu" is refused (ValueError): copy it to the host
+            yourself. ``keymesh.cuda_available()`` says whether "cuda" runs.
         history: add point_data["history_key"] (uint64: the point's grid
             edge, ``3 * np.ravel_multi_index((i, j, k), volume.shape,
             order="F") + axis + isovalue_index * 3 * volume.size``, (i, j, k)
@@ -210,7 +228,7 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             along the edge from that end, which gives the point back:
             ``np.float32(origin[axis] + spacing[axis] * (ijk[axis] +
             np.float64(t)))``), as ``keymesh contour --history`` writes them
-            (docs/HISTORY.md). Not with coarsen (ValueError).
+            (docs/HISTORY.md). Not with coarsen, nor on the GPU (ValueError).
 
     Returns:
         Mesh with points (n, 3) float32, cells (m, 3) uint32 and point_data
@@ -228,6 +246,9 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
         OverflowError: an integer argument past its C++ type.
         MemoryError: the copy a strided array needs does not fit (the
             message names the array and its size).
+        keymesh.Error: backend="cuda" where no GPU is usable or keymesh was
+            built without CUDA (the message says which); LimitError when
+            the GPU runs out of memory.
     """
     if normals is None:
         normals = "none"
@@ -241,11 +262,27 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             spacing = None
         if origin is not None and tuple(map(float, origin)) == (0.0, 0.0, 0.0):
             origin = None
-    parts, info = _ext.contour(volume, _isovalues(iso), spacing, origin, normals, weld, bool(coarsen),
-                               bool(curvature), _threads(threads), progress, bool(scalars), bool(history))
+    source = _foreign.volume_source(volume)
+    backend = _foreign.check_backend(source, backend)
+    if source.on_cuda:
+        _threads(threads)
+        if history:
+            raise ValueError("history: per-point history is not available on the GPU yet (use backend=\"cpu\" "
+                             "on a host copy)")
+        parts, info = _ext.contour_device(source.value, _isovalues(iso), spacing, origin, normals, weld,
+                                          bool(coarsen), bool(curvature), progress, bool(scalars))
+    else:
+        parts, info = _ext.contour(source.value, _isovalues(iso), spacing, origin, normals, weld, bool(coarsen),
+                                   bool(curvature), _threads(threads), progress, bool(scalars), backend, bool(history))
     last_contour_info.clear()
     last_contour_info.update(info)
-    return _mesh(parts)
+    return _mesh(_foreign.in_library(parts, source.library))
+
+
+def cuda_available() -> Optional[str]:
+    """None when keymesh.contour(..., backend="cuda") can run here, else why
+    not (no device, no driver, a build without CUDA, an earlier fault)."""
+    return _ext.cuda_available()
 
 
 def release_memory() -> int:

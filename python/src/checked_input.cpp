@@ -9,10 +9,14 @@
 
 namespace keymesh::python {
 
-std::string shape_text(const py::array& a) {
+std::string shape_text(const std::vector<py::ssize_t>& shape) {
   std::string s = "(";
-  for (py::ssize_t d = 0; d < a.ndim(); ++d) s += (d ? ", " : "") + std::to_string(a.shape(d));
-  return s + (a.ndim() == 1 ? ",)" : ")");
+  for (std::size_t d = 0; d < shape.size(); ++d) s += (d ? ", " : "") + std::to_string(shape[d]);
+  return s + (shape.size() == 1 ? ",)" : ")");
+}
+
+std::string shape_text(const py::array& a) {
+  return shape_text(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()));
 }
 
 namespace {

@@ -21,7 +21,8 @@
 #include "keymesh/parallel/threads.hpp"
 
 namespace keymesh::generate {
-struct LabelOptions;  // keymesh/generate/labels/labels.hpp
+struct LabelOptions;    // keymesh/generate/labels/labels.hpp
+struct ContourOptions;  // keymesh/generate/contour/contour.hpp
 }  // namespace keymesh::generate
 
 namespace keymesh::python {
@@ -137,6 +138,7 @@ py::array_t<T, Flags> checked_array(const py::handle& obj, const char* what) {
 }
 // "(700, 700, 700)"
 std::string shape_text(const py::array& a);
+std::string shape_text(const std::vector<py::ssize_t>& shape);
 // A copy of the module's own (into a std::vector, a library Array): `fill`
 // runs and a std::bad_alloc it throws becomes OutOfMemory naming `what` and
 // the `bytes` it needed.
@@ -202,6 +204,9 @@ struct VolumeUse {
 // made. Spacing and origin (None: 1 and 0) are given along the array's axes.
 ArrayVolume view_array_volume(const py::object& volume, const py::object& spacing, const py::object& origin,
                               VolumeOrder order, const VolumeUse& use);
+// keymesh.Error (naming the axis as the docs name it, axis 0 = x) unless
+// every axis of a 3-D volume's shape has use.min_samples samples.
+void check_volume_shape(const std::vector<py::ssize_t>& shape, const VolumeUse& use);
 // keymesh.Error unless a grid's points are finite in float32, checked where
 // a Volume is used (its spacing and origin can be set after it was made).
 void check_volume_geometry(const ImageGrid& grid, const char* command);
@@ -217,6 +222,18 @@ std::vector<Field> fields_from_python(const py::object& data, py::ssize_t rows, 
 generate::LabelOptions label_options(const std::string& method, const std::vector<std::int64_t>& labels,
                                      std::int64_t background, bool per_label, int smoothing_iterations,
                                      double relaxation, bool coarsen);
+
+// keymesh.contour's arguments as the library's options (contour.cpp):
+// ValueError for no isovalue, a non-finite one, an unknown normals, weld or
+// backend name.
+generate::ContourOptions contour_options(const std::vector<double>& isovalues, const std::string& normals,
+                                         const std::string& weld, bool coarsen, bool curvature, bool scalars,
+                                         const std::string& backend);
+
+// Inside a catch block: rethrows the library's InputError or LimitError
+// with the CLI's "--backend cuda" / "--backend cpu" said as Python says them
+// (backend='cuda'), any other exception as it is (contour_device.cpp).
+[[noreturn]] void rethrow_in_python_words();
 
 // A mesh contoured over a C-ordered array's reversed axes (VolumeOrder::
 // CAsReversedAxes) mirrored back into the array's frame: x <-> z in points
@@ -251,5 +268,6 @@ void register_io(py::module_& m);
 void register_check(py::module_& m);
 void register_marching_cubes(py::module_& m);
 void register_operations(py::module_& m);
+void register_contour_device(py::module_& m);
 
 }  // namespace keymesh::python

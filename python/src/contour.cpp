@@ -16,6 +16,7 @@
 #include <cmath>
 
 #include "common.hpp"
+#include "keymesh/backend/contour.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/option_names.hpp"
 #include "keymesh/generate/report_fields.hpp"
@@ -115,19 +116,11 @@ py::dict contour_info(const generate::ContourStats& stats, double contour_s, dou
 
 py::tuple contour(const py::object& volume, const std::vector<double>& isovalues, const py::object& spacing,
                   const py::object& origin, const std::string& normals, const std::string& weld, bool coarsen,
-                  bool curvature, int threads, const py::object& callback, bool scalars, bool history) {
+                  bool curvature, int threads, const py::object& callback, bool scalars, const std::string& backend,
+                  bool history) {
   check_threads(threads);
   const PythonProgress progress(callback);
-  if (isovalues.empty()) throw py::value_error("iso: give at least one isovalue");
-  for (double v : isovalues)
-    if (!std::isfinite(v)) throw py::value_error("iso must be finite, got " + std::string(py::repr(py::float_(v))));
-  generate::ContourOptions opt;
-  opt.isovalues = isovalues;
-  opt.normals = generate::parse_option<generate::ContourNormals>(normals);
-  opt.weld = generate::parse_option<generate::ContourWeld>(weld);
-  opt.coarsen = coarsen;
-  opt.curvature = curvature;
-  opt.scalars = scalars;
+  generate::ContourOptions opt = contour_options(isovalues, normals, weld, coarsen, curvature, scalars, backend);
   opt.history = history;
   ArrayVolume view;  // keeps a numpy array's samples alive while the GIL is released
   const ImageGrid& grid = contour_grid(volume, spacing, origin, view);
@@ -138,7 +131,8 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   // module's own arrays, handed to numpy as they are.
   OwnArrays own;
   const bool own_arrays = opt.weld == generate::ContourWeld::KeyReduce &&
-                          opt.normals == generate::ContourNormals::None && !coarsen && !curvature && !history;
+                          opt.normals == generate::ContourNormals::None && !coarsen && !curvature && !history &&
+                          opt.backend == generate::Backend::Cpu;
   if (own_arrays)
     opt.output_arrays = [&own, &opt](Id n, Id m) { return own.allocate(n, m, opt.scalars); };
   SurfaceMesh mesh;
@@ -148,7 +142,11 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   run_released(threads, progress, [&] {
     progress::report("contour", 0.0);
     auto t0 = Clock::now();
-    mesh = generate::contour(grid, opt, &stats, history && !coarsen ? &history_key : nullptr);
+    try {
+      mesh = backend::contour(grid, opt, &stats, history && !coarsen ? &history_key : nullptr);
+    } catch (const std::exception&) {
+      rethrow_in_python_words();
+    }
     contour_s = seconds_since(t0);
     t0 = Clock::now();
     if (view.reversed && own_arrays) {
@@ -162,6 +160,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
     progress::report("contour", 1.0);
   });
   py::dict info = contour_info(stats, contour_s, mirror_s);
+  info["backend"] = backend;
   py::tuple parts = own_arrays ? own.to_python(grid.name) : mesh_to_python(std::move(mesh));
   if (history) {
     const auto n = static_cast<py::ssize_t>(history_key.size());
@@ -171,6 +170,23 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
 }
 
 }  // namespace
+
+generate::ContourOptions contour_options(const std::vector<double>& isovalues, const std::string& normals,
+                                         const std::string& weld, bool coarsen, bool curvature, bool scalars,
+                                         const std::string& backend) {
+  if (isovalues.empty()) throw py::value_error("iso: give at least one isovalue");
+  for (double v : isovalues)
+    if (!std::isfinite(v)) throw py::value_error("iso must be finite, got " + std::string(py::repr(py::float_(v))));
+  generate::ContourOptions opt;
+  opt.isovalues = isovalues;
+  opt.backend = generate::parse_option<generate::Backend>(backend);
+  opt.normals = generate::parse_option<generate::ContourNormals>(normals);
+  opt.weld = generate::parse_option<generate::ContourWeld>(weld);
+  opt.coarsen = coarsen;
+  opt.curvature = curvature;
+  opt.scalars = scalars;
+  return opt;
+}
 
 void mirror_axes(SurfaceMesh& mesh) {
   swap_x_z(mesh.points.data(), mesh.num_points());
@@ -183,7 +199,8 @@ void register_contour(py::module_& m) {
   m.def("contour", &contour, py::arg("volume"), py::arg("isovalues"), py::arg("spacing") = py::none(),
         py::arg("origin") = py::none(), py::arg("normals") = "average", py::arg("weld") = "keyreduce",
         py::arg("coarsen") = false, py::arg("curvature") = false, py::arg("threads") = 0,
-        py::arg("progress") = py::none(), py::arg("scalars") = true, py::arg("history") = false,
+        py::arg("progress") = py::none(), py::arg("scalars") = true, py::arg("backend") = "cpu",
+        py::arg("history") = false,
         "Marching cubes welded by KEY-REDUCE; returns ((points, cells, offsets, point_data), timings). "
         "Use keymesh.contour, which wraps this in a Mesh.");
 }

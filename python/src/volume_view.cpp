@@ -5,20 +5,16 @@
 
 namespace keymesh::python {
 
-namespace {
-
 // Axes named the way the Python docs name them (axis 0 is x, whatever the
 // memory order): the library would name a C-ordered array's axis 0 "z",
 // the grid's axis it becomes.
-void check_volume_shape(const py::array& array, const VolumeUse& use) {
+void check_volume_shape(const std::vector<py::ssize_t>& shape, const VolumeUse& use) {
   for (int a = 0; a < 3; ++a)
-    if (array.shape(a) < use.min_samples)
-      throw InputError(std::string(use.command) + ": volume has shape " + shape_text(array) + ": " +
-                       std::to_string(array.shape(a)) + " sample(s) along axis " + std::to_string(a) + " (" +
-                       "xyz"[a] + "), need at least " + std::to_string(use.min_samples));
+    if (shape[a] < use.min_samples)
+      throw InputError(std::string(use.command) + ": volume has shape " + shape_text(shape) + ": " +
+                       std::to_string(shape[a]) + " sample(s) along axis " + std::to_string(a) + " (" + "xyz"[a] +
+                       "), need at least " + std::to_string(use.min_samples));
 }
-
-}  // namespace
 
 void check_volume_geometry(const ImageGrid& grid, const char* command) {
   check_float32_geometry(grid.dims, grid.origin, grid.spacing, command);
@@ -32,7 +28,7 @@ ArrayVolume view_array_volume(const py::object& volume, const py::object& spacin
   if (v.array.ndim() != 3)
     throw py::value_error("volume must be 3-D (axis 0 = x), got ndim=" + std::to_string(v.array.ndim()));
   v.grid.type = scalar_type_of(v.array.dtype(), "volume");
-  check_volume_shape(v.array, use);
+  check_volume_shape({v.array.shape(0), v.array.shape(1), v.array.shape(2)}, use);
   const std::array<double, 3> s = spacing.is_none() ? std::array<double, 3>{1, 1, 1} : triple(spacing, "spacing");
   const std::array<double, 3> o = origin.is_none() ? std::array<double, 3>{0, 0, 0} : triple(origin, "origin");
   // Along the array's axes (x = axis 0), before anything is copied.

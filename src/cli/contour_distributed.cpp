@@ -3,10 +3,10 @@
 // piece per rank (.pvtp) or gathered on rank 0, rank 0 reports.
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 
 #include "contour_cli.hpp"
+#include "piece_files.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/distributed/contour_distributed.hpp"
 #include "keymesh/distributed/mpi.hpp"
@@ -53,40 +53,14 @@ std::unique_ptr<PlaneSource> open_slab_source(const ContourCli& o, const generat
 // carries for its neighbours); rank 0 writes the index once all exist, so a
 // failure anywhere leaves no index and no pieces.
 void write_pieces(distributed::ContourPiece& piece, const std::string& output, bool history) {
-  namespace fs = std::filesystem;
-  const int rank = distributed::rank(), ranks = distributed::size();
-  const fs::path index(output);
-  const std::string stem = index.stem().string();
-  auto piece_name = [&](int q) { return stem + "_" + std::to_string(q) + ".vtp"; };
-  const fs::path mine = index.parent_path() / piece_name(rank);
   const auto t0 = std::chrono::steady_clock::now();
   // With one layer of ghost cells from the neighbouring slabs, marked as VTK
   // marks them: per-piece filters see across the shared planes (issue 33).
   distributed::GhostedPiece ghosted = distributed::ghosted_piece(piece);
   const io::PieceGhosts ghosts{std::move(ghosted.point_ghosts), std::move(ghosted.cell_ghosts)};
-  // Any rank's failure is every rank's (SharedError): no piece and no index is left.
-  try {
-    distributed::agreed([&] {
-      try {
-        std::vector<io::UInt64PointArray> wide;
-        if (history) wide.push_back({"history_key", &ghosted.keys});
-        io::write_vtp(ghosted.mesh, mine.string(), &ghosted.ids, &ghosts, wide);
-      } catch (const std::exception& e) {
-        throw InputError("rank " + std::to_string(rank) + ": " + e.what());
-      }
-    });
-    distributed::agreed([&] {
-      if (rank != 0) return;
-      std::vector<std::string> names;
-      for (int q = 0; q < ranks; ++q) names.push_back(piece_name(q));
-      io::write_pvtp(output, ghosted.mesh, names, true, true,
-                     history ? std::vector<std::string>{"history_key"} : std::vector<std::string>{});
-    });
-  } catch (const distributed::SharedError&) {
-    std::error_code ec;
-    fs::remove(mine, ec);
-    throw;
-  }
+  std::vector<io::UInt64PointArray> wide;
+  if (history) wide.push_back({"history_key", &ghosted.keys});
+  write_piece_files(ghosted.mesh, ghosted.ids, ghosts, output, wide);
   piece.stats.output = seconds_since(t0);
 }
 

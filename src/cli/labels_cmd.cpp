@@ -166,7 +166,9 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   cmd.add_option("-o,--output", o.output,
                  "output mesh (" + io::extensions_of(io::DataKind::Surface, true) +
                      "): .vtp (CellData) and .ply (face properties) keep the cell fields boundary_labels (and label), "
-                     "the others drop them")
+                     "the others drop them; under mpirun -np P, OUT.pvtp: every rank writes its own piece "
+                     "(OUT_<rank>.vtp, GlobalPointIds, ghost cells) and rank 0 the index, nothing gathered; "
+                     "any other file is gathered on rank 0")
       ->required();
   cmd.add_option("--method", o.method,
                  "surfacenets (a point per cell of mixed labels, a quad per edge between two labels, every "
@@ -203,7 +205,10 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
 int run_labels_command(const LabelsCli& o, CommandRun& run) {
   LabelsJob job = job_of(o);
   job.threads = run.threads();
-  if (distributed::size() > 1) return run_distributed_labels(job);
+  // One rank under mpirun writing .pvtp is the pieces path too (a piece and
+  // its index), so a scaling series starts at -np 1 with the same files.
+  const bool pieces = job.output.size() >= 5 && job.output.compare(job.output.size() - 5, 5, ".pvtp") == 0;
+  if (distributed::size() > 1 || (pieces && distributed::launched_by_mpi())) return run_distributed_labels(job);
   return run_labels(job);
 }
 

@@ -1,9 +1,10 @@
 // `mpirun -np P keymesh labels VOLUME -o OUT`: every rank reads and
 // contours its rows of the padded volume (generate/labels_stream.hpp's passes,
 // streamed in slabs too with --memory-limit); the ranks share their distinct
-// labels and counts, rank 0 gathers the pieces, merges them by key, smooths
-// and writes one file, byte-identical to the single-process run. Not written:
-// .pvtp pieces (smoothing and the per-label surfaces cross the ranks' rows).
+// labels and counts. Then either every rank writes its own piece of
+// OUT.pvtp (labels_pieces.cpp: nothing gathered), or, for any other file,
+// rank 0 gathers the pieces, merges them by key, smooths and writes one
+// file, byte-identical to the single-process run.
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -61,12 +62,7 @@ void write_merged(const LabelsJob& job, generate::LabelSlabs& slabs, const Image
 int run_distributed_labels(const LabelsJob& job) {
   const int rank = distributed::rank(), ranks = distributed::size();
   const std::string out = job.output;
-  if (out.size() >= 5 && out.compare(out.size() - 5, 5, ".pvtp") == 0) {
-    if (rank == 0)
-      std::fprintf(stderr, "keymesh labels: %s: under mpirun the mesh is gathered on rank 0 into one file; .pvtp "
-                           "pieces are not written (smoothing crosses the ranks' slabs): use .vtp\n", out.c_str());
-    return 2;
-  }
+  const bool into_pieces = out.size() >= 5 && out.compare(out.size() - 5, 5, ".pvtp") == 0;
   StageTimer timer;
   // Each step is this rank's own work, then the ranks agree
   // (distributed::agreed): an error on any rank, a slice only the last rank
@@ -94,6 +90,10 @@ int run_distributed_labels(const LabelsJob& job) {
   step("scan", [&] { counts = slabs->count_labels(); });
   const std::vector<std::vector<std::byte>> all_counts = distributed::all_gather_bytes(counts);
   step("scan", [&] { slabs->set_counts(all_counts); });
+  if (into_pieces) {
+    write_labels_pieces(job, *slabs, source->header(), rows_of(total_rows, rank, ranks), timer);
+    return 0;
+  }
   std::vector<std::byte> my_pieces;
   step("labels", [&] {
     slabs->generate();

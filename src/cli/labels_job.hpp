@@ -9,6 +9,7 @@
 
 #include "command.hpp"
 #include "keymesh/generate/labels/labels.hpp"
+#include "keymesh/generate/labels/labels_stream.hpp"
 #include "keymesh/io/volume_io.hpp"
 
 namespace keymesh::cli {
@@ -49,5 +50,12 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
 
 // Collective over the ranks: returns the exit code (every rank the same).
 int run_distributed_labels(const LabelsJob& job);
+
+// Collective, once the ranks agreed on the labels and their counts
+// (labels_pieces.cpp): every rank writes its piece of OUT.pvtp (its padded
+// rows `rows` and halo rows either side made, its share kept), rank 0 the
+// index, the summary line and the report; nothing is gathered.
+void write_labels_pieces(const LabelsJob& job, generate::LabelSlabs& slabs, const ImageGrid& header,
+                         std::pair<Id, Id> rows, StageTimer& timer);
 
 }  // namespace keymesh::cli

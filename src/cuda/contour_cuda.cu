@@ -15,12 +15,15 @@
 //   5. averaged normals: each point sums its triangles' normals in the CPU's
 //      fixed order (even slab blocks, then odd; pair order within a block).
 // Device memory comes from CUDA's stream-ordered pool (cudaMallocAsync), so
-// buffers freed by a stage are reused by the next without new allocations.
+// buffers freed by a stage are reused by the next without new allocations
+// (the pool's release threshold is raised so that it keeps them across the
+// synchronizations, and for the next contour); the arrays of a mesh handed to
+// the caller (contour_device) come from cudaMalloc and go with cudaFree.
+// Stage times are the device's: CUDA events around each stage's launches.
 #include <cuda_runtime.h>
 #include <thrust/iterator/transform_iterator.h>
 
 #include <atomic>
-#include <chrono>
 #include <cstring>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
@@ -29,11 +32,13 @@
 #include <mutex>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "contour_limits.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/backend.hpp"
+#include "keymesh/cuda/device_contour.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
 #include "keymesh/generate/contour/marching_cubes_table.hpp"
 
@@ -44,9 +49,6 @@ namespace {
 using generate::EdgeInterpolator;
 using generate::GridShape;
 using ::keymesh::Vec3f;
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // A fault that leaves the context unusable (an illegal address in a kernel,
 // say): every later CUDA call of the process fails with it, so available()
@@ -101,19 +103,36 @@ void check_at(cudaError_t e, const char* what, const char* file, int line) {
 // After a launch: its configuration errors now, its faults at the next sync.
 #define KEYMESH_CUDA_LAUNCHED(what) check_at(cudaGetLastError(), (what), __FILE__, __LINE__)
 
-// A device array from the stream-ordered pool.
+// Where a DeviceArray's memory comes from: the stream-ordered pool (freed
+// on the stream when the array goes), or cudaMalloc for an array handed to
+// the caller (release(): freed by cudaFree when the caller's last copy goes).
+enum class Memory { Pool, Handed };
+
+// A device array from the stream-ordered pool, or handed to the caller.
 template <class T>
 class DeviceArray {
  public:
-  DeviceArray(std::size_t n, cudaStream_t s) : n_(n), s_(s) {
-    if (n)
+  DeviceArray() = default;
+  DeviceArray(std::size_t n, cudaStream_t s, Memory memory = Memory::Pool) : n_(n), s_(s), memory_(memory) {
+    if (!n) return;
+    if (memory == Memory::Pool)
       KEYMESH_CUDA_CHECK(cudaMallocAsync(reinterpret_cast<void**>(&p_), n * sizeof(T), s), "allocating device memory");
+    else
+      KEYMESH_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&p_), n * sizeof(T)),
+                         "allocating the mesh's device memory");
   }
+  DeviceArray(DeviceArray&& o) noexcept
+      : p_(std::exchange(o.p_, nullptr)), n_(o.n_), s_(o.s_), memory_(o.memory_) {}
   DeviceArray(const DeviceArray&) = delete;
   DeviceArray& operator=(const DeviceArray&) = delete;
-  ~DeviceArray() {
-    if (p_) cudaFreeAsync(p_, s_);
+  DeviceArray& operator=(DeviceArray&& o) noexcept {
+    if (this != &o) {
+      free();
+      p_ = std::exchange(o.p_, nullptr), n_ = o.n_, s_ = o.s_, memory_ = o.memory_;
+    }
+    return *this;
   }
+  ~DeviceArray() { free(); }
   T* get() const { return p_; }
   std::size_t size() const { return n_; }
   void upload(const T* host, std::size_t n) {
@@ -122,11 +141,62 @@ class DeviceArray {
   void download(T* host, std::size_t n) const {
     KEYMESH_CUDA_CHECK(cudaMemcpyAsync(host, p_, n * sizeof(T), cudaMemcpyDeviceToHost, s_), "downloading");
   }
+  // A Handed array's memory, now the caller's (null when empty).
+  DeviceBuffer release() {
+    return DeviceBuffer(std::exchange(p_, nullptr), [](void* p) {
+      if (p) cudaFree(p);  // errors ignored: at exit the runtime may be gone already
+    });
+  }
 
  private:
+  void free() {
+    if (!p_) return;
+    if (memory_ == Memory::Pool) cudaFreeAsync(p_, s_);
+    else cudaFree(p_);
+    p_ = nullptr;
+  }
   T* p_ = nullptr;
-  std::size_t n_;
+  std::size_t n_ = 0;
+  cudaStream_t s_ = nullptr;
+  Memory memory_ = Memory::Pool;
+};
+
+// Stage times from CUDA events recorded on the stream around each stage's
+// launches: the device's clock (a host clock around asynchronous launches
+// would time the launches, classify's always 0).
+class StageTimes {
+ public:
+  using Stage = double generate::ContourStats::*;
+  explicit StageTimes(cudaStream_t s) : s_(s) {}
+  StageTimes(const StageTimes&) = delete;
+  StageTimes& operator=(const StageTimes&) = delete;
+  ~StageTimes() {
+    for (const Mark& m : marks_) cudaEventDestroy(m.begin), cudaEventDestroy(m.end);
+  }
+  void begin(Stage stage) {
+    marks_.push_back(Mark{stage, nullptr, nullptr});
+    KEYMESH_CUDA_CHECK(cudaEventCreate(&marks_.back().begin), "creating a timing event");
+    KEYMESH_CUDA_CHECK(cudaEventCreate(&marks_.back().end), "creating a timing event");
+    KEYMESH_CUDA_CHECK(cudaEventRecord(marks_.back().begin, s_), "recording a timing event");
+  }
+  void end() { KEYMESH_CUDA_CHECK(cudaEventRecord(marks_.back().end, s_), "recording a timing event"); }
+  // Adds every stage's seconds to st, once the stream is done.
+  void add_to(generate::ContourStats& st) const {
+    KEYMESH_CUDA_CHECK(cudaStreamSynchronize(s_), "reading the stage times");
+    for (const Mark& m : marks_) {
+      float ms = 0;
+      KEYMESH_CUDA_CHECK(cudaEventElapsedTime(&ms, m.begin, m.end), "reading a timing event");
+      st.*m.stage += ms / 1000.0;
+    }
+  }
+
+ private:
+  struct Mark {
+    Stage stage;
+    cudaEvent_t begin, end;
+  };
   cudaStream_t s_;
+  std::vector<Mark> marks_;
 };
 
 __constant__ generate::MarchingCubesTable d_table;
@@ -248,6 +318,25 @@ __global__ void average_kernel(const std::uint32_t* perm, const std::uint32_t* g
   normal[3 * g] = u.x, normal[3 * g + 1] = u.y, normal[3 * g + 2] = u.z;
 }
 
+// A mesh contoured over a C-ordered array's reversed axes mirrored back
+// (DeviceVolume::mirror_back): x <-> z in points and normals, corners 1 and 2
+// of every triangle swapped, as the Python module's mirror_axes on the host.
+__global__ void mirror_kernel(float* xyz, float* normal, std::uint32_t* conn, Id points, Id triangles) {
+  const Id i = static_cast<Id>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i < points) {
+    const float x = xyz[3 * i];
+    xyz[3 * i] = xyz[3 * i + 2], xyz[3 * i + 2] = x;
+    if (normal) {
+      const float nx = normal[3 * i];
+      normal[3 * i] = normal[3 * i + 2], normal[3 * i + 2] = nx;
+    }
+  }
+  if (i < triangles) {
+    const std::uint32_t b = conn[3 * i + 1];
+    conn[3 * i + 1] = conn[3 * i + 2], conn[3 * i + 2] = b;
+  }
+}
+
 // The grid as the kernels see it (a whole grid: no slab, no host table).
 GridShape shape_of(const ImageGrid& grid) {
   GridShape s{};
@@ -312,11 +401,14 @@ TriangleOffsets download_offsets(const VoxelCases& v, const GridShape& s, Id vox
 // past the device sort's corners or --max-memory before the part is sized.
 template <class K, class T>
 void emit_isovalue(const T* samples, const GridShape& s, Id voxels, const generate::ContourOptions& opt, Id iso_index,
-                   K key_offset, VoxelCases& v, SoupParts<K>& parts, cudaStream_t stream) {
+                   K key_offset, VoxelCases& v, SoupParts<K>& parts, StageTimes& times, cudaStream_t stream) {
   const generate::InsideTest<T> test(opt.isovalues[static_cast<std::size_t>(iso_index)]);
+  times.begin(&generate::ContourStats::classify);
   classify_kernel<T><<<grid_for(voxels), kThreads, 0, stream>>>(
       samples, s, test.threshold, test.all ? 2 : (test.none ? 1 : 0), v.cases.get(), voxels);
   KEYMESH_CUDA_LAUNCHED("classify");
+  times.end();
+  times.begin(&generate::ContourStats::generate);
   // The scan's storage is freed when this isovalue is done, after its part is allocated.
   const auto counts = thrust::make_transform_iterator(v.cases.get(), TriangleCountOf{});
   std::size_t temp_bytes = 0;
@@ -341,6 +433,7 @@ void emit_isovalue(const T* samples, const GridShape& s, Id voxels, const genera
                                                               part->get(), voxels);
     KEYMESH_CUDA_LAUNCHED("emit");
   }
+  times.end();
   parts.corners = corners;
 }
 
@@ -417,53 +510,73 @@ void average_normals(const DeviceArray<float>& xyz, const DeviceArray<std::uint3
   KEYMESH_CUDA_CHECK(cudaStreamSynchronize(stream), "averaging normals");
 }
 
-// The mesh of an empty soup: no points, the fields asked for, empty.
-SurfaceMesh empty_mesh(const ImageGrid& grid, const generate::ContourOptions& opt) {
-  SurfaceMesh mesh;
-  if (opt.scalars) mesh.point_fields.push_back(Field{grid.name, 1, {}});
-  if (opt.normals != generate::ContourNormals::None) mesh.point_fields.push_back(Field{"Normals", 3, {}});
-  return mesh;
-}
+// The mesh as the stages leave it in device memory: the points' positions
+// and fields, the triangles (the index map). The four arrays are the pool's
+// for a host mesh, Handed for contour_device.
+struct DeviceResult {
+  Id points = 0;
+  Id corners = 0;
+  DeviceArray<float> xyz, scalar, normal;
+  DeviceArray<std::uint32_t> index_map;
+};
 
-// The device's points, triangles (the index map) and fields into a mesh.
-// Waits for the stream.
-SurfaceMesh download_mesh(const ImageGrid& grid, const generate::ContourOptions& opt, Id points, int n,
-                          const DeviceArray<float>& xyz, const DeviceArray<std::uint32_t>& index_map,
-                          const DeviceArray<float>& scalar, const DeviceArray<float>& normal, cudaStream_t stream) {
+// The device's points, triangles and fields into a host mesh (no points:
+// the fields asked for, empty). Waits for the stream.
+SurfaceMesh download_mesh(const ImageGrid& grid, const generate::ContourOptions& opt, const DeviceResult& r,
+                          cudaStream_t stream) {
   SurfaceMesh mesh;
-  mesh.points.resize(static_cast<std::size_t>(3 * points));
-  mesh.connectivity.resize(static_cast<std::size_t>(n));
-  xyz.download(mesh.points.data(), mesh.points.size());
-  index_map.download(mesh.connectivity.data(), mesh.connectivity.size());
+  mesh.points.resize(static_cast<std::size_t>(3 * r.points));
+  mesh.connectivity.resize(static_cast<std::size_t>(r.corners));
+  if (r.points) r.xyz.download(mesh.points.data(), mesh.points.size());
+  if (r.corners) r.index_map.download(mesh.connectivity.data(), mesh.connectivity.size());
   if (opt.scalars) {
-    Field f{grid.name, 1, Array<float>(static_cast<std::size_t>(points))};
-    scalar.download(f.values.data(), f.values.size());
+    Field f{grid.name, 1, Array<float>(static_cast<std::size_t>(r.points))};
+    if (r.points) r.scalar.download(f.values.data(), f.values.size());
     mesh.point_fields.push_back(std::move(f));
   }
   if (opt.normals != generate::ContourNormals::None) {
-    Field f{"Normals", 3, Array<float>(static_cast<std::size_t>(3 * points))};
-    normal.download(f.values.data(), f.values.size());
+    Field f{"Normals", 3, Array<float>(static_cast<std::size_t>(3 * r.points))};
+    if (r.points) r.normal.download(f.values.data(), f.values.size());
     mesh.point_fields.push_back(std::move(f));
   }
   KEYMESH_CUDA_CHECK(cudaStreamSynchronize(stream), "downloading the mesh");
   return mesh;
 }
 
-// The stages in order. Every device array lives to the end, as the stages
-// allocate them (the pool's high-water mark is the report's peak).
+// Stage 3: KEY-REDUCE, sort plan, over the joined soup of n corners: the
+// index map into r (Handed or pool memory as `out` says), and each point's
+// key and first sorted pair; `perm` the pairs in sorted order.
+template <class K>
+void weld_soup(const DeviceArray<K>& soup, K key_range, int n, const generate::ContourOptions& opt, Memory out,
+               DeviceResult& r, DeviceArray<K>& unique_keys, DeviceArray<std::uint32_t>& perm,
+               DeviceArray<std::uint32_t>& group_begin, cudaStream_t stream) {
+  DeviceArray<std::uint32_t> pair_in(static_cast<std::size_t>(n), stream);
+  DeviceArray<K> sorted(static_cast<std::size_t>(n), stream);
+  sort_soup(soup, key_range, pair_in, sorted, perm, n, stream);
+  DeviceArray<std::uint32_t> heads(static_cast<std::size_t>(n), stream), scanned(static_cast<std::size_t>(n), stream);
+  r.points = count_groups(sorted, heads, scanned, n, stream);
+  generate::check_contour_output(opt, r.points, n / 3);  // --max-memory, before the mesh is allocated
+  unique_keys = DeviceArray<K>(static_cast<std::size_t>(r.points), stream);
+  group_begin = DeviceArray<std::uint32_t>(static_cast<std::size_t>(r.points), stream);
+  r.index_map = DeviceArray<std::uint32_t>(static_cast<std::size_t>(n), stream, out);
+  groups_kernel<K><<<grid_for(n), kThreads, 0, stream>>>(sorted.get(), perm.get(), scanned.get(), unique_keys.get(),
+                                                         group_begin.get(), r.index_map.get(), n);
+  KEYMESH_CUDA_LAUNCHED("grouping");
+}
+
+// The stages in order over device samples. The sort's buffers go when
+// weld_soup returns (stream-ordered frees, reused by the next stage's
+// allocations); the other arrays live to the end (the pool's high-water mark
+// is the report's peak); the mesh's arrays come from `out`.
 template <class K, class T>
-SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const generate::ContourOptions& opt,
-                          generate::ContourStats& st, cudaStream_t stream) {
+DeviceResult contour_typed(const ImageGrid& grid, const T* samples, const generate::ContourOptions& opt,
+                           generate::ContourStats& st, Memory out, StageTimes& times, cudaStream_t stream) {
   const GridShape s = shape_of(grid);
   const Id voxels = gpu_voxels(s.nx, s.ny, s.nz);
   const Id n_iso = static_cast<Id>(opt.isovalues.size());
   const K keys_per_iso = static_cast<K>(3 * s.n);
   const K key_range = static_cast<K>(n_iso) * keys_per_iso;
   st.key_bits = static_cast<int>(sizeof(K) * 8);
-
-  auto t0 = Clock::now();
-  DeviceArray<T> samples(static_cast<std::size_t>(s.n), stream);
-  samples.upload(host_samples, static_cast<std::size_t>(s.n));
   DeviceArray<double> isovalues(opt.isovalues.size(), stream);
   isovalues.upload(opt.isovalues.data(), opt.isovalues.size());
   KEYMESH_CUDA_CHECK(cudaMemcpyToSymbolAsync(d_table, &generate::marching_cubes_table(opt.reversed_axes),
@@ -474,50 +587,151 @@ SurfaceMesh contour_typed(const ImageGrid& grid, const T* host_samples, const ge
   VoxelCases cases(voxels, stream);
   SoupParts<K> parts;
   for (Id iso_index = 0; iso_index < n_iso; ++iso_index)
-    emit_isovalue<K, T>(samples.get(), s, voxels, opt, iso_index, static_cast<K>(iso_index) * keys_per_iso, cases,
-                        parts, stream);
+    emit_isovalue<K, T>(samples, s, voxels, opt, iso_index, static_cast<K>(iso_index) * keys_per_iso, cases, parts,
+                        times, stream);
   parts.blocks.push_back(parts.corners);
   st.soup_points = parts.corners;
+  times.begin(&generate::ContourStats::generate);
   DeviceArray<K> soup(static_cast<std::size_t>(parts.corners), stream);
   join_parts(parts, soup, stream);
-  KEYMESH_CUDA_CHECK(cudaStreamSynchronize(stream), "generate");
-  st.generate += seconds_since(t0);
-
-  // Stage 3: KEY-REDUCE, sort plan.
-  t0 = Clock::now();
+  times.end();
+  DeviceResult r;
+  r.corners = parts.corners;
   const int n = static_cast<int>(parts.corners);
-  if (n == 0) return empty_mesh(grid, opt);
-  DeviceArray<std::uint32_t> pair_in(static_cast<std::size_t>(n), stream), perm(static_cast<std::size_t>(n), stream);
-  DeviceArray<K> sorted(static_cast<std::size_t>(n), stream);
-  sort_soup(soup, key_range, pair_in, sorted, perm, n, stream);
-  DeviceArray<std::uint32_t> heads(static_cast<std::size_t>(n), stream), scanned(static_cast<std::size_t>(n), stream);
-  const Id points = count_groups(sorted, heads, scanned, n, stream);
-  generate::check_contour_output(opt, points, n / 3);  // --max-memory, before the host mesh is allocated
-  DeviceArray<K> unique_keys(static_cast<std::size_t>(points), stream);
-  DeviceArray<std::uint32_t> group_begin(static_cast<std::size_t>(points), stream);
-  DeviceArray<std::uint32_t> index_map(static_cast<std::size_t>(n), stream);
-  groups_kernel<K><<<grid_for(n), kThreads, 0, stream>>>(sorted.get(), perm.get(), scanned.get(), unique_keys.get(),
-                                                         group_begin.get(), index_map.get(), n);
-  KEYMESH_CUDA_LAUNCHED("grouping");
-  KEYMESH_CUDA_CHECK(cudaStreamSynchronize(stream), "KEY-REDUCE");
-  st.weld += seconds_since(t0);
+  if (n == 0) return r;
+
+  times.begin(&generate::ContourStats::weld);
+  DeviceArray<K> unique_keys;
+  DeviceArray<std::uint32_t> perm(static_cast<std::size_t>(n), stream), group_begin;
+  weld_soup(soup, key_range, n, opt, out, r, unique_keys, perm, group_begin, stream);
+  times.end();
 
   // Stages 4 and 5: points and fields.
-  t0 = Clock::now();
-  const EdgeInterpolator<T> interp{samples.get(), s, isovalues.get(), static_cast<Id>(keys_per_iso)};
-  DeviceArray<float> xyz(static_cast<std::size_t>(3 * points), stream);
-  DeviceArray<float> scalar(opt.scalars ? static_cast<std::size_t>(points) : 0, stream);
-  DeviceArray<float> normal(opt.normals != generate::ContourNormals::None ? static_cast<std::size_t>(3 * points) : 0,
-                            stream);
-  points_kernel<T, K><<<grid_for(points), kThreads, 0, stream>>>(
-      interp, unique_keys.get(), xyz.get(), opt.scalars ? scalar.get() : nullptr,
-      opt.normals == generate::ContourNormals::Gradient ? normal.get() : nullptr, points);
+  times.begin(&generate::ContourStats::fields);
+  const EdgeInterpolator<T> interp{samples, s, isovalues.get(), static_cast<Id>(keys_per_iso)};
+  const auto points = static_cast<std::size_t>(r.points);
+  r.xyz = DeviceArray<float>(3 * points, stream, out);
+  r.scalar = DeviceArray<float>(opt.scalars ? points : 0, stream, out);
+  r.normal = DeviceArray<float>(opt.normals != generate::ContourNormals::None ? 3 * points : 0, stream, out);
+  points_kernel<T, K><<<grid_for(r.points), kThreads, 0, stream>>>(
+      interp, unique_keys.get(), r.xyz.get(), opt.scalars ? r.scalar.get() : nullptr,
+      opt.normals == generate::ContourNormals::Gradient ? r.normal.get() : nullptr, r.points);
   KEYMESH_CUDA_LAUNCHED("points");
   if (opt.normals == generate::ContourNormals::Average)
-    average_normals(xyz, index_map, perm, group_begin, parts.blocks, n, points, normal, stream);
-  SurfaceMesh mesh = download_mesh(grid, opt, points, n, xyz, index_map, scalar, normal, stream);
-  st.fields += seconds_since(t0);
-  return mesh;
+    average_normals(r.xyz, r.index_map, perm, group_begin, parts.blocks, n, r.points, r.normal, stream);
+  times.end();
+  return r;
+}
+
+// What every GPU contour sets up and undoes: the device (made current, the
+// caller's restored after), a stream, and the device's default memory pool
+// with its high-water mark reset (the report's peak) and its release
+// threshold raised: at 0, the pool gives its memory back at every
+// synchronization and the next stage allocates it anew; raised, a freed
+// block is reused by the next stage and the next contour (the pool keeps up
+// to its peak; cudaMemPoolTrimTo or the process's end gives it back).
+class GpuSession {
+ public:
+  explicit GpuSession(int device) {
+    KEYMESH_CUDA_CHECK(cudaGetDevice(&previous_), "querying the device");
+    if (device >= 0 && device != previous_) KEYMESH_CUDA_CHECK(cudaSetDevice(device), "selecting the device");
+    KEYMESH_CUDA_CHECK(cudaGetDevice(&device_), "querying the device");
+    KEYMESH_CUDA_CHECK(cudaStreamCreate(&stream_), "creating a stream");
+    KEYMESH_CUDA_CHECK(cudaDeviceGetDefaultMemPool(&pool_, device_), "querying the memory pool");
+    unsigned long long keep = std::numeric_limits<unsigned long long>::max();  // cuuint64_t (passed as void*)
+    KEYMESH_CUDA_CHECK(cudaMemPoolSetAttribute(pool_, cudaMemPoolAttrReleaseThreshold, &keep),
+                       "raising the pool's release threshold");
+    unsigned long long high = 0;  // only resetting to zero is allowed
+    KEYMESH_CUDA_CHECK(cudaMemPoolSetAttribute(pool_, cudaMemPoolAttrUsedMemHigh, &high),
+                       "resetting the pool's high-water mark");
+  }
+  GpuSession(const GpuSession&) = delete;
+  GpuSession& operator=(const GpuSession&) = delete;
+  ~GpuSession() {
+    if (stream_) cudaStreamDestroy(stream_);
+    if (device_ != previous_) cudaSetDevice(previous_);
+  }
+  cudaStream_t stream() const { return stream_; }
+  int device() const { return device_; }
+  // The pool's high-water mark since the session began, in bytes.
+  std::uint64_t peak() const {
+    unsigned long long high = 0;
+    KEYMESH_CUDA_CHECK(cudaMemPoolGetAttribute(pool_, cudaMemPoolAttrUsedMemHigh, &high),
+                       "reading the pool's high-water mark");
+    return static_cast<std::uint64_t>(high);
+  }
+
+ private:
+  int previous_ = 0, device_ = 0;
+  cudaStream_t stream_ = nullptr;
+  cudaMemPool_t pool_ = nullptr;
+};
+
+// Calls f(K{}, T{}) with T the grid's sample type and K the key width its
+// key range needs (32 bits when it fits): the types, as tags.
+template <class F>
+decltype(auto) visit_key_and_sample(const ImageGrid& grid, const generate::ContourOptions& opt, F&& f) {
+  const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * opt.isovalues.size();
+  // visit_scalars only for the type: the pointer it passes is not read.
+  return visit_scalars(grid, [&](const auto* type_tag) {
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(type_tag)>>;
+    if (key_range <= std::numeric_limits<std::uint32_t>::max()) return f(std::uint32_t{}, T{});
+    return f(std::uint64_t{}, T{});
+  });
+}
+
+// The bytes of a mesh's device arrays.
+std::uint64_t mesh_bytes(const DeviceMesh& m) {
+  std::uint64_t floats_per_point = 3;
+  for (const DeviceField& f : m.point_fields) floats_per_point += static_cast<std::uint64_t>(f.components);
+  return static_cast<std::uint64_t>(m.points) * floats_per_point * 4 + static_cast<std::uint64_t>(m.triangles) * 12;
+}
+
+// The device of a pointer to device memory; InputError for host memory or a
+// pointer CUDA does not know (never handed to a kernel).
+int device_of(const void* p) {
+  cudaPointerAttributes a{};
+  const cudaError_t e = cudaPointerGetAttributes(&a, p);
+  if (e != cudaSuccess || (a.type != cudaMemoryTypeDevice && a.type != cudaMemoryTypeManaged)) {
+    cudaGetLastError();  // clear a non-sticky error of the query
+    throw InputError("--backend cuda: the volume's samples are not in device memory (a host pointer, or memory "
+                     "CUDA does not know); pass a CUDA array, or a host array with backend cpu");
+  }
+  return a.device;
+}
+
+// The stream waits for the work so far on `ready_after` (a cudaStream_t's
+// value; 0: nothing to wait for).
+void wait_for(std::uintptr_t ready_after, cudaStream_t stream) {
+  if (!ready_after) return;
+  cudaEvent_t ready;
+  KEYMESH_CUDA_CHECK(cudaEventCreateWithFlags(&ready, cudaEventDisableTiming), "creating an event");
+  const cudaError_t recorded = cudaEventRecord(ready, reinterpret_cast<cudaStream_t>(ready_after));
+  const cudaError_t waited = recorded == cudaSuccess ? cudaStreamWaitEvent(stream, ready, 0) : recorded;
+  cudaEventDestroy(ready);
+  KEYMESH_CUDA_CHECK(waited, "waiting for the volume's stream");
+}
+
+// A Handed result as the caller's mesh, mirrored back first when asked.
+DeviceMesh hand_out(DeviceResult& r, const ImageGrid& grid, const generate::ContourOptions& opt, bool mirror_back,
+                    int device, cudaStream_t stream) {
+  const Id triangles = r.corners / 3;
+  if (mirror_back && r.corners) {
+    mirror_kernel<<<grid_for(std::max(r.points, triangles)), kThreads, 0, stream>>>(
+        r.xyz.get(), r.normal.get(), r.index_map.get(), r.points, triangles);
+    KEYMESH_CUDA_LAUNCHED("mirroring the mesh back");
+  }
+  KEYMESH_CUDA_CHECK(cudaStreamSynchronize(stream), "finishing the mesh");
+  DeviceMesh m;
+  m.device = device;
+  m.points = r.points;
+  m.triangles = triangles;
+  m.xyz = r.xyz.release();
+  m.connectivity = r.index_map.release();
+  if (opt.scalars) m.point_fields.push_back(DeviceField{grid.name, 1, r.scalar.release()});
+  if (opt.normals != generate::ContourNormals::None)
+    m.point_fields.push_back(DeviceField{"Normals", 3, r.normal.release()});
+  return m;
 }
 
 }  // namespace
@@ -548,31 +762,52 @@ SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& opt, 
   generate::ContourStats local;
   generate::ContourStats& st = stats ? *stats : local;
   st = generate::ContourStats{};
-  cudaStream_t stream;
-  KEYMESH_CUDA_CHECK(cudaStreamCreate(&stream), "creating a stream");
-  struct StreamGuard {
-    cudaStream_t s;
-    ~StreamGuard() { cudaStreamDestroy(s); }
-  } guard{stream};
-  // Peak device memory: the stream-ordered pool's high-water mark, reset
-  // here (only resetting to zero is allowed) and read when done.
-  int device = 0;
-  KEYMESH_CUDA_CHECK(cudaGetDevice(&device), "querying the device");
-  cudaMemPool_t pool;
-  KEYMESH_CUDA_CHECK(cudaDeviceGetDefaultMemPool(&pool, device), "querying the memory pool");
-  unsigned long long high = 0;  // cuuint64_t (the attribute is passed as void*)
-  KEYMESH_CUDA_CHECK(cudaMemPoolSetAttribute(pool, cudaMemPoolAttrUsedMemHigh, &high),
-                     "resetting the pool's high-water mark");
-  const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * opt.isovalues.size();
-  SurfaceMesh mesh = visit_scalars(grid, [&](const auto* samples) {
-    using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
-    if (key_range <= std::numeric_limits<std::uint32_t>::max())
-      return contour_typed<std::uint32_t, T>(grid, samples, opt, st, stream);
-    return contour_typed<std::uint64_t, T>(grid, samples, opt, st, stream);
+  GpuSession session(-1);
+  StageTimes times(session.stream());
+  SurfaceMesh mesh = visit_key_and_sample(grid, opt, [&](auto key_tag, auto sample_tag) {
+    using K = decltype(key_tag);
+    using T = decltype(sample_tag);
+    // The upload counts in the generate stage, as it did with host clocks.
+    times.begin(&generate::ContourStats::generate);
+    DeviceArray<T> samples(static_cast<std::size_t>(grid.num_points()), session.stream());
+    samples.upload(static_cast<const T*>(grid.data()), samples.size());
+    times.end();
+    const DeviceResult r = contour_typed<K, T>(grid, samples.get(), opt, st, Memory::Pool, times, session.stream());
+    times.begin(&generate::ContourStats::fields);  // the download counts in the fields stage, as it did
+    SurfaceMesh m = download_mesh(grid, opt, r, session.stream());
+    times.end();
+    return m;
   });
-  KEYMESH_CUDA_CHECK(cudaMemPoolGetAttribute(pool, cudaMemPoolAttrUsedMemHigh, &high),
-                     "reading the pool's high-water mark");
-  st.device_peak_bytes = static_cast<std::uint64_t>(high);
+  times.add_to(st);
+  st.device_peak_bytes = session.peak();
+  return mesh;
+}
+
+DeviceMesh contour_device(const DeviceVolume& volume, const generate::ContourOptions& opt,
+                          generate::ContourStats* stats) {
+  check_device_volume(volume, opt);
+  std::string why;
+  if (!available(&why)) throw InputError("--backend cuda: " + why);
+  const int holder = device_of(volume.samples);
+  if (volume.device >= 0 && volume.device != holder)
+    throw InputError("--backend cuda: the volume's samples lie on device " + std::to_string(holder) +
+                     ", not on device " + std::to_string(volume.device) + " as it says");
+  generate::ContourStats local;
+  generate::ContourStats& st = stats ? *stats : local;
+  st = generate::ContourStats{};
+  GpuSession session(holder);
+  StageTimes times(session.stream());
+  wait_for(volume.ready_after, session.stream());
+  DeviceMesh mesh = visit_key_and_sample(volume.grid, opt, [&](auto key_tag, auto sample_tag) {
+    using K = decltype(key_tag);
+    using T = decltype(sample_tag);
+    DeviceResult r = contour_typed<K, T>(volume.grid, static_cast<const T*>(volume.samples), opt, st,
+                                         Memory::Handed, times, session.stream());
+    return hand_out(r, volume.grid, opt, volume.mirror_back, session.device(), session.stream());
+  });
+  times.add_to(st);
+  // The pool's peak and the mesh's own arrays (cudaMalloc), live at the end.
+  st.device_peak_bytes = session.peak() + mesh_bytes(mesh);
   return mesh;
 }
 

@@ -1,9 +1,11 @@
 #include "contour_limits.hpp"
 
+#include <cmath>
 #include <limits>
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/cuda/device_contour.hpp"
 
 namespace keymesh::cuda {
 
@@ -25,6 +27,24 @@ void check_gpu_options(const generate::ContourOptions& opt) {
   if (opt.output_arrays) not_on_gpu("writing into arrays the caller owns (output_arrays)");
   if (opt.total_planes) not_on_gpu("streamed (slab) contouring");
   if (opt.ghost_below || opt.ghost_above) not_on_gpu("a grid with ghost planes");
+}
+
+void check_device_volume(const DeviceVolume& volume, const generate::ContourOptions& opt) {
+  check_gpu_options(opt);
+  // generate::check_contour_input's checks but the byte count: the samples
+  // are not the grid's own (its bytes stay empty), they are device memory.
+  if (opt.isovalues.empty()) throw InputError("contour: no isovalue given");
+  for (double iso : opt.isovalues)
+    if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
+  const ImageGrid& g = volume.grid;
+  for (int a = 0; a < 3; ++a)
+    if (g.dims[a] < 2)
+      throw InputError("contour: grid has " + std::to_string(g.dims[a]) + " point(s) along axis " + "xyz"[a] +
+                       std::string(" (need at least 2)"));
+  if (!is_grid_scalar(g.type))
+    throw InputError(std::string("contour: a grid of ") + scalar_type_name(g.type) + " samples is not supported");
+  if (!volume.samples) throw InputError("--backend cuda: the volume's device pointer is null");
+  gpu_voxels(g.dims[0], g.dims[1], g.dims[2]);
 }
 
 Id gpu_voxels(Id nx, Id ny, Id nz) {

@@ -65,22 +65,19 @@ void InputFile::read_at(std::uint64_t offset, void* dst, std::uint64_t size, con
 
 std::uint64_t input_size(const std::string& path) { return InputFile(path).size(); }
 
-bool same_file(const std::string& a, const std::string& b) {
-  struct stat sa {}, sb {};
-  const bool ha = ::stat(a.c_str(), &sa) == 0, hb = ::stat(b.c_str(), &sb) == 0;
-  if (ha && hb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-  if (ha != hb) return false;  // one exists, the other does not
-  // Neither exists yet: the same name in the same (resolved) directory.
+std::string file_identity(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) return "inode " + std::to_string(st.st_dev) + " " + std::to_string(st.st_ino);
+  // Not there yet: the same name in the same (resolved) directory.
   namespace fs = std::filesystem;
-  auto where = [](const std::string& p) {
-    std::error_code ec;
-    const fs::path path(p);
-    fs::path dir = path.parent_path();
-    if (dir.empty()) dir = ".";
-    const fs::path resolved = fs::weakly_canonical(dir, ec);
-    return std::make_pair(ec ? dir.lexically_normal() : resolved, path.filename());
-  };
-  return where(a) == where(b);
+  std::error_code ec;
+  const fs::path p(path);
+  fs::path dir = p.parent_path();
+  if (dir.empty()) dir = ".";
+  const fs::path resolved = fs::weakly_canonical(dir, ec);
+  return "path " + (ec ? dir.lexically_normal() : resolved).string() + std::string(1, '\0') + p.filename().string();
 }
+
+bool same_file(const std::string& a, const std::string& b) { return file_identity(a) == file_identity(b); }
 
 }  // namespace keymesh::io

@@ -26,19 +26,23 @@ OutputTransaction::~OutputTransaction() {
 OutputTransaction* OutputTransaction::current() { return g_current; }
 
 void OutputTransaction::stage(std::string temporary, std::string destination) {
-  for (const auto& [t, d] : staged_)
-    if (d == destination || same_file(d, destination)) {
-      std::remove(temporary.c_str());
-      throw InputError(destination + ": written twice by one command (two outputs name the same file)");
-    }
+  // One identity a destination (same_file's test, hashed): a command may
+  // stage a file per segment of a large Neuroglancer output.
+  if (!identities_.insert(file_identity(destination)).second) {
+    std::remove(temporary.c_str());
+    throw InputError(destination + ": written twice by one command (two outputs name the same file)");
+  }
   staged_.emplace_back(std::move(temporary), std::move(destination));
 }
+
+void OutputTransaction::stage_removal(std::string destination) { removals_.push_back(std::move(destination)); }
 
 void OutputTransaction::commit() {
   if (done_) return;
   done_ = true;
   if (enclosing_) {
     for (auto& [temporary, destination] : staged_) enclosing_->stage(std::move(temporary), std::move(destination));
+    for (auto& destination : removals_) enclosing_->stage_removal(std::move(destination));
     return;
   }
   // Renames within one directory do not fail short of a vanished directory;
@@ -50,6 +54,9 @@ void OutputTransaction::commit() {
       for (std::size_t j = i; j < staged_.size(); ++j) std::remove(staged_[j].first.c_str());
       throw InputError(staged_[i].second + ": cannot rename temporary file into place: " + why);
     }
+  for (const std::string& destination : removals_)
+    if (std::remove(destination.c_str()) != 0 && errno != ENOENT)
+      throw InputError(destination + ": cannot remove the obsolete output: " + std::strerror(errno));
 }
 
 }  // namespace keymesh::io

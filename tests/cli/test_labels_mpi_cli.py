@@ -6,7 +6,8 @@ surfaces are checked against numpy and skimage in test_labels_cli.py): the
 file must be byte-identical for P = 1..4, both methods, one network and
 --per-label, with and without smoothing, also with --memory-limit on every
 rank and with more ranks than a thin volume has planes (a rank with no rows).
-.pvtp output is refused by name. Skipped (77) without mpirun or MPI."""
+.pvtp pieces (nothing gathered) are test_labels_pieces_mpi_cli.py's. Skipped (77)
+without mpirun or MPI."""
 import os
 import shutil
 import sys
@@ -87,15 +88,6 @@ SHAPE_ROWS[THIN] = 3
 for method in ("surfacenets", "discrete-mc"):
     check(f"{method}: a one-plane volume on 4 ranks (a rank without rows): byte-identical",
           same_as_one_process(THIN, ["--dims", SHAPE[0], SHAPE[1], 1, "--type", "int16"], ["--method", method], (4,)))
-
-
-def pvtp_refused():
-    p = mpirun(2, "labels", MIX, *RAW, "-o", os.path.join(D, "x.pvtp"), expect=2)
-    assert ".pvtp" in p.stderr and "gathered" in p.stderr, p.stderr
-    assert not os.path.exists(os.path.join(D, "x.pvtp"))
-
-
-check(".pvtp under mpirun is refused by name", pvtp_refused)
 
 
 def bad_label_refused():

@@ -3,14 +3,21 @@
 // without CUDA or no device is present, as on CI.
 #include <gtest/gtest.h>
 
+#if defined(KEYMESH_HAVE_CUDA)
+#include <cuda_runtime.h>
+#endif
+
 #include <cmath>
 #include <cstring>
 #include <random>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include "keymesh/backend/contour.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/backend.hpp"
+#include "keymesh/cuda/device_contour.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 
@@ -153,5 +160,65 @@ TEST(BackendContour, GenerateRunsOnTheCpuAndTheBackendLayerChooses) {
   o.backend = Backend::Cuda;
   EXPECT_THROW(generate::contour(g, o), InputError);
 }
+
+#if defined(KEYMESH_HAVE_CUDA)
+// A device buffer's floats or ids copied to the host, for the comparison.
+template <class T>
+std::vector<T> host_copy(const cuda::DeviceBuffer& b, Id n) {
+  std::vector<T> out(static_cast<std::size_t>(n));
+  if (n) {
+    EXPECT_EQ(cudaMemcpy(out.data(), b.get(), out.size() * sizeof(T), cudaMemcpyDeviceToHost), cudaSuccess);
+  }
+  return out;
+}
+
+// Device-resident input (cuda::contour_device): the samples already on the
+// GPU, the mesh left there; the same bits as the host path, also mirrored
+// back for a C-ordered array's reversed axes.
+TEST(CudaContour, DeviceResidentInputGivesTheHostMesh) {
+  SKIP_WITHOUT_GPU();
+  const ImageGrid g = generate::spherical_distance(48);
+  void* samples = nullptr;
+  ASSERT_EQ(cudaMalloc(&samples, g.bytes.size()), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(samples, g.bytes.data(), g.bytes.size(), cudaMemcpyHostToDevice), cudaSuccess);
+  for (bool mirror : {false, true}) {
+    ContourOptions o;
+    o.isovalues = {10.25, 20.5};
+    o.normals = ContourNormals::Average;
+    o.reversed_axes = mirror;
+    o.backend = Backend::Cpu;
+    SurfaceMesh cpu = generate::contour(g, o);
+    if (mirror) {  // what the Python module does to a host mesh of reversed axes
+      for (Id p = 0; p < cpu.num_points(); ++p) {
+        std::swap(cpu.points[3 * p], cpu.points[3 * p + 2]);
+        std::swap(cpu.point_fields[1].values[3 * p], cpu.point_fields[1].values[3 * p + 2]);
+      }
+      for (Id t = 0; t < cpu.num_cells(); ++t) std::swap(cpu.connectivity[3 * t + 1], cpu.connectivity[3 * t + 2]);
+    }
+    cuda::DeviceVolume v;
+    v.grid.dims = g.dims, v.grid.type = g.type, v.grid.name = g.name;
+    v.samples = samples;
+    v.ready_after = 1;  // the legacy default stream, as after __dlpack__(stream=1)
+    v.mirror_back = mirror;
+    o.backend = Backend::Cuda;
+    generate::ContourStats st;
+    const cuda::DeviceMesh m = cuda::contour_device(v, o, &st);
+    ASSERT_EQ(m.points, cpu.num_points());
+    ASSERT_EQ(m.triangles, cpu.num_cells());
+    const auto xyz = host_copy<float>(m.xyz, 3 * m.points);
+    EXPECT_EQ(std::memcmp(xyz.data(), cpu.points.data(), xyz.size() * 4), 0);
+    EXPECT_EQ(host_copy<std::uint32_t>(m.connectivity, 3 * m.triangles),
+              std::vector<std::uint32_t>(cpu.connectivity.begin(), cpu.connectivity.end()));
+    ASSERT_EQ(m.point_fields.size(), 2u);
+    for (std::size_t f = 0; f < 2; ++f) {
+      const auto values = host_copy<float>(m.point_fields[f].values, m.points * m.point_fields[f].components);
+      EXPECT_EQ(std::memcmp(values.data(), cpu.point_fields[f].values.data(), values.size() * 4), 0) << f;
+    }
+    EXPECT_GT(st.classify, 0.0);  // CUDA events: the device's time, never a host clock's 0
+    EXPECT_GT(st.device_peak_bytes, 0u);
+  }
+  cudaFree(samples);
+}
+#endif
 
 }  // namespace

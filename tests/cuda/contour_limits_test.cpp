@@ -10,6 +10,7 @@
 
 #include "keymesh/backend/contour.hpp"
 #include "keymesh/core/error.hpp"
+#include "keymesh/cuda/device_contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 
 using namespace keymesh;
@@ -102,6 +103,58 @@ TEST(CudaLimits, CornerLimitIsExactAcrossIsovalues) {
   EXPECT_EQ(cuda::gpu_soup_corners(30, 10), 60);
   EXPECT_THROW(cuda::gpu_soup_corners(3, max_corners / 3), LimitError);
   EXPECT_EQ(cuda::gpu_soup_corners(max_corners - 1, 0), max_corners - 1);
+}
+
+// Device-resident input: what contour_device refuses before any device is
+// touched, in every build.
+TEST(CudaLimits, DeviceVolumeChecks) {
+  static const float samples[8] = {};
+  cuda::DeviceVolume v;
+  v.grid.dims = {2, 2, 2};
+  v.samples = samples;
+  ContourOptions o;
+  o.isovalues = {0.5};
+  EXPECT_NO_THROW(cuda::check_device_volume(v, o));
+  auto refused = [](const cuda::DeviceVolume& volume, const ContourOptions& options, const char* what) {
+    try {
+      cuda::check_device_volume(volume, options);
+      ADD_FAILURE() << what << " must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  cuda::DeviceVolume thin = v;
+  thin.grid.dims = {2, 1, 2};
+  refused(thin, o, "1 point(s) along axis y");
+  cuda::DeviceVolume null = v;
+  null.samples = nullptr;
+  refused(null, o, "device pointer is null");
+  cuda::DeviceVolume wide = v;
+  wide.grid.type = ScalarType::Int64;
+  refused(wide, o, "int64");
+  ContourOptions no_iso = o;
+  no_iso.isovalues.clear();
+  refused(v, no_iso, "no isovalue");
+  ContourOptions curvature = o;
+  curvature.curvature = true;
+  refused(v, curvature, "curvature");
+  cuda::DeviceVolume huge = v;
+  huge.grid.dims = {1292, 1292, 1292};
+  EXPECT_THROW(cuda::check_device_volume(huge, o), LimitError);
+}
+
+// Host memory handed as "device" samples is refused, never read by a
+// kernel: without a GPU (or CUDA) because none is usable, with one because
+// cudaPointerGetAttributes says it is not device memory.
+TEST(CudaLimits, HostSamplesAreRefusedByContourDevice) {
+  const ImageGrid host = generate::spherical_distance(8);
+  cuda::DeviceVolume v;
+  v.grid.dims = host.dims;
+  v.grid.type = host.type;
+  v.samples = host.bytes.data();
+  ContourOptions o;
+  o.isovalues = {3.5};
+  EXPECT_THROW(cuda::contour_device(v, o), InputError);
 }
 
 }  // namespace

@@ -7,8 +7,11 @@
 //     timed with CUDA events on the legacy default stream (cuda::contour's
 //     stream waits for it and is synchronized before it returns, so the
 //     events bracket the upload, every stage and the download), the median
-//     and the minimum reported with the last run's stage times. Unless
-//     --no-cpu, the CPU's mesh is made once and compared bit for bit.
+//     and the minimum reported with the last run's stage times. Then the same
+//     with device-resident input (cuda::contour_device: the samples uploaded
+//     once, the mesh left on the device), its median and minimum, its mesh
+//     compared with the host path's. Unless --no-cpu, the CPU's mesh is made
+//     once and compared bit for bit.
 //   keymesh_gpu_timing checkerboard N
 //     A uint8 checkerboard N^3 at 127.5: every voxel holds 4 triangles, so
 //     past N = 1025 the output passes 2^32 triangles. The GPU must refuse it
@@ -30,6 +33,7 @@
 #include "keymesh/backend/contour.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/backend.hpp"
+#include "keymesh/cuda/device_contour.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 
@@ -102,6 +106,62 @@ double timed_gpu_contour(const ImageGrid& g, const generate::ContourOptions& o, 
   return ms;
 }
 
+// A device mesh downloaded, for the comparison with the CPU's.
+SurfaceMesh downloaded(const cuda::DeviceMesh& m) {
+  SurfaceMesh mesh;
+  mesh.points.resize(static_cast<std::size_t>(3 * m.points));
+  mesh.connectivity.resize(static_cast<std::size_t>(3 * m.triangles));
+  auto copy = [](void* to, const cuda::DeviceBuffer& from, std::size_t bytes) {
+    if (bytes) check_cuda(cudaMemcpy(to, from.get(), bytes, cudaMemcpyDeviceToHost), "downloading the mesh");
+  };
+  copy(mesh.points.data(), m.xyz, mesh.points.size() * sizeof(float));
+  copy(mesh.connectivity.data(), m.connectivity, mesh.connectivity.size() * sizeof(mesh.connectivity[0]));
+  for (const cuda::DeviceField& f : m.point_fields) {
+    Field field{f.name, f.components, Array<float>(static_cast<std::size_t>(m.points * f.components))};
+    copy(field.values.data(), f.values, field.values.size() * sizeof(float));
+    mesh.point_fields.push_back(std::move(field));
+  }
+  return mesh;
+}
+
+// Device-resident input (cuda::contour_device): the samples uploaded once,
+// each run timed with CUDA events from the samples on the device to the mesh
+// on the device (no upload, no download). Adds its keys to js; returns
+// whether the last run's mesh is the host path's `gpu`, bit for bit.
+bool device_input_runs(const ImageGrid& g, const generate::ContourOptions& o, const Args& a, const SurfaceMesh& gpu,
+                       std::ostringstream& js) {
+  void* samples = nullptr;
+  check_cuda(cudaMalloc(&samples, g.bytes.size()), "allocating the samples");
+  check_cuda(cudaMemcpy(samples, g.bytes.data(), g.bytes.size(), cudaMemcpyHostToDevice), "uploading the samples");
+  cuda::DeviceVolume v;
+  v.grid.dims = g.dims, v.grid.type = g.type, v.grid.name = g.name;
+  v.samples = samples;
+  cuda::DeviceMesh mesh;
+  std::vector<double> runs;
+  for (int i = 0; i < a.warmup + a.repeat; ++i) {
+    mesh = cuda::DeviceMesh{};  // the previous mesh freed before the run
+    cudaEvent_t start, stop;
+    check_cuda(cudaEventCreate(&start), "creating an event");
+    check_cuda(cudaEventCreate(&stop), "creating an event");
+    check_cuda(cudaEventRecord(start, 0), "recording an event");
+    mesh = cuda::contour_device(v, o);
+    check_cuda(cudaEventRecord(stop, 0), "recording an event");
+    check_cuda(cudaEventSynchronize(stop), "waiting for an event");
+    float ms = 0;
+    check_cuda(cudaEventElapsedTime(&ms, start, stop), "reading an event");
+    cudaEventDestroy(start);
+    cudaEventDestroy(stop);
+    if (i >= a.warmup) runs.push_back(ms);
+  }
+  const bool same = identical(downloaded(mesh), gpu);
+  mesh = cuda::DeviceMesh{};
+  cudaFree(samples);
+  std::sort(runs.begin(), runs.end());
+  js << ", \"device_input_ms_median\": " << runs[runs.size() / 2] << ", \"device_input_ms_min\": " << runs.front()
+     << ", \"device_input_identical\": " << (same ? "true" : "false");
+  return same;
+}
+
 int sphere(const Args& a) {
   const ImageGrid g = generate::spherical_distance(a.n);
   generate::ContourOptions o;
@@ -119,15 +179,15 @@ int sphere(const Args& a) {
      << ", \"triangles\": " << gpu.num_cells() << ", \"gpu_ms_median\": " << sorted[sorted.size() / 2]
      << ", \"gpu_ms_min\": " << sorted.front() << ", \"gpu_ms_runs\": [";
   for (std::size_t i = 0; i < runs.size(); ++i) js << (i ? ", " : "") << runs[i];
-  js << "], \"stage_ms\": {\"generate\": " << 1e3 * st.generate << ", \"weld\": " << 1e3 * st.weld
+  js << "], \"stage_ms\": {\"classify\": " << 1e3 * st.classify << ", \"generate\": " << 1e3 * st.generate << ", \"weld\": " << 1e3 * st.weld
      << ", \"fields\": " << 1e3 * st.fields << "}, \"device_peak_bytes\": " << st.device_peak_bytes;
-  bool ok = true;
+  bool ok = device_input_runs(g, o, a, gpu, js);
   if (a.cpu) {
     o.backend = generate::Backend::Cpu;
     const auto t0 = std::chrono::steady_clock::now();
     const SurfaceMesh cpu = generate::contour(g, o);
     js << ", \"cpu_ms\": " << 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    ok = identical(cpu, gpu);
+    ok = identical(cpu, gpu) && ok;
     js << ", \"identical_to_cpu\": " << (ok ? "true" : "false");
   }
   std::cout << js.str() << "}" << std::endl;

@@ -43,4 +43,8 @@ std::uint64_t input_size(const std::string& path);
 // may not exist yet: then its resolved parent directory and name decide.
 bool same_file(const std::string& a, const std::string& b);
 
+// What same_file compares, as one string: equal for two paths exactly when
+// same_file holds, so that many paths can be checked through a hash set.
+std::string file_identity(const std::string& path);
+
 }  // namespace keymesh::io

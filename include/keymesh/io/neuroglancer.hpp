@@ -55,19 +55,44 @@ using SegmentNames = std::map<std::uint64_t, std::string>;
 // per segment its manifest and fragment data (`<id>.index` and `<id>`, or
 // the sharded layout), fragments Draco-encoded with integer positions
 // quantized to vertex_quantization_bits over the node's box.
+// (src/io/neuroglancer/; docs/decisions/neuroglancer-multilod.md.)
+//  - Bytes depend only on the set of pieces: not on their order, nor the thread count.
+//  - Pieces without triangles are ignored; a segment with none has no files.
+//  - Every file of one call appears together or none does (OutputTransaction);
+//    earlier outputs this write does not hold (files named like a segment's
+//    or a shard's, segment_properties/info) are removed with it.
+//  - InputError for a bad layout or piece (lod or chunk outside the layout,
+//    array sizes that disagree, a corner past the piece's points, one
+//    segment/lod/chunk given twice); std::logic_error (an internal error)
+//    for a point outside its node's box beyond float rounding.
 void write_multilod(const std::string& dir, const MultilodLayout& layout, const std::vector<ChunkPiece>& pieces,
                     const SegmentNames& names = {});
 
 // Chunk tasks (`--chunk I J K`): one chunk's pieces kept under DIR/chunks/
-// until the final step assembles them; a chunk's pieces replace any earlier.
+// (DIR/chunks/I_J_K.pieces, checked by a CRC) until the final step assembles
+// them; a chunk's pieces replace any earlier. Every chunk's task must write
+// its file, an empty list included. The first task records the layout in
+// DIR/chunks/layout.json; a later task or final step with another layout is
+// refused (InputError naming the field). Tasks may run concurrently.
 void write_chunk_pieces(const std::string& dir, const MultilodLayout& layout, const std::array<std::uint32_t, 3>& chunk,
                         const std::vector<ChunkPiece>& pieces);
 std::vector<ChunkPiece> read_chunk_pieces(const std::string& dir, const std::array<std::uint32_t, 3>& chunk);
 
+// The segments (increasing, once each) of a chunk's kept pieces, read without
+// their points; empty when the chunk's task has not run. Before `--update`
+// re-runs a chunk: these and its new pieces' segments are the `segments`
+// assemble_multilod must rewrite.
+std::vector<std::uint64_t> kept_segments(const std::string& dir, const std::array<std::uint32_t, 3>& chunk);
+
 // The final step: the output from every chunk's kept pieces, equal byte for
 // byte to write_multilod over the same pieces. With `segments` non-empty,
-// only those segments' manifests and data (or the shards holding them) are
-// rewritten (`--update`).
+// only those segments' manifests and data (or the shards holding them,
+// rebuilt from every kept piece of the segments they hold) are rewritten
+// (`--update`), a segment or shard left without a mesh removed; `segments`
+// must then hold every segment whose pieces changed (the old and the new
+// pieces' segments of the re-run chunks). When the existing DIR/info differs
+// from this run's (sharding parameters, quantization, names), the whole
+// output is rewritten instead.
 void assemble_multilod(const std::string& dir, const MultilodLayout& layout, const std::vector<std::uint64_t>& segments,
                        const SegmentNames& names = {});
 

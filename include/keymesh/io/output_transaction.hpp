@@ -15,6 +15,7 @@
 // gets this by writing through AtomicFile as every writer does. Outside a
 // transaction (the Python module, tests) AtomicFile renames at once as before.
 #include <string>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -42,8 +43,15 @@ class OutputTransaction {
   // (two outputs of one command naming the same file).
   void stage(std::string temporary, std::string destination);
 
+  // An output the command makes obsolete (a Neuroglancer segment edited
+  // away): removed at the outermost commit(), after every rename, so that a
+  // failed command leaves it in place. A missing file is no error.
+  void stage_removal(std::string destination);
+
  private:
   std::vector<std::pair<std::string, std::string>> staged_;  // (temporary, destination)
+  std::unordered_set<std::string> identities_;                // file_identity of every staged destination
+  std::vector<std::string> removals_;
   OutputTransaction* enclosing_ = nullptr;
   bool done_ = false;
 };

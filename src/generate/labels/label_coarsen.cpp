@@ -103,6 +103,7 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
   const Id faces_out = parallel::exclusive_scan(keep.data(), keep.data(), faces_in + 1);
   Array<PointIndex> conn(static_cast<std::size_t>(3 * faces_out));  // every element written below
   std::vector<std::uint32_t> pair(static_cast<std::size_t>(faces_out));
+  std::vector<std::uint8_t> ghost(s.ghost_face.empty() ? 0 : static_cast<std::size_t>(faces_out));
   std::vector<Field> fields;
   for (const Field& f : s.mesh.cell_fields)
     fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(faces_out * f.components))});
@@ -111,6 +112,7 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
     if (keep[static_cast<std::size_t>(t + 1)] == at) return;
     for (int k = 0; k < 3; ++k) conn[static_cast<std::size_t>(3 * at + k)] = g.index_map[C[3 * t + k]];
     pair[static_cast<std::size_t>(at)] = s.pair[static_cast<std::size_t>(t)];
+    if (!ghost.empty()) ghost[static_cast<std::size_t>(at)] = s.ghost_face[static_cast<std::size_t>(t)];
     for (std::size_t i = 0; i < fields.size(); ++i) {
       const int c = fields[i].components;
       std::copy_n(s.mesh.cell_fields[i].values.begin() + c * t, c, fields[i].values.begin() + c * at);
@@ -122,9 +124,12 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
   parallel::for_each(3 * faces_out, [&](Id k) { used[conn[static_cast<std::size_t>(k)]] = 1; });
   const Id m_used = parallel::exclusive_scan(used.data(), used.data(), m + 1);
   Array<float> compact(static_cast<std::size_t>(3 * m_used));
+  // A streamed surface's points keep their keys: now the coarse ones.
+  std::vector<std::uint64_t> keys(s.keys.empty() ? 0 : static_cast<std::size_t>(m_used));
   parallel::for_each(m, [&](Id p) {
     if (used[static_cast<std::size_t>(p + 1)] == used[static_cast<std::size_t>(p)]) return;
     std::copy_n(merged.begin() + 3 * p, 3, compact.begin() + 3 * used[static_cast<std::size_t>(p)]);
+    if (!keys.empty()) keys[static_cast<std::size_t>(used[static_cast<std::size_t>(p)])] = g.unique_keys[static_cast<std::size_t>(p)];
   });
   parallel::for_each(3 * faces_out, [&](Id k) {
     conn[static_cast<std::size_t>(k)] = static_cast<PointIndex>(used[conn[static_cast<std::size_t>(k)]]);
@@ -133,11 +138,12 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
   s.mesh.connectivity = std::move(conn);
   s.mesh.cell_fields = std::move(fields);
   s.pair = std::move(pair);
+  s.ghost_face = std::move(ghost);
   s.quads = false;
   s.junction.assign(static_cast<std::size_t>(m_used), 0);
   s.border_axes.assign(static_cast<std::size_t>(m_used), 0);
   s.cell_centre.clear();
-  s.keys.clear();
+  s.keys = std::move(keys);
   s.coarse.clear();
   st.coarsen = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

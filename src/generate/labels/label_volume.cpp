@@ -260,6 +260,7 @@ void append_surfaces(std::vector<LabelSurface>& parts, LabelSurface& out) {
     append(out.cell_centre, part.cell_centre);
     append(out.keys, part.keys);
     append(out.coarse, part.coarse);
+    append(out.ghost_face, part.ghost_face);
     for (const Field& f : part.mesh.cell_fields) {
       Field* to = nullptr;
       for (Field& g : out.mesh.cell_fields) to = g.name == f.name ? &g : to;

@@ -113,6 +113,10 @@ struct LabelSurface {
   std::vector<std::uint64_t> keys;
   // Per point, its coarse key (LabelVolume::coarse_keys).
   std::vector<std::uint64_t> coarse;
+  // Per triangle, in a rank's surface grown by halo rows (LabelSlabs::
+  // generate_with_halo): 1 where a halo row made it (another rank's
+  // triangle). Empty otherwise. Kept through the merge and coarsening.
+  std::vector<std::uint8_t> ghost_face;
 };
 
 // Appends the parts (their own points each) to `out`, in order.
@@ -132,6 +136,14 @@ std::vector<LabelSurface> surface_nets_rows(const LabelVolume& window, bool per_
                                             LabelStats& stats);
 std::vector<LabelSurface> discrete_marching_cubes_rows(const LabelVolume& window, std::pair<Id, Id> rows,
                                                        LabelStats& stats);
+
+// Per point of a finished surface of a streamed volume (its keys: fine, or
+// coarse after coarsening; `part_points`: the points of each part, per
+// label, before coarsening), the padded row it lies in and a key that
+// ascends in the output's point order: segment << 47 | key in the segment,
+// the row never decreasing within a segment. Returns the segments.
+int point_rows(const LabelVolume& vol, const LabelOptions& options, const std::vector<std::uint64_t>& keys,
+               const std::vector<Id>& part_points, std::vector<std::uint64_t>& order_key, std::vector<Id>& row);
 
 // Throws InputError for smoothing options out of range.
 void check_label_options(const LabelOptions& options);

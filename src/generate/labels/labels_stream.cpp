@@ -40,6 +40,7 @@ detail::LabelSurface merge_by_key(const std::vector<const detail::LabelSurface*>
   const auto g = keyreduce::partition_sort(keys.data(), static_cast<Id>(keys.size()),
                                            parallel::bits_needed<std::uint64_t>(top), keyreduce::Order::Build);
   const Id unique = g.num_groups();
+  out.keys.assign(g.unique_keys.begin(), g.unique_keys.end());  // ascending: the points' order
   // Surface nets' pieces carry cell centres (a slab without the surface
   // carries none).
   const bool centres = std::any_of(pieces.begin(), pieces.end(), [](auto* p) { return !p->cell_centre.empty(); });
@@ -74,6 +75,7 @@ detail::LabelSurface merge_by_key(const std::vector<const detail::LabelSurface*>
       out.mesh.connectivity[c0 + static_cast<std::size_t>(c)] = g.index_map[base[p] + s.mesh.connectivity[c]];
     });
     out.pair.insert(out.pair.end(), s.pair.begin(), s.pair.end());
+    out.ghost_face.insert(out.ghost_face.end(), s.ghost_face.begin(), s.ghost_face.end());
     for (const Field& f : s.mesh.cell_fields) {
       Field* to = nullptr;
       for (Field& h : out.mesh.cell_fields) to = h.name == f.name ? &h : to;
@@ -106,10 +108,13 @@ struct LabelSlabs::Impl {
   detail::LabelVolume vol;     // the label table; a window of planes per slab
   detail::LabelCounts counts;  // this process's planes (pass 2)
   std::vector<std::vector<detail::LabelSurface>> pieces;  // per slab, per part, in row order
+  bool ghost_faces = false;  // generate_with_halo: every piece marks its triangles
   LabelStats st;
   LabelStreamStats ss;
 
   Impl(PlaneSource& s, const LabelOptions& o) : source(s), options(o) {}
+  // The pieces held merged by key (part_points: each part's points, per label).
+  detail::LabelSurface merged(std::vector<Id>* part_points);
 
   // The file planes this process reads in passes 1 and 2 (padded plane p is
   // file plane p - 1), and each step of the passes: slabs of planes.
@@ -118,6 +123,27 @@ struct LabelSlabs::Impl {
     return {b, std::max(b, e)};
   }
   Id planes_per_read() const { return rows_per_slab + 2; }
+  // Pass 3 over rows [k_begin, k_end) in slabs; `ghost`: the triangles are
+  // another rank's (a halo).
+  void generate_rows(Id k_begin, Id k_end, bool ghost) {
+    for (Id k0 = k_begin; k0 < k_end; k0 += rows_per_slab) {
+      const Id k1 = std::min(k0 + rows_per_slab, k_end);
+      // The window: padded planes k0 - 1 .. k1 + 1 that exist; of those, the
+      // file holds 1 .. nz.
+      const Id w0 = std::max<Id>(k0 - 1, 0), w1 = std::min<Id>(k1 + 2, nz + 2);
+      detail::allocate_window(vol, w0, w1 - w0);
+      const Id f0 = std::max<Id>(w0, 1) - 1, f1 = std::min<Id>(w1, nz + 1) - 1;
+      if (f1 > f0) detail::map_planes(vol, read(f0, f1 - f0), f0, nullptr);
+      const auto t0 = Clock::now();
+      pieces.push_back(options.method == LabelMethod::SurfaceNets
+                           ? detail::surface_nets_rows(vol, options.per_label, {k0, k1}, st)
+                           : detail::discrete_marching_cubes_rows(vol, {k0, k1}, st));
+      if (options.method == LabelMethod::DiscreteMarchingCubes) st.generate += seconds_since(t0);
+      if (ghost_faces)
+        for (detail::LabelSurface& part : pieces.back()) part.ghost_face.assign(part.pair.size(), ghost ? 1 : 0);
+      ++ss.slabs;
+    }
+  }
   ImageGrid read(Id first, Id count) {
     const auto t0 = Clock::now();
     const ImageGrid& head = source.header();
@@ -219,21 +245,26 @@ void LabelSlabs::set_counts(const std::vector<std::vector<std::byte>>& all) {
 
 void LabelSlabs::generate() {
   Impl& m = *impl_;
-  for (Id k0 = m.rows.first; k0 < m.rows.second; k0 += m.rows_per_slab) {
-    const Id k1 = std::min(k0 + m.rows_per_slab, m.rows.second);
-    // The window: padded planes k0 - 1 .. k1 + 1 that exist; of those, the
-    // file holds 1 .. nz.
-    const Id w0 = std::max<Id>(k0 - 1, 0), w1 = std::min<Id>(k1 + 2, m.nz + 2);
-    detail::allocate_window(m.vol, w0, w1 - w0);
-    const Id f0 = std::max<Id>(w0, 1) - 1, f1 = std::min<Id>(w1, m.nz + 1) - 1;
-    if (f1 > f0) detail::map_planes(m.vol, m.read(f0, f1 - f0), f0, nullptr);
-    const auto t0 = Clock::now();
-    m.pieces.push_back(m.options.method == LabelMethod::SurfaceNets
-                           ? detail::surface_nets_rows(m.vol, m.options.per_label, {k0, k1}, m.st)
-                           : detail::discrete_marching_cubes_rows(m.vol, {k0, k1}, m.st));
-    if (m.options.method == LabelMethod::DiscreteMarchingCubes) m.st.generate += seconds_since(t0);
-    ++m.ss.slabs;
+  m.generate_rows(m.rows.first, m.rows.second, false);
+  free_storage(m.vol.index);
+}
+
+Id LabelSlabs::halo_rows(const LabelOptions& options) {
+  const Id steps = static_cast<Id>(options.smooth_iterations) *
+                   (options.method == LabelMethod::DiscreteMarchingCubes ? 2 : 1);
+  return steps + (options.coarsen ? 8 : 4);
+}
+
+void LabelSlabs::generate_with_halo(Id halo) {
+  Impl& m = *impl_;
+  m.ghost_faces = true;
+  const Id first = std::max<Id>(m.rows.first - halo, 0), end = std::min<Id>(m.rows.second + halo, m.nz + 2);
+  if (m.rows.first < m.rows.second) {  // a rank without rows has no piece
+    m.generate_rows(first, m.rows.first, true);
+    m.generate_rows(m.rows.first, m.rows.second, false);
+    m.generate_rows(m.rows.second, end, true);
   }
+  m.ss.halo_rows = (m.rows.first - first) + (end - m.rows.second);
   free_storage(m.vol.index);
 }
 
@@ -245,40 +276,57 @@ std::vector<std::byte> LabelSlabs::pieces_bytes() const {
 
 void LabelSlabs::add_pieces(const std::vector<std::byte>& bytes) { detail::read_pieces(bytes, impl_->pieces); }
 
-SurfaceMesh LabelSlabs::finish() {
-  Impl& m = *impl_;
+detail::LabelSurface LabelSlabs::Impl::merged(std::vector<Id>* part_points) {
   const auto t0 = Clock::now();
-  const std::size_t parts = m.pieces.empty() ? 0 : m.pieces[0].size();
-  for (const auto& slab : m.pieces)
+  const std::size_t parts = pieces.empty() ? 0 : pieces[0].size();
+  for (const auto& slab : pieces)
     if (slab.size() != parts) throw InputError("labels: the slabs hold different numbers of surfaces");
   // Per label (--per-label): each part merged on its own, appended in label
   // order. The network: one surface, its parts (discrete MC's labels) one
   // after the other, each part's slabs in row order.
   detail::LabelSurface surface;
-  surface.quads = m.options.method == LabelMethod::SurfaceNets && !m.options.per_label;
-  if (m.options.per_label) {
+  surface.quads = options.method == LabelMethod::SurfaceNets && !options.per_label;
+  if (options.per_label) {
     std::vector<detail::LabelSurface> merged;
     for (std::size_t p = 0; p < parts; ++p) {
       std::vector<const detail::LabelSurface*> list;
-      for (const auto& slab : m.pieces) list.push_back(&slab[p]);
+      for (const auto& slab : pieces) list.push_back(&slab[p]);
       merged.push_back(merge_by_key(list));
+      if (part_points) part_points->push_back(static_cast<Id>(merged.back().junction.size()));
     }
     detail::append_surfaces(merged, surface);
   } else {
     std::vector<const detail::LabelSurface*> list;
     for (std::size_t p = 0; p < parts; ++p)
-      for (const auto& slab : m.pieces) list.push_back(&slab[p]);
+      for (const auto& slab : pieces) list.push_back(&slab[p]);
     detail::LabelSurface merged = merge_by_key(list);
     merged.quads = surface.quads;
     surface = std::move(merged);
   }
   // Discrete MC always carries `label`, also with no surface at all.
-  if (m.options.method == LabelMethod::DiscreteMarchingCubes && !surface.mesh.find_cell_field("label"))
+  if (options.method == LabelMethod::DiscreteMarchingCubes && !surface.mesh.find_cell_field("label"))
     surface.mesh.cell_fields.push_back(Field{"label", 1, {}});
-  m.pieces.clear();
-  m.ss.merge = seconds_since(t0);
-  m.st.weld += m.ss.merge;
+  pieces.clear();
+  ss.merge = seconds_since(t0);
+  st.weld += ss.merge;
+  return surface;
+}
+
+SurfaceMesh LabelSlabs::finish() {
+  Impl& m = *impl_;
+  detail::LabelSurface surface = m.merged(nullptr);
   return detail::finish_label_mesh(surface, m.vol, m.options, m.st);
+}
+
+LabelPiece LabelSlabs::finish_piece() {
+  Impl& m = *impl_;
+  std::vector<Id> part_points;
+  detail::LabelSurface surface = m.merged(&part_points);
+  LabelPiece piece;
+  piece.mesh = detail::finish_label_mesh(surface, m.vol, m.options, m.st);
+  piece.ghost_face = std::move(surface.ghost_face);
+  piece.segments = detail::point_rows(m.vol, m.options, surface.keys, part_points, piece.order_key, piece.row);
+  return piece;
 }
 
 const LabelStats& LabelSlabs::stats() const { return impl_->st; }

@@ -39,6 +39,26 @@ struct LabelStreamStats {
   std::size_t slab_bytes = 0;   // samples and label indices held at once
   double read = 0;              // reading planes, over the three passes
   double merge = 0;             // merging the slabs' pieces by key
+  Id halo_rows = 0;             // generate_with_halo: rows made for the neighbours' sake
+};
+
+// A rank's share of the surfaces when every rank writes its own piece
+// (`mpirun -np P keymesh labels -o OUT.pvtp`): the surfaces of its rows and
+// of halo rows either side, merged, smoothed and coarsened there as one
+// process does it. A point's smoothed position after n Jacobi steps depends
+// only on the points within n cells of it, and every sum runs in key order
+// (global), so what lies deeper than the steps and the coarsening's reach
+// inside the halo is bit for bit the one process's.
+struct LabelPiece {
+  SurfaceMesh mesh;                     // finished: smoothed, coarsened, with the label fields
+  std::vector<std::uint8_t> ghost_face; // per triangle: 1 when a halo row made it (another rank's)
+  // Per point: a key ascending in the output's point order (segment << 47 |
+  // key in the segment) and the padded row that owns it; within a segment
+  // the row never decreases. Points of the output are numbered segment
+  // after segment, key order within each.
+  std::vector<std::uint64_t> order_key;
+  std::vector<Id> row;
+  int segments = 1;
 };
 
 // The passes of a streamed label map, for one process or one rank. A
@@ -67,6 +87,16 @@ class LabelSlabs {
   void set_counts(const std::vector<std::vector<std::byte>>& all);
   // Pass 3: this process's pieces of the surfaces (kept).
   void generate();
+  // Pass 3 for a rank writing its own piece: its rows and `halo` rows either
+  // side (those that exist), the halo's triangles marked as ghosts; then
+  // finish_piece() instead of finish().
+  void generate_with_halo(Id halo);
+  LabelPiece finish_piece();
+  // The halo rows a piece needs for these options: a point moves by its
+  // neighbours' positions once per smoothing step (two per Taubin
+  // iteration), a cell a step, and coarsening reaches a block and its
+  // faces' groups further; the rest is margin.
+  static Id halo_rows(const LabelOptions& options);
   // This process's pieces as bytes, to send; and another process's pieces
   // received, appended in the order the processes' rows run.
   std::vector<std::byte> pieces_bytes() const;
