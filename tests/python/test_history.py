@@ -156,3 +156,9 @@ def test_write_keeps_history_key_uint64():
             with pytest.raises(ValueError, match="only .vtp"):
                 keymesh.write(m, path)
             assert not os.path.exists(path)
+
+
+def test_gpu_backend_refuses_history_by_name():
+    # Refused before any device is considered: the same on a machine with or without a GPU.
+    with pytest.raises(ValueError, match=r"per-point history \(--history\)"):
+        contour(volume(), backend="cuda")
