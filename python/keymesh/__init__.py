@@ -155,7 +155,8 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0),
             normals: Optional[str] = "average", weld: str = "keyreduce",
             coarsen: bool = False, curvature: bool = False, threads: int = 0,
-            progress: Optional[Any] = None, scalars: bool = True, backend: Optional[str] = None) -> Mesh:
+            progress: Optional[Any] = None, scalars: bool = True, backend: Optional[str] = None,
+            history: bool = False) -> Mesh:
     """Isosurface of a 3-D volume: marching cubes, points welded by edge keys.
 
     Args:
@@ -220,6 +221,14 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
             DLPack and ``__cuda_array_interface__``). A CUDA tensor with
             backend="cpu" is refused (ValueError): copy it to the host
             yourself. ``keymesh.cuda_available()`` says whether "cuda" runs.
+        history: add point_data["history_key"] (uint64: the point's grid
+            edge, ``3 * np.ravel_multi_index((i, j, k), volume.shape,
+            order="F") + axis + isovalue_index * 3 * volume.size``, (i, j, k)
+            the edge's lower end) and point_data["history_t"] (float32: t
+            along the edge from that end, which gives the point back:
+            ``np.float32(origin[axis] + spacing[axis] * (ijk[axis] +
+            np.float64(t)))``), as ``keymesh contour --history`` writes them
+            (docs/HISTORY.md). Not with coarsen, nor on the GPU (ValueError).
 
     Returns:
         Mesh with points (n, 3) float32, cells (m, 3) uint32 and point_data
@@ -257,11 +266,14 @@ def contour(volume: Union[np.ndarray, Volume], iso: Union[float, Sequence[float]
     backend = _foreign.check_backend(source, backend)
     if source.on_cuda:
         _threads(threads)
+        if history:
+            raise ValueError("history: per-point history is not available on the GPU yet (use backend=\"cpu\" "
+                             "on a host copy)")
         parts, info = _ext.contour_device(source.value, _isovalues(iso), spacing, origin, normals, weld,
                                           bool(coarsen), bool(curvature), progress, bool(scalars))
     else:
         parts, info = _ext.contour(source.value, _isovalues(iso), spacing, origin, normals, weld, bool(coarsen),
-                                   bool(curvature), _threads(threads), progress, bool(scalars), backend)
+                                   bool(curvature), _threads(threads), progress, bool(scalars), backend, bool(history))
     last_contour_info.clear()
     last_contour_info.update(info)
     return _mesh(_foreign.in_library(parts, source.library))
@@ -372,7 +384,9 @@ def write(obj: Union[Mesh, Grid, Volume, np.ndarray], path: Any,
 
     A volume is a keymesh.Volume or a 3-D numpy array (axis 0 = x; spacing
     and origin per axis apply to arrays only). Files are written under a
-    temporary name and renamed when complete.
+    temporary name and renamed when complete. A Mesh's 1-D uint64 point
+    arrays (contour's history_key) are written as UInt64 arrays of a .vtp;
+    the other mesh formats would round them to float32 and raise ValueError.
     """
     if isinstance(obj, Volume):
         _ext.write_volume(obj, str(path))

@@ -68,6 +68,22 @@ struct OwnArrays {
   }
 };
 
+// history_key in the array's own frame: a C-order array was contoured with
+// its axes reversed (grid point i + nz (j + ny k) is array index (k, j, i)
+// of shape (nx, ny, nz), grid axis a its axis 2 - a), and the key the user
+// gets is the one keymesh contour gives the same samples as a volume file:
+// 3 * (x + nx (y + ny z)) + axis + isovalue index * 3N, x fastest.
+void keys_in_array_frame(std::vector<std::uint64_t>& keys, const ImageGrid& grid) {
+  const std::uint64_t gx = grid.dims[0], gy = grid.dims[1], gz = grid.dims[2];
+  const std::uint64_t per_iso = 3 * gx * gy * gz;
+  parallel::for_each(static_cast<Id>(keys.size()), [&](Id p) {
+    const std::uint64_t key = keys[p], iso = key / per_iso, edge = key % per_iso;
+    const std::uint64_t point = edge / 3, axis = edge % 3;
+    const std::uint64_t i = point % gx, j = point / gx % gy, k = point / (gx * gy);
+    keys[p] = iso * per_iso + 3 * (k + gz * (j + gy * i)) + (2 - axis);
+  });
+}
+
 // The grid contour reads: a Volume's own, or a view of a numpy array's samples.
 const ImageGrid& contour_grid(const py::object& volume, const py::object& spacing, const py::object& origin,
                               ArrayVolume& view) {
@@ -100,10 +116,12 @@ py::dict contour_info(const generate::ContourStats& stats, double contour_s, dou
 
 py::tuple contour(const py::object& volume, const std::vector<double>& isovalues, const py::object& spacing,
                   const py::object& origin, const std::string& normals, const std::string& weld, bool coarsen,
-                  bool curvature, int threads, const py::object& callback, bool scalars, const std::string& backend) {
+                  bool curvature, int threads, const py::object& callback, bool scalars, const std::string& backend,
+                  bool history) {
   check_threads(threads);
   const PythonProgress progress(callback);
   generate::ContourOptions opt = contour_options(isovalues, normals, weld, coarsen, curvature, scalars, backend);
+  opt.history = history;
   ArrayVolume view;  // keeps a numpy array's samples alive while the GIL is released
   const ImageGrid& grid = contour_grid(volume, spacing, origin, view);
   // A C-order array is contoured with its axes reversed: the mirrored table
@@ -113,18 +131,19 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
   // module's own arrays, handed to numpy as they are.
   OwnArrays own;
   const bool own_arrays = opt.weld == generate::ContourWeld::KeyReduce &&
-                          opt.normals == generate::ContourNormals::None && !coarsen && !curvature &&
+                          opt.normals == generate::ContourNormals::None && !coarsen && !curvature && !history &&
                           opt.backend == generate::Backend::Cpu;
   if (own_arrays)
     opt.output_arrays = [&own, &opt](Id n, Id m) { return own.allocate(n, m, opt.scalars); };
   SurfaceMesh mesh;
+  std::vector<std::uint64_t> history_key;
   generate::ContourStats stats;
   double contour_s = 0, mirror_s = 0;
   run_released(threads, progress, [&] {
     progress::report("contour", 0.0);
     auto t0 = Clock::now();
     try {
-      mesh = backend::contour(grid, opt, &stats);
+      mesh = backend::contour(grid, opt, &stats, history && !coarsen ? &history_key : nullptr);
     } catch (const std::exception&) {
       rethrow_in_python_words();
     }
@@ -135,13 +154,19 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
       swap_corners(own.connectivity.data(), own.triangles);
     } else if (view.reversed) {
       mirror_axes(mesh);
+      if (history) keys_in_array_frame(history_key, grid);
     }
     mirror_s = seconds_since(t0);
     progress::report("contour", 1.0);
   });
   py::dict info = contour_info(stats, contour_s, mirror_s);
   info["backend"] = backend;
-  return py::make_tuple(own_arrays ? own.to_python(grid.name) : mesh_to_python(std::move(mesh)), info);
+  py::tuple parts = own_arrays ? own.to_python(grid.name) : mesh_to_python(std::move(mesh));
+  if (history) {
+    const auto n = static_cast<py::ssize_t>(history_key.size());
+    parts[3].cast<py::dict>()["history_key"] = adopt(std::move(history_key), {n});
+  }
+  return py::make_tuple(parts, info);
 }
 
 }  // namespace
@@ -175,6 +200,7 @@ void register_contour(py::module_& m) {
         py::arg("origin") = py::none(), py::arg("normals") = "average", py::arg("weld") = "keyreduce",
         py::arg("coarsen") = false, py::arg("curvature") = false, py::arg("threads") = 0,
         py::arg("progress") = py::none(), py::arg("scalars") = true, py::arg("backend") = "cpu",
+        py::arg("history") = false,
         "Marching cubes welded by KEY-REDUCE; returns ((points, cells, offsets, point_data), timings). "
         "Use keymesh.contour, which wraps this in a Mesh.");
 }

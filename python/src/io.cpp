@@ -75,11 +75,43 @@ py::tuple read_or_name_memory(const std::string& path, const py::object& dims, c
   }
 }
 
+// A Mesh's 1-D uint64 point arrays (a contour's history_key, docs/HISTORY.md),
+// written as UInt64 arrays of a .vtp, their float copies taken out of the
+// mesh; any other format would round them to float32, and is refused by name.
+struct WidePointArrays {
+  std::vector<std::string> names;
+  std::vector<std::vector<std::uint64_t>> values;
+
+  WidePointArrays(const py::handle& mesh_obj, const std::string& path, SurfaceMesh& mesh) {
+    const py::object data = py::getattr(mesh_obj, "point_data", py::none());
+    if (data.is_none()) return;
+    for (auto item : data.cast<py::dict>()) {
+      const auto a = py::array::ensure(item.second);
+      if (!a || a.ndim() != 1 || !a.dtype().is(py::dtype::of<std::uint64_t>())) continue;
+      const std::string name = py::str(item.first);
+      if (io::file_extension(path) != ".vtp")
+        throw py::value_error("write: point_data['" + name + "'] is uint64, which only .vtp holds (" + path +
+                              " would round it to float32)");
+      const auto v = a.cast<py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>>();
+      names.push_back(name);
+      values.emplace_back(v.data(), v.data() + v.size());
+      std::erase_if(mesh.point_fields, [&](const Field& f) { return f.name == name; });
+    }
+  }
+  std::vector<io::UInt64PointArray> arrays() const {
+    std::vector<io::UInt64PointArray> out;
+    for (std::size_t i = 0; i < names.size(); ++i) out.push_back({names[i], &values[i]});
+    return out;
+  }
+};
+
 void write_mesh(const py::handle& mesh_obj, const std::string& path) {
   refuse_nul_path(path, "write");
-  const SurfaceMesh mesh = mesh_from_python(mesh_obj);
+  SurfaceMesh mesh = mesh_from_python(mesh_obj);
+  const WidePointArrays wide(mesh_obj, path, mesh);
   py::gil_scoped_release release;
-  io::write_mesh(mesh, path);
+  if (wide.names.empty()) io::write_mesh(mesh, path);
+  else io::write_vtp(mesh, path, nullptr, nullptr, wide.arrays());
 }
 
 void write_grid(const py::handle& grid_obj, const std::string& path) {

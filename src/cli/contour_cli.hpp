@@ -22,6 +22,7 @@ struct ContourCli {
   bool no_scalars = false;
   bool coarsen = false;
   bool curvature = false;
+  bool history = false;      // history_key and history_t per point (.vtp)
   std::string array;         // tet grids: the point field to contour
   std::string memory_limit;  // stream the volume in slabs
   bool gather = false;       // under mpirun: one file from rank 0
@@ -44,6 +45,15 @@ nlohmann::json contour_report(const ContourCli& o, long long points, long long c
 // timed as "check"; non-manifold parts are said on stderr unless quiet.
 nlohmann::json coarsening_report(const ContourCli& o, const SurfaceMesh& mesh, Id triangles_before,
                                  StageTimer& timer);
+
+// --history's usage errors (exit 2, said on stderr when `say`): no
+// coarsening, a .vtp output (history_key is UInt64, which the other formats
+// cannot hold; under mpirun also .pvtp pieces). 0 when none.
+int refuse_history_usage(const ContourCli& o, bool say, bool distributed);
+
+// The mesh written to o.output: with --history (.vtp, checked) its
+// history_key array beside the mesh's history_t field.
+void write_contour(const ContourCli& o, const SurfaceMesh& mesh, const std::vector<std::uint64_t>& history_key);
 
 // Output OUT.pvtp: one OUT_<rank>.vtp piece per rank (points with their
 // global ids) and the index; any other extension (or --gather): the whole

@@ -31,6 +31,7 @@ generate::ContourOptions contour_options(const ContourCli& o) {
   opt.coarsen = o.coarsen;
   opt.max_output_bytes = memory_budget(o.common);
   opt.curvature = o.curvature;
+  opt.history = o.history;
   opt.backend = generate::parse_option<generate::Backend>(o.common.backend);
   return opt;
 }
@@ -61,12 +62,31 @@ nlohmann::json coarsening_report(const ContourCli& o, const SurfaceMesh& mesh, I
   return r;
 }
 
+int refuse_history_usage(const ContourCli& o, bool say, bool distributed) {
+  if (!o.history) return 0;
+  std::string why;
+  if (o.coarsen)
+    why = "--history with --coarsen: a coarsened point merges crossings of several edges, so it has no one edge "
+          "and t";
+  else if (io::file_extension(o.output) != ".vtp" && !(distributed && io::file_extension(o.output) == ".pvtp"))
+    why = "--history writes history_key as UInt64, which only .vtp holds (" + o.output + ")";
+  if (why.empty()) return 0;
+  if (say) std::fprintf(stderr, "keymesh contour: %s (docs/HISTORY.md)\n", why.c_str());
+  return 2;
+}
+
+void write_contour(const ContourCli& o, const SurfaceMesh& mesh, const std::vector<std::uint64_t>& history_key) {
+  if (o.history) io::write_vtp(mesh, o.output, nullptr, nullptr, {{"history_key", &history_key}});
+  else io::write_mesh(mesh, o.output);
+}
+
 namespace {
 
 // What a single-process path made: the mesh, the contour's statistics and
 // the report keys only that path knows (the grid it read, the slabs).
 struct ContourResult {
   SurfaceMesh mesh;
+  std::vector<std::uint64_t> history_key;  // --history: each point's edge key
   generate::ContourStats stats;
   nlohmann::json facts = nlohmann::json::object();
 };
@@ -100,7 +120,10 @@ ContourResult run_streamed(const ContourCli& o, const generate::ContourOptions& 
   ContourResult result;
   generate::StreamStats ss;
   result.mesh =
-      timer.run("contour", [&] { return generate::contour_streamed(*source, opt, limit, &result.stats, &ss); });
+      timer.run("contour", [&] {
+        return generate::contour_streamed(*source, opt, limit, &result.stats, &ss,
+                                          opt.history ? &result.history_key : nullptr);
+      });
   timer.add("read", ss.read);
   nlohmann::json& r = result.facts;
   r["dims"] = source->header().dims;
@@ -126,7 +149,9 @@ ContourResult run_tets(const ContourCli& o, const generate::ContourOptions& opt,
       break;
     }
   progress.say("contouring " + std::to_string(grid.num_cells()) + " tetrahedra");
-  result.mesh = timer.run("contour", [&] { return generate::contour(grid, opt, &result.stats); });
+  result.mesh = timer.run("contour", [&] {
+    return generate::contour(grid, opt, &result.stats, opt.history ? &result.history_key : nullptr);
+  });
   result.facts["input_points"] = grid.num_points();
   result.facts["input_cells"] = grid.num_cells();
   result.facts["grid"] = "tetrahedra";
@@ -144,7 +169,9 @@ ContourResult run_voxels(const ContourCli& o, const generate::ContourOptions& op
   progress.say("contouring " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
                std::to_string(grid.dims[2]) + " " + scalar_type_name(grid.type));
   ContourResult result;
-  result.mesh = timer.run("contour", [&] { return backend::contour(grid, opt, &result.stats); });
+  result.mesh = timer.run("contour", [&] {
+    return backend::contour(grid, opt, &result.stats, opt.history ? &result.history_key : nullptr);
+  });
   nlohmann::json& r = result.facts;
   r["dims"] = grid.dims;
   r["scalar_type"] = scalar_type_name(grid.type);
@@ -175,7 +202,7 @@ int finish_contour(const ContourCli& o, const generate::ContourOptions& opt, Con
   const SurfaceMesh& mesh = result.mesh;
   if (o.coarsen) report_coarsening(o, result, timer);
   progress.say("writing " + o.output);
-  timer.run("write", [&] { io::write_mesh(mesh, o.output); });
+  timer.run("write", [&] { write_contour(o, mesh, result.history_key); });
   say_written(o.common, mesh.num_points(), mesh.num_cells(), "triangles", o.output);
   if (o.common.report_path.empty()) return 0;
   nlohmann::json r = contour_report(o, mesh.num_points(), mesh.num_cells(), threads, timer);
@@ -234,8 +261,10 @@ int run_contour(const ContourCli& o) {
   const generate::ContourOptions opt = contour_options(o);
   if (runs_distributed(o)) {
     if (int rc = refuse_distributed_usage(o)) return rc;
+    if (int rc = refuse_history_usage(o, distributed::rank() == 0, true)) return rc;
     return run_distributed_contour(o, opt, threads);
   }
+  if (int rc = refuse_history_usage(o, true, false)) return rc;
   ContourResult result;
   if (!o.memory_limit.empty()) {
     result = run_streamed(o, opt, timer);
@@ -278,6 +307,11 @@ void add_contour_options(CLI::App& cmd, ContourCli& o) {
                "merge the points nearest to one grid point (key = nearest input point on the edge), "
                "averaging positions and fields; drop collapsed triangles; split pinched points, one per fan; "
                "remove points left without a triangle");
+  cmd.add_flag("--history", o.history,
+               "per point, where it came from: point arrays history_key (UInt64: its grid edge, 3 * point id + "
+               "axis + isovalue index * 3N) and history_t (Float32: t along the edge from its lower end, which "
+               "gives the point's position back; tet grids: the edge's two point ids; docs/HISTORY.md); .vtp "
+               "output, not with --coarsen");
   o.raw_input.add_options(cmd);
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "

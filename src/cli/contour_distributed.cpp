@@ -52,13 +52,15 @@ std::unique_ptr<PlaneSource> open_slab_source(const ContourCli& o, const generat
 // Every rank writes its piece (its triangles, then the ghost cells it
 // carries for its neighbours); rank 0 writes the index once all exist, so a
 // failure anywhere leaves no index and no pieces.
-void write_pieces(distributed::ContourPiece& piece, const std::string& output) {
+void write_pieces(distributed::ContourPiece& piece, const std::string& output, bool history) {
   const auto t0 = std::chrono::steady_clock::now();
   // With one layer of ghost cells from the neighbouring slabs, marked as VTK
   // marks them: per-piece filters see across the shared planes (issue 33).
   distributed::GhostedPiece ghosted = distributed::ghosted_piece(piece);
   const io::PieceGhosts ghosts{std::move(ghosted.point_ghosts), std::move(ghosted.cell_ghosts)};
-  write_piece_files(ghosted.mesh, ghosted.ids, ghosts, output);
+  std::vector<io::UInt64PointArray> wide;
+  if (history) wide.push_back({"history_key", &ghosted.keys});
+  write_piece_files(ghosted.mesh, ghosted.ids, ghosts, output, wide);
   piece.stats.output = seconds_since(t0);
 }
 
@@ -67,12 +69,14 @@ void write_pieces(distributed::ContourPiece& piece, const std::string& output) {
 // receives rank 0's coarsening report keys.
 void write_gathered(const ContourCli& o, distributed::ContourPiece& piece, StageTimer& timer,
                     nlohmann::json& coarsening) {
-  const SurfaceMesh whole = timer.run("gather", [&] { return distributed::gather(piece); });
+  std::vector<std::uint64_t> history_key;
+  const SurfaceMesh whole =
+      timer.run("gather", [&] { return distributed::gather(piece, o.history ? &history_key : nullptr); });
   distributed::agreed([&] {
     if (distributed::rank() != 0) return;
     if (o.coarsen) coarsening = coarsening_report(o, whole, piece.triangles_before_coarsening, timer);
     const auto t0 = std::chrono::steady_clock::now();
-    timer.run("write", [&] { io::write_mesh(whole, o.output); });
+    timer.run("write", [&] { write_contour(o, whole, history_key); });
     piece.stats.output += seconds_since(t0);
   });
 }
@@ -144,7 +148,7 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
   const double total_points = static_cast<double>(piece.numbering.total);
   nlohmann::json coarsening;
   if (pieces)
-    timer.run("write", [&] { write_pieces(piece, o.output); });
+    timer.run("write", [&] { write_pieces(piece, o.output, o.history); });
   else
     write_gathered(o, piece, timer, coarsening);
   const std::vector<distributed::RankStats> all = distributed::gather_stats(piece.stats);

@@ -23,6 +23,7 @@ void check_gpu_options(const generate::ContourOptions& opt) {
   if (opt.weld == generate::ContourWeld::VertexWeld) not_on_gpu("VERTEX-WELD (--weld vertexweld)");
   if (opt.coarsen) not_on_gpu("coarsening (--coarsen)");
   if (opt.curvature) not_on_gpu("curvature (--curvature)");
+  if (opt.history) not_on_gpu("per-point history (--history)");
   if (opt.output_arrays) not_on_gpu("writing into arrays the caller owns (output_arrays)");
   if (opt.total_planes) not_on_gpu("streamed (slab) contouring");
   if (opt.ghost_below || opt.ghost_above) not_on_gpu("a grid with ghost planes");

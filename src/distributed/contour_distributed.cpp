@@ -79,6 +79,8 @@ void require_distributable(const ImageGrid& head, const generate::ContourOptions
   if (options.weld == generate::ContourWeld::VertexWeld)
     throw InputError("distributed contour: --weld vertexweld compares coordinates; across ranks only keys weld");
   if (options.backend != generate::Backend::Cpu) throw InputError("distributed contour: --backend cpu only so far");
+  if (options.history && options.coarsen)
+    throw InputError("distributed contour: --history with --coarsen: a coarsened point has no one edge and t");
   if (head.dims[2] - 1 < ranks)
     throw InputError("distributed contour: " + std::to_string(head.dims[2] - 1) + " voxel layers (z) for " +
                      std::to_string(ranks) + " ranks; each rank needs at least one (use fewer ranks)");
@@ -288,7 +290,7 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   return piece;
 }
 
-SurfaceMesh gather(ContourPiece& piece) {
+SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys) {
   const auto t0 = Clock::now();
   int P = 1, r = 0;
   mpi().Comm_size(mpi().comm_world, &P);
@@ -306,7 +308,7 @@ SurfaceMesh gather(ContourPiece& piece) {
     if (g.owned[p]) {
       xyz.insert(xyz.end(), m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3);
       if (piece.coarsen) nearest.push_back(piece.nearest[static_cast<std::size_t>(p)]);
-      if (piece.average) keys.push_back(piece.keys[static_cast<std::size_t>(p)]);
+      if (piece.average || point_keys) keys.push_back(piece.keys[static_cast<std::size_t>(p)]);
       for (std::size_t f = 0; f < fields.size(); ++f) {
         const Field& fd = m.point_fields[f];
         fields[f].insert(fields[f].end(), fd.values.begin() + fd.components * p, fd.values.begin() + fd.components * (p + 1));
@@ -336,13 +338,14 @@ SurfaceMesh gather(ContourPiece& piece) {
   }
   static_assert(sizeof(PointIndex) == 4, "the gather sends point ids as MPI_UINT32_T");
   gather_segments(conn, 3, mpi().uint32, tri_counts, S, out.connectivity);
-  if (piece.average) {
+  if (piece.average || point_keys) {
     std::vector<std::uint64_t> all_keys;
     gather_segments(keys, 1, mpi().uint64, g.counts, S, all_keys);
-    if (r == 0)
+    if (r == 0 && piece.average)
       for (Field& f : out.point_fields)
         if (f.name == "Normals")
           f = generate::blocked_average_normals(out, generate::layer_blocks(out, all_keys, piece.layer_grid));
+    if (point_keys) *point_keys = std::move(all_keys);
   }
   if (piece.coarsen) {
     // The fine mesh of one process, and its points' coarse keys: coarsened
@@ -363,27 +366,29 @@ SurfaceMesh gather(ContourPiece& piece) {
 namespace {
 
 // The bytes of one triangle sent as a ghost: per corner its global id, its
-// position and its point field values, then the cell field values.
+// edge key, its position and its point field values, then the cell field values.
 struct GhostRecord {
   std::size_t corner_bytes = 0, bytes = 0;
   explicit GhostRecord(const SurfaceMesh& m) {
     std::size_t point_values = 3, cell_values = 0;
     for (const Field& f : m.point_fields) point_values += static_cast<std::size_t>(f.components);
     for (const Field& f : m.cell_fields) cell_values += static_cast<std::size_t>(f.components);
-    corner_bytes = 8 + 4 * point_values;
+    corner_bytes = 16 + 4 * point_values;
     bytes = 3 * corner_bytes + 4 * cell_values;
   }
 };
 
-void append_ghost_record(const SurfaceMesh& m, const std::vector<std::uint64_t>& ids, Id t, const GhostRecord& record,
+void append_ghost_record(const SurfaceMesh& m, const std::vector<std::uint64_t>& ids,
+                         const std::vector<std::uint64_t>& keys, Id t, const GhostRecord& record,
                          std::vector<char>& buf) {
   std::size_t at = buf.size();
   buf.resize(at + record.bytes);
   for (int c = 0; c < 3; ++c) {
     const PointIndex p = m.connectivity[3 * t + c];
     std::memcpy(buf.data() + at, &ids[p], 8);
-    std::memcpy(buf.data() + at + 8, m.points.data() + 3 * static_cast<std::size_t>(p), 12);
-    at += 20;
+    std::memcpy(buf.data() + at + 8, &keys[p], 8);
+    std::memcpy(buf.data() + at + 16, m.points.data() + 3 * static_cast<std::size_t>(p), 12);
+    at += 28;
     for (const Field& f : m.point_fields) {
       const auto k = static_cast<std::size_t>(f.components);
       std::memcpy(buf.data() + at, f.values.data() + k * p, 4 * k);
@@ -422,8 +427,8 @@ std::vector<std::vector<char>> ghost_records_to_send(const ContourPiece& piece, 
       below = below || (z == lo && r > 0);
       above = above || (z == hi && r + 1 < P);
     }
-    if (below) append_ghost_record(m, ids, t, record, to[static_cast<std::size_t>(r - 1)]);
-    if (above) append_ghost_record(m, ids, t, record, to[static_cast<std::size_t>(r + 1)]);
+    if (below) append_ghost_record(m, ids, piece.keys, t, record, to[static_cast<std::size_t>(r - 1)]);
+    if (above) append_ghost_record(m, ids, piece.keys, t, record, to[static_cast<std::size_t>(r + 1)]);
   }
   return to;
 }
@@ -479,7 +484,10 @@ void append_ghosts(GhostedPiece& out, Id n, const std::vector<char>& got, const 
       auto [it, added] = local.emplace(id[c], static_cast<PointIndex>(o.num_points()));
       if (added) {
         const char* v = got.data() + at + c * record.corner_bytes + 8;
-        v = append_floats(v, 3, o.points);
+        std::uint64_t key;
+        std::memcpy(&key, v, 8);
+        out.keys.push_back(key);
+        v = append_floats(v + 8, 3, o.points);
         for (Field& f : o.point_fields) v = append_floats(v, f.components, f.values);
         out.ids.push_back(id[c]);
         out.point_ghosts.push_back(1);
@@ -505,10 +513,14 @@ GhostedPiece ghosted_piece(ContourPiece& piece) {
   out.point_ghosts.resize(static_cast<std::size_t>(n));
   out.cell_ghosts.assign(static_cast<std::size_t>(cells), 0);
   for (Id p = 0; p < n; ++p) out.point_ghosts[p] = piece.numbering.owned[p] ? 0 : 1;
-  if (P == 1) return out;
+  if (P == 1) {
+    out.keys = std::move(piece.keys);
+    return out;
+  }
   if (!out.mesh.all_triangles()) throw InputError("distributed contour: ghost cells of a piece with polygons");
   const GhostRecord record(out.mesh);
   const std::vector<char> got = exchange_bytes(ghost_records_to_send(piece, out.mesh, out.ids, P, r, record), P);
+  out.keys = std::move(piece.keys);
   append_ghosts(out, n, got, record);
   return out;
 }

@@ -490,8 +490,12 @@ std::string declared_array(const Field& f) {
 void write_vtp(const SurfaceMesh& mesh, const std::string& path) { write_vtp(mesh, path, nullptr); }
 
 void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids,
-               const PieceGhosts* ghosts) {
+               const PieceGhosts* ghosts, const std::vector<UInt64PointArray>& uint64_arrays) {
   validate_mesh(mesh, path);
+  for (const UInt64PointArray& a : uint64_arrays)
+    if (!a.values || a.values->size() != static_cast<std::size_t>(mesh.num_points()))
+      throw InputError(path + ": point array '" + a.name + "' holds " + std::to_string(a.values ? a.values->size() : 0) +
+                       " values for " + std::to_string(mesh.num_points()) + " points");
   if (global_point_ids && global_point_ids->size() != static_cast<std::size_t>(mesh.num_points()))
     throw InputError(path + ": " + std::to_string(global_point_ids->size()) + " global point ids for " +
                      std::to_string(mesh.num_points()) + " points");
@@ -512,6 +516,8 @@ void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vect
        "\">\n";
   x += "      <PointData" + point_data_attributes(mesh, global_point_ids != nullptr) + ">\n";
   for (const Field& f : mesh.point_fields) x += arrays.floats(f.name, f.components, f.values);
+  for (const UInt64PointArray& a : uint64_arrays)
+    x += arrays.bytes(ScalarType::UInt64, a.name, 1, a.values->data(), a.values->size() * sizeof(std::uint64_t));
   if (global_point_ids)
     x += arrays.integers(ScalarType::Int64, "GlobalPointIds", global_point_ids->size(),
                          [&](std::uint64_t i) { return (*global_point_ids)[i]; });
@@ -539,12 +545,14 @@ void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vec
 }
 
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
-                bool global_point_ids, bool ghosts) {
+                bool global_point_ids, bool ghosts, const std::vector<std::string>& uint64_arrays) {
   const std::string ghost_array = std::string("      <PDataArray type=\"UInt8\" Name=\"") + kGhostArray + "\"/>\n";
   std::string x = vtk_xml::file_header("PPolyData");
   x += std::string("  <PPolyData GhostLevel=\"") + (ghosts ? "1" : "0") + "\">\n";
   x += "    <PPointData" + point_data_attributes(like, global_point_ids) + ">\n";
   for (const Field& f : like.point_fields) x += declared_array(f);
+  for (const std::string& name : uint64_arrays)
+    x += "      <PDataArray type=\"UInt64\" Name=\"" + xml_escape(name) + "\"/>\n";
   if (global_point_ids) x += "      <PDataArray type=\"Int64\" Name=\"GlobalPointIds\"/>\n";
   if (ghosts) x += ghost_array;
   x += "    </PPointData>\n";

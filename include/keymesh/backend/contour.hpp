@@ -15,7 +15,9 @@ namespace keymesh::backend {
 // Backend::Cuda: the same input checks as generate::contour (same
 // InputError), then cuda::contour; a slab (options.total_planes) is refused
 // by name, as is a build or a machine without a usable GPU.
+// point_keys (the CPU only): generate::contour's, every point's edge key
+// (history_key with options.history); the GPU refuses options.history.
 SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& options,
-                    generate::ContourStats* stats = nullptr);
+                    generate::ContourStats* stats = nullptr, std::vector<std::uint64_t>* point_keys = nullptr);
 
 }  // namespace keymesh::backend

@@ -69,7 +69,9 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
 // triangles isovalue by isovalue in rank order: the single-process file;
 // with piece.coarsen, that mesh coarsened as one process coarsens it), the
 // others an empty one. Adds the gather's time to piece.stats.output.
-SurfaceMesh gather(ContourPiece& piece);
+// point_keys (given on every rank or none): rank 0 receives the whole
+// mesh's points' edge keys (history_key), in its point order.
+SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys = nullptr);
 
 // A rank's piece as VTK's parallel pipeline wants it: its triangles, then
 // one layer of ghost cells (the neighbouring ranks' triangles that use a
@@ -80,13 +82,14 @@ SurfaceMesh gather(ContourPiece& piece);
 struct GhostedPiece {
   SurfaceMesh mesh;
   std::vector<std::uint64_t> ids;
+  std::vector<std::uint64_t> keys;  // every point's edge key (history_key)
   std::vector<std::uint8_t> point_ghosts, cell_ghosts;
 };
 
 // Collective: each rank sends its neighbours (the only ranks that hold its
 // points: the planes it shares with them) the triangles touching those
-// planes, with their points' ids, positions and fields; it keeps what it
-// receives that uses a point it holds. Moves the piece's mesh and ids into
+// planes, with their points' ids, keys, positions and fields; it keeps what it
+// receives that uses a point it holds. Moves the piece's mesh, ids and keys into
 // the result.
 GhostedPiece ghosted_piece(ContourPiece& piece);
 

@@ -31,16 +31,24 @@ void write_mesh(const SurfaceMesh& mesh, const std::string& path);
 struct PieceGhosts {
   std::vector<std::uint8_t> points, cells;
 };
+// `uint64_arrays`: UInt64 PointData arrays written after the float point
+// fields, one value per point each (a contour's history_key: the mesh's own
+// fields are floats). keymesh's readers read them back as float fields.
+struct UInt64PointArray {
+  std::string name;
+  const std::vector<std::uint64_t>* values = nullptr;
+};
 void write_vtp(const SurfaceMesh& mesh, const std::string& path, const std::vector<std::uint64_t>* global_point_ids,
-               const PieceGhosts* ghosts = nullptr);
+               const PieceGhosts* ghosts = nullptr, const std::vector<UInt64PointArray>& uint64_arrays = {});
 
 // A ParaView parallel PolyData index (.pvtp) over piece files written by
 // write_vtp (Source paths relative to the index); `like` gives the point
 // fields every piece has.
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
                 bool global_point_ids);
-// Pieces written with ghosts: GhostLevel 1 and the vtkGhostType arrays declared.
+// Pieces written with ghosts: GhostLevel 1 and the vtkGhostType arrays
+// declared; `uint64_arrays` names the pieces' UInt64 point arrays (write_vtp's).
 void write_pvtp(const std::string& path, const SurfaceMesh& like, const std::vector<std::string>& pieces,
-                bool global_point_ids, bool ghosts);
+                bool global_point_ids, bool ghosts, const std::vector<std::string>& uint64_arrays = {});
 
 }  // namespace keymesh::io

@@ -29,6 +29,7 @@
 #include "contour_rows.hpp"
 #include "derivative_rows.hpp"
 #include "grid_lines.hpp"
+#include "history_t.hpp"
 #include "keymesh/generate/contour/layer_blocks.hpp"
 #include "voxel_bits.hpp"
 
@@ -144,6 +145,7 @@ struct PointArrays {
   float* scalar = nullptr;
   float* gradient_normal = nullptr;
   float* curvature = nullptr;
+  float* history_t = nullptr;       // ContourOptions::history (history_t.hpp)
   std::uint64_t* key = nullptr;     // global edge key (point_keys)
   std::uint64_t* coarse = nullptr;  // coarse key: the edge's end nearest the crossing
 };
@@ -167,7 +169,7 @@ struct PointWriter {
   std::uint64_t point_shift = 0;    // nxy * first plane: the slab's first grid point in the whole grid
 
   bool positions_and_scalar_only() const {
-    return out.xyz && !out.gradient_normal && !out.curvature && !out.key && !out.coarse;
+    return out.xyz && !out.gradient_normal && !out.curvature && !out.history_t && !out.key && !out.coarse;
   }
   bool needs_derivatives() const { return out.gradient_normal || out.curvature; }
 
@@ -204,6 +206,7 @@ struct PointWriter {
     if (out.gradient_normal) interp.gradient_normal(p, ends.g[0], ends.g[1], out.gradient_normal + 3 * id);
     if constexpr (Hessians)
       if (out.curvature) out.curvature[id] = interp.mean_curvature(p, ends.g[0], ends.h[0], ends.g[1], ends.h[1]);
+    if (out.history_t) out.history_t[id] = history_t(s, p.axis, p.ijk[p.axis], p.t);
     if (out.key)
       out.key[id] = static_cast<std::uint64_t>(iso_index) * total_per_iso + 3 * static_cast<std::uint64_t>(p.p0) +
                     static_cast<std::uint64_t>(p.axis) + key_shift;
@@ -277,7 +280,7 @@ PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& gri
     parallel::resize_fresh(v, static_cast<std::size_t>(components * points));
     return v.data();
   };
-  mesh.point_fields.reserve(mesh.point_fields.size() + 3);  // the writer's pointers stay valid
+  mesh.point_fields.reserve(mesh.point_fields.size() + 4);  // the writer's pointers stay valid
   auto field = [&](const std::string& name, int components) {
     mesh.point_fields.push_back(Field{name, components, {}});
     return sized(mesh.point_fields.back().values, components);
@@ -286,6 +289,7 @@ PointWriter<T> prepare_points(SurfaceMesh& mesh, Id points, const ImageGrid& gri
   if (opt.scalars) w.out.scalar = field(grid.name, 1);
   if (opt.normals == ContourNormals::Gradient) w.out.gradient_normal = field("Normals", 3);
   if (opt.curvature) w.out.curvature = field("mean_curvature", 1);
+  if (opt.history) w.out.history_t = field("history_t", 1);
   // Global keys: the slab's edges and points renumbered as those of the whole grid.
   w.points_per_iso = static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(opt.total_planes ? opt.total_planes : s.nz);
   w.point_shift = static_cast<std::uint64_t>(s.nxy) * static_cast<std::uint64_t>(opt.total_planes ? opt.first_plane : 0);
@@ -875,9 +879,12 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
     throw InputError("contour: coarsening a slab with ghost planes is not supported");
   if (options.output_arrays &&
       (options.weld != ContourWeld::KeyReduce || options.normals != ContourNormals::None || options.curvature ||
-       options.coarsen || point_keys || nearest_keys))
+       options.coarsen || options.history || point_keys || nearest_keys))
     throw InputError("contour: output arrays are written by the structured plan (weld keyreduce) with no "
-                     "normals, curvature, coarsening or keys");
+                     "normals, curvature, coarsening, history or keys");
+  if (options.history && options.coarsen)
+    throw InputError("contour: --history with --coarsen: a coarsened point merges crossings of several edges, "
+                     "so it has no one edge and t (docs/HISTORY.md)");
   if ((point_keys || nearest_keys) && options.coarsen)
     throw InputError("contour: coarsened points have no edge keys (a slab's fine points and their nearest grid "
                      "points are merged, then coarsened, by the caller)");

@@ -28,6 +28,9 @@ void check_streamable(const ImageGrid& head, const ContourOptions& options) {
   if (options.backend != Backend::Cpu) throw InputError("contour --memory-limit: streaming runs on the CPU backend");
   if (options.weld == ContourWeld::VertexWeld)
     throw InputError("contour --memory-limit: VERTEX-WELD has no keys to merge slabs by; use --weld keyreduce");
+  if (options.history && options.coarsen)
+    throw InputError("contour: --history with --coarsen: a coarsened point merges crossings of several edges, "
+                     "so it has no one edge and t (docs/HISTORY.md)");
   for (int a = 0; a < 3; ++a)
     if (head.dims[a] < 2)
       throw InputError("contour: grid has " + std::to_string(head.dims[a]) + " point(s) along axis " + "xyz"[a] +
@@ -87,8 +90,9 @@ struct SlabPoints {
   // KEY-REDUCE over the slabs' points: a shared plane's points appear
   // twice, with equal bits; the first of each group stands for it, and the
   // index map takes every slab point to its merged point. With coarsen,
-  // `merged_nearest` receives the merged points' coarse keys.
-  SurfaceMesh merge(std::vector<std::uint64_t>& merged_nearest) const {
+  // `merged_nearest` receives the merged points' coarse keys; `merged_keys`,
+  // when given, their edge keys.
+  SurfaceMesh merge(std::vector<std::uint64_t>& merged_nearest, std::vector<std::uint64_t>* merged_keys) const {
     const Id n = static_cast<Id>(keys.size());
     const auto g = keyreduce::partition_sort(keys.data(), n,
                                              parallel::bits_needed<std::uint64_t>(per_iso * corners.size() - 1),
@@ -98,12 +102,12 @@ struct SlabPoints {
     mesh.points.resize(static_cast<std::size_t>(3 * unique));
     for (const Field& f : fields)
       mesh.point_fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(unique * f.components))});
-    std::vector<std::uint64_t> point_keys(average ? static_cast<std::size_t>(unique) : 0);
+    std::vector<std::uint64_t> point_keys(average || merged_keys ? static_cast<std::size_t>(unique) : 0);
     merged_nearest.resize(coarsen ? static_cast<std::size_t>(unique) : 0);
     parallel::for_each(unique, [&](Id p) {
       const Id first = g.order[g.offsets[p]];
       if (coarsen) merged_nearest[p] = nearest[first];
-      if (average) point_keys[p] = keys[first];
+      if (!point_keys.empty()) point_keys[p] = keys[first];
       for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
       for (std::size_t i = 0; i < fields.size(); ++i) {
         const int c = fields[i].components;
@@ -119,6 +123,7 @@ struct SlabPoints {
       at += c.size();
     }
     if (average) mesh.point_fields.push_back(blocked_average_normals(mesh, layer_blocks(mesh, point_keys, layers)));
+    if (merged_keys) *merged_keys = std::move(point_keys);
     return mesh;
   }
 };
@@ -132,7 +137,8 @@ void add_stats(ContourStats& total, const ContourStats& st) {
 }  // namespace
 
 SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
-                             ContourStats* stats, StreamStats* stream_stats) {
+                             ContourStats* stats, StreamStats* stream_stats,
+                             std::vector<std::uint64_t>* point_keys) {
   const retained_blocks::KeepNothing within_the_budget;
   const ImageGrid& head = source.header();
   check_streamable(head, options);
@@ -184,7 +190,7 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   free_storage(slab.bytes);
   auto t0 = Clock::now();
   std::vector<std::uint64_t> nearest;
-  SurfaceMesh mesh = all.merge(nearest);
+  SurfaceMesh mesh = all.merge(nearest, point_keys);
   ss.merge = seconds_since(t0);
   if (options.coarsen) {
     t0 = Clock::now();

@@ -25,6 +25,7 @@
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/weld/vertex_weld.hpp"
+#include "generate/contour/history_t.hpp"
 
 namespace keymesh::generate {
 
@@ -277,6 +278,26 @@ void interpolate_fields(const UnstructuredGrid& tets, const Field& field, const 
   }
 }
 
+// History (contour_tets.hpp): each point's t, as the float that gives its
+// three written coordinates back (its key is groups.unique_keys).
+void add_history_t(const TetEdgePoints& ep, const keyreduce::Groups<std::uint64_t>& groups, SurfaceMesh& mesh) {
+  const Id points = groups.num_groups();
+  Field history{"history_t", 1, {}};
+  parallel::resize_fresh(history.values, static_cast<std::size_t>(points));
+  parallel::for_each(points, [&](Id p) {
+    const EdgePoint e = ep.locate(groups.unique_keys[p]);
+    const float* written = &mesh.points[3 * p];
+    history.values[p] = nearest_float_t(e.t, [&](float t) {
+      for (int a = 0; a < 3; ++a) {
+        const double pa = ep.P[3 * e.a + a], pb = ep.P[3 * e.b + a];
+        if (static_cast<float>(pa + static_cast<double>(t) * (pb - pa)) != written[a]) return false;
+      }
+      return true;
+    });
+  });
+  mesh.point_fields.push_back(std::move(history));
+}
+
 // Coarsening: every point's coarse key is its edge's end point nearest to
 // the crossing, per isovalue.
 SurfaceMesh coarsen_contour(SurfaceMesh mesh, const TetEdgePoints& ep, const std::vector<std::uint64_t>& point_key,
@@ -295,8 +316,12 @@ SurfaceMesh coarsen_contour(SurfaceMesh mesh, const TetEdgePoints& ep, const std
 
 }  // namespace
 
-SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats) {
+SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats,
+                    std::vector<std::uint64_t>* point_keys) {
   const Field& field = contour_field(tets, opt);
+  if (opt.coarsen && (opt.history || point_keys))
+    throw InputError("contour: --history with --coarsen: a coarsened point merges crossings of several edges, "
+                     "so it has no one edge and t (docs/HISTORY.md)");
   ContourStats local;
   ContourStats& st = stats ? *stats : local;
   st = ContourStats{};
@@ -341,6 +366,8 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
     parallel::for_each(points, [&](Id p) { ep.position(groups.unique_keys[p], &mesh.points[3 * p]); });
   }
   interpolate_fields(tets, field, opt, ep, groups, mesh);
+  if (opt.history) add_history_t(ep, groups, mesh);
+  if (point_keys) point_keys->assign(groups.unique_keys.begin(), groups.unique_keys.end());
   if (average && !opt.coarsen) {
     // The weld's groups are the corners grouped by point (mesh/normals.hpp),
     // summed into the field itself.

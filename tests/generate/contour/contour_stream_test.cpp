@@ -213,3 +213,31 @@ TEST(ContourStream, BoxWithPositionOffsetGivesTheWholeGridsPositions) {
   for (Id p = 0; p < part.num_points(); ++p)
     EXPECT_TRUE(all.count({part.points[3 * p], part.points[3 * p + 1], part.points[3 * p + 2]})) << p;
 }
+
+namespace {
+
+// --history in slabs (docs/HISTORY.md): the merged points' keys and
+// history_t are the whole volume's; with coarsening it is refused.
+TEST(ContourStream, SlabsGiveTheWholeVolumesHistory) {
+  ImageGrid g = generate::spherical_distance(24);
+  g.origin = {1.5, 2.25, 10.125};
+  g.spacing = {0.5, 1.5, 0.3};
+  ContourOptions o;
+  o.isovalues = {9.5, 4.25};
+  o.history = true;
+  std::vector<std::uint64_t> whole_keys;
+  const SurfaceMesh whole = generate::contour(g, o, nullptr, &whole_keys);
+  ASSERT_NE(whole.find_point_field("history_t"), nullptr);
+  for (std::size_t planes : {2u, 5u}) {
+    GridPlanes src(g);
+    std::vector<std::uint64_t> keys;
+    const SurfaceMesh m = generate::contour_streamed(src, o, planes * 24 * 24 * sizeof(float), nullptr, nullptr, &keys);
+    EXPECT_EQ(keys, whole_keys);
+    expect_same(whole, m);
+  }
+  o.coarsen = true;
+  GridPlanes src(g);
+  EXPECT_THROW(generate::contour_streamed(src, o, 1 << 20), InputError);
+}
+
+}  // namespace

@@ -69,6 +69,16 @@ struct ContourOptions {
   // a sphere of radius r has kappa = 1/r. Point field "mean_curvature".
   // Voxel grids only.
   bool curvature = false;
+  // Per-point history (docs/HISTORY.md): point field "history_t", the float
+  // t in [0, 1] along the point's edge (its key, through contour()'s
+  // point_keys, is history_key) from the edge's lower grid point, chosen
+  // among the floats next to the crossing's t so that
+  //   x[axis] = float(origin[axis] + spacing[axis] * (double(c) + double(t)))
+  // (c the lower end's index along the axis, in the whole grid) gives the
+  // written coordinate bit for bit where such a float exists (see
+  // history_t.hpp for the bound elsewhere). Not with coarsening (a coarse
+  // point has no one edge) nor output_arrays (InputError).
+  bool history = false;
   // The grid's axes are the caller's in reverse order (x <-> z: a C-order
   // numpy array seen without a copy, the output mirrored back by the
   // caller): cubes are split by the mirrored table (coarsening's tables are

@@ -17,9 +17,12 @@
 // coarse keys) are merged first, then the whole mesh is coarsened as one
 // contour coarsens it: byte-identical, averaged normals included (computed
 // from the coarse mesh). The fine mesh is held before coarsening.
-// Refused by name for now: the GPU.
+// History (options.history): the slabs' history_t field, merged as every
+// field is; point_keys, when given, receives the merged points' global edge
+// keys (history_key). Refused by name for now: the GPU.
 #include <cstddef>
 #include <memory>
+#include <vector>
 
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/mesh/plane_source.hpp"
@@ -37,6 +40,7 @@ struct StreamStats {
 // the output mesh comes on top. Throws InputError for unsupported options,
 // LimitError when two planes do not fit the limit.
 SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
-                             ContourStats* stats = nullptr, StreamStats* stream_stats = nullptr);
+                             ContourStats* stats = nullptr, StreamStats* stream_stats = nullptr,
+                             std::vector<std::uint64_t>* point_keys = nullptr);
 
 }  // namespace keymesh::generate

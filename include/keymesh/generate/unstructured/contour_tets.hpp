@@ -27,6 +27,14 @@ namespace keymesh::generate {
 // Throws InputError when the grid has cells other than tetrahedra, no such
 // point field, or invalid isovalues; LimitError past 2^32 - 1 output points
 // or corners, or when the edge keys need more than 64 bits.
-SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& options, ContourStats* stats = nullptr);
+// History (options.history, docs/HISTORY.md): point field "history_t", the
+// float t from the edge's smaller point id a towards b for which
+//   x[c] = float(double(P[a][c]) + double(t) * (double(P[b][c]) - double(P[a][c])))
+// gives all three written coordinates back where such a float exists near
+// the crossing's t; point_keys, when given, receives every point's edge key
+// (history_key): iso_index << 2b | a << b | b_id, b the bits of the
+// largest point id (at least 1). Not with coarsening (InputError).
+SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& options, ContourStats* stats = nullptr,
+                    std::vector<std::uint64_t>* point_keys = nullptr);
 
 }  // namespace keymesh::generate
