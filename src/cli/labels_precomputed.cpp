@@ -76,6 +76,16 @@ std::map<std::array<std::uint32_t, 3>, std::vector<ng::ChunkPiece>> by_chunk(std
 struct Counts {
   std::size_t pieces = 0, chunks = 0;
   std::set<std::uint64_t> segments;
+  std::vector<std::uint64_t> triangles_per_lod;  // of the pieces this run made (a triangle lies in one chunk)
+
+  void add(const std::vector<ng::ChunkPiece>& made) {
+    pieces += made.size();
+    for (const auto& p : made) {
+      segments.insert(p.segment);
+      if (triangles_per_lod.size() <= p.lod) triangles_per_lod.resize(p.lod + 1, 0);
+      triangles_per_lod[p.lod] += p.triangles.size() / 3;
+    }
+  }
 };
 
 // One call: every chunk's pieces kept (for a later --update), then the output.
@@ -86,8 +96,7 @@ Counts write_everything(const LabelsJob& job, const ImageGrid& grid, const ng::M
     return naming_input(job, [&] { return generate::multilod_pieces(grid, o); });
   }));
   Counts n;
-  n.pieces = pieces.size();
-  for (const auto& p : pieces) n.segments.insert(p.segment);
+  n.add(pieces);
   timer.run("write", [&] {
     ng::write_multilod(job.output, layout, pieces);
     auto chunks = by_chunk(std::move(pieces));
@@ -112,9 +121,8 @@ Counts write_one_chunk(const LabelsJob& job, const ImageGrid& grid, const ng::Mu
     return naming_input(job, [&] { return generate::multilod_chunk_pieces(grid, multilod_options(job), c); });
   }));
   Counts n;
-  n.pieces = pieces.size();
+  n.add(pieces);
   n.chunks = 1;
-  for (const auto& p : pieces) n.segments.insert(p.segment);
   timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, to_u32(c), pieces); });
   return n;
 }
@@ -135,8 +143,7 @@ Counts update_chunks(const LabelsJob& job, const ImageGrid& grid, const ng::Mult
     std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
       return naming_input(job, [&] { return generate::multilod_chunk_pieces(grid, o, c); });
     }));
-    for (const auto& p : pieces) n.segments.insert(p.segment);
-    n.pieces += pieces.size();
+    n.add(pieces);
     timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, to_u32(c), pieces); });
     ++n.chunks;
   }
@@ -178,7 +185,7 @@ int run_labels_precomputed(const LabelsJob& job) {
             {"method", job.method}, {"smooth", job.options.smooth_iterations}, {"lods", pc.lods},
             {"chunk_shape", g.chunk_shape}, {"chunks", g.chunks}, {"halo", generate::multilod_halo(o)},
             {"sharded", pc.sharded}, {"segments", n.segments.size()}, {"pieces", n.pieces},
-            {"chunks_written", n.chunks}, {"dims", grid.dims}});
+            {"chunks_written", n.chunks}, {"triangles_per_lod", n.triangles_per_lod}, {"dims", grid.dims}});
   finish_report(job.common, std::move(r), job.threads, timer, PeakRss::Include);
   return 0;
 }
