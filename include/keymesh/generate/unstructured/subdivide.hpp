@@ -33,6 +33,9 @@ struct SubdivideOptions {
 // points or corners.
 SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options);
 
+// subdivide()'s input checks alone (the same InputError), for the device path.
+void check_subdivide_input(const SurfaceMesh& mesh, const SubdivideOptions& options);
+
 // Tetrahedra 1 -> 8: the four corner tets and the inner octahedron cut along
 // its shortest diagonal; every child positively oriented. Linear only.
 UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options);
