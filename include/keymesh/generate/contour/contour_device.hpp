@@ -27,6 +27,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/device/algorithms.hpp"
 #include "keymesh/device/key_groups.hpp"
+#include "keymesh/generate/device_normals.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
 #include "keymesh/generate/contour/layer_blocks.hpp"
@@ -151,13 +152,6 @@ struct WritePoints {
   }
 };
 
-struct FaceNormals {
-  const float* xyz;
-  const PointIndex* triangles;
-  Vec3f* face;
-  KEYMESH_HD void operator()(Id t) const { face[t] = triangle_normal(xyz, triangles, t); }
-};
-
 // Stage 5's value of sorted position j for the blocks of one parity: its
 // triangle's face normal, or zero (adding +0 leaves a sum that starts at +0
 // unchanged, bit for bit) when its corner lies in a block of the other parity.
@@ -177,15 +171,6 @@ struct BlockedFace {
     }
     return (lo & 1) == parity ? face[pair / 3] : Vec3f{0, 0, 0};
   }
-};
-
-struct AddVec {
-  KEYMESH_HD Vec3f operator()(Vec3f a, Vec3f b) const { return add(a, b); }
-};
-
-struct UnitInPlace {
-  Vec3f* v;
-  KEYMESH_HD void operator()(Id i) const { v[i] = unit(v[i]); }
 };
 
 // What the stages share: the input where the device reads it, the case table
@@ -281,18 +266,14 @@ Soup<D, K> emit_soup(const D& d, const Input<D, T>& in, const ContourOptions& op
 template <class D, class K>
 typename D::template Array<float> averaged_normals(const D& d, const device::KeyGroups<D, K>& g, const Soup<D, K>& soup,
                                                    const float* xyz, const PointIndex* triangles) {
-  const Id t = soup.corners / 3;
-  auto face = d.template allocate<Vec3f>(t);
-  d.for_each(t, FaceNormals{xyz, triangles, face.data()});
-  auto normals = d.template allocate<float>(3 * g.groups);
-  auto* sums = reinterpret_cast<Vec3f*>(normals.data());
-  device::fill(d, sums, g.groups, Vec3f{0, 0, 0});
+  const auto face = device_normals::face_normals(d, xyz, triangles, soup.corners / 3);
+  auto normals = device_normals::zero_sums(d, g.groups);
   const Id block_count = static_cast<Id>(soup.blocks.size()) - 1;
   for (Id parity = 0; parity < 2; ++parity)
     device::segmented_reduce(d, g.offsets.data(), g.groups,
                              BlockedFace{g.sorted_pairs.data(), face.data(), soup.blocks.data(), block_count, parity},
-                             AddVec{}, sums);
-  d.for_each(g.groups, UnitInPlace{sums});
+                             device_normals::Add{}, reinterpret_cast<Vec3f*>(normals.data()));
+  device_normals::make_unit(d, normals.data(), g.groups);
   return normals;
 }
 
