@@ -153,27 +153,10 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
     std::uint64_t v[10];  // corners 0-3, then the midpoints of edges 01 02 03 12 13 23
     for (int k = 0; k < 4; ++k) v[k] = m.connectivity[4 * t + k];
     for (int e = 0; e < 6; ++e) v[4 + e] = static_cast<std::uint64_t>(V + g.index_map[6 * t + e]);
-    enum { A, B, C, D, AB, AC, AD, BC, BD, CD };
-    // The inner octahedron's three diagonals: (AB, CD), (AC, BD), (AD, BC); cut along the shortest.
-    const int diag[3][2] = {{AB, CD}, {AC, BD}, {AD, BC}};
-    int best = 0;
-    double best_len = std::numeric_limits<double>::max();
-    for (int d = 0; d < 3; ++d) {
-      const V3 x = load(P + 3 * v[diag[d][0]]) - load(P + 3 * v[diag[d][1]]);
-      if (dot(x, x) < best_len) best_len = dot(x, x), best = d;
-    }
-    // The four other octahedron vertices, in cyclic order around the diagonal.
-    static constexpr int ring[3][4] = {{AC, BC, BD, AD}, {AB, BC, CD, AD}, {AB, BD, CD, AC}};
-    int child[8][4] = {{A, AB, AC, AD}, {AB, B, BC, BD}, {AC, BC, C, CD}, {AD, BD, CD, D}};
-    for (int k = 0; k < 4; ++k) {
-      child[4 + k][0] = diag[best][0];
-      child[4 + k][1] = diag[best][1];
-      child[4 + k][2] = ring[best][k];
-      child[4 + k][3] = ring[best][(k + 1) % 4];
-    }
+    std::uint64_t children[8][4];
+    subdivision::tet_children(v, P, children);
     for (int c = 0; c < 8; ++c) {
-      std::uint64_t w[4] = {v[child[c][0]], v[child[c][1]], v[child[c][2]], v[child[c][3]]};
-      if (tet_volume(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], P + 3 * w[3]) < 0) std::swap(w[2], w[3]);
+      const std::uint64_t* w = children[c];
       for (int k = 0; k < 4; ++k) out.connectivity.set(static_cast<std::size_t>(32 * t + 4 * c + k), w[k]);
     }
   });
@@ -222,12 +205,16 @@ SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) 
   return cur;
 }
 
-UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options) {
+void check_subdivide_input(const UnstructuredGrid& tets, const SubdivideOptions& options) {
   if (options.levels < 0) throw InputError("subdivide: --levels must be >= 0");
   if (options.scheme != SubdivideScheme::Linear)
     throw InputError("subdivide: tetrahedra are subdivided with the linear scheme only");
   if (!tets.all_cells_are(CellType::Tetra)) throw InputError("subdivide: the grid has cells other than tetrahedra");
   tets.validate("subdivide input");
+}
+
+UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options) {
+  check_subdivide_input(tets, options);
   if (options.levels == 0) {
     UnstructuredGrid out = tets;
     out.offsets.clear();

@@ -10,4 +10,8 @@ SurfaceMesh subdivide_on_cpu_device(const SurfaceMesh& mesh, const SubdivideOpti
   return subdivide_on(device::CpuDevice{}, mesh, options);
 }
 
+UnstructuredGrid subdivide_on_cpu_device(const UnstructuredGrid& tets, const SubdivideOptions& options) {
+  return subdivide_on(device::CpuDevice{}, tets, options);
+}
+
 }  // namespace keymesh::generate

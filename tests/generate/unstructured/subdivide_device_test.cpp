@@ -11,6 +11,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
+#include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "same_bits.hpp"
 
 using namespace keymesh;
@@ -96,4 +97,69 @@ TEST(DeviceSubdivide, RefusesWhatTheCpuRefuses) {
   o.scheme = SubdivideScheme::Linear;
   o.weld = generate::SubdivideWeld::VertexWeld;
   EXPECT_THROW(generate::subdivide_on_cpu_device(bad, o), InputError);
+}
+
+namespace {
+
+void expect_same_grid(const UnstructuredGrid& device, const UnstructuredGrid& cpu, const std::string& what) {
+  EXPECT_EQ(keymesh::testing::first_difference(device.points, cpu.points), "") << what;
+  ASSERT_EQ(device.connectivity.wide(), cpu.connectivity.wide()) << what;
+  if (cpu.connectivity.wide())
+    EXPECT_EQ(keymesh::testing::first_difference(device.connectivity.wide_values(), cpu.connectivity.wide_values()), "")
+        << what;
+  else
+    EXPECT_EQ(keymesh::testing::first_difference(device.connectivity.narrow(), cpu.connectivity.narrow()), "") << what;
+  EXPECT_EQ(device.uniform_type, cpu.uniform_type) << what;
+  EXPECT_EQ(device.offsets, cpu.offsets) << what;
+  EXPECT_EQ(device.cell_types, cpu.cell_types) << what;
+  keymesh::testing::expect_same_fields(device.point_fields, cpu.point_fields, what + " point fields");
+  keymesh::testing::expect_same_fields(device.cell_fields, cpu.cell_fields, what + " cell fields");
+}
+
+// A grid's 5-tet split with a second point field and a cell field.
+UnstructuredGrid tets_with_fields(const ImageGrid& grid) {
+  UnstructuredGrid g = generate::tetrahedralize5(grid);
+  Field p{"xz", 2, Array<float>(static_cast<std::size_t>(2 * g.num_points()))};
+  for (Id i = 0; i < g.num_points(); ++i) p.values[2 * i] = g.points[3 * i], p.values[2 * i + 1] = -g.points[3 * i + 2];
+  g.point_fields.push_back(std::move(p));
+  Field c{"cell", 1, Array<float>(static_cast<std::size_t>(g.num_cells()))};
+  for (Id i = 0; i < g.num_cells(); ++i) c.values[i] = 0.25f * float(i);
+  g.cell_fields.push_back(std::move(c));
+  return g;
+}
+
+}  // namespace
+
+TEST(DeviceSubdivide, TetsEqualTheCpuPath) {
+  ImageGrid sphere = generate::spherical_distance(7);
+  sphere.spacing = {1.0, 0.5, 1.75};  // octahedra with distinct diagonals
+  UnstructuredGrid g = tets_with_fields(sphere);
+  for (int levels : {0, 1, 2}) {
+    SubdivideOptions o;
+    o.levels = levels;
+    expect_same_grid(generate::subdivide_on_cpu_device(g, o), generate::subdivide(g, o),
+                     "tets levels " + std::to_string(levels));
+  }
+  // Left-handed input tets: children reoriented as on the CPU.
+  for (Id t = 0; t < g.num_cells(); t += 3) {
+    const std::uint64_t a = g.connectivity[4 * t];
+    g.connectivity.set(static_cast<std::size_t>(4 * t), g.connectivity[4 * t + 1]);
+    g.connectivity.set(static_cast<std::size_t>(4 * t + 1), a);
+  }
+  expect_same_grid(generate::subdivide_on_cpu_device(g, SubdivideOptions{}), generate::subdivide(g, SubdivideOptions{}),
+                   "left-handed tets");
+}
+
+TEST(DeviceSubdivide, TetKeysNeeding64BitsEqualTheCpuPath) {
+  const UnstructuredGrid g = generate::tetrahedralize5(generate::spherical_distance(42));
+  ASSERT_GT(g.num_points(), 1 << 16);
+  expect_same_grid(generate::subdivide_on_cpu_device(g, SubdivideOptions{}), generate::subdivide(g, SubdivideOptions{}),
+                   "64-bit tet keys");
+}
+
+TEST(DeviceSubdivide, TetsRefuseWhatTheCpuRefuses) {
+  const UnstructuredGrid g = generate::tetrahedralize5(generate::spherical_distance(4));
+  SubdivideOptions o;
+  o.scheme = SubdivideScheme::Bezier;
+  EXPECT_THROW(generate::subdivide_on_cpu_device(g, o), InputError);
 }

@@ -40,4 +40,7 @@ void check_subdivide_input(const SurfaceMesh& mesh, const SubdivideOptions& opti
 // its shortest diagonal; every child positively oriented. Linear only.
 UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options);
 
+// subdivide(tets)'s input checks alone (the same InputError), for the device path.
+void check_subdivide_input(const UnstructuredGrid& tets, const SubdivideOptions& options);
+
 }  // namespace keymesh::generate

@@ -1,11 +1,12 @@
 #pragma once
-// Uniform subdivision of a triangle mesh (1 -> 4, subdivide.hpp) over the
-// device layer (keymesh/device/), written once for every device:
-//   an edge key per triangle side -> KEY-REDUCE's grouping (stable radix sort
-//   + run-length: new points in key order, the index map) -> every new point
+// Uniform subdivision (subdivide.hpp) over the device layer (keymesh/device/),
+// written once for every device:
+//   an edge key per cell edge -> KEY-REDUCE's grouping (stable radix sort +
+//   run-length: new points in key order, the index map) -> every new point
 //   from its key (subdivide_kernels.hpp, the CPU path's arithmetic) -> the
-//   four children of every triangle from the index map.
-// The mesh stays on the device from level to level. Equal to subdivide()
+//   children of every cell from the index map (triangles 1 -> 4, tets 1 -> 8).
+// A surface stays on the device from level to level; a tet grid goes back
+// to the host between levels (its id width may grow). Equal to subdivide()
 // bit for bit (ctest runs it on the CPU device:
 // tests/generate/unstructured/subdivide_device_test.cpp). KeyReduce only
 // (VERTEX-WELD, the baseline, is refused by name).
@@ -21,13 +22,17 @@
 #include "keymesh/device/key_groups.hpp"
 #include "keymesh/generate/unstructured/subdivide.hpp"
 #include "keymesh/generate/unstructured/subdivide_kernels.hpp"
+#include "keymesh/mesh/fields.hpp"
 #include "keymesh/mesh/keys.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
+#include "keymesh/mesh/cell_tables.hpp"
+#include "keymesh/mesh/unstructured_grid.hpp"
 
 namespace keymesh::generate {
 
-// subdivide() through the device path on the CPU device.
+// subdivide() through the device path on the CPU device (triangles, tets).
 SurfaceMesh subdivide_on_cpu_device(const SurfaceMesh& mesh, const SubdivideOptions& options);
+UnstructuredGrid subdivide_on_cpu_device(const UnstructuredGrid& tets, const SubdivideOptions& options);
 
 namespace device_subdivide {
 
@@ -194,6 +199,90 @@ Surface<D> subdivide_once(const D& d, const Surface<D>& m, SubdivideScheme schem
   return out;
 }
 
+// Tets: the key of every edge of tet t.
+template <class I>
+struct TetEdgeKeys {
+  const I* conn;
+  EdgeKeys ek;
+  std::uint64_t* keys;
+  KEYMESH_HD void operator()(Id t) const {
+    for (int e = 0; e < 6; ++e)
+      keys[6 * t + e] = ek(conn[4 * t + cells::kTetEdges[e][0]], conn[4 * t + cells::kTetEdges[e][1]]);
+  }
+};
+
+// Tuple of new point e (k components) as the mean, in float, of its edge's.
+struct TetEdgeTuples {
+  const std::uint64_t* edge_key;
+  EdgeKeys ek;
+  Id old_points;
+  int components;
+  const float* in;
+  float* out;
+  KEYMESH_HD void operator()(Id e) const {
+    const auto ab = ek.decode(edge_key[e]);
+    subdivision::midpoint_tuple(in + components * static_cast<Id>(ab.first), in + components * static_cast<Id>(ab.second),
+                                components, false, out + components * (old_points + e));
+  }
+};
+
+template <class I, class O>
+struct TetChildren {
+  const I* conn;
+  const std::uint32_t* index_map;
+  Id old_points;
+  const float* P;  // the output points
+  O* out;
+  KEYMESH_HD void operator()(Id t) const {
+    std::uint64_t v[10], children[8][4];
+    for (int k = 0; k < 4; ++k) v[k] = conn[4 * t + k];
+    for (int e = 0; e < 6; ++e) v[4 + e] = static_cast<std::uint64_t>(old_points + index_map[6 * t + e]);
+    subdivision::tet_children(v, P, children);
+    for (int c = 0; c < 8; ++c)
+      for (int k = 0; k < 4; ++k) out[32 * t + 4 * c + k] = static_cast<O>(children[c][k]);
+  }
+};
+
+// One level of tets 1 -> 8 (the input's ids of type I).
+template <class D, class I>
+UnstructuredGrid subdivide_tets_once(const D& d, const UnstructuredGrid& m, const I* host_conn) {
+  const Id V = m.num_points(), T = m.num_cells();
+  const EdgeKeys ek = EdgeKeys::for_points(V, "subdivide");
+  typename D::template Array<I> conn_copy;
+  const I* conn = device::readable(d, host_conn, 4 * T, conn_copy);
+  auto keys = d.template allocate<std::uint64_t>(6 * T);
+  d.for_each(T, TetEdgeKeys<I>{conn, ek, keys.data()});
+  device::KeyGroups<D, std::uint64_t> g = device::group_keys(d, keys.data(), 6 * T, ek.key_bits());
+  const Id E = g.groups;
+  if (V + E > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("subdivide: the grid would have " + std::to_string(V + E) + " points (more than 2^32 - 1)");
+  auto grown = [&](const Array<float>& in, int k) {
+    typename D::template Array<float> holder;
+    const float* values = device::readable(d, in.data(), static_cast<Id>(in.size()), holder);
+    auto out = d.template allocate<float>(k * (V + E));
+    device::copy(d, values, k * V, out.data());
+    d.for_each(E, TetEdgeTuples{g.unique_keys.data(), ek, V, k, values, out.data()});
+    return out;
+  };
+  auto points = grown(m.points, 3);
+  UnstructuredGrid out;
+  out.uniform_type = CellType::Tetra;
+  for (const keymesh::Field& f : m.point_fields)
+    out.point_fields.push_back({f.name, f.components, d.to_host(grown(f.values, f.components))});
+  out.connectivity = IndexArray::for_ids(static_cast<std::uint64_t>(V + E), 0);
+  auto children = [&](auto type) {
+    using O = decltype(type);
+    auto ids = d.template allocate<O>(32 * T);
+    d.for_each(T, TetChildren<I, O>{conn, g.index_map.data(), V, points.data(), ids.data()});
+    return d.to_host(std::move(ids));
+  };
+  if (out.connectivity.wide()) out.connectivity.wide_values() = children(std::uint64_t{});
+  else out.connectivity.narrow() = children(std::uint32_t{});
+  out.points = d.to_host(std::move(points));
+  out.cell_fields = repeat_cell_fields(m.cell_fields, T, 8);
+  return out;
+}
+
 }  // namespace device_subdivide
 
 // The device path on device `d`: subdivide()'s input checks, then every
@@ -211,6 +300,28 @@ SurfaceMesh subdivide_on(const D& d, const SurfaceMesh& mesh, const SubdivideOpt
   device_subdivide::Surface<D> cur = device_subdivide::upload(d, mesh);
   for (int level = 0; level < options.levels; ++level) cur = device_subdivide::subdivide_once(d, cur, options.scheme);
   return device_subdivide::download(d, std::move(cur));
+}
+
+// Tets 1 -> 8 on device `d`: subdivide(tets)'s checks, then level after level.
+template <class D>
+UnstructuredGrid subdivide_on(const D& d, const UnstructuredGrid& tets, const SubdivideOptions& options) {
+  check_subdivide_input(tets, options);
+  if (options.weld != SubdivideWeld::KeyReduce)
+    throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
+  if (options.levels == 0) {
+    UnstructuredGrid out = tets;
+    out.offsets.clear();
+    out.cell_types.clear();
+    out.uniform_type = CellType::Tetra;
+    return out;
+  }
+  auto once = [&](const UnstructuredGrid& m) {
+    if (m.connectivity.wide()) return device_subdivide::subdivide_tets_once(d, m, m.connectivity.wide_values().data());
+    return device_subdivide::subdivide_tets_once(d, m, m.connectivity.narrow().data());
+  };
+  UnstructuredGrid cur = once(tets);
+  for (int level = 1; level < options.levels; ++level) cur = once(cur);
+  return cur;
 }
 
 }  // namespace keymesh::generate

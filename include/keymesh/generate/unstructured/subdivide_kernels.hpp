@@ -4,8 +4,10 @@
 // (subdivide_device.hpp): plain KEYMESH_HD functions, so every device computes
 // the same bits.
 #include <cmath>
+#include <cstdint>
 
 #include "keymesh/core/device.hpp"
+#include "keymesh/generate/unstructured/tet_kernels.hpp"
 
 namespace keymesh::generate::subdivision {
 
@@ -55,6 +57,40 @@ KEYMESH_HD inline void edge_point(const float* pa_f, const float* pb_f, const fl
 KEYMESH_HD inline void midpoint_tuple(const float* a, const float* b, int components, bool renormalize, float* out) {
   for (int c = 0; c < components; ++c) out[c] = 0.5f * (a[c] + b[c]);
   if (renormalize) store(unit(load(out)), out);
+}
+
+// The eight children of a tet (1 -> 8): v holds its corners 0-3, then the
+// midpoints of edges 01 02 03 12 13 23, as point ids into P (the output
+// points). The four corner tets, then the inner octahedron cut along its
+// shortest diagonal (the first among equals); every child positively
+// oriented (two corners swapped where its volume is negative).
+KEYMESH_HD inline void tet_children(const std::uint64_t v[10], const float* P, std::uint64_t out[8][4]) {
+  enum { A, B, C, D, AB, AC, AD, BC, BD, CD };
+  // The inner octahedron's three diagonals: (AB, CD), (AC, BD), (AD, BC).
+  const int diag[3][2] = {{AB, CD}, {AC, BD}, {AD, BC}};
+  int best = 0;
+  double best_len = 1.7976931348623157e308;  // DBL_MAX
+  for (int d = 0; d < 3; ++d) {
+    const V3 x = load(P + 3 * v[diag[d][0]]) - load(P + 3 * v[diag[d][1]]);
+    if (dot(x, x) < best_len) best_len = dot(x, x), best = d;
+  }
+  // The four other octahedron vertices, in cyclic order around the diagonal.
+  const int ring[3][4] = {{AC, BC, BD, AD}, {AB, BC, CD, AD}, {AB, BD, CD, AC}};
+  int child[8][4] = {{A, AB, AC, AD}, {AB, B, BC, BD}, {AC, BC, C, CD}, {AD, BD, CD, D}};
+  for (int k = 0; k < 4; ++k) {
+    child[4 + k][0] = diag[best][0];
+    child[4 + k][1] = diag[best][1];
+    child[4 + k][2] = ring[best][k];
+    child[4 + k][3] = ring[best][(k + 1) % 4];
+  }
+  for (int c = 0; c < 8; ++c) {
+    std::uint64_t* w = out[c];
+    for (int k = 0; k < 4; ++k) w[k] = v[child[c][k]];
+    if (tet_volume(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], P + 3 * w[3]) < 0) {
+      const std::uint64_t t = w[2];
+      w[2] = w[3], w[3] = t;
+    }
+  }
 }
 
 }  // namespace keymesh::generate::subdivision
