@@ -29,4 +29,8 @@ namespace keymesh::generate {
 // or corners, or when the edge keys need more than 64 bits.
 SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& options, ContourStats* stats = nullptr);
 
+// contour()'s input checks alone (the same InputError); returns the point
+// field to contour. For the device path (contour_tets_device.hpp).
+const Field& check_tet_contour_input(const UnstructuredGrid& tets, const ContourOptions& options);
+
 }  // namespace keymesh::generate
