@@ -8,25 +8,26 @@
 # include/keymesh/<layer>/ and src/<layer>/ (private headers included); the
 # python layer is python/src/. docs/ARCHITECTURE.md ("Layers") says what each
 # layer holds.
-set(KEYMESH_LAYERS core parallel weld keyreduce mesh analyze io generate distributed cuda backend cli python)
+set(KEYMESH_LAYERS core parallel device weld keyreduce mesh analyze io generate distributed cuda backend cli python)
 
 set(KEYMESH_LAYER_USES_core        "")
 set(KEYMESH_LAYER_USES_parallel    core)
+set(KEYMESH_LAYER_USES_device      core parallel)
 set(KEYMESH_LAYER_USES_weld        core parallel)
 set(KEYMESH_LAYER_USES_keyreduce   core parallel weld)
 set(KEYMESH_LAYER_USES_mesh        core parallel weld keyreduce)
 set(KEYMESH_LAYER_USES_analyze     core parallel weld keyreduce mesh)
 set(KEYMESH_LAYER_USES_io          core parallel weld keyreduce mesh)
-set(KEYMESH_LAYER_USES_generate    core parallel weld keyreduce mesh analyze)
-set(KEYMESH_LAYER_USES_distributed core parallel weld keyreduce mesh analyze io generate)
-set(KEYMESH_LAYER_USES_cuda        core parallel weld keyreduce mesh generate)
-set(KEYMESH_LAYER_USES_backend     core parallel weld keyreduce mesh generate cuda)
-set(KEYMESH_LAYER_USES_cli         core parallel weld keyreduce mesh analyze io generate distributed cuda backend)
-set(KEYMESH_LAYER_USES_python      core parallel weld keyreduce mesh analyze io generate distributed cuda backend)
+set(KEYMESH_LAYER_USES_generate    core parallel device weld keyreduce mesh analyze)
+set(KEYMESH_LAYER_USES_distributed core parallel device weld keyreduce mesh analyze io generate)
+set(KEYMESH_LAYER_USES_cuda        core parallel device weld keyreduce mesh generate)
+set(KEYMESH_LAYER_USES_backend     core parallel device weld keyreduce mesh generate cuda)
+set(KEYMESH_LAYER_USES_cli         core parallel device weld keyreduce mesh analyze io generate distributed cuda backend)
+set(KEYMESH_LAYER_USES_python      core parallel device weld keyreduce mesh analyze io generate distributed cuda backend)
 
 # The layers built into the library (cli is the `keymesh` executable, python
 # the module; both link every library layer through keymesh_lib).
-set(KEYMESH_LIBRARY_LAYERS core parallel weld keyreduce mesh analyze io generate distributed cuda backend)
+set(KEYMESH_LIBRARY_LAYERS core parallel device weld keyreduce mesh analyze io generate distributed cuda backend)
 
 # Fails (FATAL_ERROR) when the table names an unknown layer or lets a layer
 # use itself or a layer above it: the order above is what "downward" means.

@@ -1,8 +1,11 @@
 #pragma once
-// What the CUDA contour refuses, and the arithmetic that sizes its arrays,
-// as host code compiled in every build (with nvcc or without): the tests
-// check it on machines without a GPU (tests/cuda/contour_limits_test.cpp),
-// and src/cuda/contour_cuda.cu calls the same functions.
+// What the CUDA contour refuses, and the arithmetic that sized the first
+// cut's arrays, as host code compiled in every build (with nvcc or without):
+// the tests check it on machines without a GPU
+// (tests/cuda/contour_limits_test.cpp). src/cuda/contour_cuda.cu calls
+// check_gpu_options; the device path it now runs counts in 64 bits and
+// checks its sizes with check_contour_output, so gpu_voxels and
+// gpu_soup_corners (CUB's former int counts) are no longer called.
 #include <cstdint>
 
 #include "keymesh/generate/contour/contour.hpp"

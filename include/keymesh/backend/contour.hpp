@@ -2,9 +2,10 @@
 // Marching cubes on the backend the options name: CPU threads
 // (generate::contour) or an NVIDIA GPU (cuda::contour, byte-identical output).
 //
-// Why a layer of its own: generate is CPU-only and the CUDA backend is built
-// on generate's options and per-element kernels (cuda sits above generate),
-// so the choice between them is made above both. The CLI calls this; the
+// Why a layer of its own: generate's entry points run on the CPU, and the
+// CUDA backend instantiates generate's device path (contour_device.hpp) on
+// the GPU (cuda sits above generate), so the choice between them is made
+// above both. The CLI calls this; the
 // generators and the distributed and streamed contours call generate directly
 // (they refuse --backend cuda by name).
 #include "keymesh/generate/contour/contour.hpp"

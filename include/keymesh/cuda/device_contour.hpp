@@ -3,7 +3,10 @@
 // PyTorch array's, a buffer of the caller's), the mesh left in device memory:
 // no host copy either way. The Python module's backend='cuda' on a CUDA
 // tensor calls this (python/src/contour_device.cpp); cuda::contour
-// (backend.hpp) is the same stages on host samples and a host mesh.
+// (backend.hpp) is the same stages on host samples and a host mesh. Both run
+// the voxel contour's device path (generate/contour/contour_device.hpp:
+// contour_arrays_on here, on a view of the samples, the outputs left as
+// device arrays), the code ctest runs on the CPU device.
 #include <cstdint>
 #include <memory>
 #include <string>

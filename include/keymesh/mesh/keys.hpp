@@ -17,6 +17,7 @@
 #include <string>
 #include <utility>
 
+#include "keymesh/core/device.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/types.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -37,18 +38,19 @@ struct EdgeKeys {
   // The significant bits of a key (the sort plan's key width).
   int key_bits() const { return 2 * bits; }
 
-  std::uint64_t operator()(std::uint64_t a, std::uint64_t b) const {
+  // KEYMESH_HD: the device paths key edges with the same code.
+  KEYMESH_HD std::uint64_t operator()(std::uint64_t a, std::uint64_t b) const {
     return a < b ? (a << bits) | b : (b << bits) | a;
   }
   // The edge's two points, smaller first.
-  std::pair<std::uint64_t, std::uint64_t> decode(std::uint64_t key) const {
+  KEYMESH_HD std::pair<std::uint64_t, std::uint64_t> decode(std::uint64_t key) const {
     const std::uint64_t mask = (std::uint64_t{1} << bits) - 1;
     return {(key >> bits) & mask, key & mask};
   }
 
   // An edge key with a level above it (e.g. the isovalue's index).
-  std::uint64_t with_level(std::uint64_t key, std::uint64_t level) const { return (level << (2 * bits)) | key; }
-  std::uint64_t level(std::uint64_t key) const { return key >> (2 * bits); }
+  KEYMESH_HD std::uint64_t with_level(std::uint64_t key, std::uint64_t level) const { return (level << (2 * bits)) | key; }
+  KEYMESH_HD std::uint64_t level(std::uint64_t key) const { return key >> (2 * bits); }
 
   // A quad face given as a corner cycle: its smallest corner and the corner
   // opposite it.

@@ -23,13 +23,15 @@ int bits_needed(K max_key) {
   return b;
 }
 
+// The passes of sort_pairs over caller-owned arrays: the pairs start in
+// (keys, values) and end where the return value says (false: there; true:
+// in (keys_tmp, values_tmp), after an odd number of passes ran).
 template <class K, class V>
-void sort_pairs(std::vector<K>& keys, std::vector<V>& values, int significant_bits = int(sizeof(K) * 8)) {
+bool sort_pairs_passes(K* keys, V* values, K* keys_tmp, V* values_tmp, Id n, int significant_bits) {
   static_assert(std::is_unsigned_v<K>, "radix sort keys are unsigned integers");
-  const Id n = static_cast<Id>(keys.size());
-  if (n <= 1) return;
+  if (n <= 1) return false;
   if (significant_bits > int(sizeof(K) * 8)) significant_bits = int(sizeof(K) * 8);
-  if (significant_bits <= 0) return;
+  if (significant_bits <= 0) return false;
   // Digits of at most kMaxDigitBits, as few passes as that allows, the bits
   // spread evenly over them (48 bits: 5 passes of 10, not 6 of 8).
   constexpr int kMaxDigitBits = 11;
@@ -38,16 +40,14 @@ void sort_pairs(std::vector<K>& keys, std::vector<V>& values, int significant_bi
   const Id buckets = Id{1} << digit_bits;
   const K mask = static_cast<K>(buckets - 1);
 
-  std::vector<K> keys_tmp(n);
-  std::vector<V> values_tmp(n);
   const int chunks = chunk_count(n, 1 << 15);
   std::vector<Id> hist_store(static_cast<std::size_t>(chunks * buckets));
   auto hist = [&](int c) { return hist_store.data() + c * buckets; };
 
-  K* src_k = keys.data();
-  V* src_v = values.data();
-  K* dst_k = keys_tmp.data();
-  V* dst_v = values_tmp.data();
+  K* src_k = keys;
+  V* src_v = values;
+  K* dst_k = keys_tmp;
+  V* dst_v = values_tmp;
   for (int pass = 0; pass < passes; ++pass) {
     const int shift = pass * digit_bits;
     for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
@@ -83,10 +83,31 @@ void sort_pairs(std::vector<K>& keys, std::vector<V>& values, int significant_bi
     std::swap(src_k, dst_k);
     std::swap(src_v, dst_v);
   }
-  if (src_k != keys.data()) {
+  return src_k != keys;
+}
+
+template <class K, class V>
+void sort_pairs(std::vector<K>& keys, std::vector<V>& values, int significant_bits = int(sizeof(K) * 8)) {
+  const Id n = static_cast<Id>(keys.size());
+  if (n <= 1 || significant_bits <= 0) return;
+  std::vector<K> keys_tmp(n);
+  std::vector<V> values_tmp(n);
+  if (sort_pairs_passes(keys.data(), values.data(), keys_tmp.data(), values_tmp.data(), n, significant_bits)) {
     keys.swap(keys_tmp);
     values.swap(values_tmp);
   }
+}
+
+// The same over n pairs in place at (keys, values) (the device layer's CPU
+// device sorts arrays it does not hold as vectors): the scratch is
+// allocated here, and the pairs copied back when they end in it.
+template <class K, class V>
+void sort_pairs(K* keys, V* values, Id n, int significant_bits = int(sizeof(K) * 8)) {
+  if (n <= 1 || significant_bits <= 0) return;
+  std::vector<K> keys_tmp(n);
+  std::vector<V> values_tmp(n);
+  if (sort_pairs_passes(keys, values, keys_tmp.data(), values_tmp.data(), n, significant_bits))
+    for_each(n, [&](Id i) { keys[i] = keys_tmp[i], values[i] = values_tmp[i]; });
 }
 
 }  // namespace keymesh::parallel

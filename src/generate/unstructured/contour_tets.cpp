@@ -13,6 +13,7 @@
 #include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/uninitialized_array.hpp"
 #include "keymesh/generate/coarsen/coarsen.hpp"
+#include "keymesh/generate/unstructured/tet_kernels.hpp"
 #include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -42,58 +43,59 @@ int edge_of(int a, int b) {
   return -1;
 }
 
-// Marching tetrahedra cases: bit v of the case is set when corner v is
-// inside. One corner apart from the others gives a triangle, two and two a
-// quad cut into two triangles along a diagonal inside the tet. Each triangle
-// is wound, on the positively oriented reference tet, so that its normal
-// points from the inside corners to the outside ones.
-struct TetTable {
-  std::uint8_t triangles[16];
-  std::uint8_t edges[16][6];
-
-  TetTable() {
-    const double ref[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    for (int m = 0; m < 16; ++m) {
-      int in[4], out[4], ni = 0, no = 0;
-      for (int v = 0; v < 4; ++v) ((m >> v) & 1 ? in[ni++] : out[no++]) = v;
-      int tri[2][3];
-      int nt = 0;
-      if (ni == 1 || ni == 3) {
-        const int apex = ni == 1 ? in[0] : out[0];
-        int k = 0;
-        for (int v = 0; v < 4; ++v)
-          if (v != apex) tri[0][k++] = edge_of(apex, v);
-        nt = 1;
-      } else if (ni == 2) {
-        const int a = in[0], b = in[1], c = out[0], d = out[1];
-        const int ac = edge_of(a, c), ad = edge_of(a, d), bd = edge_of(b, d), bc = edge_of(b, c);
-        tri[0][0] = ac, tri[0][1] = ad, tri[0][2] = bd;
-        tri[1][0] = ac, tri[1][1] = bd, tri[1][2] = bc;
-        nt = 2;
-      }
-      triangles[m] = static_cast<std::uint8_t>(nt);
-      double dir[3] = {0, 0, 0};  // from the inside corners' centroid to the outside ones'
+// The case table (tet_kernels.hpp): one corner apart from the others gives a
+// triangle, two and two a quad cut into two triangles along a diagonal inside
+// the tet, each wound on the reference tet to point from inside to outside.
+TetTable build_tet_table() {
+  TetTable table{};
+  std::uint8_t (&triangles)[16] = table.triangles;
+  std::uint8_t (&edges)[16][6] = table.edges;
+  const double ref[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int m = 0; m < 16; ++m) {
+    int in[4], out[4], ni = 0, no = 0;
+    for (int v = 0; v < 4; ++v) ((m >> v) & 1 ? in[ni++] : out[no++]) = v;
+    int tri[2][3];
+    int nt = 0;
+    if (ni == 1 || ni == 3) {
+      const int apex = ni == 1 ? in[0] : out[0];
+      int k = 0;
       for (int v = 0; v < 4; ++v)
-        for (int a = 0; a < 3; ++a) dir[a] += ((m >> v) & 1 ? -1.0 / ni : 1.0 / no) * ref[v][a];
-      for (int t = 0; t < nt; ++t) {
-        double p[3][3];
-        for (int c = 0; c < 3; ++c)
-          for (int a = 0; a < 3; ++a)
-            p[c][a] = 0.5 * (ref[kTetEdges[tri[t][c]][0]][a] + ref[kTetEdges[tri[t][c]][1]][a]);
-        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-        const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-        if (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2] < 0) std::swap(tri[t][1], tri[t][2]);
-        for (int c = 0; c < 3; ++c) edges[m][3 * t + c] = static_cast<std::uint8_t>(tri[t][c]);
-      }
+        if (v != apex) tri[0][k++] = edge_of(apex, v);
+      nt = 1;
+    } else if (ni == 2) {
+      const int a = in[0], b = in[1], c = out[0], d = out[1];
+      const int ac = edge_of(a, c), ad = edge_of(a, d), bd = edge_of(b, d), bc = edge_of(b, c);
+      tri[0][0] = ac, tri[0][1] = ad, tri[0][2] = bd;
+      tri[1][0] = ac, tri[1][1] = bd, tri[1][2] = bc;
+      nt = 2;
+    }
+    triangles[m] = static_cast<std::uint8_t>(nt);
+    double dir[3] = {0, 0, 0};  // from the inside corners' centroid to the outside ones'
+    for (int v = 0; v < 4; ++v)
+      for (int a = 0; a < 3; ++a) dir[a] += ((m >> v) & 1 ? -1.0 / ni : 1.0 / no) * ref[v][a];
+    for (int t = 0; t < nt; ++t) {
+      double p[3][3];
+      for (int c = 0; c < 3; ++c)
+        for (int a = 0; a < 3; ++a)
+          p[c][a] = 0.5 * (ref[kTetEdges[tri[t][c]][0]][a] + ref[kTetEdges[tri[t][c]][1]][a]);
+      const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+      const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+      const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+      if (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2] < 0) std::swap(tri[t][1], tri[t][2]);
+      for (int c = 0; c < 3; ++c) edges[m][3 * t + c] = static_cast<std::uint8_t>(tri[t][c]);
     }
   }
-};
-
-const TetTable& tet_table() {
-  static const TetTable table;
   return table;
 }
+
+}  // namespace
+
+const TetTable& tet_table() {
+  static const TetTable table = build_tet_table();
+  return table;
+}
+
+namespace {
 
 // Tets per chunk of the counting pass: fixed, so the work split never
 // changes the output (which is in tet order anyway).
@@ -173,66 +175,6 @@ void tet_soup(const I* conn, Id tets, Id points, const float* P, const float* sc
   st.generate += seconds_since(t0);
 }
 
-// Checks what marching tetrahedra cannot do and returns the field to contour.
-const Field& contour_field(const UnstructuredGrid& tets, const ContourOptions& opt) {
-  if (opt.isovalues.empty()) throw InputError("contour: no isovalue given");
-  for (double iso : opt.isovalues)
-    if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
-  if (opt.normals == ContourNormals::Gradient)
-    throw InputError("contour: --normals gradient needs a voxel grid; use --normals average on tetrahedra");
-  if (opt.backend == Backend::Cuda)
-    throw InputError("--backend cuda: marching tetrahedra are not available on the GPU yet");
-  if (opt.curvature)
-    throw InputError("contour: --curvature needs a voxel grid (it reads the volume's Hessian)");
-  if (!tets.all_cells_are(CellType::Tetra))
-    throw InputError("contour: the grid has cells other than tetrahedra (tetrahedralize it first)");
-  tets.validate("contour input", /*check_ids=*/false);  // ids are checked as the tets are classified
-  const Field* field = nullptr;
-  for (const Field& f : tets.point_fields)
-    if (opt.array.empty() ? f.components == 1 : f.name == opt.array) {
-      field = &f;
-      break;
-    }
-  if (!field)
-    throw InputError(opt.array.empty() ? "contour: the grid has no one-component point field to contour"
-                                       : "contour: the grid has no point field '" + opt.array + "'");
-  if (field->components != 1)
-    throw InputError("contour: point field '" + field->name + "' has " + std::to_string(field->components) +
-                     " components (need 1)");
-  return *field;
-}
-
-// Where the point of an edge key lies: its end points a < b and the
-// parameter t from a to b.
-struct EdgePoint {
-  std::uint64_t a, b;
-  double t;
-};
-
-struct TetEdgePoints {
-  EdgeKeys ek;
-  const std::vector<double>& isovalues;
-  const float* P;  // grid points
-  const float* S;  // the contoured samples
-
-  EdgePoint locate(std::uint64_t key) const {
-    EdgePoint e{};
-    std::tie(e.a, e.b) = ek.decode(key);
-    const double iso = isovalues[ek.level(key)];
-    const double t = (iso - double(S[e.a])) / (double(S[e.b]) - double(S[e.a]));
-    // A NaN end sample (outside by definition) has no crossing: midway.
-    e.t = std::isfinite(t) ? (t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t)) : 0.5;
-    return e;
-  }
-  void position(std::uint64_t key, float* xyz) const {
-    const EdgePoint e = locate(key);
-    for (int a = 0; a < 3; ++a) {
-      const double pa = P[3 * e.a + a], pb = P[3 * e.b + a];
-      xyz[a] = static_cast<float>(pa + e.t * (pb - pa));
-    }
-  }
-};
-
 // The map step over every isovalue: an edge key per triangle corner.
 std::vector<std::uint64_t> tet_soups(const UnstructuredGrid& tets, const ContourOptions& opt, const TetEdgePoints& ep,
                                      ContourStats& st) {
@@ -263,17 +205,8 @@ void interpolate_fields(const UnstructuredGrid& tets, const Field& field, const 
     const int k = f.components;
     Field g{f.name, k, {}};
     parallel::resize_fresh(g.values, static_cast<std::size_t>(points) * static_cast<std::size_t>(k));
-    parallel::for_each(points, [&](Id p) {
-      const EdgePoint e = ep.locate(point_key[p]);
-      for (int c = 0; c < k; ++c) {
-        const double va = f.values[e.a * k + c], vb = f.values[e.b * k + c];
-        const double v = va + e.t * (vb - va);
-        // The contoured field at a NaN end takes the isovalue; others keep a finite end.
-        const float value = static_cast<float>(std::isfinite(v) ? v : (std::isfinite(va) ? va : vb));
-        g.values[p * k + c] =
-            &f == &field && !std::isfinite(value) ? static_cast<float>(opt.isovalues[ep.ek.level(point_key[p])]) : value;
-      }
-    });
+    // The contoured field at a NaN end takes the isovalue; others keep a finite end.
+    parallel::for_each(points, [&](Id p) { ep.tuple(point_key[p], f.values.data(), k, &f == &field, &g.values[p * k]); });
     mesh.point_fields.push_back(std::move(g));
   }
 }
@@ -285,7 +218,7 @@ void add_history_t(const TetEdgePoints& ep, const keyreduce::Groups<std::uint64_
   Field history{"history_t", 1, {}};
   parallel::resize_fresh(history.values, static_cast<std::size_t>(points));
   parallel::for_each(points, [&](Id p) {
-    const EdgePoint e = ep.locate(groups.unique_keys[p]);
+    const TetEdgePoint e = ep.locate(groups.unique_keys[p]);
     const float* written = &mesh.points[3 * p];
     history.values[p] = nearest_float_t(e.t, [&](float t) {
       for (int a = 0; a < 3; ++a) {
@@ -305,7 +238,7 @@ SurfaceMesh coarsen_contour(SurfaceMesh mesh, const TetEdgePoints& ep, const std
   const Id points = mesh.num_points();
   std::vector<std::uint64_t> coarse(static_cast<std::size_t>(points));
   parallel::for_each(points, [&](Id p) {
-    const EdgePoint e = ep.locate(point_key[p]);
+    const TetEdgePoint e = ep.locate(point_key[p]);
     coarse[p] = ep.ek.level(point_key[p]) * static_cast<std::uint64_t>(points_in) + (e.t >= 0.5 ? e.b : e.a);
   });
   st.triangles_before_coarsening = mesh.num_cells();
@@ -316,9 +249,37 @@ SurfaceMesh coarsen_contour(SurfaceMesh mesh, const TetEdgePoints& ep, const std
 
 }  // namespace
 
+const Field& check_tet_contour_input(const UnstructuredGrid& tets, const ContourOptions& opt) {
+  if (opt.isovalues.empty()) throw InputError("contour: no isovalue given");
+  for (double iso : opt.isovalues)
+    if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
+  if (opt.normals == ContourNormals::Gradient)
+    throw InputError("contour: --normals gradient needs a voxel grid; use --normals average on tetrahedra");
+  if (opt.backend == Backend::Cuda)
+    throw InputError("--backend cuda: marching tetrahedra are not available on the GPU yet");
+  if (opt.curvature)
+    throw InputError("contour: --curvature needs a voxel grid (it reads the volume's Hessian)");
+  if (!tets.all_cells_are(CellType::Tetra))
+    throw InputError("contour: the grid has cells other than tetrahedra (tetrahedralize it first)");
+  tets.validate("contour input", /*check_ids=*/false);  // ids are checked as the tets are classified
+  const Field* field = nullptr;
+  for (const Field& f : tets.point_fields)
+    if (opt.array.empty() ? f.components == 1 : f.name == opt.array) {
+      field = &f;
+      break;
+    }
+  if (!field)
+    throw InputError(opt.array.empty() ? "contour: the grid has no one-component point field to contour"
+                                       : "contour: the grid has no point field '" + opt.array + "'");
+  if (field->components != 1)
+    throw InputError("contour: point field '" + field->name + "' has " + std::to_string(field->components) +
+                     " components (need 1)");
+  return *field;
+}
+
 SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats,
                     std::vector<std::uint64_t>* point_keys) {
-  const Field& field = contour_field(tets, opt);
+  const Field& field = check_tet_contour_input(tets, opt);
   if (opt.coarsen && (opt.history || point_keys))
     throw InputError("contour: --history with --coarsen: a coarsened point merges crossings of several edges, "
                      "so it has no one edge and t (docs/HISTORY.md)");
@@ -326,7 +287,7 @@ SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, Con
   ContourStats& st = stats ? *stats : local;
   st = ContourStats{};
   const Id points_in = tets.num_points();
-  const TetEdgePoints ep{EdgeKeys::for_points(points_in, "contour"), opt.isovalues, tets.points.data(),
+  const TetEdgePoints ep{EdgeKeys::for_points(points_in, "contour"), opt.isovalues.data(), tets.points.data(),
                          field.values.data()};
   const int iso_bits = parallel::bits_needed<std::uint64_t>(opt.isovalues.size() - 1);
   if (ep.ek.key_bits() + iso_bits > 64)

@@ -13,6 +13,7 @@
 #include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/progress.hpp"
 #include "keymesh/core/uninitialized_array.hpp"
+#include "keymesh/generate/unstructured/subdivide_kernels.hpp"
 #include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/mesh/cell_tables.hpp"
@@ -53,18 +54,9 @@ void check_points(Id total, const char* what) {
                      " points (more than 2^32 - 1)");
 }
 
-struct V3 {
-  double x, y, z;
-};
-V3 load(const float* p) { return {p[0], p[1], p[2]}; }
-V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
-double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V3 unit(V3 a) {
-  const double l = std::sqrt(dot(a, a));
-  return l > 0 ? (1.0 / l) * a : V3{0, 0, 0};
-}
+using subdivision::dot;
+using subdivision::load;
+using subdivision::V3;
 
 SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, SubdivideWeld weld) {
   const Id V = m.num_points(), F = m.num_cells();
@@ -82,25 +74,9 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
   // The new point of edge (a, b) and, with Bezier, its normal.
   auto edge_point = [&](std::uint64_t key, float* xyz, float* nrm) {
     const auto [a, b] = ek.decode(key);
-    const V3 pa = load(&m.points[3 * a]), pb = load(&m.points[3 * b]);
-    V3 p = 0.5 * (pa + pb);
-    if (scheme == SubdivideScheme::Bezier) {
-      const V3 na = load(&normals->values[3 * a]), nb = load(&normals->values[3 * b]);
-      // Cubic edge of the PN triangle: control points b1 = (2a + b - w_ab na) / 3,
-      // b2 = (2b + a - w_ba nb) / 3; its midpoint is (a + 3 b1 + 3 b2 + b) / 8.
-      const V3 b1 = (1.0 / 3.0) * (2.0 * pa + pb - dot(pb - pa, na) * na);
-      const V3 b2 = (1.0 / 3.0) * (2.0 * pb + pa - dot(pa - pb, nb) * nb);
-      p = 0.125 * (pa + 3.0 * b1 + 3.0 * b2 + pb);
-      if (nrm) {
-        const V3 d = pb - pa;
-        const double dd = dot(d, d);
-        const double v = dd > 0 ? 2.0 * dot(d, na + nb) / dd : 0.0;
-        const V3 n110 = unit(na + nb - v * d);
-        const V3 n = unit(na + nb + n110);
-        nrm[0] = float(n.x), nrm[1] = float(n.y), nrm[2] = float(n.z);
-      }
-    }
-    xyz[0] = float(p.x), xyz[1] = float(p.y), xyz[2] = float(p.z);
+    const bool bezier = scheme == SubdivideScheme::Bezier;
+    subdivision::edge_point(&m.points[3 * a], &m.points[3 * b], bezier ? &normals->values[3 * a] : nullptr,
+                            bezier ? &normals->values[3 * b] : nullptr, xyz, nrm);
   };
   EdgeGroups g = group_edges(keys.get(), 3 * F, ek.key_bits(), weld,
                              [&](std::uint64_t k, float* xyz) { edge_point(k, xyz, nullptr); });
@@ -118,14 +94,11 @@ SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, Subdivi
     const auto [a, b] = ek.decode(key);
     for (std::size_t i = 0; i < m.point_fields.size(); ++i) {
       const Field& f = m.point_fields[i];
-      float* dst = &out.point_fields[i].values[(V + e) * f.components];
+      const int k = f.components;
       const bool is_normals = &f == normals;
       if (is_normals && scheme == SubdivideScheme::Bezier) continue;  // set with the position
-      midpoint_tuple(f, out.point_fields[i], V + e, a, b);
-      if (is_normals) {
-        const V3 n = unit(load(dst));
-        dst[0] = float(n.x), dst[1] = float(n.y), dst[2] = float(n.z);
-      }
+      subdivision::midpoint_tuple(&f.values[a * k], &f.values[b * k], k, is_normals,
+                                  &out.point_fields[i].values[(V + e) * k]);
     }
     float* nrm = nullptr;
     if (scheme == SubdivideScheme::Bezier)
@@ -180,27 +153,10 @@ UnstructuredGrid subdivide_tets_once(const UnstructuredGrid& m, SubdivideWeld we
     std::uint64_t v[10];  // corners 0-3, then the midpoints of edges 01 02 03 12 13 23
     for (int k = 0; k < 4; ++k) v[k] = m.connectivity[4 * t + k];
     for (int e = 0; e < 6; ++e) v[4 + e] = static_cast<std::uint64_t>(V + g.index_map[6 * t + e]);
-    enum { A, B, C, D, AB, AC, AD, BC, BD, CD };
-    // The inner octahedron's three diagonals: (AB, CD), (AC, BD), (AD, BC); cut along the shortest.
-    const int diag[3][2] = {{AB, CD}, {AC, BD}, {AD, BC}};
-    int best = 0;
-    double best_len = std::numeric_limits<double>::max();
-    for (int d = 0; d < 3; ++d) {
-      const V3 x = load(P + 3 * v[diag[d][0]]) - load(P + 3 * v[diag[d][1]]);
-      if (dot(x, x) < best_len) best_len = dot(x, x), best = d;
-    }
-    // The four other octahedron vertices, in cyclic order around the diagonal.
-    static constexpr int ring[3][4] = {{AC, BC, BD, AD}, {AB, BC, CD, AD}, {AB, BD, CD, AC}};
-    int child[8][4] = {{A, AB, AC, AD}, {AB, B, BC, BD}, {AC, BC, C, CD}, {AD, BD, CD, D}};
-    for (int k = 0; k < 4; ++k) {
-      child[4 + k][0] = diag[best][0];
-      child[4 + k][1] = diag[best][1];
-      child[4 + k][2] = ring[best][k];
-      child[4 + k][3] = ring[best][(k + 1) % 4];
-    }
+    std::uint64_t children[8][4];
+    subdivision::tet_children(v, P, children);
     for (int c = 0; c < 8; ++c) {
-      std::uint64_t w[4] = {v[child[c][0]], v[child[c][1]], v[child[c][2]], v[child[c][3]]};
-      if (tet_volume(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], P + 3 * w[3]) < 0) std::swap(w[2], w[3]);
+      const std::uint64_t* w = children[c];
       for (int k = 0; k < 4; ++k) out.connectivity.set(static_cast<std::size_t>(32 * t + 4 * c + k), w[k]);
     }
   });
@@ -216,7 +172,7 @@ void report_level(int level, int levels) {
 
 }  // namespace
 
-SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) {
+void check_subdivide_input(const SurfaceMesh& mesh, const SubdivideOptions& options) {
   if (options.levels < 0) throw InputError("subdivide: --levels must be >= 0");
   if (!mesh.all_triangles()) {
     for (Id c = 0; c < mesh.num_cells(); ++c)
@@ -229,6 +185,10 @@ SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) 
       throw InputError("subdivide: point field '" + f.name + "' does not have one tuple per point");
   for (PointIndex id : mesh.connectivity)
     if (Id{id} >= mesh.num_points()) throw InputError("subdivide: a triangle refers to point " + std::to_string(id) + " out of range");
+}
+
+SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) {
+  check_subdivide_input(mesh, options);
   if (options.levels == 0) {
     SurfaceMesh out = mesh;
     out.offsets.clear();
@@ -245,12 +205,16 @@ SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) 
   return cur;
 }
 
-UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options) {
+void check_subdivide_input(const UnstructuredGrid& tets, const SubdivideOptions& options) {
   if (options.levels < 0) throw InputError("subdivide: --levels must be >= 0");
   if (options.scheme != SubdivideScheme::Linear)
     throw InputError("subdivide: tetrahedra are subdivided with the linear scheme only");
   if (!tets.all_cells_are(CellType::Tetra)) throw InputError("subdivide: the grid has cells other than tetrahedra");
   tets.validate("subdivide input");
+}
+
+UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options) {
+  check_subdivide_input(tets, options);
   if (options.levels == 0) {
     UnstructuredGrid out = tets;
     out.offsets.clear();

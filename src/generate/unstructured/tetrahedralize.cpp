@@ -28,28 +28,24 @@ constexpr std::uint8_t kSplit[2][5][4] = {
 };
 
 // The splits with every tet positively oriented on the unit cube.
-struct OrientedSplits {
-  std::uint8_t tet[2][5][4];
-  OrientedSplits() {
-    for (int parity = 0; parity < 2; ++parity)
-      for (int t = 0; t < 5; ++t) {
-        float p[4][3];
-        for (int v = 0; v < 4; ++v) {
-          const int c = kSplit[parity][t][v];
-          tet[parity][t][v] = static_cast<std::uint8_t>(c);
-          p[v][0] = float(c & 1);
-          p[v][1] = float((c >> 1) & 1);
-          p[v][2] = float((c >> 2) & 1);
-        }
-        if (tet_volume(p[0], p[1], p[2], p[3]) < 0) std::swap(tet[parity][t][2], tet[parity][t][3]);
+FiveTetSplits oriented_splits() {
+  FiveTetSplits s{};
+  for (int parity = 0; parity < 2; ++parity)
+    for (int t = 0; t < 5; ++t) {
+      float p[4][3];
+      for (int v = 0; v < 4; ++v) {
+        const int c = kSplit[parity][t][v];
+        s.tet[parity][t][v] = static_cast<std::uint8_t>(c);
+        p[v][0] = float(c & 1);
+        p[v][1] = float((c >> 1) & 1);
+        p[v][2] = float((c >> 2) & 1);
       }
-  }
-};
-
-const OrientedSplits& splits() {
-  static const OrientedSplits s;
+      if (tet_volume(p[0], p[1], p[2], p[3]) < 0) std::swap(s.tet[parity][t][2], s.tet[parity][t][3]);
+    }
   return s;
 }
+
+const FiveTetSplits& splits() { return five_tet_splits(); }
 
 Id checked_mul(Id a, Id b, const char* what) {
   if (a != 0 && b > std::numeric_limits<Id>::max() / a)
@@ -72,12 +68,9 @@ std::array<int, 2> face_diagonal(int f, int parity) {
 
 }  // namespace
 
-double tet_volume(const float* a, const float* b, const float* c, const float* d) {
-  const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-  const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-  const double w[3] = {double(d[0]) - a[0], double(d[1]) - a[1], double(d[2]) - a[2]};
-  return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])) /
-         6.0;
+const FiveTetSplits& five_tet_splits() {
+  static const FiveTetSplits s = oriented_splits();
+  return s;
 }
 
 UnstructuredGrid grid_points(const ImageGrid& grid) {
@@ -87,12 +80,9 @@ UnstructuredGrid grid_points(const ImageGrid& grid) {
   UnstructuredGrid out;
   parallel::resize_fresh(out.points, static_cast<std::size_t>(3 * points));
   const Id nxy = nx * ny;
-  parallel::for_each(points, [&](Id p) {
-    const Id k = p / nxy, j = (p - k * nxy) / nx, i = p - k * nxy - j * nx;
-    const Id ijk[3] = {i, j, k};
-    for (int a = 0; a < 3; ++a)
-      out.points[3 * p + a] = static_cast<float>(grid.origin[a] + grid.spacing[a] * static_cast<double>(ijk[a]));
-  });
+  const GridPoints where{nx, nxy, {grid.origin[0], grid.origin[1], grid.origin[2]},
+                         {grid.spacing[0], grid.spacing[1], grid.spacing[2]}};
+  parallel::for_each(points, [&](Id p) { where.position(p, &out.points[3 * p]); });
   Field f{grid.name, 1, {}};
   parallel::resize_fresh(f.values, static_cast<std::size_t>(points));
   visit_scalars(grid, [&](const auto* samples) {
@@ -102,7 +92,7 @@ UnstructuredGrid grid_points(const ImageGrid& grid) {
   return out;
 }
 
-UnstructuredGrid tetrahedralize5(const ImageGrid& grid) {
+void check_tetrahedralize5_input(const ImageGrid& grid) {
   const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2)
@@ -110,8 +100,15 @@ UnstructuredGrid tetrahedralize5(const ImageGrid& grid) {
                        " (need at least 2)");
   const Id points = checked_mul(checked_mul(nx, ny, "point count"), nz, "point count");
   const Id voxels = checked_mul(checked_mul(nx - 1, ny - 1, "voxel count"), nz - 1, "voxel count");
-  const Id corners = checked_mul(voxels, 20, "tet corner count");
+  checked_mul(voxels, 20, "tet corner count");
   checked_mul(points, 3 * Id(sizeof(float)), "point coordinates");
+}
+
+UnstructuredGrid tetrahedralize5(const ImageGrid& grid) {
+  check_tetrahedralize5_input(grid);
+  const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  const Id points = nx * ny * nz;
+  const Id corners = 20 * (nx - 1) * (ny - 1) * (nz - 1);
 
   UnstructuredGrid out = grid_points(grid);
   out.uniform_type = CellType::Tetra;

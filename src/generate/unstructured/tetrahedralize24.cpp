@@ -48,18 +48,13 @@ FaceGroups group_faces(const K* keys, Id n, bool dense, K key_range, int key_bit
   return out;
 }
 
-// The 24 tets of a cell from its corner ids (bit order), its face-centre ids
-// and its centre id, oriented by their volume.
+// The 24 tets of a cell (tet_kernels.hpp's hex_tets24), handed to out(k, ids).
 template <class Out>
 void emit_cell(const std::uint64_t corner[8], const std::uint64_t face[6], std::uint64_t centre, const float* P,
                Out&& out) {
-  int k = 0;
-  for (int f = 0; f < 6; ++f)
-    for (int e = 0; e < 4; ++e) {
-      std::uint64_t v[4] = {corner[kFaceCycle[f][e]], corner[kFaceCycle[f][(e + 1) % 4]], face[f], centre};
-      if (tet_volume(P + 3 * v[0], P + 3 * v[1], P + 3 * v[2], P + 3 * v[3]) < 0) std::swap(v[0], v[1]);
-      out(k++, v);
-    }
+  std::uint64_t tets[24][4];
+  hex_tets24(corner, face, centre, P, tets);
+  for (int k = 0; k < 24; ++k) out(k, tets[k]);
 }
 
 // The corner ids of face pair % 6 of cell pair / 6, in cycle order.
@@ -117,16 +112,21 @@ UnstructuredGrid assemble24(const Array<float>& points, const std::vector<Field>
 // Voxels: the corners are the grid points (with the samples as a field),
 // the cells implicit, face f of voxel v keyed by 3 * (its lower corner) +
 // its normal axis (dense plan).
-UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
+void check_tetrahedralize24_input(const ImageGrid& grid) {
   for (int a = 0; a < 3; ++a)
     if (grid.dims[a] < 2)
       throw InputError("tetrahedralize: grid has " + std::to_string(grid.dims[a]) + " point(s) along axis " + "xyz"[a] +
                        " (need at least 2)");
+  const Id N = grid.num_points(), cells = (grid.dims[0] - 1) * (grid.dims[1] - 1) * (grid.dims[2] - 1);
+  if (6 * cells > Id{std::numeric_limits<std::uint32_t>::max()} || N + 3 * N + cells > Id{std::numeric_limits<std::uint32_t>::max()})
+    throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " voxels exceed the supported size");
+}
+
+UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld) {
+  check_tetrahedralize24_input(grid);
   const UnstructuredGrid corners = grid_points(grid);
   const Id nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2], nxy = nx * ny, N = nxy * nz;
   const Id cells = (nx - 1) * (ny - 1) * (nz - 1);
-  if (6 * cells > Id{std::numeric_limits<std::uint32_t>::max()} || N + 3 * N + cells > Id{std::numeric_limits<std::uint32_t>::max()})
-    throw LimitError("tetrahedralize --scheme 24: " + std::to_string(cells) + " voxels exceed the supported size");
   auto cell_corner = [&](Id v, int c) {
     const Id i = v % (nx - 1), j = (v / (nx - 1)) % (ny - 1), k = v / ((nx - 1) * (ny - 1));
     return static_cast<std::uint64_t>((i + (c & 1)) + nx * (j + ((c >> 1) & 1)) + nxy * (k + ((c >> 2) & 1)));

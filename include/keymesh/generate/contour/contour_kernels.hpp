@@ -1,8 +1,8 @@
 #pragma once
 // The per-element functors of marching cubes on a voxel grid, shared by the
-// CPU backend (src/generate/contour/contour.cpp) and the CUDA backend
-// (src/cuda/contour_cuda.cu): plain values and KEYMESH_HD functions, no
-// allocation, so the same arithmetic (hence the same bits) runs on both.
+// CPU fast path (src/generate/contour/contour.cpp) and the device path
+// (contour_device.hpp, which src/cuda runs on the GPU): plain values and KEYMESH_HD
+// functions, no allocation, so the same arithmetic (hence the same bits) runs on both.
 #include <cmath>
 #include <cstdint>
 #include <limits>

@@ -37,4 +37,8 @@ namespace keymesh::generate {
 SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& options, ContourStats* stats = nullptr,
                     std::vector<std::uint64_t>* point_keys = nullptr);
 
+// contour()'s input checks alone (the same InputError); returns the point
+// field to contour. For the device path (contour_tets_device.hpp).
+const Field& check_tet_contour_input(const UnstructuredGrid& tets, const ContourOptions& options);
+
 }  // namespace keymesh::generate

@@ -33,8 +33,14 @@ struct SubdivideOptions {
 // points or corners.
 SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options);
 
+// subdivide()'s input checks alone (the same InputError), for the device path.
+void check_subdivide_input(const SurfaceMesh& mesh, const SubdivideOptions& options);
+
 // Tetrahedra 1 -> 8: the four corner tets and the inner octahedron cut along
 // its shortest diagonal; every child positively oriented. Linear only.
 UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options);
+
+// subdivide(tets)'s input checks alone (the same InputError), for the device path.
+void check_subdivide_input(const UnstructuredGrid& tets, const SubdivideOptions& options);
 
 }  // namespace keymesh::generate

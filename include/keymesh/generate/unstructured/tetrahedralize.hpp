@@ -9,6 +9,7 @@
 //
 // Every tet is positively oriented: det(p1 - p0, p2 - p0, p3 - p0) > 0.
 #include "keymesh/mesh/image_grid.hpp"
+#include "keymesh/generate/unstructured/tet_kernels.hpp"  // tet_volume
 #include "keymesh/mesh/unstructured_grid.hpp"
 
 namespace keymesh::generate {
@@ -18,6 +19,8 @@ namespace keymesh::generate {
 // i + j + k is even. The grid's scalars become the float point field of the
 // grid's name. Throws LimitError naming the sizes when they cannot be held.
 UnstructuredGrid tetrahedralize5(const ImageGrid& grid);
+// tetrahedralize5(grid)'s checks alone (the same errors), for the device path.
+void check_tetrahedralize5_input(const ImageGrid& grid);
 
 // Hexahedral cells (VTK_HEXAHEDRON or VTK_VOXEL) of an unstructured grid
 // become 5 tets each, points and point fields unchanged, each tet carrying its
@@ -39,13 +42,13 @@ UnstructuredGrid tetrahedralize5(const UnstructuredGrid& hexes);
 // N^3 + 3 N (N-1)^2 + (N-1)^3 points. Every tet positively oriented.
 // `vertex_weld` welds the face centres by coordinates instead (the baseline).
 UnstructuredGrid tetrahedralize24(const ImageGrid& grid, bool vertex_weld = false);
+// tetrahedralize24(grid)'s checks alone (the same errors), for the device path.
+void check_tetrahedralize24_input(const ImageGrid& grid);
 UnstructuredGrid tetrahedralize24(const UnstructuredGrid& hexes, bool vertex_weld = false);
 
 // The points of a voxel grid (ids as in the grid, x fastest) with its
 // scalars as a float point field, and no cells.
 UnstructuredGrid grid_points(const ImageGrid& grid);
 
-// Signed volume of tet (a, b, c, d): det(b - a, c - a, d - a) / 6.
-double tet_volume(const float* a, const float* b, const float* c, const float* d);
 
 }  // namespace keymesh::generate
