@@ -43,6 +43,7 @@ struct LabelsCli {
   std::vector<long long> chunk;
   bool assemble = false;
   std::string update;
+  std::string label_names;
   std::vector<CLI::Option*> precomputed_only;  // refused without --format precomputed
 };
 
@@ -68,6 +69,8 @@ LabelsJob job_of(const LabelsCli& o) {
   pc.lods = o.lods;
   for (int a = 0; a < 3; ++a) pc.chunk_shape[a] = o.chunk_shape[static_cast<std::size_t>(a)];
   pc.sharded = o.sharded;
+  pc.label_names = o.label_names;
+  pc.label_names_given = !o.label_names.empty();
   pc.chunk_given = !o.chunk.empty();
   for (std::size_t a = 0; a < o.chunk.size() && a < 3; ++a) pc.chunk[a] = o.chunk[a];
   pc.assemble = o.assemble;
@@ -260,7 +263,12 @@ void add_precomputed_options(CLI::App& cmd, LabelsCli& o) {
       cmd.add_option("--update", o.update,
                      "re-mesh an edit: IN differs from the earlier run's volume only inside CHUNKS ('I,J,K;I,J,K' or "
                      "@FILE with one 'I J K' a line); recomputes the chunks the edit can reach and rewrites the "
-                     "segments they held or hold in DIR (needs its DIR/chunks); equal to a full run on IN")};
+                     "segments they held or hold in DIR (needs its DIR/chunks); equal to a full run on IN"),
+      cmd.add_option("--label-names", o.label_names,
+                     "a label table, one 'ID NAME' a line (whitespace-separated; further columns, blank lines and "
+                     "lines starting with # ignored): the segments' names, written as segment_properties/ "
+                     "(default: IN.txt, or IN without .gz + .txt, when such a file is beside the input, as "
+                     "MRIcron's atlases ship)")};
 }
 
 void add_labels_options(CLI::App& cmd, LabelsCli& o) {

@@ -26,6 +26,10 @@ struct PrecomputedJob {
   std::array<Id, 3> chunk{0, 0, 0};
   bool assemble = false;
   std::vector<std::array<Id, 3>> update;  // --update: the chunks changed
+  // --label-names FILE, or the label table beside the input (IN.txt, or
+  // IN without .gz + .txt, as MRIcron's atlases ship): segment names.
+  std::string label_names;
+  bool label_names_given = false;
 };
 
 struct LabelsJob {

@@ -15,6 +15,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/labels/labels_multilod.hpp"
 #include "keymesh/generate/labels/labels_stream.hpp"
+#include "keymesh/io/label_table.hpp"
 #include "keymesh/io/neuroglancer.hpp"
 #include "keymesh/io/volume_io.hpp"
 #include "labels_job.hpp"
@@ -46,6 +47,17 @@ ng::MultilodLayout layout_of(const ImageGrid& grid, const generate::MultilodGrid
   layout.lods = static_cast<std::uint32_t>(g.lods);
   layout.sharded = sharded;
   return layout;
+}
+
+// The segments' names: --label-names, else the label table beside the input
+// (none: no segment_properties). The background's entry is left out.
+ng::SegmentNames segment_names(const LabelsJob& job) {
+  const PrecomputedJob& pc = job.precomputed;
+  const std::string path = pc.label_names_given ? pc.label_names : io::label_table_beside(job.input);
+  if (path.empty()) return {};
+  ng::SegmentNames names = io::read_label_table(path);
+  if (job.options.background >= 0) names.erase(static_cast<std::uint64_t>(job.options.background));
+  return names;
 }
 
 std::vector<ng::ChunkPiece> to_io(std::vector<generate::MultilodPiece>&& pieces) {
@@ -98,7 +110,7 @@ Counts write_everything(const LabelsJob& job, const ImageGrid& grid, const ng::M
   Counts n;
   n.add(pieces);
   timer.run("write", [&] {
-    ng::write_multilod(job.output, layout, pieces);
+    ng::write_multilod(job.output, layout, pieces, segment_names(job));
     auto chunks = by_chunk(std::move(pieces));
     const generate::MultilodGrid g = generate::multilod_grid(grid.dims, o);
     for (Id z = 0; z < g.chunks[2]; ++z)  // every chunk, empty ones too: the store is complete
@@ -149,7 +161,8 @@ Counts update_chunks(const LabelsJob& job, const ImageGrid& grid, const ng::Mult
   }
   timer.run("assemble", [&] {
     if (!n.segments.empty())
-      ng::assemble_multilod(job.output, layout, std::vector<std::uint64_t>(n.segments.begin(), n.segments.end()));
+      ng::assemble_multilod(job.output, layout, std::vector<std::uint64_t>(n.segments.begin(), n.segments.end()),
+                            segment_names(job));
   });
   return n;
 }
@@ -170,7 +183,7 @@ int run_labels_precomputed(const LabelsJob& job) {
   if (pc.chunk_given) {
     n = write_one_chunk(job, grid, layout, timer), route = "chunk";
   } else if (pc.assemble) {
-    timer.run("assemble", [&] { ng::assemble_multilod(job.output, layout, {}); });
+    timer.run("assemble", [&] { ng::assemble_multilod(job.output, layout, {}, segment_names(job)); });
     route = "assemble";
   } else if (!pc.update.empty()) {
     n = update_chunks(job, grid, layout, timer), route = "update";

@@ -198,7 +198,37 @@ def test_refusals():
     assert not os.path.exists(os.path.join(D, "u")), "a refused --update wrote something"
 
 
+def test_label_names():
+    """A label table beside the input (MRIcron's IN.txt) names the segments; --label-names overrides it;
+    a malformed table is refused by file and line with nothing written."""
+    d = os.path.join(D, "named")
+    os.makedirs(d, exist_ok=True)
+    vol = write_nrrd(os.path.join(d, "atlas.nrrd"), VOLUME)
+    with open(vol + ".txt", "w") as f:
+        f.write("# id name\n0\tBackground\n" + "".join(f"{i} region_{i} {i + 1000}\n" for i in range(1, 9)))
+    out = os.path.join(d, "ng")
+    precomputed(out, volume=vol)
+    names = ngp.segment_names(out)
+    assert names == {i: f"region_{i}" for i in range(1, 9)}, names  # the background's entry left out
+    assert set(ngp.segment_ids(out)) <= set(names)
+    other = os.path.join(d, "other.txt")
+    with open(other, "w") as f:
+        f.write("3 third\n")
+    precomputed(out, "--label-names", other, volume=vol)
+    assert ngp.segment_names(out) == {3: "third"}
+    bad = os.path.join(d, "bad.txt")
+    for text, words in (("1 a\nx b\n", "bad.txt line 2: 'x' is not a label id"),
+                        ("1 a\n1 b\n", "line 2: label 1 is named twice"), ("2\n", "label 2 has no name")):
+        with open(bad, "w") as f:
+            f.write(text)
+        p = run("labels", vol, "-o", os.path.join(d, "refused"), "--format", "precomputed", *GRID,
+                "--label-names", bad, expect=1)
+        assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+        assert not os.path.exists(os.path.join(d, "refused")), "a refused label table left output"
+
+
 check("info declares the multilod format; every fragment decodes", test_info_and_fragments)
+check("a label table names the segments (segment_properties)", test_label_names)
 check("neighbouring nodes agree on their common face in the decoded output", test_faces_agree_in_decoded_output)
 check("3 levels, 32^3 chunks, discrete-mc, sharded: faces agree", test_issue_settings_discrete_mc_sharded)
 check("chunk tasks + --assemble are byte-identical to one call", test_chunk_tasks_and_assembly_equal_one_call)
