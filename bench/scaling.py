@@ -226,6 +226,38 @@ def write_doc(rows, mach, path, reps, elapsed):
         f.write("\n".join(L))
 
 
+def replace_ops_part(doc, lines, mach, reps, elapsed):
+    """docs/SCALING.md with its labels-and-coarsening part (from its heading to the Reproduce line) replaced."""
+    text = open(doc).read() if os.path.exists(doc) else ""
+    head = "# Labels and coarsening under mpirun"
+    cut = text.find(head)
+    if cut < 0:
+        cut = text.find("Reproduce: `make scaling`")
+    keep = text[:cut] if cut >= 0 else text
+    lines = list(lines)
+    lines.insert(1, f"Measured by `bench/scaling.py --ops-only` on {mach['date']}: {mach['cpu']}, {mach['cores']} cores, "
+                    f"one OpenMP thread per rank, median of {reps} run(s), load average beside each row in "
+                    "bench/results/scaling_ops.jsonl; the run took "
+                    f"{elapsed / 60:.1f} min. Peak memory does not depend on the load; seconds do.\n")
+    with open(doc, "w") as f:
+        f.write(keep + "\n".join(lines) + "\nReproduce: `make scaling` (needs openmpi-bin and mricron-data).\n")
+
+
+def ops_only(keymesh, args, t0):
+    def progress(text):
+        print(f"[{time.time() - t0:6.1f} s] {text}", flush=True)
+
+    with tempfile.TemporaryDirectory(prefix="keymesh-scaling-") as work:
+        rows = run_ops(keymesh, list(range(1, args.max_ranks + 1)), args.reps, work, progress, mpirun_cmd)
+    mach = machine()
+    os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
+    with open(os.path.join(HERE, "results", "scaling_ops.jsonl"), "w") as f:
+        for r in rows:
+            f.write(json.dumps({**r, "machine": mach}) + "\n")
+    replace_ops_part(args.doc, ops_doc(rows), mach, args.reps, time.time() - t0)
+    print(f"scaling: wrote {args.doc}'s labels and coarsening part in {(time.time() - t0) / 60:.1f} min")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
@@ -233,6 +265,8 @@ def main():
     ap.add_argument("--max-ranks", type=int, default=8)
     ap.add_argument("--doc", default=os.path.join(ROOT, "docs", "SCALING.md"))
     ap.add_argument("--render", action="store_true", help="only rewrite the doc from bench/results/scaling.jsonl")
+    ap.add_argument("--ops-only", action="store_true",
+                    help="only the labels and coarsening series (scaling_ops.py): their part of the doc is replaced")
     args = ap.parse_args()
     if not shutil.which("mpirun"):
         raise SystemExit("scaling: no mpirun (install openmpi-bin)")
@@ -243,6 +277,8 @@ def main():
         return
     t0 = time.time()
     step = [0]
+    if args.ops_only:
+        return ops_only(keymesh, args, t0)
 
     def progress(text):
         step[0] += 1
