@@ -292,11 +292,7 @@ SurfaceMesh subdivide_on(const D& d, const SurfaceMesh& mesh, const SubdivideOpt
   check_subdivide_input(mesh, options);
   if (options.weld != SubdivideWeld::KeyReduce)
     throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
-  if (options.levels == 0) {
-    SurfaceMesh out = mesh;
-    out.offsets.clear();
-    return out;
-  }
+  if (options.levels == 0) return subdivided_zero_levels(mesh);
   device_subdivide::Surface<D> cur = device_subdivide::upload(d, mesh);
   for (int level = 0; level < options.levels; ++level) cur = device_subdivide::subdivide_once(d, cur, options.scheme);
   return device_subdivide::download(d, std::move(cur));
@@ -308,13 +304,7 @@ UnstructuredGrid subdivide_on(const D& d, const UnstructuredGrid& tets, const Su
   check_subdivide_input(tets, options);
   if (options.weld != SubdivideWeld::KeyReduce)
     throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
-  if (options.levels == 0) {
-    UnstructuredGrid out = tets;
-    out.offsets.clear();
-    out.cell_types.clear();
-    out.uniform_type = CellType::Tetra;
-    return out;
-  }
+  if (options.levels == 0) return subdivided_zero_levels(tets);
   auto once = [&](const UnstructuredGrid& m) {
     if (m.connectivity.wide()) return device_subdivide::subdivide_tets_once(d, m, m.connectivity.wide_values().data());
     return device_subdivide::subdivide_tets_once(d, m, m.connectivity.narrow().data());
