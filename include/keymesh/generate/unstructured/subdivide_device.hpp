@@ -63,6 +63,9 @@ struct EdgePoints {
   }
 };
 
+// Tuple of new point e (`components` of them) from its edge's two
+// (subdivision::midpoint_tuple; `renormalize` for a normals field): the
+// surfaces' point fields and the tets'.
 struct EdgeTuples {
   const std::uint64_t* edge_key;
   EdgeKeys ek;
@@ -211,21 +214,6 @@ struct TetEdgeKeys {
   }
 };
 
-// Tuple of new point e (k components) as the mean, in float, of its edge's.
-struct TetEdgeTuples {
-  const std::uint64_t* edge_key;
-  EdgeKeys ek;
-  Id old_points;
-  int components;
-  const float* in;
-  float* out;
-  KEYMESH_HD void operator()(Id e) const {
-    const auto ab = ek.decode(edge_key[e]);
-    subdivision::midpoint_tuple(in + components * static_cast<Id>(ab.first), in + components * static_cast<Id>(ab.second),
-                                components, false, out + components * (old_points + e));
-  }
-};
-
 template <class I, class O>
 struct TetChildren {
   const I* conn;
@@ -261,7 +249,7 @@ UnstructuredGrid subdivide_tets_once(const D& d, const UnstructuredGrid& m, cons
     const float* values = device::readable(d, in.data(), static_cast<Id>(in.size()), holder);
     auto out = d.template allocate<float>(k * (V + E));
     device::copy(d, values, k * V, out.data());
-    d.for_each(E, TetEdgeTuples{g.unique_keys.data(), ek, V, k, values, out.data()});
+    d.for_each(E, EdgeTuples{g.unique_keys.data(), ek, V, k, false, values, out.data()});
     return out;
   };
   auto points = grown(m.points, 3);
