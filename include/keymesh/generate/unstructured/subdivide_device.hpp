@@ -271,15 +271,22 @@ UnstructuredGrid subdivide_tets_once(const D& d, const UnstructuredGrid& m, cons
   return out;
 }
 
+// subdivide()'s input checks (a surface or tets), then the refusal of what
+// the device path lacks: VERTEX-WELD.
+template <class Mesh>
+void check_input(const Mesh& mesh, const SubdivideOptions& options) {
+  check_subdivide_input(mesh, options);
+  if (options.weld != SubdivideWeld::KeyReduce)
+    throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
+}
+
 }  // namespace device_subdivide
 
 // The device path on device `d`: subdivide()'s input checks, then every
 // level on the device.
 template <class D>
 SurfaceMesh subdivide_on(const D& d, const SurfaceMesh& mesh, const SubdivideOptions& options) {
-  check_subdivide_input(mesh, options);
-  if (options.weld != SubdivideWeld::KeyReduce)
-    throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
+  device_subdivide::check_input(mesh, options);
   if (options.levels == 0) return subdivided_zero_levels(mesh);
   device_subdivide::Surface<D> cur = device_subdivide::upload(d, mesh);
   for (int level = 0; level < options.levels; ++level) cur = device_subdivide::subdivide_once(d, cur, options.scheme);
@@ -289,9 +296,7 @@ SurfaceMesh subdivide_on(const D& d, const SurfaceMesh& mesh, const SubdivideOpt
 // Tets 1 -> 8 on device `d`: subdivide(tets)'s checks, then level after level.
 template <class D>
 UnstructuredGrid subdivide_on(const D& d, const UnstructuredGrid& tets, const SubdivideOptions& options) {
-  check_subdivide_input(tets, options);
-  if (options.weld != SubdivideWeld::KeyReduce)
-    throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
+  device_subdivide::check_input(tets, options);
   if (options.levels == 0) return subdivided_zero_levels(tets);
   auto once = [&](const UnstructuredGrid& m) {
     if (m.connectivity.wide()) return device_subdivide::subdivide_tets_once(d, m, m.connectivity.wide_values().data());
