@@ -108,6 +108,27 @@ def require_numpy():
     return numpy
 
 
+def boxes_in_noise(shape, seed, boxes, noise_fraction, noise_labels=(0, 4)):
+    """An int16 label volume [x, y, z] of `shape`: the boxes (label, slices;
+    later ones on top, 0 around them), each voxel replaced with probability
+    noise_fraction by uniform noise over the labels [lo, hi): triple lines,
+    diagonal contacts and regions touching every border."""
+    np = require_numpy()
+    rng = np.random.default_rng(seed)
+    noise = rng.integers(*noise_labels, size=shape)
+    labels = np.zeros(shape, np.int16)
+    for label, where in boxes:
+        labels[where] = label
+    return np.where(rng.random(shape) < noise_fraction, noise, labels).astype(np.int16)
+
+
+def write_raw(path, volume):
+    """volume[x, y, z] as raw samples, x fastest; returns path."""
+    with open(path, "wb") as f:
+        f.write(volume.tobytes(order="F"))
+    return path
+
+
 def require_vtk():
     try:
         import vtk  # noqa: F401

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "keymesh/mesh/surface_mesh.hpp"
+#include "keymesh/mesh/unstructured_grid.hpp"
 
 namespace keymesh::testing {
 
@@ -44,6 +45,21 @@ inline void expect_same_bits(const SurfaceMesh& a, const SurfaceMesh& b, const s
   EXPECT_EQ(first_difference(a.points, b.points), "") << what << " points";
   EXPECT_EQ(first_difference(a.connectivity, b.connectivity), "") << what << " connectivity";
   EXPECT_EQ(first_difference(a.offsets, b.offsets), "") << what << " offsets";
+  expect_same_fields(a.point_fields, b.point_fields, what + " point fields");
+  expect_same_fields(a.cell_fields, b.cell_fields, what + " cell fields");
+}
+
+// Tetrahedral (or any unstructured) grids: the connectivity's width too.
+inline void expect_same_bits(const UnstructuredGrid& a, const UnstructuredGrid& b, const std::string& what) {
+  EXPECT_EQ(first_difference(a.points, b.points), "") << what << " points";
+  ASSERT_EQ(a.connectivity.wide(), b.connectivity.wide()) << what << " connectivity width";
+  if (b.connectivity.wide())
+    EXPECT_EQ(first_difference(a.connectivity.wide_values(), b.connectivity.wide_values()), "") << what << " connectivity";
+  else
+    EXPECT_EQ(first_difference(a.connectivity.narrow(), b.connectivity.narrow()), "") << what << " connectivity";
+  EXPECT_EQ(a.uniform_type, b.uniform_type) << what;
+  EXPECT_EQ(a.offsets, b.offsets) << what;
+  EXPECT_EQ(a.cell_types, b.cell_types) << what;
   expect_same_fields(a.point_fields, b.point_fields, what + " point fields");
   expect_same_fields(a.cell_fields, b.cell_fields, what + " cell fields");
 }

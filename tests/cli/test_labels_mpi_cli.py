@@ -9,44 +9,19 @@ rank and with more ranks than a thin volume has planes (a rank with no rows).
 .pvtp pieces (nothing gathered) are test_labels_pieces_mpi_cli.py's. Skipped (77)
 without mpirun or MPI."""
 import os
-import shutil
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, mpirun, report, run, tempdir  # noqa: E402
+from kmtest import (boxes_in_noise, check, finish, mpirun, report, require_mpi, require_numpy, run,  # noqa: E402
+                    tempdir, write_raw)
 
-MPIRUN = shutil.which("mpirun")
-if not MPIRUN:
-    print("skipped: no mpirun (install openmpi-bin and libopenmpi-dev)")
-    sys.exit(77)
-try:
-    import numpy as np
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(77)
-
-
+np = require_numpy()
 D = tempdir()
-launcher = mpirun(2, expect=None, program=shutil.which("true") or "/bin/true")
-if launcher.returncode != 0:
-    print(f"skipped: mpirun -np 2 true fails here (exit {launcher.returncode}): {launcher.stderr.strip()[:400]}")
-    sys.exit(77)
-
-rng = np.random.default_rng(9)
 SHAPE = (9, 10, 12)  # x, y, z
-noise = rng.integers(0, 4, size=SHAPE)
-boxes = np.zeros(SHAPE, np.int16)
-boxes[1:6, 2:8, 1:8] = 5
-boxes[3:8, 1:6, 5:11] = 9
-MIX = os.path.join(D, "mix.raw")
-vol = np.where(rng.random(SHAPE) < 0.5, noise, boxes).astype(np.int16)
-with open(MIX, "wb") as f:
-    f.write(vol.tobytes(order="F"))  # x fastest
+vol = boxes_in_noise(SHAPE, 9, [(5, np.s_[1:6, 2:8, 1:8]), (9, np.s_[3:8, 1:6, 5:11])], 0.5)
+MIX = write_raw(os.path.join(D, "mix.raw"), vol)
 RAW = ["--dims", *SHAPE, "--type", "int16"]
-probe = mpirun(2, "labels", MIX, *RAW, "-o", os.path.join(D, "probe.vtp"), "-q", expect=None)
-if probe.returncode != 0 and "built without MPI" in probe.stderr:
-    print("skipped: keymesh was built without MPI (install libopenmpi-dev and rebuild)")
-    sys.exit(77)
+require_mpi("labels", MIX, *RAW, "-o", os.path.join(D, "probe.vtp"), "-q")
 
 
 def same_as_one_process(path, raw, args, ranks=(1, 2, 3, 4), extra=()):

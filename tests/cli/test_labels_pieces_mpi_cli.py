@@ -20,27 +20,18 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, mpirun, read_polydata, report, require_mpi, run, tempdir  # noqa: E402
+from kmtest import (boxes_in_noise, check, finish, mpirun, read_polydata, report, require_mpi,  # noqa: E402
+                    require_vtk, run, tempdir, write_raw)
 
-try:
-    import numpy as np
-    import vtk
-    from vtk.util import numpy_support as ns
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(77)
+require_vtk()
+import numpy as np  # noqa: E402
+import vtk  # noqa: E402
+from vtk.util import numpy_support as ns  # noqa: E402
 
 D = tempdir()
-rng = np.random.default_rng(36)
 SHAPE = (9, 8, 40)  # x, y, z: 42 padded rows, 14 a rank at -np 3, halos of 7 to 22 rows
-noise = rng.integers(0, 4, size=SHAPE)
-blobs = np.zeros(SHAPE, np.int16)
-blobs[1:6, 2:7, 2:20] = 5
-blobs[3:8, 1:6, 12:37] = 9
-VOL = os.path.join(D, "mix.raw")
-vol = np.where(rng.random(SHAPE) < 0.35, noise, blobs).astype(np.int16)
-with open(VOL, "wb") as f:
-    f.write(vol.tobytes(order="F"))  # x fastest
+vol = boxes_in_noise(SHAPE, 36, [(5, np.s_[1:6, 2:7, 2:20]), (9, np.s_[3:8, 1:6, 12:37])], 0.35)
+VOL = write_raw(os.path.join(D, "mix.raw"), vol)
 RAW = ["--dims", *SHAPE, "--type", "int16"]
 require_mpi("labels", VOL, *RAW, "-o", os.path.join(D, "probe.vtp"), "-q")
 

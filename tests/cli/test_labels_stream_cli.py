@@ -13,13 +13,9 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, report, run, tempdir  # noqa: E402
+from kmtest import check, finish, report, require_numpy, run, tempdir  # noqa: E402
 
-try:
-    import numpy as np
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(77)
+np = require_numpy()
 
 D = tempdir()
 

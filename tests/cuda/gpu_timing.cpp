@@ -89,14 +89,14 @@ void check_cuda(cudaError_t e, const char* what) {
   if (e != cudaSuccess) throw InputError(std::string(what) + ": " + cudaGetErrorString(e));
 }
 
-// One GPU contour timed with CUDA events, in milliseconds.
-double timed_gpu_contour(const ImageGrid& g, const generate::ContourOptions& o, SurfaceMesh& mesh,
-                         generate::ContourStats& st) {
+// run() timed with CUDA events on the default stream, in milliseconds.
+template <class Run>
+double gpu_milliseconds(Run&& run) {
   cudaEvent_t start, stop;
   check_cuda(cudaEventCreate(&start), "creating an event");
   check_cuda(cudaEventCreate(&stop), "creating an event");
   check_cuda(cudaEventRecord(start, 0), "recording an event");
-  mesh = backend::contour(g, o, &st);
+  run();
   check_cuda(cudaEventRecord(stop, 0), "recording an event");
   check_cuda(cudaEventSynchronize(stop), "waiting for an event");
   float ms = 0;
@@ -104,6 +104,12 @@ double timed_gpu_contour(const ImageGrid& g, const generate::ContourOptions& o, 
   cudaEventDestroy(start);
   cudaEventDestroy(stop);
   return ms;
+}
+
+// One GPU contour timed with CUDA events, in milliseconds.
+double timed_gpu_contour(const ImageGrid& g, const generate::ContourOptions& o, SurfaceMesh& mesh,
+                         generate::ContourStats& st) {
+  return gpu_milliseconds([&] { mesh = backend::contour(g, o, &st); });
 }
 
 // A device mesh downloaded, for the comparison with the CPU's.
@@ -140,17 +146,7 @@ bool device_input_runs(const ImageGrid& g, const generate::ContourOptions& o, co
   std::vector<double> runs;
   for (int i = 0; i < a.warmup + a.repeat; ++i) {
     mesh = cuda::DeviceMesh{};  // the previous mesh freed before the run
-    cudaEvent_t start, stop;
-    check_cuda(cudaEventCreate(&start), "creating an event");
-    check_cuda(cudaEventCreate(&stop), "creating an event");
-    check_cuda(cudaEventRecord(start, 0), "recording an event");
-    mesh = cuda::contour_device(v, o);
-    check_cuda(cudaEventRecord(stop, 0), "recording an event");
-    check_cuda(cudaEventSynchronize(stop), "waiting for an event");
-    float ms = 0;
-    check_cuda(cudaEventElapsedTime(&ms, start, stop), "reading an event");
-    cudaEventDestroy(start);
-    cudaEventDestroy(stop);
+    const double ms = gpu_milliseconds([&] { mesh = cuda::contour_device(v, o); });
     if (i >= a.warmup) runs.push_back(ms);
   }
   const bool same = identical(downloaded(mesh), gpu);

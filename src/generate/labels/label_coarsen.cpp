@@ -60,16 +60,9 @@ std::vector<Id> cancel_opposite_faces(const std::vector<Face>& faces, Id points)
   return keep;
 }
 
-}  // namespace
-
-void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const Id points = static_cast<Id>(s.coarse.size());
-  const Id faces_in = static_cast<Id>(s.pair.size());
-  st.triangles_before_coarsening = faces_in;
-  const std::uint64_t top = s.coarse.empty() ? 0 : *std::max_element(s.coarse.begin(), s.coarse.end());
-  const auto g = keyreduce::partition_sort(s.coarse.data(), points, parallel::bits_needed<std::uint64_t>(top),
-                                           keyreduce::Order::Build);
+// Per coarse point (group of g), the mean of its points' positions, summed
+// in increasing index so any thread count gives the same bits.
+std::vector<float> merged_positions(const LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g) {
   const Id m = g.num_groups();
   std::vector<float> merged(static_cast<std::size_t>(3 * m));
   parallel::for_each(m, [&](Id p) {
@@ -79,8 +72,13 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
       merged[static_cast<std::size_t>(3 * p + a)] = static_cast<float>(sum / static_cast<double>(g.count(p)));
     }
   }, 1024);
-  // Faces through the index map; collapsed ones (fewer than three distinct
-  // points) marked for dropping by tag ~0.
+  return merged;
+}
+
+// The faces through the index map; collapsed ones (fewer than three
+// distinct points) get sign 0, to be dropped.
+std::vector<Face> mapped_faces(const LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g) {
+  const Id faces_in = static_cast<Id>(s.pair.size());
   const Field* label = s.mesh.find_cell_field("label");
   std::vector<Face> faces(static_cast<std::size_t>(faces_in));
   const PointIndex* C = s.mesh.connectivity.data();
@@ -96,17 +94,22 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
                : 0u);
     faces[static_cast<std::size_t>(t)] = Face{a, std::min(b, c), std::max(b, c), collapsed ? 0 : (b < c ? 1 : -1), tag};
   }, 4096);
-  std::vector<Id> keep = cancel_opposite_faces(faces, m);
-  parallel::for_each(faces_in, [&](Id t) {
-    if (faces[static_cast<std::size_t>(t)].sign == 0) keep[static_cast<std::size_t>(t)] = 0;
-  });
-  const Id faces_out = parallel::exclusive_scan(keep.data(), keep.data(), faces_in + 1);
+  return faces;
+}
+
+// Keeps the faces `keep` marks (its exclusive scan: face t stays, at
+// keep[t], where keep[t + 1] differs) with their pair, ghost flag and cell
+// fields; their corners become coarse point indices.
+void keep_faces(LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g, const std::vector<Id>& keep) {
+  const Id faces_in = static_cast<Id>(s.pair.size());
+  const Id faces_out = keep[static_cast<std::size_t>(faces_in)];
   Array<PointIndex> conn(static_cast<std::size_t>(3 * faces_out));  // every element written below
   std::vector<std::uint32_t> pair(static_cast<std::size_t>(faces_out));
   std::vector<std::uint8_t> ghost(s.ghost_face.empty() ? 0 : static_cast<std::size_t>(faces_out));
   std::vector<Field> fields;
   for (const Field& f : s.mesh.cell_fields)
     fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(faces_out * f.components))});
+  const PointIndex* C = s.mesh.connectivity.data();
   parallel::for_each(faces_in, [&](Id t) {
     const Id at = keep[static_cast<std::size_t>(t)];
     if (keep[static_cast<std::size_t>(t + 1)] == at) return;
@@ -118,10 +121,21 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
       std::copy_n(s.mesh.cell_fields[i].values.begin() + c * t, c, fields[i].values.begin() + c * at);
     }
   }, 4096);
-  // Points no kept face uses (every face through them collapsed or
-  // cancelled) are dropped, the others renumbered in coarse-key order.
+  s.mesh.connectivity = std::move(conn);
+  s.mesh.cell_fields = std::move(fields);
+  s.pair = std::move(pair);
+  s.ghost_face = std::move(ghost);
+}
+
+// Points no kept face uses (every face through them collapsed or
+// cancelled) are dropped, the others renumbered in coarse-key order and
+// placed at their merged positions. Returns the number of points left.
+Id keep_used_points(LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g, const std::vector<float>& merged) {
+  const Id m = g.num_groups();
+  Array<PointIndex>& conn = s.mesh.connectivity;
+  const Id corners = static_cast<Id>(conn.size());
   std::vector<Id> used(static_cast<std::size_t>(m + 1), 0);
-  parallel::for_each(3 * faces_out, [&](Id k) { used[conn[static_cast<std::size_t>(k)]] = 1; });
+  parallel::for_each(corners, [&](Id k) { used[conn[static_cast<std::size_t>(k)]] = 1; });
   const Id m_used = parallel::exclusive_scan(used.data(), used.data(), m + 1);
   Array<float> compact(static_cast<std::size_t>(3 * m_used));
   // A streamed surface's points keep their keys: now the coarse ones.
@@ -131,19 +145,37 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
     std::copy_n(merged.begin() + 3 * p, 3, compact.begin() + 3 * used[static_cast<std::size_t>(p)]);
     if (!keys.empty()) keys[static_cast<std::size_t>(used[static_cast<std::size_t>(p)])] = g.unique_keys[static_cast<std::size_t>(p)];
   });
-  parallel::for_each(3 * faces_out, [&](Id k) {
+  parallel::for_each(corners, [&](Id k) {
     conn[static_cast<std::size_t>(k)] = static_cast<PointIndex>(used[conn[static_cast<std::size_t>(k)]]);
   });
   s.mesh.points = std::move(compact);
-  s.mesh.connectivity = std::move(conn);
-  s.mesh.cell_fields = std::move(fields);
-  s.pair = std::move(pair);
-  s.ghost_face = std::move(ghost);
+  s.keys = std::move(keys);
+  return m_used;
+}
+
+}  // namespace
+
+void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Id points = static_cast<Id>(s.coarse.size());
+  const Id faces_in = static_cast<Id>(s.pair.size());
+  st.triangles_before_coarsening = faces_in;
+  const std::uint64_t top = s.coarse.empty() ? 0 : *std::max_element(s.coarse.begin(), s.coarse.end());
+  const auto g = keyreduce::partition_sort(s.coarse.data(), points, parallel::bits_needed<std::uint64_t>(top),
+                                           keyreduce::Order::Build);
+  const std::vector<float> merged = merged_positions(s, g);
+  const std::vector<Face> faces = mapped_faces(s, g);
+  std::vector<Id> keep = cancel_opposite_faces(faces, g.num_groups());
+  parallel::for_each(faces_in, [&](Id t) {
+    if (faces[static_cast<std::size_t>(t)].sign == 0) keep[static_cast<std::size_t>(t)] = 0;
+  });
+  parallel::exclusive_scan(keep.data(), keep.data(), faces_in + 1);
+  keep_faces(s, g, keep);
+  const Id m_used = keep_used_points(s, g, merged);
   s.quads = false;
   s.junction.assign(static_cast<std::size_t>(m_used), 0);
   s.border_axes.assign(static_cast<std::size_t>(m_used), 0);
   s.cell_centre.clear();
-  s.keys = std::move(keys);
   s.coarse.clear();
   st.coarsen = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

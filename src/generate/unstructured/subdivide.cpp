@@ -187,13 +187,23 @@ void check_subdivide_input(const SurfaceMesh& mesh, const SubdivideOptions& opti
     if (Id{id} >= mesh.num_points()) throw InputError("subdivide: a triangle refers to point " + std::to_string(id) + " out of range");
 }
 
+SurfaceMesh subdivided_zero_levels(const SurfaceMesh& mesh) {
+  SurfaceMesh out = mesh;
+  out.offsets.clear();
+  return out;
+}
+
+UnstructuredGrid subdivided_zero_levels(const UnstructuredGrid& tets) {
+  UnstructuredGrid out = tets;
+  out.offsets.clear();
+  out.cell_types.clear();
+  out.uniform_type = CellType::Tetra;
+  return out;
+}
+
 SurfaceMesh subdivide(const SurfaceMesh& mesh, const SubdivideOptions& options) {
   check_subdivide_input(mesh, options);
-  if (options.levels == 0) {
-    SurfaceMesh out = mesh;
-    out.offsets.clear();
-    return out;
-  }
+  if (options.levels == 0) return subdivided_zero_levels(mesh);
   // The first level reads the input in place (its cells are triangles, so
   // offsets, if any, are 3 c); no copy of it is held beside the output.
   report_level(0, options.levels);
@@ -215,13 +225,7 @@ void check_subdivide_input(const UnstructuredGrid& tets, const SubdivideOptions&
 
 UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions& options) {
   check_subdivide_input(tets, options);
-  if (options.levels == 0) {
-    UnstructuredGrid out = tets;
-    out.offsets.clear();
-    out.cell_types.clear();
-    out.uniform_type = CellType::Tetra;
-    return out;
-  }
+  if (options.levels == 0) return subdivided_zero_levels(tets);
   // The first level reads the input in place (validated tets: 4 corners
   // per cell whatever the offsets say), as the surface's does.
   report_level(0, options.levels);

@@ -5,8 +5,6 @@
 // mirroring, bit for bit.
 #include <gtest/gtest.h>
 
-#include <random>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,12 +13,15 @@
 #include "keymesh/device/cpu_device.hpp"
 #include "keymesh/generate/contour/contour_device.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
+#include "device_contour_cases.hpp"
 #include "same_bits.hpp"
 
 using namespace keymesh;
 using generate::ContourNormals;
 using generate::ContourOptions;
 using generate::DeviceKeys;
+using keymesh::testing::describe;
+using keymesh::testing::noise;
 
 namespace {
 
@@ -40,12 +41,6 @@ std::vector<ContourOptions> option_sets(const std::vector<double>& isovalues) {
   return sets;
 }
 
-std::string describe(const ContourOptions& opt, const std::string& what) {
-  std::ostringstream s;
-  s << what << " normals " << int(opt.normals) << " curvature " << opt.curvature << " scalars " << opt.scalars;
-  return s.str();
-}
-
 // The grid's description without its samples (a DeviceVolume's grid): the
 // entry must read them from the pointer it is given.
 ImageGrid description_of(const ImageGrid& g) {
@@ -62,18 +57,6 @@ Arrays resident_arrays(const ImageGrid& g, const ContourOptions& opt, generate::
 SurfaceMesh to_host(Arrays&& a, const ImageGrid& g, const ContourOptions& opt) {
   generate::ContourStats st;
   return generate::device_contour::to_host_mesh(device::CpuDevice{}, std::move(a), g.name, opt, st);
-}
-
-ImageGrid noise(Id nx, Id ny, Id nz, unsigned seed) {
-  ImageGrid g;
-  g.allocate({nx, ny, nz}, ScalarType::Float32);
-  g.origin = {-1.5, 0.25, 3.0};
-  g.spacing = {0.5, 1.25, 0.75};
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
-  return g;
 }
 
 // What the Python module's mirror_axes does to a host mesh of reversed axes:

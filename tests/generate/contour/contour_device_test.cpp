@@ -8,12 +8,12 @@
 #include <cmath>
 #include <limits>
 #include <random>
-#include <sstream>
 #include <string>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "device_contour_cases.hpp"
 #include "same_bits.hpp"
 
 using namespace keymesh;
@@ -21,6 +21,8 @@ using generate::ContourNormals;
 using generate::ContourOptions;
 using generate::ContourWeld;
 using generate::DeviceKeys;
+using keymesh::testing::describe;
+using keymesh::testing::noise;
 
 namespace {
 
@@ -40,12 +42,6 @@ std::vector<ContourOptions> option_sets(const std::vector<double>& isovalues) {
   bare.scalars = false;
   sets.push_back(bare);
   return sets;
-}
-
-std::string describe(const ContourOptions& opt, const std::string& what) {
-  std::ostringstream s;
-  s << what << " normals " << int(opt.normals) << " curvature " << opt.curvature << " scalars " << opt.scalars;
-  return s.str();
 }
 
 // The device path (narrow and wide keys) against both KEY-REDUCE plans of
@@ -68,18 +64,6 @@ Id expect_device_equals_cpu(const ImageGrid& g, const std::vector<double>& isova
     triangles = fast.num_cells();
   }
   return triangles;
-}
-
-ImageGrid noise(Id nx, Id ny, Id nz, unsigned seed) {
-  ImageGrid g;
-  g.allocate({nx, ny, nz}, ScalarType::Float32);
-  g.origin = {-1.5, 0.25, 3.0};
-  g.spacing = {0.5, 1.25, 0.75};
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
-  return g;
 }
 
 template <class T>

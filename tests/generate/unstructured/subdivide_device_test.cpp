@@ -101,21 +101,6 @@ TEST(DeviceSubdivide, RefusesWhatTheCpuRefuses) {
 
 namespace {
 
-void expect_same_grid(const UnstructuredGrid& device, const UnstructuredGrid& cpu, const std::string& what) {
-  EXPECT_EQ(keymesh::testing::first_difference(device.points, cpu.points), "") << what;
-  ASSERT_EQ(device.connectivity.wide(), cpu.connectivity.wide()) << what;
-  if (cpu.connectivity.wide())
-    EXPECT_EQ(keymesh::testing::first_difference(device.connectivity.wide_values(), cpu.connectivity.wide_values()), "")
-        << what;
-  else
-    EXPECT_EQ(keymesh::testing::first_difference(device.connectivity.narrow(), cpu.connectivity.narrow()), "") << what;
-  EXPECT_EQ(device.uniform_type, cpu.uniform_type) << what;
-  EXPECT_EQ(device.offsets, cpu.offsets) << what;
-  EXPECT_EQ(device.cell_types, cpu.cell_types) << what;
-  keymesh::testing::expect_same_fields(device.point_fields, cpu.point_fields, what + " point fields");
-  keymesh::testing::expect_same_fields(device.cell_fields, cpu.cell_fields, what + " cell fields");
-}
-
 // A grid's 5-tet split with a second point field and a cell field.
 UnstructuredGrid tets_with_fields(const ImageGrid& grid) {
   UnstructuredGrid g = generate::tetrahedralize5(grid);
@@ -137,8 +122,8 @@ TEST(DeviceSubdivide, TetsEqualTheCpuPath) {
   for (int levels : {0, 1, 2}) {
     SubdivideOptions o;
     o.levels = levels;
-    expect_same_grid(generate::subdivide_on_cpu_device(g, o), generate::subdivide(g, o),
-                     "tets levels " + std::to_string(levels));
+    keymesh::testing::expect_same_bits(generate::subdivide_on_cpu_device(g, o), generate::subdivide(g, o),
+                                       "tets levels " + std::to_string(levels));
   }
   // Left-handed input tets: children reoriented as on the CPU.
   for (Id t = 0; t < g.num_cells(); t += 3) {
@@ -146,15 +131,15 @@ TEST(DeviceSubdivide, TetsEqualTheCpuPath) {
     g.connectivity.set(static_cast<std::size_t>(4 * t), g.connectivity[4 * t + 1]);
     g.connectivity.set(static_cast<std::size_t>(4 * t + 1), a);
   }
-  expect_same_grid(generate::subdivide_on_cpu_device(g, SubdivideOptions{}), generate::subdivide(g, SubdivideOptions{}),
-                   "left-handed tets");
+  keymesh::testing::expect_same_bits(generate::subdivide_on_cpu_device(g, SubdivideOptions{}),
+                                     generate::subdivide(g, SubdivideOptions{}), "left-handed tets");
 }
 
 TEST(DeviceSubdivide, TetKeysNeeding64BitsEqualTheCpuPath) {
   const UnstructuredGrid g = generate::tetrahedralize5(generate::spherical_distance(42));
   ASSERT_GT(g.num_points(), 1 << 16);
-  expect_same_grid(generate::subdivide_on_cpu_device(g, SubdivideOptions{}), generate::subdivide(g, SubdivideOptions{}),
-                   "64-bit tet keys");
+  keymesh::testing::expect_same_bits(generate::subdivide_on_cpu_device(g, SubdivideOptions{}),
+                                     generate::subdivide(g, SubdivideOptions{}), "64-bit tet keys");
 }
 
 TEST(DeviceSubdivide, TetsRefuseWhatTheCpuRefuses) {

@@ -395,16 +395,23 @@ struct MirrorBack {
   }
 };
 
-// Dispatches on the key width the key range needs and the grid's sample
-// type; the samples are grid.data() (host memory, or the device's when the
-// caller says so: contour_arrays_on's view).
-template <class D, class F>
-decltype(auto) visit_contour_types(const ImageGrid& grid, const ContourOptions& options, DeviceKeys keys, F&& f) {
+// contour()'s input checks (check_contour_input) and the device path's
+// refusals, then the arrays (stats reset first) of the grid's samples,
+// grid.data(): host memory, or the device's when `resident` (contour_arrays_on's
+// view). Dispatches on the grid's sample type and the key width the key range
+// needs (64-bit where the caller asks for it).
+template <class D>
+ContourArrays<D> checked_contour_arrays(const D& d, const ImageGrid& grid, bool resident, const ContourOptions& options,
+                                        ContourStats& st, DeviceKeys keys) {
+  check_contour_input(grid, options);
+  check_device_contour_options(options);
+  st = ContourStats{};
   const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * options.isovalues.size();
   const bool narrow = keys == DeviceKeys::Narrowest && key_range <= std::numeric_limits<std::uint32_t>::max();
   return visit_scalars(grid, [&](const auto* samples) {
-    if (narrow) return f(std::uint32_t{}, samples);
-    return f(std::uint64_t{}, samples);
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
+    if (narrow) return contour_arrays_typed<D, std::uint32_t, T>(d, grid, samples, resident, options, st);
+    return contour_arrays_typed<D, std::uint64_t, T>(d, grid, samples, resident, options, st);
   });
 }
 
@@ -415,17 +422,10 @@ decltype(auto) visit_contour_types(const ImageGrid& grid, const ContourOptions& 
 template <class D>
 SurfaceMesh contour_on(const D& d, const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
                        DeviceKeys keys = DeviceKeys::Narrowest) {
-  check_contour_input(grid, options);
-  check_device_contour_options(options);
   ContourStats local;
   ContourStats& st = stats ? *stats : local;
-  st = ContourStats{};
-  return device_contour::visit_contour_types<D>(grid, options, keys, [&](auto key_tag, const auto* samples) {
-    using K = decltype(key_tag);
-    using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
-    auto arrays = device_contour::contour_arrays_typed<D, K, T>(d, grid, samples, false, options, st);
-    return device_contour::to_host_mesh(d, std::move(arrays), grid.name, options, st);
-  });
+  auto arrays = device_contour::checked_contour_arrays(d, grid, false, options, st, keys);
+  return device_contour::to_host_mesh(d, std::move(arrays), grid.name, options, st);
 }
 
 // The device path on samples already in the device's memory (a non-owning
@@ -443,16 +443,8 @@ device_contour::ContourArrays<D> contour_arrays_on(const D& d, const ImageGrid& 
   view.dims = grid.dims, view.origin = grid.origin, view.spacing = grid.spacing;
   view.type = grid.type, view.name = grid.name;
   view.external = static_cast<const std::byte*>(samples);
-  check_contour_input(view, options);
-  check_device_contour_options(options);
   ContourStats local;
-  ContourStats& st = stats ? *stats : local;
-  st = ContourStats{};
-  return device_contour::visit_contour_types<D>(view, options, keys, [&](auto key_tag, const auto* typed) {
-    using K = decltype(key_tag);
-    using T = std::remove_cv_t<std::remove_pointer_t<decltype(typed)>>;
-    return device_contour::contour_arrays_typed<D, K, T>(d, view, typed, true, options, st);
-  });
+  return device_contour::checked_contour_arrays(d, view, true, options, stats ? *stats : local, keys);
 }
 
 // Mirrors the arrays back (device_contour::MirrorBack) on the device.

@@ -43,4 +43,10 @@ UnstructuredGrid subdivide(const UnstructuredGrid& tets, const SubdivideOptions&
 // subdivide(tets)'s input checks alone (the same InputError), for the device path.
 void check_subdivide_input(const UnstructuredGrid& tets, const SubdivideOptions& options);
 
+// subdivide()'s output for --levels 0, shared by the host and device paths:
+// the input, its cells in the output's layout (uniform triangles, resp.
+// uniform tetrahedra).
+SurfaceMesh subdivided_zero_levels(const SurfaceMesh& mesh);
+UnstructuredGrid subdivided_zero_levels(const UnstructuredGrid& tets);
+
 }  // namespace keymesh::generate

@@ -63,6 +63,9 @@ struct EdgePoints {
   }
 };
 
+// Tuple of new point e (`components` of them) from its edge's two
+// (subdivision::midpoint_tuple; `renormalize` for a normals field): the
+// surfaces' point fields and the tets'.
 struct EdgeTuples {
   const std::uint64_t* edge_key;
   EdgeKeys ek;
@@ -211,21 +214,6 @@ struct TetEdgeKeys {
   }
 };
 
-// Tuple of new point e (k components) as the mean, in float, of its edge's.
-struct TetEdgeTuples {
-  const std::uint64_t* edge_key;
-  EdgeKeys ek;
-  Id old_points;
-  int components;
-  const float* in;
-  float* out;
-  KEYMESH_HD void operator()(Id e) const {
-    const auto ab = ek.decode(edge_key[e]);
-    subdivision::midpoint_tuple(in + components * static_cast<Id>(ab.first), in + components * static_cast<Id>(ab.second),
-                                components, false, out + components * (old_points + e));
-  }
-};
-
 template <class I, class O>
 struct TetChildren {
   const I* conn;
@@ -261,7 +249,7 @@ UnstructuredGrid subdivide_tets_once(const D& d, const UnstructuredGrid& m, cons
     const float* values = device::readable(d, in.data(), static_cast<Id>(in.size()), holder);
     auto out = d.template allocate<float>(k * (V + E));
     device::copy(d, values, k * V, out.data());
-    d.for_each(E, TetEdgeTuples{g.unique_keys.data(), ek, V, k, values, out.data()});
+    d.for_each(E, EdgeTuples{g.unique_keys.data(), ek, V, k, false, values, out.data()});
     return out;
   };
   auto points = grown(m.points, 3);
@@ -283,20 +271,23 @@ UnstructuredGrid subdivide_tets_once(const D& d, const UnstructuredGrid& m, cons
   return out;
 }
 
+// subdivide()'s input checks (a surface or tets), then the refusal of what
+// the device path lacks: VERTEX-WELD.
+template <class Mesh>
+void check_input(const Mesh& mesh, const SubdivideOptions& options) {
+  check_subdivide_input(mesh, options);
+  if (options.weld != SubdivideWeld::KeyReduce)
+    throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
+}
+
 }  // namespace device_subdivide
 
 // The device path on device `d`: subdivide()'s input checks, then every
 // level on the device.
 template <class D>
 SurfaceMesh subdivide_on(const D& d, const SurfaceMesh& mesh, const SubdivideOptions& options) {
-  check_subdivide_input(mesh, options);
-  if (options.weld != SubdivideWeld::KeyReduce)
-    throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
-  if (options.levels == 0) {
-    SurfaceMesh out = mesh;
-    out.offsets.clear();
-    return out;
-  }
+  device_subdivide::check_input(mesh, options);
+  if (options.levels == 0) return subdivided_zero_levels(mesh);
   device_subdivide::Surface<D> cur = device_subdivide::upload(d, mesh);
   for (int level = 0; level < options.levels; ++level) cur = device_subdivide::subdivide_once(d, cur, options.scheme);
   return device_subdivide::download(d, std::move(cur));
@@ -305,16 +296,8 @@ SurfaceMesh subdivide_on(const D& d, const SurfaceMesh& mesh, const SubdivideOpt
 // Tets 1 -> 8 on device `d`: subdivide(tets)'s checks, then level after level.
 template <class D>
 UnstructuredGrid subdivide_on(const D& d, const UnstructuredGrid& tets, const SubdivideOptions& options) {
-  check_subdivide_input(tets, options);
-  if (options.weld != SubdivideWeld::KeyReduce)
-    throw InputError("subdivide: VERTEX-WELD (--weld vertexweld) is not available on the device path (use --backend cpu)");
-  if (options.levels == 0) {
-    UnstructuredGrid out = tets;
-    out.offsets.clear();
-    out.cell_types.clear();
-    out.uniform_type = CellType::Tetra;
-    return out;
-  }
+  device_subdivide::check_input(tets, options);
+  if (options.levels == 0) return subdivided_zero_levels(tets);
   auto once = [&](const UnstructuredGrid& m) {
     if (m.connectivity.wide()) return device_subdivide::subdivide_tets_once(d, m, m.connectivity.wide_values().data());
     return device_subdivide::subdivide_tets_once(d, m, m.connectivity.narrow().data());
