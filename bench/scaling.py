@@ -226,7 +226,7 @@ def write_doc(rows, mach, path, reps, elapsed):
         f.write("\n".join(L))
 
 
-def replace_ops_part(doc, lines, mach, reps, elapsed):
+def replace_ops_part(doc, lines, mach, reps, elapsed, load):
     """docs/SCALING.md with its labels-and-coarsening part (from its heading to the Reproduce line) replaced."""
     text = open(doc).read() if os.path.exists(doc) else ""
     head = "# Labels and coarsening under mpirun"
@@ -236,8 +236,8 @@ def replace_ops_part(doc, lines, mach, reps, elapsed):
     keep = text[:cut] if cut >= 0 else text
     lines = list(lines)
     lines.insert(1, f"Measured by `bench/scaling.py --ops-only` on {mach['date']}: {mach['cpu']}, {mach['cores']} cores, "
-                    f"one OpenMP thread per rank, median of {reps} run(s), load average beside each row in "
-                    "bench/results/scaling_ops.jsonl; the run took "
+                    f"one OpenMP thread per rank, median of {reps} run(s), load average {load[0]:.1f} to {load[1]:.1f} "
+                    "(rows with their load in bench/results/scaling_ops.jsonl, not kept in git); the run took "
                     f"{elapsed / 60:.1f} min. Peak memory does not depend on the load; seconds do.\n")
     with open(doc, "w") as f:
         f.write(keep + "\n".join(lines) + "\nReproduce: `make scaling` (needs openmpi-bin and mricron-data).\n")
@@ -254,7 +254,8 @@ def ops_only(keymesh, args, t0):
     with open(os.path.join(HERE, "results", "scaling_ops.jsonl"), "w") as f:
         for r in rows:
             f.write(json.dumps({**r, "machine": mach}) + "\n")
-    replace_ops_part(args.doc, ops_doc(rows), mach, args.reps, time.time() - t0)
+    load = (min(r["loadavg"] for r in rows), max(r["loadavg"] for r in rows))
+    replace_ops_part(args.doc, ops_doc(rows), mach, args.reps, time.time() - t0, load)
     print(f"scaling: wrote {args.doc}'s labels and coarsening part in {(time.time() - t0) / 60:.1f} min")
 
 
