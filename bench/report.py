@@ -636,6 +636,22 @@ class Report:
                 "per label; the smoothing stage alone below. Medians after a warm-up.", "",
                 table(["case", "thr", "seconds", "points", "triangles", "VTK / keymesh", "load"], body), ""]
 
+    def lods_table(self):
+        rows = [r for r in self.rows if r.get("bench") == "lods"]
+        if not rows:
+            return []
+        body = [[r["case"], r["threads"], f"{r['seconds']:.3f}", f"{r['mvox_per_s']:.1f}",
+                 " / ".join(f"{t:,}" for t in r["triangles"]),
+                 f"{r['labels_stage']:.3f}" if "labels_stage" in r else "",
+                 f"{r['write_stage']:.3f}" if "write_stage" in r else "", r["loadavg"]] for r in rows]
+        return ["## Multi-resolution label meshes (issue 37)", "",
+                "`bench/lods_bench.py`: the AAL atlas to Neuroglancer's multi-resolution format "
+                "(`keymesh labels --format precomputed`, 32^3 chunks, Draco) in a fresh process per run, against "
+                "vtkDiscreteFlyingEdges3D and vtkQuadricDecimation to keymesh's per-level triangle counts in one "
+                "process (no smoothing, no file). Medians after a warm-up.", "",
+                table(["case", "thr", "seconds", "Mvox/s", "triangles per level", "labels stage s", "write stage s",
+                       "load"], body), ""]
+
     def dense_table(self):
         rows = [r for r in self.rows if r.get("bench") == "dense" and "median" in r]
         if not rows:
@@ -692,7 +708,7 @@ class Report:
                                "`bench/ops_bench --op tet24`: face centres keyed by the face (KEY-REDUCE) or welded "
                                "by coordinates (VERTEX-WELD); run up to 128³ (49 M tets). Data-independent: the "
                                "MRI row times the same grid shape.", PAPER_T4) +
-                 self.table5_6() + self.dense_table() + self.labels_table() + self.losses() + self.skipped() + self.figures(plots))
+                 self.table5_6() + self.dense_table() + self.labels_table() + self.lods_table() + self.losses() + self.skipped() + self.figures(plots))
         # The whole file is this run's; measurements by hand live in
         # docs/results/NOTES.md, which no bench run touches.
         parts += ["## Measured by hand", "",

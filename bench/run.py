@@ -236,6 +236,12 @@ def main():
                               str(threads_all), "--repeat", str(peer_reps)], {"PYTHONPATH": os.path.join(a.build, "python")})
         except SystemExit as e:
             rows.append(skipped("labels_bench.py", str(e)))
+        progress("multi-resolution label meshes: the AAL atlas to 3 levels of detail vs VTK (lods_bench.py)")
+        try:
+            rows += run_json([SYSTEM_PYTHON, os.path.join(HERE, "lods_bench.py"), "--json", "--keymesh",
+                              os.path.join(a.build, "keymesh"), "--threads", str(threads_all), "--repeat", str(peer_reps)])
+        except SystemExit as e:
+            rows.append(skipped("lods_bench.py", str(e)))
         rows += dense_rows(bench, a.build, threads_all, peer_reps, work, a.quick)
         progress("pictures (Figures 8-10), rendered off-screen with VTK")
         rows += figures(keymesh, work, "head128" if a.quick else names[-1], a.quick)
