@@ -116,7 +116,8 @@ def _compute(result, compute: bool, scheduler):
 def contour(array: Any, iso: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
             origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0), normals: Optional[str] = "average",
             weld: str = "keyreduce", coarsen: bool = False, curvature: bool = False, scalars: bool = True,
-            order: str = "C", threads: int = 1, compute: bool = True, scheduler: Any = None) -> Mesh:
+            order: str = "C", threads: int = 1, compute: bool = True, scheduler: Any = None,
+            history: bool = False) -> Mesh:
     """Isosurface of a chunked 3-D Dask array: ``keymesh.contour`` of the
     whole array, bit for bit, made chunk by chunk.
 
@@ -142,6 +143,11 @@ def contour(array: Any, iso: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0
         threads: worker threads of each chunk's task (default 1: the
             scheduler runs tasks side by side); the merge uses all cores.
         compute: False returns a dask Delayed whose result is the Mesh.
+        history: point_data["history_key"] (uint64, the point's grid edge in
+            the whole array) and point_data["history_t"] (float32), as
+            keymesh.contour(..., history=True) gives them (docs/HISTORY.md):
+            a chunk's keys are the whole grid's, so every chunking gives the
+            same arrays. Not with coarsen (a coarse point has no one edge).
         scheduler: passed to dask's compute (default: dask's, or the
             dask.distributed client in force).
 
@@ -169,17 +175,20 @@ def contour(array: Any, iso: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0
     if not all(np.isfinite(isovalues)):
         raise ValueError(f"iso must be finite, got {iso!r}")
     threads = _threads(threads)
+    if history and coarsen:
+        raise ValueError("history with coarsen: a coarsened point merges crossings of several edges, so it has "
+                         "no one edge and t (docs/HISTORY.md)")
     ghost = 1 if normals == "gradient" or curvature else 0
     chunk_kwargs = dict(isovalues=isovalues, spacing=spacing, origin=origin, whole=tuple(array.shape),
                         normals="gradient" if normals == "gradient" else "none", curvature=bool(curvature),
-                        scalars=bool(scalars), coarse_keys=bool(coarsen), threads=threads)
+                        scalars=bool(scalars), coarse_keys=bool(coarsen), history=bool(history), threads=threads)
     task = dask.delayed(_contour_chunk, pure=True)
     pieces = []
     for box, first, own_lo, own_hi in _boxes(array, ghost):
         kwargs = dict(chunk_kwargs, first=tuple(first), own_lo=tuple(own_lo), own_hi=tuple(own_hi))
         pieces.append(task(array[box], order, kwargs))
     merge_kwargs = dict(whole=tuple(array.shape), isovalues=len(isovalues), average=normals == "average",
-                        coarsen=bool(coarsen), threads=0)
+                        coarsen=bool(coarsen), history=bool(history), threads=0)
     return _compute(dask.delayed(_merge_contour, pure=True)(pieces, merge_kwargs), compute, scheduler)
 
 

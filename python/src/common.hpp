@@ -240,6 +240,10 @@ generate::ContourOptions contour_options(const std::vector<double>& isovalues, c
 // and 3-component point fields, two corners of every triangle swapped so
 // that it still faces lower values (contour.cpp).
 void mirror_axes(SurfaceMesh& mesh);
+// A C-ordered array's history_key (3 * grid point + axis + isovalue * 3N,
+// docs/HISTORY.md) renumbered from the library's reversed axes, whose dims
+// are library_dims, into the array's own (contour.cpp).
+void keys_in_array_frame(std::vector<std::uint64_t>& keys, const std::array<Id, 3>& library_dims);
 
 // SurfaceMesh <-> (points, cells, offsets, point_data, cell_data) of a Python Mesh.
 // to_python moves every array into numpy without a copy; triangle meshes

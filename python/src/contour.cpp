@@ -68,22 +68,6 @@ struct OwnArrays {
   }
 };
 
-// history_key in the array's own frame: a C-order array was contoured with
-// its axes reversed (grid point i + nz (j + ny k) is array index (k, j, i)
-// of shape (nx, ny, nz), grid axis a its axis 2 - a), and the key the user
-// gets is the one keymesh contour gives the same samples as a volume file:
-// 3 * (x + nx (y + ny z)) + axis + isovalue index * 3N, x fastest.
-void keys_in_array_frame(std::vector<std::uint64_t>& keys, const ImageGrid& grid) {
-  const std::uint64_t gx = grid.dims[0], gy = grid.dims[1], gz = grid.dims[2];
-  const std::uint64_t per_iso = 3 * gx * gy * gz;
-  parallel::for_each(static_cast<Id>(keys.size()), [&](Id p) {
-    const std::uint64_t key = keys[p], iso = key / per_iso, edge = key % per_iso;
-    const std::uint64_t point = edge / 3, axis = edge % 3;
-    const std::uint64_t i = point % gx, j = point / gx % gy, k = point / (gx * gy);
-    keys[p] = iso * per_iso + 3 * (k + gz * (j + gy * i)) + (2 - axis);
-  });
-}
-
 // The grid contour reads: a Volume's own, or a view of a numpy array's samples.
 const ImageGrid& contour_grid(const py::object& volume, const py::object& spacing, const py::object& origin,
                               ArrayVolume& view) {
@@ -154,7 +138,7 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
       swap_corners(own.connectivity.data(), own.triangles);
     } else if (view.reversed) {
       mirror_axes(mesh);
-      if (history) keys_in_array_frame(history_key, grid);
+      if (history) keys_in_array_frame(history_key, {grid.dims[0], grid.dims[1], grid.dims[2]});
     }
     mirror_s = seconds_since(t0);
     progress::report("contour", 1.0);
@@ -170,6 +154,24 @@ py::tuple contour(const py::object& volume, const std::vector<double>& isovalues
 }
 
 }  // namespace
+
+// history_key in the array's own frame: a C-order array was contoured with
+// its axes reversed (grid point i + nx (j + ny k) of the library's dims
+// (nx, ny, nz) is array index (k, j, i), grid axis a its axis 2 - a), and the
+// key the user gets is the one keymesh contour gives the same samples as a
+// volume file: 3 * (x + nx' (y + ny' z)) + axis + isovalue index * 3N, x
+// fastest in the array's own axes.
+void keys_in_array_frame(std::vector<std::uint64_t>& keys, const std::array<Id, 3>& library_dims) {
+  const auto gx = static_cast<std::uint64_t>(library_dims[0]), gy = static_cast<std::uint64_t>(library_dims[1]);
+  const auto gz = static_cast<std::uint64_t>(library_dims[2]);
+  const std::uint64_t per_iso = 3 * gx * gy * gz;
+  parallel::for_each(static_cast<Id>(keys.size()), [&](Id p) {
+    const std::uint64_t key = keys[p], iso = key / per_iso, edge = key % per_iso;
+    const std::uint64_t point = edge / 3, axis = edge % 3;
+    const std::uint64_t i = point % gx, j = point / gx % gy, k = point / (gx * gy);
+    keys[p] = iso * per_iso + 3 * (k + gz * (j + gy * i)) + (2 - axis);
+  });
+}
 
 generate::ContourOptions contour_options(const std::vector<double>& isovalues, const std::string& normals,
                                          const std::string& weld, bool coarsen, bool curvature, bool scalars,

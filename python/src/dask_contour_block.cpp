@@ -163,7 +163,7 @@ Triple to_library(const Triple& t, bool reversed) { return reversed ? Triple{t[2
 py::tuple contour_block(const py::object& block, const std::vector<double>& isovalues, const py::object& spacing,
                         const py::object& origin, const Triple& first, const Triple& whole, const Triple& own_lo,
                         const Triple& own_hi, const std::string& normals, bool curvature, bool scalars,
-                        bool coarse_keys, int threads) {
+                        bool coarse_keys, bool history, int threads) {
   check_threads(threads);
   const ArrayVolume view = view_array_volume(block, spacing, origin, VolumeOrder::CAsReversedAxes,
                                              {"dask_contour_block", 1, "dask_contour_block: the chunk must be a 3-D numpy array"});
@@ -181,6 +181,7 @@ py::tuple contour_block(const py::object& block, const std::vector<double>& isov
     throw py::value_error("dask_contour_block: averaged normals are summed by the merge, not per chunk");
   opt.curvature = curvature;
   opt.scalars = scalars;
+  opt.history = history;  // history_t: positions are the whole grid's, so is t
   opt.reversed_axes = view.reversed;
   for (int a = 0; a < 3; ++a) opt.position_offset[a] = f.first[a];
   BlockPiece piece = run_released(threads, [&] {
@@ -207,7 +208,7 @@ void register_dask_contour_block(py::module_& m) {
   m.def("dask_contour_block", &contour_block, py::arg("block"), py::arg("isovalues"), py::arg("spacing"),
         py::arg("origin"), py::arg("first"), py::arg("whole"), py::arg("own_lo"), py::arg("own_hi"),
         py::arg("normals") = "none", py::arg("curvature") = false, py::arg("scalars") = true,
-        py::arg("coarse_keys") = false, py::arg("threads") = 1,
+        py::arg("coarse_keys") = false, py::arg("history") = false, py::arg("threads") = 1,
         "One Dask chunk's contour with the whole grid's keys: (keys, coarse keys or None, points, cells, "
         "triangle ranks, [(field name, values)], reversed axes). Use keymesh.dask.contour.");
 }

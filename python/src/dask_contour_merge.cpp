@@ -126,16 +126,22 @@ SurfaceMesh weld(const Concatenated& all, const WholeGrid& w, std::vector<std::u
 }
 
 py::tuple contour_merge(const py::list& pieces, const std::array<Id, 3>& whole, Id isovalues, bool average,
-                        bool coarsen, int threads) {
+                        bool coarsen, bool history, int threads) {
   check_threads(threads);
   const Concatenated all = concatenate(pieces, coarsen);
   // whole: the array's dims; the pieces' keys are the library's (reversed for a C-ordered array).
   const int x = all.reversed ? 2 : 0, z = all.reversed ? 0 : 2;
   const WholeGrid w{static_cast<std::uint64_t>(whole[x]), static_cast<std::uint64_t>(whole[1]),
                     static_cast<std::uint64_t>(whole[z]), static_cast<std::uint64_t>(isovalues)};
+  std::vector<std::uint64_t> history_key;
   SurfaceMesh mesh = run_released(threads, [&] {
     std::vector<std::uint64_t> point_keys, nearest;
     SurfaceMesh m = weld(all, w, point_keys, nearest);
+    if (history) {  // a point's history_key is its whole-grid edge key
+      history_key = point_keys;
+      if (all.reversed)
+        keys_in_array_frame(history_key, {static_cast<Id>(w.nx), static_cast<Id>(w.ny), static_cast<Id>(w.nz)});
+    }
     if (average && !coarsen)
       m.point_fields.push_back(generate::blocked_average_normals(
           m, generate::layer_blocks(m, point_keys, generate::LayerGrid{w.nx * w.ny, static_cast<Id>(w.nz) - 1, isovalues})));
@@ -146,14 +152,19 @@ py::tuple contour_merge(const py::list& pieces, const std::array<Id, 3>& whole, 
     if (all.reversed) mirror_axes(m);
     return m;
   });
-  return mesh_to_python(std::move(mesh));
+  py::tuple parts = mesh_to_python(std::move(mesh));
+  if (history) {
+    const auto n = static_cast<py::ssize_t>(history_key.size());
+    parts[3].cast<py::dict>()["history_key"] = adopt(std::move(history_key), {n});
+  }
+  return parts;
 }
 
 }  // namespace
 
 void register_dask_contour_merge(py::module_& m) {
   m.def("dask_contour_merge", &contour_merge, py::arg("pieces"), py::arg("whole"), py::arg("isovalues"),
-        py::arg("average") = false, py::arg("coarsen") = false, py::arg("threads") = 0,
+        py::arg("average") = false, py::arg("coarsen") = false, py::arg("history") = false, py::arg("threads") = 0,
         "The pieces of dask_contour_block welded into the whole grid's contour: (points, cells, None, "
         "point_data, cell_data). Use keymesh.dask.contour.");
 }

@@ -176,3 +176,35 @@ def test_refused():
         keymesh.dask.contour_labels(vol)
     with pytest.raises(ValueError, match="method"):
         keymesh.dask.contour_labels(da.zeros((4, 4, 4), dtype=np.uint8, chunks=2), method="marching")
+
+
+@pytest.mark.parametrize("order", ["C", "F"])
+@pytest.mark.parametrize("chunks", [((5, 1, 10, 7), (19,), (2, 9, 10)), 1, (23, 19, 21)])
+def test_history_equals_in_memory(order, chunks):
+    """history=True: history_key and history_t of every chunking are the
+    in-memory call's (keys of the whole array, not of a chunk), and they give
+    every point back through docs/HISTORY.md's formula (its origin keeps
+    coordinates away from zero, where the formula's bound is looser)."""
+    field = smooth_random_field((23, 19, 21), seed=5)
+    vol = np.asfortranarray(field) if order == "F" else np.ascontiguousarray(field)
+    iso = [0.0, 0.05]
+    kw = dict(spacing=(0.7, 1.1, 1.3), origin=(3.0, 2.5, 2.0), normals="none", history=True)
+    want = keymesh.contour(vol, iso, **kw)
+    got = keymesh.dask.contour(da.from_array(field, chunks=chunks), iso, order=order, **kw)
+    assert want.n_points > 1000
+    assert_same(got, want)
+    key, t = got.point_data["history_key"], got.point_data["history_t"]
+    assert key.dtype == np.uint64 and t.dtype == np.float32
+    n = np.prod(vol.shape)
+    edge = key % (3 * n)
+    point, axis = edge // 3, edge % 3
+    ijk = np.stack(np.unravel_index(point, vol.shape, order="F"), axis=1).astype(np.float64)
+    ijk[np.arange(len(ijk)), axis] += t.astype(np.float64)
+    again = (np.array([3.0, 2.5, 2.0]) + np.array([0.7, 1.1, 1.3]) * ijk).astype(np.float32)
+    assert np.array_equal(again, got.points)
+
+
+def test_history_refused_with_coarsen():
+    vol = sphere_field((9, 9, 9), center=(4.2, 4.1, 3.9))
+    with pytest.raises(ValueError, match="history with coarsen"):
+        keymesh.dask.contour(da.from_array(vol, chunks=4), 3.5, coarsen=True, history=True)
