@@ -2,14 +2,17 @@
 // multi-resolution meshes (generate/labels/labels_multilod.hpp cuts and
 // coarsens the surfaces, io/neuroglancer.hpp writes them). Four routes:
 //   one call           every chunk's pieces, kept under DIR/chunks/, and the output;
-//   --chunk I J K      one chunk's pieces into DIR/chunks/ (a task);
+//   --chunk I J K      one chunk's pieces into DIR/chunks/ (a task; it holds only
+//                      its box's planes where the format can be read by planes);
 //   --assemble         the output from every chunk's kept pieces (after the tasks);
 //   --update CHUNKS    the chunks an edit inside CHUNKS can reach recomputed,
 //                      then the segments they held before or hold now rewritten.
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "keymesh/core/error.hpp"
@@ -17,6 +20,7 @@
 #include "keymesh/generate/labels/labels_stream.hpp"
 #include "keymesh/io/label_table.hpp"
 #include "keymesh/io/neuroglancer.hpp"
+#include "keymesh/io/plane_source.hpp"
 #include "keymesh/io/volume_io.hpp"
 #include "labels_job.hpp"
 
@@ -125,12 +129,57 @@ Counts write_everything(const LabelsJob& job, const ImageGrid& grid, const ng::M
   return n;
 }
 
-// --chunk I J K: the chunk's pieces from its box and halo.
-Counts write_one_chunk(const LabelsJob& job, const ImageGrid& grid, const ng::MultilodLayout& layout,
-                       StageTimer& timer) {
+// A chunk task's input: the volume read plane by plane where its format
+// allows (raw, NRRD, NIfTI, VTI, gzip-compressed ones too, Zarr, DICOM:
+// io/plane_source.hpp), so that the task holds only the planes of its box;
+// null otherwise (read whole).
+std::unique_ptr<PlaneSource> chunk_planes(const LabelsJob& job, const io::RawOptions* raw) {
+  if (!job.precomputed.chunk_given) return nullptr;
+  try {
+    return io::open_volume_planes(job.input, raw);
+  } catch (const InputError&) {
+    return nullptr;  // read_volume reads it whole, or says what is wrong with it
+  }
+}
+
+// The box's samples: its planes read, their rows cropped to the box.
+ImageGrid read_box(PlaneSource& planes, const generate::MultilodBox& box) {
+  const ImageGrid& h = planes.header();
+  const std::size_t size = scalar_size(h.type);
+  const std::size_t row = static_cast<std::size_t>(h.dims[0]) * size, plane = row * static_cast<std::size_t>(h.dims[1]);
+  std::vector<std::byte> slab(plane * static_cast<std::size_t>(box.dims[2]));
+  planes.read_planes(box.lo[2], box.dims[2], slab.data());
+  ImageGrid out;
+  out.allocate(box.dims, h.type);
+  out.name = h.name;
+  const std::size_t out_row = static_cast<std::size_t>(box.dims[0]) * size;
+  for (Id k = 0; k < box.dims[2]; ++k)
+    for (Id j = 0; j < box.dims[1]; ++j)
+      std::memcpy(out.bytes.data() + static_cast<std::size_t>(k * box.dims[1] + j) * out_row,
+                  slab.data() + static_cast<std::size_t>(k) * plane + static_cast<std::size_t>(box.lo[1] + j) * row +
+                      static_cast<std::size_t>(box.lo[0]) * size,
+                  out_row);
+  return out;
+}
+
+// --chunk I J K: the chunk's pieces from its box and halo (`planes`: read
+// just those; else `grid` holds the whole volume).
+Counts write_one_chunk(const LabelsJob& job, const ImageGrid& grid, PlaneSource* planes,
+                       const ng::MultilodLayout& layout, StageTimer& timer, std::uint64_t& samples_read) {
   const std::array<Id, 3> c = job.precomputed.chunk;
+  const auto o = multilod_options(job);
+  ImageGrid box_samples;
+  const generate::MultilodBox box = naming_input(job, [&] { return generate::multilod_chunk_box(grid.dims, o, c); });
+  if (planes) {
+    check_labels_memory(job, grid, {0, box.dims[2] + 2});
+    box_samples = timer.run("read", [&] { return read_box(*planes, box); });
+    samples_read = static_cast<std::uint64_t>(grid.dims[0] * grid.dims[1] * box.dims[2]);
+  }
   std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
-    return naming_input(job, [&] { return generate::multilod_chunk_pieces(grid, multilod_options(job), c); });
+    return naming_input(job, [&] {
+      return planes ? generate::multilod_box_pieces(box_samples, grid.dims, box, o, c)
+                    : generate::multilod_chunk_pieces(grid, o, c);
+    });
   }));
   Counts n;
   n.add(pieces);
@@ -173,15 +222,18 @@ int run_labels_precomputed(const LabelsJob& job) {
   StageTimer timer;
   const PrecomputedJob& pc = job.precomputed;
   const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
-  const ImageGrid grid = timer.run("read", [&] { return io::read_volume(job.input, raw); });
-  check_labels_memory(job, grid, {0, generate::LabelSlabs::total_rows(grid)});
+  const std::unique_ptr<PlaneSource> planes = chunk_planes(job, raw);
+  // With planes, `grid` is the header only (no samples): the task reads its box.
+  const ImageGrid grid = timer.run("read", [&] { return planes ? planes->header() : io::read_volume(job.input, raw); });
+  std::uint64_t samples_read = planes ? 0 : static_cast<std::uint64_t>(grid.num_points());
+  if (!planes) check_labels_memory(job, grid, {0, generate::LabelSlabs::total_rows(grid)});
   const auto o = multilod_options(job);
   const generate::MultilodGrid g = naming_input(job, [&] { return generate::multilod_grid(grid.dims, o); });
   const ng::MultilodLayout layout = layout_of(grid, g, pc.sharded);
   Counts n;
   const char* route = "one call";
   if (pc.chunk_given) {
-    n = write_one_chunk(job, grid, layout, timer), route = "chunk";
+    n = write_one_chunk(job, grid, planes.get(), layout, timer, samples_read), route = "chunk";
   } else if (pc.assemble) {
     timer.run("assemble", [&] { ng::assemble_multilod(job.output, layout, {}, segment_names(job)); });
     route = "assemble";
@@ -198,7 +250,8 @@ int run_labels_precomputed(const LabelsJob& job) {
             {"method", job.method}, {"smooth", job.options.smooth_iterations}, {"lods", pc.lods},
             {"chunk_shape", g.chunk_shape}, {"chunks", g.chunks}, {"halo", generate::multilod_halo(o)},
             {"sharded", pc.sharded}, {"segments", n.segments.size()}, {"pieces", n.pieces},
-            {"chunks_written", n.chunks}, {"triangles_per_lod", n.triangles_per_lod}, {"dims", grid.dims}});
+            {"chunks_written", n.chunks}, {"triangles_per_lod", n.triangles_per_lod}, {"dims", grid.dims},
+            {"samples_read", samples_read}});
   finish_report(job.common, std::move(r), job.threads, timer, PeakRss::Include);
   return 0;
 }

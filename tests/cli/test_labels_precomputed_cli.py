@@ -160,6 +160,39 @@ def test_chunk_tasks_and_assembly_equal_one_call():
     same_tree(ONE, tasks)
 
 
+def test_chunk_task_reads_only_its_planes():
+    """A chunk task of a raw NRRD reads the planes of its box (chunk + halo)
+    only (report: samples_read); its pieces and the assembled output equal
+    one call's, and a gzip NRRD (inflated in order, only the box's planes
+    kept) gives the same bytes."""
+    tall = atlas((20, 18, 80), 3)
+    raw = write_nrrd(os.path.join(D, "tall.nrrd"), tall)
+    gz = os.path.join(D, "tall_gz.nrrd")
+    with open(raw, "rb") as f:
+        header, samples = f.read().split(b"\n\n", 1)
+    import gzip
+    with open(gz, "wb") as f:
+        f.write(header.replace(b"encoding: raw", b"encoding: gzip") + b"\n\n" + gzip.compress(samples))
+    one, tasks = os.path.join(D, "tall_one"), os.path.join(D, "tall_tasks")
+    precomputed(one, volume=raw)
+    whole = tall.size
+    halo = 4 + 4  # --smooth 4 (surface nets) + 4
+    for k in range(6):  # (80 + 16) // 16 chunks along z
+        for j in range(2):
+            for i in range(2):
+                r_path = os.path.join(D, "task.json")
+                precomputed(tasks, "--chunk", i, j, k, "--report", r_path, volume=raw)
+                lo, hi = max(16 * k - 1 - halo, 0), min(16 * (k + 1) - 1 + halo, 79)
+                assert report(r_path)["samples_read"] == 20 * 18 * (hi - lo + 1) < whole, (k, report(r_path))
+    precomputed(tasks, "--assemble", volume=raw)
+    same_tree(one, tasks)
+    from_gz, from_raw = os.path.join(D, "tall_gz_task"), os.path.join(D, "tall_raw_task")
+    precomputed(from_gz, "--chunk", 1, 0, 3, "--report", os.path.join(D, "gz.json"), volume=gz)
+    precomputed(from_raw, "--chunk", 1, 0, 3, volume=raw)
+    same_tree(from_gz, from_raw)
+    assert report(os.path.join(D, "gz.json"))["samples_read"] == 20 * 18 * (63 + 8 - (48 - 1 - 8) + 1)
+
+
 def test_update_equals_full_run():
     edited = VOLUME.copy()
     edited[0:15, 0:15, 0:15] = 0  # chunk (0, 0, 0) covers samples -1 .. 14
@@ -232,6 +265,8 @@ check("a label table names the segments (segment_properties)", test_label_names)
 check("neighbouring nodes agree on their common face in the decoded output", test_faces_agree_in_decoded_output)
 check("3 levels, 32^3 chunks, discrete-mc, sharded: faces agree", test_issue_settings_discrete_mc_sharded)
 check("chunk tasks + --assemble are byte-identical to one call", test_chunk_tasks_and_assembly_equal_one_call)
+check("a chunk task reads only its box's planes (raw and gzip NRRD): the same bytes",
+      test_chunk_task_reads_only_its_planes)
 check("--update equals a full run on the edited volume", test_update_equals_full_run)
 check("refusals name the cause", test_refusals)
 finish()

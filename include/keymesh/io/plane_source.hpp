@@ -15,11 +15,12 @@ namespace keymesh::io {
 // bytes plus the samples the dims declare.
 std::unique_ptr<PlaneSource> open_raw_planes(const std::string& path, const RawOptions& options);
 
-// Raw (when `raw` is given), or a .nrrd/.nhdr or .nii whose samples are
-// stored uncompressed: the header parsed with the reader's checks, then
-// planes read at their offset (NIfTI scl_slope/scl_inter applied as
-// read_volume applies them). Anything else, or gzip-compressed samples:
-// InputError naming the file and what to do.
+// Raw (when `raw` is given), or a .nrrd/.nhdr, .nii(.gz) or .vti: the header
+// parsed with the reader's checks, then planes read at their offset, or
+// inflated in order when the samples are gzip-compressed (GzipPlaneReader:
+// planes before the first asked for are inflated and dropped) (NIfTI
+// scl_slope/scl_inter applied as read_volume applies them). Any other
+// compression or format: InputError naming the file and what to do.
 // A folder is a Zarr array or OME-Zarr image (io/zarr.hpp) when it holds
 // Zarr metadata, else a DICOM series (io/dicom.hpp).
 std::unique_ptr<PlaneSource> open_volume_planes(const std::string& path, const RawOptions* raw);

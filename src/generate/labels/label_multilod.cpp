@@ -199,22 +199,43 @@ std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const Multilod
   return pieces;
 }
 
-std::vector<MultilodPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
-                                              const std::array<Id, 3>& chunk) {
-  const MultilodGrid mg = multilod_grid(grid.dims, options);
+MultilodBox multilod_chunk_box(const std::array<Id, 3>& whole_dims, const MultilodOptions& options,
+                               const std::array<Id, 3>& chunk) {
+  const MultilodGrid mg = multilod_grid(whole_dims, options);
   for (int a = 0; a < 3; ++a)
     if (chunk[a] < 0 || chunk[a] >= mg.chunks[a])
       throw InputError("labels: chunk " + std::to_string(chunk[0]) + " " + std::to_string(chunk[1]) + " " +
                        std::to_string(chunk[2]) + " is outside the grid of " + std::to_string(mg.chunks[0]) + " x " +
                        std::to_string(mg.chunks[1]) + " x " + std::to_string(mg.chunks[2]) + " chunks");
   const Id halo = multilod_halo(options);
-  std::array<Id, 3> lo{}, dims{};
+  MultilodBox box;
   for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max<Id>(static_cast<Id>(mg.plane(a, chunk[a])) - halo, 0);
-    const Id hi = std::min<Id>(static_cast<Id>(mg.plane(a, chunk[a] + 1)) + halo, grid.dims[a] - 1);
-    dims[a] = hi - lo[a] + 1;
+    box.lo[a] = std::max<Id>(static_cast<Id>(mg.plane(a, chunk[a])) - halo, 0);
+    const Id hi = std::min<Id>(static_cast<Id>(mg.plane(a, chunk[a] + 1)) + halo, whole_dims[a] - 1);
+    box.dims[a] = hi - box.lo[a] + 1;
   }
-  const ImageGrid sub = crop(grid, lo, dims);
+  return box;
+}
+
+std::vector<MultilodPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
+                                              const std::array<Id, 3>& chunk) {
+  const MultilodBox box = multilod_chunk_box(grid.dims, options, chunk);
+  return multilod_box_pieces(crop(grid, box.lo, box.dims), grid.dims, box, options, chunk);
+}
+
+std::vector<MultilodPiece> multilod_box_pieces(const ImageGrid& box_samples, const std::array<Id, 3>& whole_dims,
+                                            const MultilodBox& box, const MultilodOptions& options,
+                                            const std::array<Id, 3>& chunk) {
+  const MultilodGrid mg = multilod_grid(whole_dims, options);
+  if (box_samples.dims != box.dims)
+    throw InputError("labels: a chunk task's samples do not match its box (internal)");
+  ImageGrid sub;  // a view of the box's samples in index space (sample i at box.lo + i)
+  sub.dims = box.dims;
+  sub.type = box_samples.type;
+  sub.name = box_samples.name;
+  sub.external = static_cast<const std::byte*>(box_samples.data());
+  for (int a = 0; a < 3; ++a) sub.origin[a] = static_cast<double>(box.lo[a]), sub.spacing[a] = 1.0;
+  const std::array<Id, 3>& lo = box.lo;
   LabelOptions opt = options.labels;
   if (!opt.labels.empty()) {  // the selected labels the sub-volume holds
     const std::vector<std::int64_t> held = detail::distinct_labels(sub);

@@ -119,6 +119,21 @@ std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const Multilod
 std::vector<MultilodPiece> multilod_chunk_pieces(const ImageGrid& grid, const MultilodOptions& options,
                                               const std::array<Id, 3>& chunk);
 
+// The samples a chunk task reads: [lo, lo + dims) of the whole volume (the
+// chunk's box grown by multilod_halo, inside the volume). InputError for a
+// chunk outside the grid of chunks.
+struct MultilodBox {
+  std::array<Id, 3> lo{}, dims{};
+};
+MultilodBox multilod_chunk_box(const std::array<Id, 3>& whole_dims, const MultilodOptions& options,
+                               const std::array<Id, 3>& chunk);
+// multilod_chunk_pieces from the box's samples alone (box_samples: box.dims,
+// sample i at whole-volume index box.lo + i), so a task can read just those
+// planes of a large volume.
+std::vector<MultilodPiece> multilod_box_pieces(const ImageGrid& box_samples, const std::array<Id, 3>& whole_dims,
+                                            const MultilodBox& box, const MultilodOptions& options,
+                                            const std::array<Id, 3>& chunk);
+
 // The chunks whose pieces can change when the samples inside `changed`
 // chunks change: those within the halo's reach, in increasing (z, y, x).
 std::vector<std::array<Id, 3>> multilod_affected_chunks(const MultilodGrid& grid, const MultilodOptions& options,
