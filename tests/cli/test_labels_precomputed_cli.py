@@ -186,6 +186,20 @@ def test_chunk_task_reads_only_its_planes():
                 assert report(r_path)["samples_read"] == 20 * 18 * (hi - lo + 1) < whole, (k, report(r_path))
     precomputed(tasks, "--assemble", volume=raw)
     same_tree(one, tasks)
+    # The final step in batches (--memory-limit: each segment's pieces then a
+    # batch of their own), unsharded and sharded: the same bytes.
+    precomputed(tasks, "--assemble", "--memory-limit", "1K", "--report", os.path.join(D, "batches.json"), volume=raw)
+    same_tree(one, tasks)
+    segments = len(ngp.segment_ids(one))
+    assert segments > 3 and report(os.path.join(D, "batches.json"))["assemble_batches"] == segments
+    sharded_one, sharded_tasks = os.path.join(D, "tall_sharded_one"), os.path.join(D, "tall_sharded_tasks")
+    precomputed(sharded_one, "--sharded", volume=raw)
+    for k in range(6):
+        for j in range(2):
+            for i in range(2):
+                precomputed(sharded_tasks, "--sharded", "--chunk", i, j, k, volume=raw)
+    precomputed(sharded_tasks, "--sharded", "--assemble", "--memory-limit", "1K", volume=raw)
+    same_tree(sharded_one, sharded_tasks)
     from_gz, from_raw = os.path.join(D, "tall_gz_task"), os.path.join(D, "tall_raw_task")
     precomputed(from_gz, "--chunk", 1, 0, 3, "--report", os.path.join(D, "gz.json"), volume=gz)
     precomputed(from_raw, "--chunk", 1, 0, 3, volume=raw)
