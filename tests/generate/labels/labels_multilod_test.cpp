@@ -67,7 +67,7 @@ std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>>
   std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>> out;
   if (!p) return out;
   for (std::size_t i = 0; i < p->point_keys.size(); ++i)
-    if (p->points[3 * i + axis] == x && (p->lod == 0 || p->point_keys[i] >> 61 <= 3))
+    if (p->points[3 * i + axis] == x)
       out.emplace(p->point_keys[i], bits(p->points[3 * i]), bits(p->points[3 * i + 1]), bits(p->points[3 * i + 2]));
   return out;
 }
