@@ -75,20 +75,17 @@ ONE = os.path.join(D, "one")
 precomputed(ONE, "--report", os.path.join(D, "one.json"))
 
 
-def face_points(fragment, axis, plane, chunk_shape):
-    """Decoded points of a fragment on the plane `axis` = plane; with
-    `chunk_shape`, only those off every lod-0 chunk edge line in the face
-    (points shared by four chunks: agreed at level 0 only, see
-    docs/decisions/labels-multilod-chunks.md)."""
+def face_points(fragment, axis, plane):
+    """Decoded points of a fragment on the plane `axis` = plane, those on the
+    face's border lines (lod-0 chunk edge lines, shared by four chunks)
+    included."""
     p = fragment.points
-    on = p[:, axis] == plane
-    if chunk_shape is not None:
-        for a in range(3):
-            if a != axis:
-                # lod-0 planes at -1 + k * shape (inside a node, quantized: within a step)
-                off = (p[:, a] + 1) / chunk_shape[a]
-                on &= np.abs(off - np.round(off)) * chunk_shape[a] > 1e-3
-    return {tuple(x) for x in p[on]}
+    return {tuple(x) for x in p[p[:, axis] == plane]}
+
+
+def noise(shape, seed):
+    """White noise of labels 1-4: thin, touching, self-touching regions that cross every chunk edge line."""
+    return np.random.default_rng(seed).integers(1, 5, shape).astype(np.uint8)
 
 
 def test_info_and_fragments():
@@ -110,10 +107,10 @@ def test_info_and_fragments():
 
 def faces_agree(out):
     """At every level, two neighbouring nodes' decoded points on their common
-    face are the same; at level 0 the face's edge lines included. Returns how
-    many points were compared."""
+    face are the same, the face's edge lines included. Returns how many points
+    were compared, and how many of them lie on a lod-0 chunk edge line."""
     info = ngp.read_info(out)
-    compared = 0
+    compared = on_lines = 0
     for s in ngp.segment_ids(out):
         mesh = ngp.read_segment(out, s, info)
         nodes = {(f.lod, tuple(f.position)): f for f in mesh.fragments if f.size}
@@ -124,18 +121,37 @@ def faces_agree(out):
                 nxt[axis] += 1
                 g = nodes.get((lod, tuple(nxt)))
                 plane = origin[axis] + size[axis]
-                lines = None if lod == 0 else mesh.manifest.chunk_shape
-                mine = face_points(f, axis, plane, lines)
-                theirs = face_points(g, axis, plane, lines) if g else set()
+                mine = face_points(f, axis, plane)
+                theirs = face_points(g, axis, plane) if g else set()
                 assert mine == theirs, (f"segment {s} lod {lod} node {pos} axis {axis}: "
                                         f"{len(mine ^ theirs)} of {len(mine | theirs)} points differ: "
                                         f"{sorted(mine - theirs)[:3]} / {sorted(theirs - mine)[:3]}")
                 compared += len(mine)
-    return compared
+                on_lines += sum(1 for x in mine if on_edge_line(x, axis, mesh.manifest.chunk_shape))
+    return compared, on_lines
+
+
+def on_edge_line(point, axis, chunk_shape):
+    """Whether a decoded point of the plane normal to `axis` lies on a lod-0
+    chunk plane along another axis too (planes at -1 + k * shape)."""
+    return any(((point[a] + 1) / chunk_shape[a]).is_integer() for a in range(3) if a != axis)
 
 
 def test_faces_agree_in_decoded_output():
-    assert faces_agree(ONE) > 100
+    compared, on_lines = faces_agree(ONE)
+    assert compared > 100 and on_lines > 10, (compared, on_lines)
+
+
+def test_noise_faces_agree_on_edge_lines():
+    """Noise volumes, both methods, 4 levels, 8^3 chunks: at every level the
+    face point sets agree, the points on chunk edge lines included."""
+    for seed, method in ((3, "surfacenets"), (4, "discrete-mc"), (5, "surfacenets")):
+        vol = write_nrrd(os.path.join(D, f"noise{seed}.nrrd"), noise((20, 19, 21), seed))
+        out = os.path.join(D, f"noise{seed}")
+        run("labels", vol, "-o", out, "--format", "precomputed", "--lods", "4", "--chunk-shape", "8", "8", "8",
+            "--method", method, "--smooth", str(seed))
+        compared, on_lines = faces_agree(out)
+        assert compared > 1000 and on_lines > 100, (seed, method, compared, on_lines)
 
 
 def test_issue_settings_discrete_mc_sharded():
@@ -146,7 +162,8 @@ def test_issue_settings_discrete_mc_sharded():
         "--method", "discrete-mc", "--sharded")
     info = ngp.read_info(out)
     assert info["@type"] == "neuroglancer_multilod_draco" and "sharding" in info, info
-    assert faces_agree(out) > 100
+    compared, on_lines = faces_agree(out)
+    assert compared > 100 and on_lines > 10, (compared, on_lines)
 
 
 def test_chunk_tasks_and_assembly_equal_one_call():
@@ -278,6 +295,7 @@ check("info declares the multilod format; every fragment decodes", test_info_and
 check("a label table names the segments (segment_properties)", test_label_names)
 check("neighbouring nodes agree on their common face in the decoded output", test_faces_agree_in_decoded_output)
 check("3 levels, 32^3 chunks, discrete-mc, sharded: faces agree", test_issue_settings_discrete_mc_sharded)
+check("noise volumes, both methods, 4 levels: faces agree on chunk edge lines too", test_noise_faces_agree_on_edge_lines)
 check("chunk tasks + --assemble are byte-identical to one call", test_chunk_tasks_and_assembly_equal_one_call)
 check("a chunk task reads only its box's planes (raw and gzip NRRD): the same bytes",
       test_chunk_task_reads_only_its_planes)
