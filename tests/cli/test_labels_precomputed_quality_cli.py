@@ -14,31 +14,11 @@ import re
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, run, tempdir  # noqa: E402
+from kmtest import check, finish, run, tempdir, precomputed_reader, write_label_nrrd  # noqa: E402
 
-try:
-    import numpy as np
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(77)
-import neuroglancer_precomputed as ngp  # noqa: E402
-
-if not ngp.DRACO_DECODER:
-    print("skipped: draco_decoder not found (Debian package draco)")
-    sys.exit(77)
-
+np, ngp = precomputed_reader()
 D = tempdir()
 AAL = "/usr/share/mricron/templates/aal.nii.gz"  # Debian's mricron package
-
-
-def write_nrrd(path, volume):
-    """volume[x, y, z] (uint8) as a raw NRRD, x fastest."""
-    header = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: {volume.shape[0]} {volume.shape[1]} {volume.shape[2]}\n"
-              "spacings: 1 1 1\nencoding: raw\n\n")
-    with open(path, "wb") as f:
-        f.write(header.encode())
-        f.write(volume.astype(np.uint8).tobytes(order="F"))
-    return path
 
 
 def ellipsoids(shape, seed):
@@ -136,7 +116,7 @@ def expect_clean(out, volume, segments, *options):
 
 
 def test_ellipsoids():
-    volume = write_nrrd(os.path.join(D, "ellipsoids.nrrd"), ellipsoids((72, 72, 40), 0))
+    volume = write_label_nrrd(os.path.join(D, "ellipsoids.nrrd"), ellipsoids((72, 72, 40), 0))
     out = os.path.join(D, "ellipsoids")
     grid = ["--lods", "3", "--chunk-shape", "16", "16", "16"]
     run("labels", volume, "-o", out, "--format", "precomputed", *grid)
