@@ -9,30 +9,10 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, report, run, tempdir  # noqa: E402
+from kmtest import check, finish, report, run, tempdir, precomputed_reader, write_label_nrrd  # noqa: E402
 
-try:
-    import numpy as np
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(77)
-import neuroglancer_precomputed as ngp  # noqa: E402
-
-if not ngp.DRACO_DECODER:
-    print("skipped: draco_decoder not found (Debian package draco)")
-    sys.exit(77)
-
+np, ngp = precomputed_reader()
 D = tempdir()
-
-
-def write_nrrd(path, volume):
-    """volume[x, y, z] (uint8) as a raw NRRD, x fastest."""
-    header = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: {volume.shape[0]} {volume.shape[1]} {volume.shape[2]}\n"
-              "spacings: 1 1 1\nencoding: raw\n\n")
-    with open(path, "wb") as f:
-        f.write(header.encode())
-        f.write(volume.astype(np.uint8).tobytes(order="F"))
-    return path
 
 
 def atlas(shape, seed):
@@ -50,7 +30,7 @@ def atlas(shape, seed):
 
 
 VOLUME = atlas((40, 36, 30), 1)
-IN = write_nrrd(os.path.join(D, "atlas.nrrd"), VOLUME)
+IN = write_label_nrrd(os.path.join(D, "atlas.nrrd"), VOLUME)
 GRID = ["--lods", "3", "--chunk-shape", "16", "16", "16", "--smooth", "4"]
 
 
@@ -156,7 +136,7 @@ def test_noise_faces_agree_on_edge_lines():
 
 def test_issue_settings_discrete_mc_sharded():
     """The issue's check: 3 levels of detail, 32^3 chunks; here with discrete-mc and --sharded."""
-    big = write_nrrd(os.path.join(D, "big.nrrd"), atlas((70, 66, 60), 2))
+    big = write_label_nrrd(os.path.join(D, "big.nrrd"), atlas((70, 66, 60), 2))
     out = os.path.join(D, "big")
     run("labels", big, "-o", out, "--format", "precomputed", "--lods", "3", "--chunk-shape", "32", "32", "32",
         "--method", "discrete-mc", "--sharded")
@@ -228,7 +208,7 @@ def test_update_equals_full_run():
     edited = VOLUME.copy()
     edited[0:15, 0:15, 0:15] = 0  # chunk (0, 0, 0) covers samples -1 .. 14
     edited[3:11, 3:11, 3:11] = 9  # a new label there
-    new = write_nrrd(os.path.join(D, "edited.nrrd"), edited)
+    new = write_label_nrrd(os.path.join(D, "edited.nrrd"), edited)
     updated = os.path.join(D, "updated")
     precomputed(updated)
     precomputed(updated, "--update", "0,0,0", "--report", os.path.join(D, "update.json"), volume=new)
@@ -267,7 +247,7 @@ def test_label_names():
     a malformed table is refused by file and line with nothing written."""
     d = os.path.join(D, "named")
     os.makedirs(d, exist_ok=True)
-    vol = write_nrrd(os.path.join(d, "atlas.nrrd"), VOLUME)
+    vol = write_label_nrrd(os.path.join(d, "atlas.nrrd"), VOLUME)
     with open(vol + ".txt", "w") as f:
         f.write("# id name\n0\tBackground\n" + "".join(f"{i} region_{i} {i + 1000}\n" for i in range(1, 9)))
     out = os.path.join(d, "ng")
