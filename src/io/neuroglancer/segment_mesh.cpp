@@ -6,6 +6,7 @@
 #include "keymesh/core/error.hpp"
 #include "coincident_points.hpp"
 #include "collinear_triangles.hpp"
+#include "face_points.hpp"
 #include "manifest.hpp"
 #include "node_fragment.hpp"
 #include "octree_nodes.hpp"
@@ -56,6 +57,7 @@ SegmentFiles encode_segment(const MultilodLayout& layout, std::uint64_t segment,
       if (!node_pieces.empty()) {
         QuantizedMesh mesh = node_fragment(node_pieces, node_box(layout, lod, node), layout.vertex_quantization_bits);
         merge_coincident_points(mesh);
+        settle_face_points(mesh, layout.vertex_quantization_bits);
         flip_collinear_triangles(mesh);
         fragment = encode_draco_fragment(mesh);
       }
