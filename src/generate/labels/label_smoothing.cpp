@@ -25,7 +25,7 @@
 
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
-#include "label_kernels.hpp"
+#include "keymesh/generate/labels/label_kernels.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {

@@ -10,7 +10,7 @@
 
 #include "keymesh/generate/labels/labels.hpp"
 #include "keymesh/mesh/image_grid.hpp"
-#include "label_kernels.hpp"
+#include "keymesh/generate/labels/label_kernels.hpp"
 
 namespace keymesh::generate::detail {
 

@@ -16,7 +16,7 @@
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
-#include "label_kernels.hpp"
+#include "keymesh/generate/labels/label_kernels.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {

@@ -22,9 +22,9 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/device/algorithms.hpp"
 #include "keymesh/device/key_groups.hpp"
+#include "keymesh/parallel/bits_needed.hpp"
 #include "keymesh/generate/unstructured/dual.hpp"
 #include "keymesh/generate/unstructured/dual_kernels.hpp"
-#include "keymesh/parallel/radix_sort.hpp"
 
 namespace keymesh::generate {
 

@@ -9,7 +9,7 @@
 #include "keymesh/core/device.hpp"
 #include "keymesh/core/types.hpp"
 
-namespace keymesh::generate::detail::label_kernels {
+namespace keymesh::generate::label_kernels {
 
 // The four cells around an edge along `axis`, as offsets along the next two
 // axes (u, v), counter-clockwise seen from +axis.
@@ -105,4 +105,4 @@ struct SmoothStep {
   }
 };
 
-}  // namespace keymesh::generate::detail::label_kernels
+}  // namespace keymesh::generate::label_kernels
