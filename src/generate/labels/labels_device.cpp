@@ -4,6 +4,7 @@
 // with contour_labels() bit for bit.
 #include "keymesh/generate/labels/labels_device.hpp"
 
+#include <chrono>
 #include <string>
 #include <utility>
 
@@ -23,11 +24,13 @@ void check_device_label_options(const LabelOptions& options) {
 
 ScannedLabels scan_labels_for_device(const ImageGrid& grid, const LabelOptions& options) {
   detail::check_label_options(options);
+  const auto t0 = std::chrono::steady_clock::now();
   detail::LabelVolume vol = detail::scan_labels(grid, options);
   ScannedLabels sc{detail::placement(vol), std::move(vol.index), std::vector<float>(vol.values.size()),
-                   vol.distinct_in_grid, static_cast<Id>(vol.selected.size())};
+                   vol.distinct_in_grid, static_cast<Id>(vol.selected.size()), 0.0};
   // As finish_label_mesh writes boundary_labels: each value cast to float.
   for (std::size_t l = 0; l < vol.values.size(); ++l) sc.value_of[l] = static_cast<float>(vol.values[l]);
+  sc.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sc;
 }
 

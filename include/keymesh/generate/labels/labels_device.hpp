@@ -49,6 +49,7 @@ struct ScannedLabels {
   std::vector<std::uint16_t> index;
   std::vector<float> value_of;
   Id distinct_labels = 0, surfaces = 0;  // LabelStats'
+  double seconds = 0;                    // the scan's, on the host's clock
 };
 ScannedLabels scan_labels_for_device(const ImageGrid& grid, const LabelOptions& options);
 
@@ -351,10 +352,11 @@ SurfaceMesh contour_labels_on(const D& d, const ImageGrid& grid, const LabelOpti
   LabelStats local;
   LabelStats& st = stats ? *stats : local;
   st = LabelStats{};
-  auto mark = d.begin_stage(&st.scan);
   const ScannedLabels sc = scan_labels_for_device(grid, options);
+  st.scan = sc.seconds;
   st.distinct_labels = sc.distinct_labels;
   st.surfaces = sc.surfaces;
+  auto mark = d.begin_stage(&st.generate);  // the upload
   typename D::template Array<std::uint16_t> index_holder;
   const Volume vol{device::readable(d, sc.index.data(), static_cast<Id>(sc.index.size()), index_holder),
                    {sc.place.dims[0], sc.place.dims[1], sc.place.dims[2]}};
