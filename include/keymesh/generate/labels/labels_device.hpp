@@ -3,8 +3,8 @@
 // (keymesh/device/), written once for every device:
 //   the label volume scanned on the host (distinct labels, the padded
 //   index volume: scan_labels_for_device) and uploaded ->
-//   map: per padded point, how many of its 3 edges join two labels ->
-//   exclusive scan (64-bit) -> each such edge's quad, 4 cell keys as two
+//   map: per row of padded points, how many of their edges join two labels
+//   -> exclusive scan (64-bit) -> each such edge's quad, 4 cell keys as two
 //   triangles, and its label pair (label_kernels::network_quad, the CPU
 //   path's) ->
 //   weld: KEY-REDUCE's grouping (stable radix sort + run-length: points in
@@ -80,42 +80,49 @@ struct Volume {
   }
 };
 
-// Per padded point: its edges whose two labels differ (a quad each).
+// Per row of padded points (y fastest, then z; point i of row r is
+// r * dims[0] + i): the quads of its points' edges whose two labels differ.
+// A thread per row, as the CPU path counts: no per-point counts or offsets
+// (8 bytes a voxel) held.
 struct EdgeCounts {
   Volume vol;
-  std::uint8_t* counts;
-  KEYMESH_HD void operator()(Id p) const {
-    Id g[3];
+  Id* counts;
+  KEYMESH_HD void operator()(Id r) const {
+    Id n = 0, g[3];
     std::uint16_t end[3];
-    const std::uint16_t a = vol.ends(p, g, end);
-    counts[p] = static_cast<std::uint8_t>((end[0] != a) + (end[1] != a) + (end[2] != a));
+    for (Id p = r * vol.dims[0]; p < (r + 1) * vol.dims[0]; ++p) {
+      const std::uint16_t a = vol.ends(p, g, end);
+      n += (end[0] != a) + (end[1] != a) + (end[2] != a);
+    }
+    counts[r] = n;
   }
 };
 
-// Per padded point, from its first quad: the quads' keys (6 each) and the
-// label pair of their two triangles, in grid order then axis order (the
-// CPU path's soup).
+// Per row, from its first quad: the quads' keys (6 each) and the label pair
+// of their two triangles, in grid order then axis order (the CPU path's
+// soup).
 template <class K>
 struct WriteQuads {
   Volume vol;
   const Id* first_quad;
   K* keys;
   std::uint32_t* pair;
-  KEYMESH_HD void operator()(Id p) const {
-    Id g[3];
-    std::uint16_t end[3];
-    const std::uint16_t a = vol.ends(p, g, end);
+  KEYMESH_HD void operator()(Id r) const {
     const Id cx = vol.dims[0] - 1;
     const Id cstride[3] = {1, cx, cx * (vol.dims[1] - 1)};
-    const Id cell = g[0] + g[1] * cstride[1] + g[2] * cstride[2];
-    Id t = 2 * first_quad[p];
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::uint16_t b = end[axis];
-      if (a == b) continue;
-      label_kernels::network_quad(cell, cstride, axis, a < b, keys + 3 * t);
-      const std::uint16_t lo = a < b ? a : b, hi = a < b ? b : a;
-      pair[t] = pair[t + 1] = (std::uint32_t{lo} << 16) | hi;
-      t += 2;
+    Id t = 2 * first_quad[r], g[3];
+    std::uint16_t end[3];
+    for (Id p = r * vol.dims[0]; p < (r + 1) * vol.dims[0]; ++p) {
+      const std::uint16_t a = vol.ends(p, g, end);
+      const Id cell = g[0] + g[1] * cstride[1] + g[2] * cstride[2];
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::uint16_t b = end[axis];
+        if (a == b) continue;
+        label_kernels::network_quad(cell, cstride, axis, a < b, keys + 3 * t);
+        const std::uint16_t lo = a < b ? a : b, hi = a < b ? b : a;
+        pair[t] = pair[t + 1] = (std::uint32_t{lo} << 16) | hi;
+        t += 2;
+      }
     }
   }
 };
@@ -243,17 +250,16 @@ template <class D, class K>
 Surface<D> network(const D& d, const ScannedLabels& sc, const Volume& vol, LabelStats& st) {
   Surface<D> s;
   auto mark = d.begin_stage(&st.generate);
-  const Id n = vol.dims[0] * vol.dims[1] * vol.dims[2];
-  auto counts = d.template allocate<std::uint8_t>(n);
-  d.for_each(n, EdgeCounts{vol, counts.data()});
-  auto first_quad = d.template allocate<Id>(n);
-  const Id quads = d.exclusive_scan(counts.data(), first_quad.data(), n);
+  const Id rows = vol.dims[1] * vol.dims[2];
+  auto first_quad = d.template allocate<Id>(rows);
+  d.for_each(rows, EdgeCounts{vol, first_quad.data()});
+  const Id quads = d.exclusive_scan(first_quad.data(), first_quad.data(), rows);
   s.triangles = 2 * quads;
   if (3 * s.triangles > Id{std::numeric_limits<std::uint32_t>::max()})
     throw LimitError("labels: " + std::to_string(s.triangles) + " triangles exceed the supported 1431655765");
   auto keys = d.template allocate<K>(3 * s.triangles);
   s.pair = d.template allocate<std::uint32_t>(s.triangles);
-  d.for_each(n, WriteQuads<K>{vol, first_quad.data(), keys.data(), s.pair.data()});
+  d.for_each(rows, WriteQuads<K>{vol, first_quad.data(), keys.data(), s.pair.data()});
   d.end_stage(mark);
   st.soup_corners += 3 * s.triangles;
   mark = d.begin_stage(&st.weld);
