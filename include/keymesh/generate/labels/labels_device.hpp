@@ -21,7 +21,6 @@
 // (InputError): --method discrete-mc, --per-label, --coarsen. The scan stays
 // on the host: its table of distinct values is small, the index volume
 // 2 bytes a voxel.
-#include <array>
 #include <cstdint>
 #include <limits>
 #include <string>
