@@ -61,16 +61,21 @@ std::vector<char> cancel_opposite(const std::vector<Corners>& tris) {
 
 }  // namespace
 
-void merge_coincident_points(QuantizedMesh& mesh) {
+std::vector<std::uint8_t> merge_coincident_points(QuantizedMesh& mesh) {
   const std::vector<std::uint32_t> first = first_at_position(mesh);
   bool merged = false;
   for (std::size_t i = 0; i < first.size() && !merged; ++i) merged = first[i] != i;
-  if (!merged) return;
+  if (!merged) return {};
+  std::vector<std::uint8_t> in_group(first.size(), 0), touched(first.size(), 0);
+  for (std::size_t i = 0; i < first.size(); ++i)
+    if (first[i] != i) in_group[i] = in_group[first[i]] = 1;
   std::vector<std::array<std::uint32_t, 3>> tris;  // as written (their orientation), on merged points
   std::vector<Corners> sets;
   for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
     const std::array<std::uint32_t, 3> c{first[mesh.triangles[t]], first[mesh.triangles[t + 1]],
                                          first[mesh.triangles[t + 2]]};
+    if (in_group[c[0]] || in_group[c[1]] || in_group[c[2]])
+      for (std::uint32_t p : c) touched[p] = 1;
     if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;  // collapsed
     tris.push_back(c);
     sets.push_back(corners(c.data()));
@@ -81,8 +86,10 @@ void merge_coincident_points(QuantizedMesh& mesh) {
     if (keep[t])
       for (std::uint32_t c : tris[t]) used[c] = 1;
   QuantizedMesh out;
+  std::vector<std::uint8_t> out_touched;
   for (std::size_t i = 0; i < first.size(); ++i) {
     if (!used[i]) continue;
+    out_touched.push_back(touched[i]);
     index[i] = static_cast<std::uint32_t>(out.positions.size() / 3);
     out.positions.insert(out.positions.end(), mesh.positions.begin() + static_cast<std::ptrdiff_t>(3 * i),
                          mesh.positions.begin() + static_cast<std::ptrdiff_t>(3 * i + 3));
@@ -91,6 +98,7 @@ void merge_coincident_points(QuantizedMesh& mesh) {
     if (keep[t])
       for (std::uint32_t c : tris[t]) out.triangles.push_back(index[c]);
   mesh = std::move(out);
+  return out_touched;
 }
 
 }  // namespace keymesh::io::neuroglancer

@@ -12,6 +12,9 @@
 // the same points on it (same quantized values), so they merge them alike,
 // and a point off the chunk planes keeps two quantization steps from them,
 // so it never merges with a face point.
+#include <cstdint>
+#include <vector>
+
 #include "draco_fragment.hpp"
 
 namespace keymesh::io::neuroglancer {
@@ -19,7 +22,9 @@ namespace keymesh::io::neuroglancer {
 // In place: each set of points with equal positions becomes its first
 // point; triangles collapsed or cancelled are removed; points no triangle
 // uses are removed (the others keep their order). A mesh without such
-// points is left as it is.
-void merge_coincident_points(QuantizedMesh& mesh);
+// points is left as it is. Returns, per point of the result, 1 where a
+// triangle at the point had a merged corner (empty when nothing merged):
+// the points whose boundary edges the merge can have changed.
+std::vector<std::uint8_t> merge_coincident_points(QuantizedMesh& mesh);
 
 }  // namespace keymesh::io::neuroglancer

@@ -37,7 +37,8 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary_edges(const Quanti
 
 }  // namespace
 
-int settle_face_points(QuantizedMesh& mesh, int bits) {
+int settle_face_points(QuantizedMesh& mesh, int bits, const std::vector<std::uint8_t>& candidates) {
+  if (candidates.empty()) return 0;
   const std::int32_t top = static_cast<std::int32_t>((std::int64_t{1} << bits) - 1);
   const std::size_t n = mesh.positions.size() / 3;
   auto face_side = [&](std::size_t p, int a) {  // -1 low face, +1 high face, 0 neither
@@ -53,7 +54,7 @@ int settle_face_points(QuantizedMesh& mesh, int bits) {
         held[u] |= static_cast<std::uint8_t>(1 << a), held[v] |= static_cast<std::uint8_t>(1 << a);
   int moved = 0;
   for (std::size_t p = 0; p < n; ++p) {
-    if (!used[p]) continue;
+    if (!used[p] || !candidates[p]) continue;
     bool any = false;
     for (int a = 0; a < 3; ++a) {
       const int side = face_side(p, a);

@@ -14,12 +14,17 @@
 // unchanged, so the piece stays a closed 2-cycle with its neighbours, and in
 // both nodes the point is off the face (moved, or dropped with its last
 // triangle). Decided from integer positions and the node's own triangles.
+#include <cstdint>
+#include <vector>
+
 #include "draco_fragment.hpp"
 
 namespace keymesh::io::neuroglancer {
 
-// In place; `bits`: the quantization (node faces at 0 and 2^bits - 1).
-// Returns how many points were moved.
-int settle_face_points(QuantizedMesh& mesh, int bits);
+// In place, for the points `candidates` marks (merge_coincident_points'
+// result: the others' boundary edges are the generator's, which keeps every
+// used face point on one); `bits`: the quantization (node faces at 0 and
+// 2^bits - 1). Returns how many points were moved.
+int settle_face_points(QuantizedMesh& mesh, int bits, const std::vector<std::uint8_t>& candidates);
 
 }  // namespace keymesh::io::neuroglancer

@@ -56,8 +56,7 @@ SegmentFiles encode_segment(const MultilodLayout& layout, std::uint64_t segment,
       std::string fragment;
       if (!node_pieces.empty()) {
         QuantizedMesh mesh = node_fragment(node_pieces, node_box(layout, lod, node), layout.vertex_quantization_bits);
-        merge_coincident_points(mesh);
-        settle_face_points(mesh, layout.vertex_quantization_bits);
+        settle_face_points(mesh, layout.vertex_quantization_bits, merge_coincident_points(mesh));
         flip_collinear_triangles(mesh);
         fragment = encode_draco_fragment(mesh);
       }
