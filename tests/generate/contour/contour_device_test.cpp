@@ -11,6 +11,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/device/cpu_device.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/parallel/threads.hpp"
 #include "device_contour_cases.hpp"
@@ -165,9 +166,9 @@ TEST(DeviceContour, RefusesWhatThePathLacksByName) {
   opt.weld = ContourWeld::VertexWeld;
   EXPECT_THROW(generate::contour_on_cpu_device(g, opt), InputError);
   opt.weld = ContourWeld::KeyReduce;
-  opt.coarsen = true;
+  opt.coarsen = true;  // the fine contour's entry refuses it (contour_coarsened_on coarsens)
   try {
-    generate::contour_on_cpu_device(g, opt);
+    generate::contour_on(device::CpuDevice{}, g, opt, nullptr);
     ADD_FAILURE() << "coarsening was not refused";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--coarsen"), std::string::npos) << e.what();
