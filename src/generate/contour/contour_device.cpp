@@ -19,6 +19,7 @@ namespace {
 
 void check_device_contour_options(const ContourOptions& opt) {
   if (opt.weld == ContourWeld::VertexWeld) not_on_device_path("VERTEX-WELD (--weld vertexweld)");
+  if (opt.history) not_on_device_path("per-point history (--history)");
   if (opt.output_arrays) not_on_device_path("writing into arrays the caller owns (output_arrays)");
   if (opt.total_planes) not_on_device_path("streamed (slab) contouring");
   if (opt.ghost_below || opt.ghost_above) not_on_device_path("a grid with ghost planes");

@@ -53,31 +53,13 @@ generate::CoarsenStats expect_device_coarsen_equals_cpu(const SurfaceMesh& mesh,
   return cpu_stats;
 }
 
-// The field options `contour --coarsen` runs with: none, each normal kind,
-// curvature, no scalar.
-std::vector<ContourOptions> coarsen_option_sets(const std::vector<double>& isovalues) {
-  std::vector<ContourOptions> sets;
-  for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average})
-    for (bool curvature : {false, true}) {
-      ContourOptions opt;
-      opt.isovalues = isovalues;
-      opt.normals = normals;
-      opt.curvature = curvature;
-      opt.coarsen = true;
-      sets.push_back(opt);
-    }
-  sets.push_back(sets.front());
-  sets.back().scalars = false;
-  return sets;
-}
-
 // `contour --coarsen` through the device path (narrow and wide keys)
 // against both of contour()'s plans, at every thread count; returns the
 // coarse triangles of the last option set.
 Id expect_device_contour_coarsen_equals_cpu(const ImageGrid& g, const std::vector<double>& isovalues,
                                             const std::string& what) {
   Id triangles = -1;
-  for (ContourOptions opt : coarsen_option_sets(isovalues)) {
+  for (ContourOptions opt : keymesh::testing::option_sets(isovalues, true)) {
     for (int threads : kThreadCounts) {
       parallel::set_thread_count(threads);
       const std::string at = keymesh::testing::describe(opt, what + " threads " + std::to_string(threads));
@@ -255,5 +237,9 @@ TEST(DeviceCoarsen, RefusesWhatTheCpuPathRefuses) {
   EXPECT_THROW(generate::coarsen_on_cpu_device(m, {0, 1, 2}, 4), InputError);
   ContourOptions opt;
   opt.isovalues = {2.5};
+  EXPECT_THROW(generate::contour_coarsened_on_cpu_device(generate::spherical_distance(8), opt), InputError);  // coarsen off
+  opt.coarsen = true;
+  opt.history = true;  // refused as contour() refuses it with --coarsen
+  EXPECT_THROW(generate::contour(generate::spherical_distance(8), opt), InputError);
   EXPECT_THROW(generate::contour_coarsened_on_cpu_device(generate::spherical_distance(8), opt), InputError);
 }

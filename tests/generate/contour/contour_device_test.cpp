@@ -24,26 +24,9 @@ using generate::ContourWeld;
 using generate::DeviceKeys;
 using keymesh::testing::describe;
 using keymesh::testing::noise;
+using keymesh::testing::option_sets;
 
 namespace {
-
-// The field options a test runs through: none, each normal kind, curvature.
-std::vector<ContourOptions> option_sets(const std::vector<double>& isovalues) {
-  std::vector<ContourOptions> sets;
-  for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average})
-    for (bool curvature : {false, true}) {
-      ContourOptions opt;
-      opt.isovalues = isovalues;
-      opt.normals = normals;
-      opt.curvature = curvature;
-      sets.push_back(opt);
-    }
-  ContourOptions bare;
-  bare.isovalues = isovalues;
-  bare.scalars = false;
-  sets.push_back(bare);
-  return sets;
-}
 
 // The device path (narrow and wide keys) against both KEY-REDUCE plans of
 // contour(); returns the triangles, for tests to check they did contour.
@@ -174,6 +157,9 @@ TEST(DeviceContour, RefusesWhatThePathLacksByName) {
     EXPECT_NE(std::string(e.what()).find("--coarsen"), std::string::npos) << e.what();
   }
   opt.coarsen = false;
+  opt.history = true;  // no history_t on this path: refused, not left out
+  EXPECT_THROW(generate::contour_on_cpu_device(g, opt), InputError);
+  opt.history = false;
   opt.isovalues = {};
   EXPECT_THROW(generate::contour_on_cpu_device(g, opt), InputError);  // contour()'s own input check
 }

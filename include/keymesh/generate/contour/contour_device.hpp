@@ -17,7 +17,7 @@
 // Averaged normals sum each point's face normals in contour()'s order (even
 // blocks of 4 voxel layers, then odd; corner order within), so they match too.
 // Not on this path (refused by name, check_device_contour_options):
-// VERTEX-WELD, output arrays, slabs and ghost planes. Coarsening is
+// VERTEX-WELD, per-point history, output arrays, slabs and ghost planes. Coarsening is
 // contour_coarsened_on's (generate/coarsen/coarsen_device.hpp): these entries
 // refuse it, and with it on the arrays carry each point's coarse key.
 #include <cstddef>
