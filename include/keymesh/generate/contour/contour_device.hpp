@@ -17,7 +17,9 @@
 // Averaged normals sum each point's face normals in contour()'s order (even
 // blocks of 4 voxel layers, then odd; corner order within), so they match too.
 // Not on this path (refused by name, check_device_contour_options):
-// VERTEX-WELD, coarsening, output arrays, slabs and ghost planes.
+// VERTEX-WELD, per-point history, output arrays, slabs and ghost planes. Coarsening is
+// contour_coarsened_on's (generate/coarsen/coarsen_device.hpp): these entries
+// refuse it, and with it on the arrays carry each point's coarse key.
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -31,6 +33,7 @@
 #include "keymesh/device/algorithms.hpp"
 #include "keymesh/device/key_groups.hpp"
 #include "keymesh/generate/device_normals.hpp"
+#include "keymesh/generate/device_surface.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
 #include "keymesh/generate/contour/layer_blocks.hpp"
@@ -47,7 +50,14 @@ enum class DeviceKeys { Narrowest, Wide };
 // The options this path refuses (InputError naming them, and what to use).
 void check_device_contour_options(const ContourOptions& options);
 
-// contour() through the device path on the CPU device.
+// The fine contour's entries (contour_on, contour_arrays_on) refuse
+// options.coarsen by name: `contour --coarsen` on a device is
+// contour_coarsened_on (generate/coarsen/coarsen_device.hpp), whose mesh
+// ends on the host. `entry` names the refusing entry.
+void refuse_device_coarsen(const ContourOptions& options, const char* entry);
+
+// contour() through the device path on the CPU device (with options.coarsen:
+// contour_coarsened_on_cpu_device, generate/coarsen/coarsen_device.hpp).
 SurfaceMesh contour_on_cpu_device(const ImageGrid& grid, const ContourOptions& options,
                                   ContourStats* stats = nullptr, DeviceKeys keys = DeviceKeys::Narrowest);
 
@@ -135,10 +145,15 @@ struct WritePoints {
   float* scalar;
   float* gradient_normal;
   float* curvature;
+  std::uint64_t* nearest;  // coarsening: the nearest grid point's key (contour()'s nearest_keys); null otherwise
   KEYMESH_HD void operator()(Id p) const {
     const auto e = interp.locate(static_cast<std::uint64_t>(keys[p]));
     interp.position(e, xyz + 3 * p);
     if (scalar) scalar[p] = interp.scalar(e);
+    if (nearest)
+      nearest[p] = static_cast<std::uint64_t>(keys[p]) / static_cast<std::uint64_t>(interp.keys_per_iso) *
+                       static_cast<std::uint64_t>(interp.s.n) +
+                   static_cast<std::uint64_t>(interp.nearest_point(e));
     if (!gradient_normal && !curvature) return;
     double d[2][9];
     Id ijk1[3] = {e.ijk[0], e.ijk[1], e.ijk[2]};
@@ -300,6 +315,10 @@ struct ContourArrays {
   typename D::template Array<float> xyz;
   typename D::template Array<std::uint32_t> connectivity;
   PointFields<D> fields;
+  // With options.coarsen: every point's coarse key, the grid point nearest
+  // it on its edge + isovalue index x N (contour()'s nearest_keys), for
+  // coarsen_device.hpp to merge by; the averaged normals are left to it.
+  typename D::template Array<std::uint64_t> nearest;
   Id points = 0, triangles = 0;
 };
 
@@ -314,12 +333,14 @@ void write_points(const D& d, const Input<D, T>& in, const device::KeyGroups<D, 
   f.scalar = d.template allocate_output<float>(opt.scalars ? points : 0);
   f.gradient_normal = d.template allocate_output<float>(gradient ? 3 * points : 0);
   f.curvature = d.template allocate_output<float>(opt.curvature ? points : 0);
+  out.nearest = d.template allocate<std::uint64_t>(opt.coarsen ? points : 0);
   const EdgeInterpolator<T> interp{in.samples, in.shape, in.isovalues.data(), 3 * in.shape.n};
   d.for_each(points, WritePoints<T, K>{interp, g.unique_keys.data(), out.xyz.data(),
                                        opt.scalars ? f.scalar.data() : nullptr,
                                        gradient ? f.gradient_normal.data() : nullptr,
-                                       opt.curvature ? f.curvature.data() : nullptr});
-  if (opt.normals == ContourNormals::Average)
+                                       opt.curvature ? f.curvature.data() : nullptr,
+                                       opt.coarsen ? out.nearest.data() : nullptr});
+  if (opt.normals == ContourNormals::Average && !opt.coarsen)
     f.averaged_normal = averaged_normals(d, g, soup, out.xyz.data(), g.index_map.data());
 }
 
@@ -349,9 +370,22 @@ ContourArrays<D> contour_arrays_typed(const D& d, const ImageGrid& grid, const T
   return out;
 }
 
-// The arrays brought to the host as contour()'s mesh: its fields in
-// contour()'s order (the scalar, gradient normals, curvature, then averaged
-// normals). The download counts in the fields stage.
+// The fields asked for, named, in contour()'s order (the scalar, gradient
+// normals, curvature, then averaged normals; none when coarsening), even
+// when empty (no points).
+template <class D>
+std::vector<device_surface::Field<D>> point_fields(PointFields<D>&& f, const std::string& scalar_name,
+                                                   const ContourOptions& opt) {
+  std::vector<device_surface::Field<D>> out;
+  if (opt.scalars) out.push_back({scalar_name, 1, std::move(f.scalar)});
+  if (opt.normals == ContourNormals::Gradient) out.push_back({"Normals", 3, std::move(f.gradient_normal)});
+  if (opt.curvature) out.push_back({"mean_curvature", 1, std::move(f.curvature)});
+  if (opt.normals == ContourNormals::Average && !opt.coarsen) out.push_back({"Normals", 3, std::move(f.averaged_normal)});
+  return out;
+}
+
+// The arrays brought to the host as contour()'s mesh. The download counts
+// in the fields stage.
 template <class D>
 SurfaceMesh to_host_mesh(const D& d, ContourArrays<D>&& a, const std::string& scalar_name, const ContourOptions& opt,
                          ContourStats& st) {
@@ -359,13 +393,8 @@ SurfaceMesh to_host_mesh(const D& d, ContourArrays<D>&& a, const std::string& sc
   SurfaceMesh mesh;
   mesh.points = d.to_host(std::move(a.xyz));
   mesh.connectivity = d.to_host(std::move(a.connectivity));
-  auto field = [&](const std::string& name, int components, typename D::template Array<float>& values) {
-    mesh.point_fields.push_back(Field{name, components, d.to_host(std::move(values))});
-  };  // asked for, even when empty (no points)
-  if (opt.scalars) field(scalar_name, 1, a.fields.scalar);
-  if (opt.normals == ContourNormals::Gradient) field("Normals", 3, a.fields.gradient_normal);
-  if (opt.curvature) field("mean_curvature", 1, a.fields.curvature);
-  if (opt.normals == ContourNormals::Average) field("Normals", 3, a.fields.averaged_normal);
+  for (device_surface::Field<D>& f : point_fields(std::move(a.fields), scalar_name, opt))
+    mesh.point_fields.push_back(Field{f.name, f.components, d.to_host(std::move(f.values))});
   d.end_stage(mark);
   return mesh;
 }
@@ -422,6 +451,7 @@ ContourArrays<D> checked_contour_arrays(const D& d, const ImageGrid& grid, bool 
 template <class D>
 SurfaceMesh contour_on(const D& d, const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
                        DeviceKeys keys = DeviceKeys::Narrowest) {
+  refuse_device_coarsen(options, "contour_on");
   ContourStats local;
   ContourStats& st = stats ? *stats : local;
   auto arrays = device_contour::checked_contour_arrays(d, grid, false, options, st, keys);
@@ -439,6 +469,7 @@ device_contour::ContourArrays<D> contour_arrays_on(const D& d, const ImageGrid& 
                                                    const ContourOptions& options, ContourStats* stats,
                                                    DeviceKeys keys = DeviceKeys::Narrowest) {
   if (!samples) throw InputError("contour: the volume's samples pointer is null");
+  refuse_device_coarsen(options, "contour_arrays_on");
   ImageGrid view;  // the grid's description over the device's samples
   view.dims = grid.dims, view.origin = grid.origin, view.spacing = grid.spacing;
   view.type = grid.type, view.name = grid.name;
