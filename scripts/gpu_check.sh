@@ -7,7 +7,9 @@
 # Prints the driver, the GPU and glibc; runs the CUDA tests; compares
 # `keymesh contour --backend cuda` with `--backend cpu` byte for byte (cmp of
 # the written meshes) on generated inputs from 64^3 to 1024^3, twice, with the
-# paper's Table 1 counts; runs compute-sanitizer's memcheck on a small case;
+# paper's Table 1 counts; the same for `tetrahedralize` (5 and 24 tets),
+# `contour` of a tet grid and `subdivide` (tets, triangles linear and Bezier)
+# at a small and a large size; runs compute-sanitizer's memcheck on small cases;
 # runs the 2^32-triangle checkerboard in its own process; times 512^3 and
 # 1024^3 with CUDA events (keymesh_gpu_timing). Writes summary.json and
 # gpu_check.log into $OUT (default ./gpu-check-out).
@@ -21,7 +23,8 @@
 #
 # Environment: OUT, GPU_CHECK_BIN (default build-gpucheck), GPU_CHECK_BACKEND
 # (cpu: a dry run of the script where there is no GPU), GPU_CHECK_SIZES
-# (default "64 128 256 512 1024"), GPU_CHECK_BUDGET, GPU_CHECK_MAX_MEMORY
+# (default "64 128 256 512 1024"), GPU_CHECK_UNSTRUCTURED_SIZES (default
+# "32 96"), GPU_CHECK_BUDGET, GPU_CHECK_MAX_MEMORY
 # (default 96G), TMPDIR; GPU_CHECK_PYTHONPATH (a build's python folder:
 # runs tests/python/test_dlpack.py with GPU_CHECK_PYTHON, default python3).
 set -u
@@ -160,25 +163,35 @@ count_of() { grep -oE "\"$1\": *[0-9]+" "$2" 2>/dev/null | grep -oE '[0-9]+$'; }
 table1() {  # the paper's Table 1: points triangles at N^3, iso N/2 - 1 + 0.001
   case $1 in 128) echo "74715 149420" ;; 256) echo "303699 607388" ;; 512) echo "1225611 2451212" ;; esac
 }
-# compare NAME INPUT CONTOUR-ARGS...: the CPU's mesh and two GPU meshes, cmp'd.
-compare() {
-  local name=$1 input=$2
-  shift 2
+# compare_command NAME EXT COMMAND INPUT ARGS...: `keymesh COMMAND INPUT -o
+# OUT.EXT ARGS` on the CPU once and on the GPU twice, the outputs cmp'd; the
+# CPU's output stays as $CMP_BASE.cpu.EXT (its caller removes it).
+compare_command() {
+  local name=$1 ext=$2 command=$3 input=$4
+  shift 4
   local base
   base=$WORK/$(echo "$name" | tr -c 'A-Za-z0-9_\n' '_')
-  step "$name: cpu" 60 "$KEYMESH" contour "$input" -o "$base.cpu.ply" --report "$base.cpu.json" -q $MEM --backend cpu "$@"
+  CMP_BASE=$base
+  step "$name: cpu" 60 "$KEYMESH" "$command" "$input" -o "$base.cpu.$ext" --report "$base.cpu.json" -q $MEM \
+    --backend cpu "$@"
   local cpu_rc=$STEP_RC
   for run in 1 2; do
-    gpu_step "$name: cuda run $run" 60 "$KEYMESH" contour "$input" -o "$base.gpu$run.ply" --report "$base.gpu$run.json" \
-      -q $MEM --backend "$BACKEND" "$@"
+    gpu_step "$name: cuda run $run" 60 "$KEYMESH" "$command" "$input" -o "$base.gpu$run.$ext" \
+      --report "$base.gpu$run.json" -q $MEM --backend "$BACKEND" "$@"
   done
   if [ $HAVE_GPU = 0 ] || [ $cpu_rc != 0 ]; then
     skip "$name: cuda = cpu, byte for byte" "$([ $HAVE_GPU = 0 ] && echo no GPU || echo the CPU run failed)"
     return
   fi
-  step "$name: cuda run 1 = cpu, byte for byte" 30 bash -c "$SAME_FILE" same_file "$base.cpu.ply" "$base.gpu1.ply"
-  step "$name: cuda run 2 = run 1 (deterministic)" 30 bash -c "$SAME_FILE" same_file "$base.gpu1.ply" "$base.gpu2.ply"
-  rm -f "$base".gpu*.ply
+  step "$name: cuda run 1 = cpu, byte for byte" 30 bash -c "$SAME_FILE" same_file "$base.cpu.$ext" "$base.gpu1.$ext"
+  step "$name: cuda run 2 = run 1 (deterministic)" 30 bash -c "$SAME_FILE" same_file "$base.gpu1.$ext" "$base.gpu2.$ext"
+  rm -f "$base".gpu*."$ext"
+}
+# compare NAME INPUT CONTOUR-ARGS...: the contour's CPU mesh and two GPU meshes, cmp'd.
+compare() {
+  local name=$1 input=$2
+  shift 2
+  compare_command "$name" ply contour "$input" "$@"
 }
 if [ -n "$KEYMESH" ]; then
   for n in $SIZES; do
@@ -219,6 +232,48 @@ else
   skip "keymesh contour, cuda against cpu" "the keymesh command does not run here"
 fi
 
+# ---- the unstructured generators: CPU against GPU, byte for byte -------------------
+# tetrahedralize --scheme 5 and 24 of a volume, marching tetrahedra on the
+# 5-tet grid, subdivision of that grid (tets 1 -> 8) and of a contour
+# (triangles 1 -> 4, linear and Bezier), each at a small and a large size
+# (GPU_CHECK_UNSTRUCTURED_SIZES; the 24-tet split and the tets' subdivision,
+# 5 and 8 times the cells, at half of it), each written by the CPU once and
+# by the GPU twice, cmp'd (.vtu, .ply).
+U_SIZES=${GPU_CHECK_UNSTRUCTURED_SIZES:-32 96}
+unstructured() {  # N: the comparisons on a sphere N^3
+  local n=$1 half=$(($1 / 2)) v=$WORK/usphere$1.vti h=$WORK/usphere_half$1.vti iso
+  iso=$(awk -v n="$n" 'BEGIN { printf "%.3f", n / 2 - 1 + 0.001 }')
+  step "generate sphere ${n}^3 and ${half}^3 (unstructured)" 60 sh -c "'$KEYMESH' generate sphere --size $n -o '$v' -q \
+    && '$KEYMESH' generate sphere --size $half -o '$h' -q"
+  [ $STEP_RC = 0 ] || return
+  compare_command "tetrahedralize --scheme 5, sphere ${n}^3" vtu tetrahedralize "$v" --scheme 5
+  local tets=$CMP_BASE.cpu.vtu
+  compare_command "tetrahedralize --scheme 24, sphere ${half}^3" vtu tetrahedralize "$h" --scheme 24
+  compare_command "tetrahedralize --scheme 5, sphere ${half}^3" vtu tetrahedralize "$h" --scheme 5
+  local half_tets=$CMP_BASE.cpu.vtu
+  if [ -f "$tets" ]; then
+    compare_command "contour (marching tetrahedra), 5 tets of sphere ${n}^3, 2 isovalues, averaged normals" ply \
+      contour "$tets" --iso "$iso" --iso 10.5 --normals average
+  fi
+  # One level (8 times the tets; keymesh_cuda_tests runs two): at 48^3, 4.2 M tets written thrice.
+  [ -f "$half_tets" ] && compare_command "subdivide tets 1->8, 5 tets of sphere ${half}^3" vtu \
+    subdivide "$half_tets" --levels 1
+  local surface=$WORK/surface$n.cpu.ply
+  step "contour sphere ${n}^3 (the surface to subdivide)" 60 "$KEYMESH" contour "$v" -o "$surface" -q $MEM \
+    --iso "$iso" --normals average
+  if [ $STEP_RC = 0 ]; then
+    compare_command "subdivide triangles linear, sphere ${n}^3 contour, 2 levels" ply subdivide "$surface" --levels 2
+    compare_command "subdivide triangles bezier, sphere ${n}^3 contour, 2 levels" ply subdivide "$surface" --levels 2 \
+      --scheme bezier
+  fi
+  rm -f "$v" "$h" "$WORK"/*.cpu.vtu "$WORK"/*.cpu.ply
+}
+if [ -n "$KEYMESH" ]; then
+  for n in $U_SIZES; do unstructured "$n"; done
+else
+  skip "keymesh tetrahedralize, contour (tets), subdivide: cuda against cpu" "the keymesh command does not run here"
+fi
+
 # ---- compute-sanitizer ---------------------------------------------------------
 SANITIZER=$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)
 if [ ! -x "$SANITIZER" ]; then
@@ -228,6 +283,19 @@ elif [ -n "$KEYMESH" ]; then
   gpu_step "compute-sanitizer memcheck: contour 64^3, 3 isovalues, averaged normals" 90 \
     "$SANITIZER" --tool memcheck --error-exitcode 3 --leak-check full "$KEYMESH" contour "$WORK/s64.vti" \
     -o "$WORK/s64.ply" -q --backend cuda --iso 10.25 --iso 20.001 --iso 31 --normals average
+  step "generate sphere 16^3 (for memcheck)" 30 "$KEYMESH" generate sphere --size 16 -o "$WORK/s16.vti" -q
+  gpu_step "compute-sanitizer memcheck: tetrahedralize --scheme 24, 16^3" 60 \
+    "$SANITIZER" --tool memcheck --error-exitcode 3 --leak-check full "$KEYMESH" tetrahedralize "$WORK/s16.vti" \
+    -o "$WORK/t24.vtu" -q --backend cuda --scheme 24
+  gpu_step "compute-sanitizer memcheck: tetrahedralize --scheme 5, then subdivide tets, 16^3" 60 sh -c \
+    "'$SANITIZER' --tool memcheck --error-exitcode 3 --leak-check full '$KEYMESH' tetrahedralize '$WORK/s16.vti' \
+    -o '$WORK/t5.vtu' -q --backend cuda --scheme 5 && '$SANITIZER' --tool memcheck --error-exitcode 3 \
+    --leak-check full '$KEYMESH' subdivide '$WORK/t5.vtu' -o '$WORK/t5s.vtu' -q --backend cuda"
+  gpu_step "compute-sanitizer memcheck: contour tets, then subdivide bezier, 16^3" 60 sh -c \
+    "'$SANITIZER' --tool memcheck --error-exitcode 3 --leak-check full '$KEYMESH' contour '$WORK/t5.vtu' \
+    -o '$WORK/t5.ply' -q --backend cuda --iso 5.5 --iso 7.001 --normals average && '$SANITIZER' --tool memcheck \
+    --error-exitcode 3 --leak-check full '$KEYMESH' subdivide '$WORK/t5.ply' -o '$WORK/t5s.ply' -q \
+    --backend cuda --scheme bezier --levels 2"
 elif [ -n "$TIMING" ]; then
   gpu_step "compute-sanitizer memcheck: timing 48^3" 90 "$SANITIZER" --tool memcheck --error-exitcode 3 \
     "$TIMING" sphere 48 --repeat 1 --warmup 0

@@ -176,10 +176,24 @@ class CommandRun {
   StageTimer timer_;
 };
 
-// A subcommand with no GPU path, described by `add_options` (its help:
-// cmd.description() and the options): when chosen, --backend other than cpu
-// is refused naming `what` (require_cpu_backend), then `run` gets the parsed
-// options and a CommandRun.
+// A compute subcommand described by `add_options` (its help:
+// cmd.description() and the options): when chosen, `run` gets the parsed
+// options and a CommandRun. Its --backend is `run`'s to honour.
+template <class Options>
+Command make_run_command(std::string name, void (*add_options)(CLI::App&, Options&),
+                         int (*run)(const Options&, CommandRun&)) {
+  return Command{std::move(name), "", [add_options, run](CLI::App& cmd) -> std::function<int()> {
+                   auto options = std::make_shared<Options>();
+                   add_options(cmd, *options);
+                   return [options, run] {
+                     CommandRun frame(options->common);
+                     return run(*options, frame);
+                   };
+                 }};
+}
+
+// A subcommand with no GPU path, as make_run_command, but --backend other
+// than cpu is refused naming `what` (require_cpu_backend) before `run`.
 template <class Options>
 Command make_cpu_command(std::string name, const char* what, void (*add_options)(CLI::App&, Options&),
                          int (*run)(const Options&, CommandRun&)) {

@@ -150,7 +150,7 @@ ContourResult run_tets(const ContourCli& o, const generate::ContourOptions& opt,
     }
   progress.say("contouring " + std::to_string(grid.num_cells()) + " tetrahedra");
   result.mesh = timer.run("contour", [&] {
-    return generate::contour(grid, opt, &result.stats, opt.history ? &result.history_key : nullptr);
+    return backend::contour(grid, opt, &result.stats, opt.history ? &result.history_key : nullptr);
   });
   result.facts["input_points"] = grid.num_points();
   result.facts["input_cells"] = grid.num_cells();

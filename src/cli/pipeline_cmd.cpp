@@ -4,6 +4,7 @@
 
 #include "command.hpp"
 #include "keymesh/backend/contour.hpp"
+#include "keymesh/backend/subdivide.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/unstructured/contour_tets.hpp"
 #include "keymesh/generate/unstructured/dual.hpp"
@@ -39,7 +40,7 @@ SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& 
   SurfaceMesh mesh;
   if (io::is_grid_file(o.input)) {
     const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
-    mesh = timer.run("contour", [&] { return generate::contour(g, opt); });
+    mesh = timer.run("contour", [&] { return backend::contour(g, opt); });
   } else {
     const ImageGrid g = timer.run("read", [&] { return io::read_volume(o.input); });
     mesh = timer.run("contour", [&] { return backend::contour(g, opt); });
@@ -52,7 +53,7 @@ SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& 
     check_work(estimate_subdivide_triangles(mesh.num_points(), mesh.num_cells(), o.subdivide,
                                             field_components(mesh.point_fields)),
                memory_budget(o.common), o.input + ": pipeline --subdivide " + std::to_string(o.subdivide));
-    mesh = timer.run("subdivide", [&] { return generate::subdivide(mesh, so); });
+    mesh = timer.run("subdivide", [&] { return backend::subdivide(mesh, so, opt.backend); });
   }
   if (o.dual)
     check_work(estimate_dual(mesh.num_points(), mesh.num_cells(), mesh.connectivity.size(),
@@ -70,8 +71,8 @@ int run_pipeline(const PipelineCli& o) {
   }
   const int threads = apply_threads(o.common);
   StageTimer timer;
-  if (o.common.backend == "cuda" && (o.subdivide > 0 || o.dual))
-    if (int rc = require_cpu_backend(o.common, "subdivision and the dual")) return rc;
+  if (o.dual)
+    if (int rc = require_cpu_backend(o.common, "the dual")) return rc;
   nlohmann::json r;
   const SurfaceMesh mesh = run_stages(o, timer, r);
   timer.run("write", [&] { io::write_mesh(mesh, o.output); });

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "command.hpp"
+#include "keymesh/backend/subdivide.hpp"
 #include "keymesh/generate/unstructured/subdivide.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
@@ -46,6 +47,7 @@ int run_subdivide(const SubdivideCli& o, CommandRun& run) {
   opt.levels = o.levels;
   opt.scheme = generate::parse_option<generate::SubdivideScheme>(o.scheme);
   opt.weld = generate::parse_option<generate::SubdivideWeld>(o.weld);
+  const auto backend = generate::parse_option<generate::Backend>(o.common.backend);
   const bool grid_in = io::is_grid_file(o.input);
   if (grid_in ? is_mesh_path(o.output) : !is_mesh_path(o.output)) {
     std::fprintf(stderr, "keymesh subdivide: %s: a %s subdivides into a %s\n", printable(o.output).c_str(),
@@ -66,7 +68,7 @@ int run_subdivide(const SubdivideCli& o, CommandRun& run) {
     check_work(estimate_subdivide_tets(g.num_points(), g.num_cells(), o.levels, field_components(g.point_fields)),
                memory_budget(o.common), o.input + ": subdivide --levels " + std::to_string(o.levels),
                kMaxPoints);
-    const UnstructuredGrid s = run.stage("subdivide", [&] { return generate::subdivide(g, opt); });
+    const UnstructuredGrid s = run.stage("subdivide", [&] { return backend::subdivide(g, opt, backend); });
     run.stage("write", [&] { io::write_grid(s, o.output); });
     in_points = g.num_points(), in_cells = g.num_cells(), points = s.num_points(), cells = s.num_cells();
   } else {
@@ -75,7 +77,7 @@ int run_subdivide(const SubdivideCli& o, CommandRun& run) {
                                             field_components(m.point_fields)),
                memory_budget(o.common), o.input + ": subdivide --levels " + std::to_string(o.levels),
                kMaxPoints, kMaxPoints / 3);
-    const SurfaceMesh s = run.stage("subdivide", [&] { return generate::subdivide(m, opt); });
+    const SurfaceMesh s = run.stage("subdivide", [&] { return backend::subdivide(m, opt, backend); });
     run.stage("write", [&] { io::write_mesh(s, o.output); });
     in_points = m.num_points(), in_cells = m.num_cells(), points = s.num_points(), cells = s.num_cells();
   }
@@ -84,12 +86,13 @@ int run_subdivide(const SubdivideCli& o, CommandRun& run) {
   r["levels"] = o.levels;
   r["scheme"] = o.scheme;
   r["weld"] = o.weld;
+  r["backend"] = o.common.backend;
   r["input_points"] = in_points;
   r["input_cells"] = in_cells;
   return run.finish(r, PeakRss::Include);
 }
 
-Register reg{make_cpu_command("subdivide", "subdivision", add_subdivide_options, run_subdivide)};
+Register reg{make_run_command("subdivide", add_subdivide_options, run_subdivide)};
 
 }  // namespace
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "command.hpp"
-#include "keymesh/generate/unstructured/tetrahedralize.hpp"
+#include "keymesh/backend/tetrahedralize.hpp"
 #include "keymesh/io/formats.hpp"
 #include "keymesh/io/grid_io.hpp"
 #include "keymesh/io/volume_io.hpp"
@@ -45,6 +45,7 @@ int run_tetrahedralize(const TetrahedralizeCli& o, CommandRun& run) {
   progress.say("reading " + o.input);
   const bool vertexweld =
       generate::parse_option<generate::SubdivideWeld>(o.weld) == generate::SubdivideWeld::VertexWeld;
+  const auto backend = generate::parse_option<generate::Backend>(o.common.backend);
   UnstructuredGrid tets;
   nlohmann::json r;
   if (io::is_grid_file(o.input)) {
@@ -52,10 +53,8 @@ int run_tetrahedralize(const TetrahedralizeCli& o, CommandRun& run) {
     check_work(estimate_tetrahedralize(hexes.num_points(), hexes.num_cells(), o.scheme,
                                        field_components(hexes.point_fields)),
                memory_budget(o.common), o.input + ": tetrahedralize --scheme " + std::to_string(o.scheme));
-    tets = run.stage("tetrahedralize", [&] {
-      return o.scheme == 24 ? generate::tetrahedralize24(hexes, vertexweld)
-                             : generate::tetrahedralize5(hexes);
-    });
+    tets = run.stage("tetrahedralize",
+                     [&] { return backend::tetrahedralize(hexes, o.scheme, vertexweld, backend); });
     r["input_cells"] = hexes.num_cells();
   } else {
     const ImageGrid grid = run.stage("read", [&] { return io::read_volume(o.input); });
@@ -69,10 +68,8 @@ int run_tetrahedralize(const TetrahedralizeCli& o, CommandRun& run) {
     progress.enable_if(grid.num_points() > (1ll << 24));
     progress.say("tetrahedralizing " + std::to_string(grid.dims[0]) + "x" + std::to_string(grid.dims[1]) + "x" +
                  std::to_string(grid.dims[2]));
-    tets = run.stage("tetrahedralize", [&] {
-      return o.scheme == 24 ? generate::tetrahedralize24(grid, vertexweld)
-                             : generate::tetrahedralize5(grid);
-    });
+    tets = run.stage("tetrahedralize",
+                     [&] { return backend::tetrahedralize(grid, o.scheme, vertexweld, backend); });
     r["dims"] = grid.dims;
   }
   progress.say("writing " + o.output);
@@ -81,11 +78,11 @@ int run_tetrahedralize(const TetrahedralizeCli& o, CommandRun& run) {
   r.update(files_and_counts(o.input, o.output, tets.num_points(), tets.num_cells()));
   r["scheme"] = o.scheme;
   r["weld"] = o.weld;
+  r["backend"] = o.common.backend;
   return run.finish(r, PeakRss::Include);
 }
 
-Register reg{
-    make_cpu_command("tetrahedralize", "tetrahedralization", add_tetrahedralize_options, run_tetrahedralize)};
+Register reg{make_run_command("tetrahedralize", add_tetrahedralize_options, run_tetrahedralize)};
 
 }  // namespace
 

@@ -12,10 +12,10 @@
 //                   contour_arrays_on's view), the mesh left on the device in
 //                   memory handed to the caller (cudaMalloc, freed by cudaFree
 //                   when its last copy goes), mirrored back there when asked.
-// This file holds what only the GPU needs: the device and stream, the memory
-// pool (its release threshold raised, its high-water mark the report's peak),
-// the stage times (CUDA events, device::CudaStageEvents), whether a usable
-// device is present, and the checks of a caller's device pointer and stream.
+// This file holds what only the contour needs on the GPU (gpu_session.cuh has
+// the device, stream and memory pool every GPU run sets up): the stage times
+// (CUDA events, device::CudaStageEvents), whether a usable device is present,
+// and the checks of a caller's device pointer and stream.
 #include <cuda_runtime.h>
 
 #include <cstdint>
@@ -24,6 +24,7 @@
 #include <utility>
 
 #include "contour_limits.hpp"
+#include "gpu_session.cuh"
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/cuda/device_contour.hpp"
@@ -33,52 +34,6 @@
 namespace keymesh::cuda {
 
 namespace {
-
-#define KEYMESH_CUDA_CHECK(call, what) KEYMESH_DEVICE_CUDA_CHECK(call, what)
-
-// What every GPU contour sets up and undoes: the device (made current, the
-// caller's restored after), a stream, and the device's default memory pool
-// with its high-water mark reset (the report's peak) and its release
-// threshold raised: at 0, the pool gives its memory back at every
-// synchronization and the next stage allocates it anew; raised, a freed
-// block is reused by the next stage and the next contour (the pool keeps up
-// to its peak; cudaMemPoolTrimTo or the process's end gives it back).
-class GpuSession {
- public:
-  explicit GpuSession(int device) {
-    KEYMESH_CUDA_CHECK(cudaGetDevice(&previous_), "querying the device");
-    if (device >= 0 && device != previous_) KEYMESH_CUDA_CHECK(cudaSetDevice(device), "selecting the device");
-    KEYMESH_CUDA_CHECK(cudaGetDevice(&device_), "querying the device");
-    KEYMESH_CUDA_CHECK(cudaStreamCreate(&stream_), "creating a stream");
-    KEYMESH_CUDA_CHECK(cudaDeviceGetDefaultMemPool(&pool_, device_), "querying the memory pool");
-    unsigned long long keep = std::numeric_limits<unsigned long long>::max();  // cuuint64_t (passed as void*)
-    KEYMESH_CUDA_CHECK(cudaMemPoolSetAttribute(pool_, cudaMemPoolAttrReleaseThreshold, &keep),
-                       "raising the pool's release threshold");
-    unsigned long long high = 0;  // only resetting to zero is allowed
-    KEYMESH_CUDA_CHECK(cudaMemPoolSetAttribute(pool_, cudaMemPoolAttrUsedMemHigh, &high),
-                       "resetting the pool's high-water mark");
-  }
-  GpuSession(const GpuSession&) = delete;
-  GpuSession& operator=(const GpuSession&) = delete;
-  ~GpuSession() {
-    if (stream_) cudaStreamDestroy(stream_);
-    if (device_ != previous_) cudaSetDevice(previous_);
-  }
-  cudaStream_t stream() const { return stream_; }
-  int device() const { return device_; }
-  // The pool's high-water mark since the session began, in bytes.
-  std::uint64_t peak() const {
-    unsigned long long high = 0;
-    KEYMESH_CUDA_CHECK(cudaMemPoolGetAttribute(pool_, cudaMemPoolAttrUsedMemHigh, &high),
-                       "reading the pool's high-water mark");
-    return static_cast<std::uint64_t>(high);
-  }
-
- private:
-  int previous_ = 0, device_ = 0;
-  cudaStream_t stream_ = nullptr;
-  cudaMemPool_t pool_ = nullptr;
-};
 
 // The bytes of a mesh's device arrays.
 std::uint64_t mesh_bytes(const DeviceMesh& m) {
@@ -155,8 +110,7 @@ bool available(std::string* why) {
 
 SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& opt, generate::ContourStats* stats) {
   check_gpu_options(opt);
-  std::string why;
-  if (!available(&why)) throw InputError("--backend cuda: " + why);
+  require_gpu();
   generate::ContourStats local;
   generate::ContourStats& st = stats ? *stats : local;
   GpuSession session(-1);
@@ -171,8 +125,7 @@ SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& opt, 
 DeviceMesh contour_device(const DeviceVolume& volume, const generate::ContourOptions& opt,
                           generate::ContourStats* stats) {
   check_device_volume(volume, opt);
-  std::string why;
-  if (!available(&why)) throw InputError("--backend cuda: " + why);
+  require_gpu();
   const int holder = device_of(volume.samples);
   if (volume.device >= 0 && volume.device != holder)
     throw InputError("--backend cuda: the volume's samples lie on device " + std::to_string(holder) +

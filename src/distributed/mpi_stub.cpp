@@ -34,7 +34,7 @@ GlobalNumbering number_keys(std::span<const std::uint64_t>, int, const std::func
 }
 void require_distributable(const ImageGrid&, const generate::ContourOptions&, int) { not_built(); }
 ContourPiece contour_piece(PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }
-SurfaceMesh gather(ContourPiece&) { not_built(); }
+SurfaceMesh gather(ContourPiece&, std::vector<std::uint64_t>*) { not_built(); }
 GhostedPiece ghosted_piece(ContourPiece&) { not_built(); }
 std::vector<RankStats> gather_stats(const RankStats&) { not_built(); }
 

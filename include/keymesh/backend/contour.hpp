@@ -9,6 +9,7 @@
 // generators and the distributed and streamed contours call generate directly
 // (they refuse --backend cuda by name).
 #include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/mesh/unstructured_grid.hpp"
 
 namespace keymesh::backend {
 
@@ -19,6 +20,13 @@ namespace keymesh::backend {
 // point_keys (the CPU only): generate::contour's, every point's edge key
 // (history_key with options.history); the GPU refuses options.history.
 SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& options,
+                    generate::ContourStats* stats = nullptr, std::vector<std::uint64_t>* point_keys = nullptr);
+
+// Marching tetrahedra on the backend the options name: generate::contour(tets)
+// or, for Backend::Cuda, its input checks (the CPU's InputError), then what
+// the GPU lacks refused by name (VERTEX-WELD, coarsening, history, point
+// keys), then cuda::contour_tets.
+SurfaceMesh contour(const UnstructuredGrid& tets, const generate::ContourOptions& options,
                     generate::ContourStats* stats = nullptr, std::vector<std::uint64_t>* point_keys = nullptr);
 
 }  // namespace keymesh::backend

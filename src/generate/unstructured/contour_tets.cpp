@@ -255,8 +255,6 @@ const Field& check_tet_contour_input(const UnstructuredGrid& tets, const Contour
     if (!std::isfinite(iso)) throw InputError("contour: isovalue " + std::to_string(iso) + " is not finite");
   if (opt.normals == ContourNormals::Gradient)
     throw InputError("contour: --normals gradient needs a voxel grid; use --normals average on tetrahedra");
-  if (opt.backend == Backend::Cuda)
-    throw InputError("--backend cuda: marching tetrahedra are not available on the GPU yet");
   if (opt.curvature)
     throw InputError("contour: --curvature needs a voxel grid (it reads the volume's Hessian)");
   if (!tets.all_cells_are(CellType::Tetra))
@@ -280,6 +278,9 @@ const Field& check_tet_contour_input(const UnstructuredGrid& tets, const Contour
 SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& opt, ContourStats* stats,
                     std::vector<std::uint64_t>* point_keys) {
   const Field& field = check_tet_contour_input(tets, opt);
+  // The GPU is reached through keymesh/backend/contour.hpp (the layer above generate and cuda).
+  if (opt.backend != Backend::Cpu)
+    throw InputError("--backend cuda: generate::contour runs on the CPU (backend::contour chooses the GPU)");
   if (opt.coarsen && (opt.history || point_keys))
     throw InputError("contour: --history with --coarsen: a coarsened point merges crossings of several edges, "
                      "so it has no one edge and t (docs/HISTORY.md)");

@@ -58,14 +58,17 @@ using subdivision::dot;
 using subdivision::load;
 using subdivision::V3;
 
+[[noreturn]] void refuse_bezier_without_normals() {
+  throw InputError("subdivide --scheme bezier needs point normals (a 3-component \"Normals\" field; "
+                   "contour with --normals average or gradient)");
+}
+
 SurfaceMesh subdivide_once(const SurfaceMesh& m, SubdivideScheme scheme, SubdivideWeld weld) {
   const Id V = m.num_points(), F = m.num_cells();
   const EdgeKeys ek = EdgeKeys::for_points(V, "subdivide");
   const Field* normals = m.find_point_field("Normals");
   if (normals && normals->components != 3) normals = nullptr;
-  if (scheme == SubdivideScheme::Bezier && !normals)
-    throw InputError("subdivide --scheme bezier needs point normals (a 3-component \"Normals\" field; "
-                     "contour with --normals average or gradient)");
+  if (scheme == SubdivideScheme::Bezier && !normals) refuse_bezier_without_normals();
   const PointIndex* C = m.connectivity.data();
   auto keys = uninitialized_array<std::uint64_t>(static_cast<std::size_t>(3 * F));
   parallel::for_each(F, [&](Id t) {
@@ -185,6 +188,10 @@ void check_subdivide_input(const SurfaceMesh& mesh, const SubdivideOptions& opti
       throw InputError("subdivide: point field '" + f.name + "' does not have one tuple per point");
   for (PointIndex id : mesh.connectivity)
     if (Id{id} >= mesh.num_points()) throw InputError("subdivide: a triangle refers to point " + std::to_string(id) + " out of range");
+  // Checked here too (not only as a level starts), so that the GPU's path refuses it before the device is considered.
+  const Field* normals = mesh.find_point_field("Normals");
+  if (options.levels > 0 && options.scheme == SubdivideScheme::Bezier && (!normals || normals->components != 3))
+    refuse_bezier_without_normals();
 }
 
 SurfaceMesh subdivided_zero_levels(const SurfaceMesh& mesh) {

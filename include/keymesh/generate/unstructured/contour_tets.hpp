@@ -34,11 +34,14 @@ namespace keymesh::generate {
 // the crossing's t; point_keys, when given, receives every point's edge key
 // (history_key): iso_index << 2b | a << b | b_id, b the bits of the
 // largest point id (at least 1). Not with coarsening (InputError).
+// Runs on the CPU: options.backend must be Backend::Cpu
+// (keymesh/backend/contour.hpp chooses the GPU).
 SurfaceMesh contour(const UnstructuredGrid& tets, const ContourOptions& options, ContourStats* stats = nullptr,
                     std::vector<std::uint64_t>* point_keys = nullptr);
 
 // contour()'s input checks alone (the same InputError); returns the point
-// field to contour. For the device path (contour_tets_device.hpp).
+// field to contour. For the device path (contour_tets_device.hpp), which
+// runs on any device: options.backend is not read.
 const Field& check_tet_contour_input(const UnstructuredGrid& tets, const ContourOptions& options);
 
 }  // namespace keymesh::generate

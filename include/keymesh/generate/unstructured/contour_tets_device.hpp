@@ -85,7 +85,7 @@ struct Emit {
     for (int tri = 0; tri < table->triangles[m]; ++tri)
       for (int corner = 0; corner < 3; ++corner) {
         const int e = table->edges[m][3 * tri + (flip && corner ? 3 - corner : corner)];
-        *o++ = ek.with_level(ek(v[cells::kTetEdges[e][0]], v[cells::kTetEdges[e][1]]), level);
+        *o++ = ek.with_level(ek(v[cells::tet_edge_corner(e, 0)], v[cells::tet_edge_corner(e, 1)]), level);
       }
   }
 };

@@ -181,7 +181,7 @@ struct TetEdgeKeys {
   std::uint64_t* keys;
   KEYMESH_HD void operator()(Id t) const {
     for (int e = 0; e < 6; ++e)
-      keys[6 * t + e] = ek(conn[4 * t + cells::kTetEdges[e][0]], conn[4 * t + cells::kTetEdges[e][1]]);
+      keys[6 * t + e] = ek(conn[4 * t + cells::tet_edge_corner(e, 0)], conn[4 * t + cells::tet_edge_corner(e, 1)]);
   }
 };
 
