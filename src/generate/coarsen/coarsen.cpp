@@ -97,8 +97,12 @@ Id remove_folds(SurfaceMesh& mesh) {
   return n - at;
 }
 
-SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
-                    CoarsenStats* stats) {
+namespace {
+
+// coarsen()'s work; with `rounds`, the split's rounds agreed with the other
+// parts and what it did returned in `split` (unused points left in place).
+SurfaceMesh coarsen_mesh(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                         CoarsenStats* stats, const SplitRounds* rounds, NonmanifoldSplit* split) {
   if (!mesh.all_triangles()) throw InputError("coarsen: the mesh has polygons; only triangles are coarsened");
   const Id n = mesh.num_points();
   if (static_cast<Id>(keys.size()) != n) throw InputError("coarsen: one key per point is needed");
@@ -156,9 +160,24 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
     }
   });
   const Id folded = remove_folds(out);
-  remove_points(out, split_nonmanifold(out).unused);
+  if (rounds)
+    *split = split_nonmanifold_part(out, *rounds);
+  else
+    remove_points(out, split_nonmanifold(out).unused);
   if (stats) *stats = CoarsenStats{n, out.num_points(), t_in, t_out - folded, folded};
   return out;
+}
+
+}  // namespace
+
+SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                    CoarsenStats* stats) {
+  return coarsen_mesh(mesh, keys, key_range, stats, nullptr, nullptr);
+}
+
+SurfaceMesh coarsen_part(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                         const SplitRounds& rounds, NonmanifoldSplit& split) {
+  return coarsen_mesh(mesh, keys, key_range, nullptr, &rounds, &split);
 }
 
 }  // namespace keymesh::generate
