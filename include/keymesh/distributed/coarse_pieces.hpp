@@ -36,7 +36,7 @@ struct CoarsePiece {
 };
 
 // The halo first tried, in voxel layers.
-constexpr Id kFirstCoarseHalo = 4;
+constexpr Id kFirstCoarseHalo = 8;
 
 // Collective: this rank's piece of the coarsened contour.
 CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance);
