@@ -74,12 +74,14 @@ struct CoarseLayers {
   std::vector<PointIndex> original;    // per point
   std::vector<float> layer;            // per triangle
   Id originals = 0;
+  Id own_fine_triangles = 0;           // of the fine layers: those of the rank's own layers
 };
 
 // The fine layers coarsened as one process coarsens them, with the split's
 // rounds agreed with the other ranks (the copies and edges left counted at
 // the points this rank owns). Collective: an error here ends every rank.
-CoarseLayers coarsen_layers(FineLayers& fine, const Grid& g, std::uint64_t key_range, std::pair<Id, Id> own) {
+CoarseLayers coarsen_layers(FineLayers& fine, const Grid& g, std::uint64_t key_range, std::pair<Id, Id> own,
+                            std::pair<Id, Id> own_layers) {
   CoarseLayers c;
   c.key = fine.nearest;
   std::sort(c.key.begin(), c.key.end());
@@ -87,6 +89,8 @@ CoarseLayers coarsen_layers(FineLayers& fine, const Grid& g, std::uint64_t key_r
   fine.mesh.cell_fields.push_back(Field{"fine_layer", 1, {}});
   const std::vector<float> layers = fine_layers(fine, g);
   fine.mesh.cell_fields.back().values.assign(layers.begin(), layers.end());
+  for (float layer : layers)
+    c.own_fine_triangles += own_layers.first <= static_cast<Id>(layer) && static_cast<Id>(layer) < own_layers.second;
   const generate::SplitRounds rounds{
       [&](PointIndex p) {
         const Id z = g.plane(c.key[p]);
@@ -353,17 +357,15 @@ CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& op
     out.read += fine.read;
     out.contour += fine.contour;
     auto t0 = Clock::now();
-    CoarseLayers c = coarsen_layers(fine, g, g.nxyz * static_cast<std::uint64_t>(isovalues), own);
+    CoarseLayers c = coarsen_layers(fine, g, g.nxyz * static_cast<std::uint64_t>(isovalues), own, {lo, hi});
+    fine = FineLayers{};  // the fine layers are not read again
     Written w;
     bool inside = false;
     agreed([&] {
       w = written(c, g, {lo, hi}, own);
       inside = decisions_inside(c, g, w, first, end);
-      out.triangles_before = 0;
-      for (float layer : fine_layers(fine, g))
-        out.triangles_before += lo <= static_cast<Id>(layer) && static_cast<Id>(layer) < hi;
+      out.triangles_before = c.own_fine_triangles;
     });
-    fine = FineLayers{};
     out.coarsen += seconds_since(t0);
     if (!all_ok(inside)) continue;
     t0 = Clock::now();
