@@ -146,7 +146,9 @@ def ops_doc(rows):
          "steps for discrete-mc), smooths and coarsens them with the one-process code, and keeps what its rows "
          "made, so its share is bit-identical to one process (docs/decisions/labels-pieces-halo.md); the distributed "
          "KEY-REDUCE numbers the points. Any other output file is gathered on rank 0, byte-identical to one process. "
-         "`contour --coarsen` still gathers (its non-manifold split is not local). 'peak MiB, busiest rank' is the "
+         "`contour --coarsen` with `-o X.pvtp` writes pieces too (halo layers, grown while a chain of the "
+         "non-manifold split reaches past them: docs/decisions/contour-coarsen-pieces.md); its series below is the "
+         "gathered file, not yet measured in pieces. 'peak MiB, busiest rank' is the "
          "largest peak over the ranks with pieces, rank 0's when gathered (the other ranks then hold only their "
          "slab).\n"]
     for name, title in (("labels-strong", "Labels, strong: AAL atlas 181 x 217 x 181, 116 labels, "

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <span>
 #include <vector>
 
 #include "keymesh/core/equal_mask.hpp"  // emmintrin.h too, with SSE2
@@ -486,7 +487,7 @@ struct FanPass {
 
 // Every point's fan, in fixed chunks; the counts summed into r.
 void count_fans(const SurfaceMesh& mesh, const FanPass& fan, const std::vector<Id>& start,
-                CornerOrder& order, TopologyReport& r) {
+                CornerOrder& order, TopologyReport& r, std::span<const std::uint8_t> counted) {
   const Id n = mesh.num_points();
   Id max_degree = 0;
   for (Id v = 0; v < n; ++v) max_degree = std::max(max_degree, start[v + 1] - start[v]);
@@ -501,6 +502,7 @@ void count_fans(const SurfaceMesh& mesh, const FanPass& fan, const std::vector<I
   parallel::for_each_chunk(n, chunks, [&](Id vb, Id ve, int chunk) {
     ChunkCounts cc;  // local: counts[] entries share cache lines
     for (Id v = vb; v < ve; ++v) {
+      if (!counted.empty() && !counted[static_cast<std::size_t>(v)]) continue;
       const Id s = start[v], d = start[v + 1] - s;
       if (d == 0) {
         ++cc.unused;
@@ -545,7 +547,7 @@ Id count_components(const SurfaceMesh& mesh, const std::vector<Id>& start) {
 
 namespace {
 // check_fans' counts; `start` keeps the corners' grouping by point.
-TopologyReport fans_of(const SurfaceMesh& mesh, std::vector<Id>& start) {
+TopologyReport fans_of(const SurfaceMesh& mesh, std::vector<Id>& start, std::span<const std::uint8_t> counted = {}) {
   check_layout(mesh);
   TopologyReport r;
   const Id m = mesh.num_cells();
@@ -564,7 +566,7 @@ TopologyReport fans_of(const SurfaceMesh& mesh, std::vector<Id>& start) {
   }
   CornerOrder order;
   corners_by_point(mesh, start, order);
-  count_fans(mesh, FanPass{mesh, corner_cell, degenerate}, start, order, r);
+  count_fans(mesh, FanPass{mesh, corner_cell, degenerate}, start, order, r, counted);
   free_storage(order);
   for (std::uint8_t f : degenerate) r.degenerate_cells += f;
   return r;
@@ -574,6 +576,14 @@ TopologyReport fans_of(const SurfaceMesh& mesh, std::vector<Id>& start) {
 TopologyReport check_fans(const SurfaceMesh& mesh) {
   std::vector<Id> start;
   return fans_of(mesh, start);
+}
+
+TopologyReport check_fans(const SurfaceMesh& mesh, std::span<const std::uint8_t> counted) {
+  if (counted.size() != static_cast<std::size_t>(mesh.num_points()))
+    throw InputError("check_fans: " + std::to_string(counted.size()) + " point marks for " +
+                     std::to_string(mesh.num_points()) + " points");
+  std::vector<Id> start;
+  return fans_of(mesh, start, counted);
 }
 
 TopologyReport check_topology(const SurfaceMesh& mesh) {

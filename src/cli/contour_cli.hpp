@@ -4,13 +4,15 @@
 //   run_voxels    a volume read whole, marching cubes;
 //   run_tets      a tetrahedral grid (.vtu .vtk), marching tetrahedra;
 //   run_streamed  --memory-limit: the volume in slabs of z-planes;
-//   run_distributed_contour  under mpirun: each rank reads and contours its slab.
+//   run_distributed_contour  under mpirun: each rank reads and contours its slab;
+//   run_coarse_pieces  (contour_coarse_pieces.cpp) its --coarsen into .pvtp pieces.
 #include <string>
 #include <vector>
 
 #include "command.hpp"
 #include "raw_input.hpp"
 #include "keymesh/generate/contour/contour.hpp"
+#include "keymesh/mesh/plane_source.hpp"
 
 namespace keymesh::cli {
 
@@ -60,5 +62,11 @@ void write_contour(const ContourCli& o, const SurfaceMesh& mesh, const std::vect
 // mesh gathered on rank 0, byte-identical to the single-process file.
 // Returns the exit code (every rank returns the same).
 int run_distributed_contour(const ContourCli& o, const generate::ContourOptions& options, int threads);
+
+// --coarsen into OUT.pvtp under mpirun: every rank its piece of the coarse
+// surface, made from its layers and a halo (distributed/coarse_pieces.hpp),
+// nothing gathered; welded by their global ids, the one process's output.
+int run_coarse_pieces(const ContourCli& o, const generate::ContourOptions& options, PlaneSource& source,
+                      int threads);
 
 }  // namespace keymesh::cli

@@ -134,15 +134,9 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
                    o.output.c_str());
     return 2;
   }
-  if (pieces && o.coarsen) {
-    if (distributed::rank() == 0)
-      std::fprintf(stderr, "keymesh contour: --coarsen averages the points the ranks share, on rank 0: write one file "
-                           "(.vtp .ply ...), not the pieces of %s\n",
-                   o.output.c_str());
-    return 2;
-  }
   StageTimer timer;
   const std::unique_ptr<PlaneSource> source = open_slab_source(o, options);
+  if (pieces && o.coarsen) return run_coarse_pieces(o, options, *source, threads);
   distributed::ContourPiece piece =
       timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance); });
   const double total_points = static_cast<double>(piece.numbering.total);

@@ -290,6 +290,41 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   return piece;
 }
 
+std::vector<Id> slab_bounds(PlaneSource& source, const generate::ContourOptions& options, bool balance_work) {
+  int P = 1, r = 0;
+  mpi().Comm_size(mpi().comm_world, &P);
+  mpi().Comm_rank(mpi().comm_world, &r);
+  const Id nz = source.header().dims[2];
+  std::vector<Id> bounds(static_cast<std::size_t>(P) + 1);
+  for (int q = 0; q <= P; ++q) bounds[q] = (nz - 1) * q / P;
+  RankStats unused;
+  if (balance_work && P > 1) balance(source, options, bounds, r, unused);
+  return bounds;
+}
+
+FineLayers contour_layers(PlaneSource& source, const generate::ContourOptions& options, Id first, Id end) {
+  const ImageGrid& head = source.header();
+  const Id nz = head.dims[2];
+  // Derivatives read a ghost plane beyond the layers, where the grid has one.
+  const bool ghosts = options.normals == generate::ContourNormals::Gradient || options.curvature;
+  const Id below = ghosts && first > 0 ? 1 : 0, above = ghosts && end < nz - 1 ? 1 : 0;
+  FineLayers out;
+  auto t0 = Clock::now();
+  ImageGrid slab = read_slab(source, HeldSlab{}, first - below, end + above);
+  out.read = seconds_since(t0);
+  t0 = Clock::now();
+  generate::ContourOptions opt = options;
+  opt.first_plane = first - below;
+  opt.total_planes = nz;
+  opt.ghost_below = below;
+  opt.ghost_above = above;
+  opt.coarsen = false;  // the caller coarsens the layers with their nearest grid points
+  if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
+  out.mesh = generate::contour(slab, opt, nullptr, &out.keys, &out.nearest);
+  out.contour = seconds_since(t0);
+  return out;
+}
+
 SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys) {
   const auto t0 = Clock::now();
   int P = 1, r = 0;

@@ -36,6 +36,8 @@ void require_distributable(const ImageGrid&, const generate::ContourOptions&, in
 ContourPiece contour_piece(PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }
 SurfaceMesh gather(ContourPiece&, std::vector<std::uint64_t>*) { not_built(); }
 GhostedPiece ghosted_piece(ContourPiece&) { not_built(); }
+std::vector<Id> slab_bounds(PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }
+FineLayers contour_layers(PlaneSource&, const generate::ContourOptions&, Id, Id) { not_built(); }
 std::vector<RankStats> gather_stats(const RankStats&) { not_built(); }
 
 }  // namespace keymesh::distributed

@@ -7,8 +7,8 @@ process coarsens it. Checked against the single in-memory process of the
 same keymesh: the output file is byte-identical for several slab sizes, for
 mpirun -np 1..4, with gradient or averaged normals and several isovalues, on
 smoothed noise (many collapsed triangles and folds) and a real MRI volume
-when installed. The report's counts are checked against the file read back,
-and an index of pieces (.pvtp) is refused by name under --coarsen."""
+when installed. The report's counts are checked against the file read back.
+Pieces (.pvtp) under --coarsen: test_coarsen_pieces_mpi_cli.py."""
 import os
 import shutil
 import sys
@@ -102,19 +102,9 @@ def real_volume():
         assert open(out, "rb").read() == ref, "brainsmall.den -np 3 coarsening differs"
 
 
-def pieces_refused():
-    if not shutil.which("mpirun"):
-        return
-    out = os.path.join(D, "pieces.pvtp")
-    p = mpirun(2, "contour", NOISE, *DIMS, "--iso", 0.5, "--coarsen", "-o", out, expect=2)
-    assert "--coarsen" in p.stderr and p.stderr.count("--coarsen") == 1, p.stderr
-    assert not os.path.exists(out) and not os.path.exists(os.path.join(D, "pieces_0.vtp"))
-
-
 check("--coarsen --memory-limit: byte-identical to in-memory (3 slab sizes, normals, curvature, 2 isovalues)",
       streamed_equals_in_memory)
 check("mpirun -np 1..4 --coarsen: gathered file byte-identical to one process; report counts = file",
       distributed_equals_single_process)
 check("brainsmall.den iso 37.3: streamed and -np 3 coarsening byte-identical", real_volume)
-check("--coarsen with .pvtp pieces refused by name, nothing written", pieces_refused)
 finish()

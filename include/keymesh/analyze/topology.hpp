@@ -1,5 +1,7 @@
 #pragma once
 // Topology check of a polygon surface: is it a closed 2-manifold?
+#include <span>
+
 #include "keymesh/mesh/surface_mesh.hpp"
 
 namespace keymesh::analyze {
@@ -33,6 +35,10 @@ TopologyReport check_topology(const SurfaceMesh& mesh);
 // characteristic (left 0) and closed_manifold (left false): what a
 // coarsened contour's report needs, at about three quarters of the cost.
 TopologyReport check_fans(const SurfaceMesh& mesh);
+// The same counted at the marked points only (counted[v] != 0, one mark a
+// point): their vertices, and the edges whose smaller end they are; a part
+// of a mesh that holds every cell at its marked points counts their share.
+TopologyReport check_fans(const SurfaceMesh& mesh, std::span<const std::uint8_t> counted);
 
 namespace detail {
 // check_topology's duplicate_points of the n points at xyz; `hash_bits` (1 to

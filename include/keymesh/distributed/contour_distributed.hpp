@@ -65,6 +65,21 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 // output is the same either way.
 ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance);
 
+// Collective: the voxel layers of every rank, rank q's [bounds[q],
+// bounds[q + 1]): equal counts, or balanced as contour_piece balances them.
+std::vector<Id> slab_bounds(PlaneSource& source, const generate::ContourOptions& options, bool balance);
+
+// The fine surface of voxel layers [first, end) with every point's global
+// edge key and nearest grid point (its coarse key), read from `source` (a
+// ghost plane either side for derivatives, as contour_piece reads them);
+// averaged normals are left to the caller. Not collective.
+struct FineLayers {
+  SurfaceMesh mesh;
+  std::vector<std::uint64_t> keys, nearest;
+  double read = 0, contour = 0;  // seconds
+};
+FineLayers contour_layers(PlaneSource& source, const generate::ContourOptions& options, Id first, Id end);
+
 // Collective: rank 0 returns the whole mesh (points in global id order,
 // triangles isovalue by isovalue in rank order: the single-process file;
 // with piece.coarsen, that mesh coarsened as one process coarsens it), the

@@ -91,8 +91,12 @@ void check_coarsen_input(const SurfaceMesh& mesh, const std::vector<std::uint64_
                      " is outside the key range [0, " + std::to_string(key_range) + ")");
 }
 
-SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
-                    CoarsenStats* stats) {
+namespace {
+
+// coarsen()'s work; with `rounds`, the split's rounds agreed with the other
+// parts and what it did returned in `split` (unused points left in place).
+SurfaceMesh coarsen_mesh(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                         CoarsenStats* stats, const SplitRounds* rounds, NonmanifoldSplit* split) {
   check_coarsen_input(mesh, keys, key_range);
   const Id n = mesh.num_points();
   // The dense plan's table spans the key range (every grid point of the
@@ -143,9 +147,24 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
     }
   });
   const Id folded = remove_folds(out);
-  remove_points(out, split_nonmanifold(out).unused);
+  if (rounds)
+    *split = split_nonmanifold_part(out, *rounds);
+  else
+    remove_points(out, split_nonmanifold(out).unused);
   if (stats) *stats = CoarsenStats{n, out.num_points(), t_in, t_out - folded, folded};
   return out;
+}
+
+}  // namespace
+
+SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                    CoarsenStats* stats) {
+  return coarsen_mesh(mesh, keys, key_range, stats, nullptr, nullptr);
+}
+
+SurfaceMesh coarsen_part(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                         const SplitRounds& rounds, NonmanifoldSplit& split) {
+  return coarsen_mesh(mesh, keys, key_range, nullptr, &rounds, &split);
 }
 
 }  // namespace keymesh::generate

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <atomic>
+#include <functional>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -442,8 +443,8 @@ struct MultiEdges {
 };
 
 // Sweeps over the multi-edges in key order: a conflicted edge takes the
-// first rotation that separates its pairs. Returns the edges left joined.
-Id rotate_pairings(FanCache& cache, MultiEdges& edges, std::vector<std::uint32_t>& rotation) {
+// first rotation that separates its pairs.
+void rotate_pairings(FanCache& cache, MultiEdges& edges, std::vector<std::uint32_t>& rotation) {
   auto refresh = [&](std::size_t e) { cache.refresh(edges.lo[e]), cache.refresh(edges.hi[e]); };
   for (int sweep = 0; sweep < 4; ++sweep) {
     bool changed = false;
@@ -461,19 +462,36 @@ Id rotate_pairings(FanCache& cache, MultiEdges& edges, std::vector<std::uint32_t
     }
     if (!changed) break;
   }
-  Id left = 0;
-  for (std::size_t e = 0; e < rotation.size(); ++e) left += edges.joins_twice(cache, e) ? 1 : 0;
+}
+
+// The edges left joined after the sweeps: all of them, and those whose
+// smaller end's original (a copy's is the point it copies) `counts` names.
+struct EdgesLeft {
+  Id all = 0, counted = 0;
+};
+EdgesLeft edges_left(FanCache& cache, MultiEdges& edges, const Flagged& f, Id n, const std::vector<PointIndex>& source,
+                     const std::function<bool(PointIndex)>* counts) {
+  EdgesLeft left;
+  for (std::size_t e = 0; e < edges.lo.size(); ++e) {
+    if (!edges.joins_twice(cache, e)) continue;
+    ++left.all;
+    const PointIndex lo = f.point[edges.lo[e]];
+    if (counts && (*counts)(Id{lo} < n ? lo : source[lo - n])) ++left.counted;
+  }
   return left;
 }
 
 // One pass of the rule over the flagged points: the pairings rotated, then
 // every fan but a point's first given a new id (appended to `source`: the
 // original point it copies). All is decided before a corner is rewritten,
-// since the rule reads the other points' ids. Returns the edges left joined;
+// since the rule reads the other points' ids. Returns the edges left joined
+// (`counts`: see EdgesLeft); `split_from` gets the point each copy's fan left;
 // `regrouped` gets the flagged corners grouped by the ids they hold after
 // (ascending ids: the points kept their first fans, in order, and the
 // copies' ids come after every id there was).
-Id split_round(PointIndex* C, Id n, Flagged& f, std::vector<PointIndex>& source, Flagged& regrouped) {
+EdgesLeft split_round(PointIndex* C, Id n, Flagged& f, std::vector<PointIndex>& source,
+                      std::vector<PointIndex>& split_from, Flagged& regrouped,
+                      const std::function<bool(PointIndex)>* counts) {
   std::vector<std::uint64_t> multi;
   std::vector<std::uint32_t> rotation;
   const FanRule fans{multi, rotation};
@@ -489,7 +507,8 @@ Id split_round(PointIndex* C, Id n, Flagged& f, std::vector<PointIndex>& source,
   });
   rotation.assign(multi.size(), 0);
   MultiEdges edges(f, multi);
-  const Id left = rotate_pairings(cache, edges, rotation);
+  rotate_pairings(cache, edges, rotation);
+  const EdgesLeft left = edges_left(cache, edges, f, n, source, counts);
   std::vector<std::pair<std::uint32_t, PointIndex>> moves;  // corner, new id
   std::vector<PointIndex> id_of_root;
   Flagged copies;
@@ -507,6 +526,7 @@ Id split_round(PointIndex* C, Id n, Flagged& f, std::vector<PointIndex>& source,
           throw LimitError("split_nonmanifold: more than 2^32 - 1 points");
         id_of_root[r] = static_cast<PointIndex>(n + static_cast<Id>(source.size()));
         source.push_back(original);
+        split_from.push_back(f.point[k]);
       }
       group.clear();
       for (std::size_t j = r; j < d; ++j)
@@ -525,19 +545,29 @@ Id split_round(PointIndex* C, Id n, Flagged& f, std::vector<PointIndex>& source,
 
 namespace {
 
-// The rule over the flagged points, then the copies appended.
-void split_flagged(SurfaceMesh& mesh, Flagged f, NonmanifoldSplit& result) {
+// The rule over the flagged points, then the copies appended. `rounds`
+// (parts of one mesh): the rounds agreed with the other parts.
+void split_flagged(SurfaceMesh& mesh, Flagged f, NonmanifoldSplit& result, const SplitRounds* rounds = nullptr) {
   const Id n = mesh.num_points();
   PointIndex* C = mesh.connectivity.data();
   std::vector<PointIndex> source;  // the original point each new id copies
+  result.first_flagged = f.point;
   // A split renames the corners around the points it splits, which can let
   // a rotation separate an edge it could not before: the points still
   // flagged are looked at again (a few rounds, each over them only).
-  for (int round = 0; round < 4 && f.size() > 0; ++round) {
+  for (int round = 0; round < 4 && (rounds || f.size() > 0); ++round) {
     const std::size_t added_before = source.size();
     Flagged regrouped;
-    result.edges_left = split_round(C, n, f, source, regrouped);
-    if (source.size() == added_before || result.edges_left == 0) break;
+    const EdgesLeft left =
+        split_round(C, n, f, source, result.split_from, regrouped, rounds ? &rounds->counts : nullptr);
+    result.copy_round.resize(source.size(), static_cast<std::uint8_t>(round + 1));
+    result.rounds = round + 1;
+    result.edges_left = rounds ? left.counted : left.all;
+    Id counted_added = 0;
+    for (std::size_t i = added_before; rounds && i < source.size(); ++i) counted_added += rounds->counts(source[i]);
+    const bool again = rounds ? rounds->go_on(counted_added, left.counted)
+                              : source.size() != added_before && left.all != 0;
+    if (!again) break;
     f = still_odd(C, regrouped);
   }
   const Id added = static_cast<Id>(source.size());
@@ -603,6 +633,19 @@ NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const NonmanifoldSuspects&
   // its neighbours is left once and arrived from once), so it changes
   // nothing (the check cost more than the rule on the few such points).
   split_flagged(mesh, corners_of(mesh.connectivity.data(), n, points, where), result);
+  return result;
+}
+
+NonmanifoldSplit split_nonmanifold_part(SurfaceMesh& mesh, const SplitRounds& rounds) {
+  const Id corners = checked_corners(mesh), n = mesh.num_points();
+  NonmanifoldSplit result;
+  // A part without a triangle still takes part in every round's agreement.
+  Flagged f;
+  if (corners == 0)
+    for (Id p = 0; p < n; ++p) result.unused.push_back(static_cast<PointIndex>(p));
+  else
+    f = flag_points(mesh.connectivity.data(), corners, n, result.unused);
+  split_flagged(mesh, std::move(f), result, &rounds);
   return result;
 }
 

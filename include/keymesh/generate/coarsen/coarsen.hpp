@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "keymesh/generate/coarsen/split_nonmanifold.hpp"
 #include "keymesh/mesh/normals.hpp"
 #include "keymesh/mesh/surface_mesh.hpp"
 
@@ -38,6 +39,13 @@ void check_coarsen_input(const SurfaceMesh& mesh, const std::vector<std::uint64_
 // `keys[p]` is point p's coarse key, every key < key_range (dense plan).
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
                     CoarsenStats* stats = nullptr);
+
+// One part of a mesh that other processes coarsen beside it (a rank's slab
+// and halo): the same, with the split's rounds agreed (split_nonmanifold.hpp,
+// SplitRounds) and what the split did returned in `split`; the points left
+// without a triangle (split.unused) are not removed.
+SurfaceMesh coarsen_part(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
+                         const SplitRounds& rounds, NonmanifoldSplit& split);
 
 // Point normals live in the mesh layer (mesh/normals.hpp): coarsening
 // renormalises averaged ones and callers re-average after it with

@@ -31,6 +31,8 @@
 // than the other (an open surface's border, or a fold's one-way repeats)
 // keep their unpaired triangles as boundary. Triangles, their order and the
 // points' order are kept; deterministic, the same at any thread count.
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "keymesh/mesh/surface_mesh.hpp"
@@ -43,6 +45,14 @@ struct NonmanifoldSplit {
   // The points no triangle refers to, ascending, found on the way and left
   // in place (keymesh::remove_points takes them out without another scan).
   std::vector<PointIndex> unused;
+  // The copies, in the order appended (copy i is point n + i): the point
+  // whose fan it took (an original or an earlier copy) and the round
+  // (1 to 4) that made it. And the points the first round looked at
+  // (ascending): every point that was not one closed fan.
+  std::vector<PointIndex> split_from;
+  std::vector<std::uint8_t> copy_round;
+  std::vector<PointIndex> first_flagged;
+  int rounds = 0;  // rounds run
 };
 
 // Triangles only (InputError otherwise, and for a corner referring to a
@@ -72,5 +82,22 @@ struct NonmanifoldSuspects {
 // missing from the suspects (or a triangle from the ranges) is left as it
 // is. Lists out of order are refused (InputError).
 NonmanifoldSplit split_nonmanifold(SurfaceMesh& mesh, const NonmanifoldSuspects& suspects);
+
+// Parts of one mesh split apart, each with a margin of its neighbours'
+// (the distributed contour's ranks, docs/decisions/contour-coarsen-pieces.md):
+// a decision of the rule reaches along chains of points that are not one
+// closed fan, and how many rounds run depends on the whole mesh (a round
+// follows one that added a copy and left an edge joined). So the rounds are
+// agreed: after each, `go_on` (collective) is told the copies this part
+// added of the points it `counts` and the edges left joined whose smaller
+// end it counts, and says whether any part added a copy and left an edge.
+struct SplitRounds {
+  std::function<bool(PointIndex)> counts;
+  std::function<bool(Id added, Id left)> go_on;
+};
+
+// The whole-mesh form on one part, with agreed rounds (edges_left: this
+// part's count).
+NonmanifoldSplit split_nonmanifold_part(SurfaceMesh& mesh, const SplitRounds& rounds);
 
 }  // namespace keymesh::generate
