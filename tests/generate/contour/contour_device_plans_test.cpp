@@ -143,6 +143,9 @@ TEST(DevicePlans, ThinAndEmptyShapesEqualTheCpu) {
   auto* p = static_cast<std::uint8_t*>(plate.data());
   for (Id i = 0; i < plate.num_points(); ++i) p[i] = (i / 144 == 5) ? 200 : 0;
   EXPECT_GT(expect_plans_equal_cpu(plate, {100.0}, "one-voxel plate"), 100);
+  // Integer isovalues past the type's range: no sample inside, or every one
+  // (InsideTest's none / all), beside an isovalue that cuts.
+  EXPECT_GT(expect_plans_equal_cpu(plate, {300.0, 100.0, -5.0}, "uint8 out of range"), 100);
   const ImageGrid sphere = generate::spherical_distance(20);
   EXPECT_EQ(expect_plans_equal_cpu(sphere, {1000.0}, "empty (none inside)"), 0);
   EXPECT_EQ(expect_plans_equal_cpu(sphere, {-1.0}, "empty (all inside)"), 0);

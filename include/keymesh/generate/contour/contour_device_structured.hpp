@@ -33,17 +33,29 @@ namespace keymesh::generate::device_structured {
 
 using device_contour::PointOutputs;
 
-// `value >= iso` at a grid point, as the sort plan's Classify tests it
-// (mode 0 compare, 1 none inside, 2 all inside; NaN is outside).
+// `value >= iso` at a grid point, as the sort plan's Classify tests it (NaN
+// is outside). An isovalue no sample can be inside of, or every sample is
+// (InsideTest's none / all: integer samples), cuts no edge: count_rows skips
+// it, so the test here is the comparison alone.
 template <class T>
 struct Inside {
   const T* samples;
   T threshold;
-  int mode;
-  KEYMESH_HD bool operator()(Id q) const { return mode == 2 || (mode == 0 && samples[q] >= threshold); }
+  KEYMESH_HOT_INLINE KEYMESH_HD bool operator()(Id q) const { return samples[q] >= threshold; }
 };
 
-KEYMESH_HD inline unsigned count3(unsigned m) { return (m & 1u) + ((m >> 1) & 1u) + ((m >> 2) & 1u); }
+KEYMESH_HOT_INLINE KEYMESH_HD unsigned count3(unsigned m) { return (m & 1u) + ((m >> 1) & 1u) + ((m >> 2) & 1u); }
+
+// A row walk reads each sample of a column once: the inside bits of column
+// i of the grid rows (j + a, k + b) around row (j, k), bit w for the w-th
+// (a, b) below. Bits 0-3 (a, b in {0, 1}) are the four grid rows a voxel
+// row's corners lie in (bit dy + 2 dz, so a cube case is two columns' low
+// nibbles); the others are the rows their y and z edges end in.
+// (Packed in integers: a constant array would need a copy in device memory.)
+KEYMESH_HD inline Id window_a(int w) { return (0x4a44u >> 2 * w) & 3u; }
+KEYMESH_HD inline Id window_b(int w) { return (0xa450u >> 2 * w) & 3u; }
+KEYMESH_HD inline unsigned window_y(int s) { return (0x5341u >> 4 * s) & 15u; }  // the bit of row (a + 1, b), rows 0-3
+KEYMESH_HD inline unsigned window_z(int s) { return (0x7632u >> 4 * s) & 15u; }  // the bit of row (a, b + 1)
 
 // The grid and the inside test, as the row functors read them.
 template <class T>
@@ -52,25 +64,47 @@ struct Rows {
   Id nx, ny, nz, nxy;
   const MarchingCubesTable* table;
 
-  // Bit a: the edge from grid point (i, j, k) along axis a is cut.
-  KEYMESH_HD unsigned cut_edges(Id i, Id j, Id k) const {
-    const Id p = i + nx * j + nxy * k;
-    const bool in = inside(p);
+  // Where the window rows of row (j, k) in `wanted` start (those in the grid; bit w of `in_grid`).
+  struct Window {
+    Id start[8];
+    unsigned in_grid;
+  };
+  KEYMESH_HD Window window(Id j, Id k, unsigned wanted) const {
+    Window win{{}, 0};
+    for (int w = 0; w < 8; ++w) {
+      const Id jw = j + window_a(w), kw = k + window_b(w);
+      win.start[w] = nx * jw + nxy * kw;
+      if ((wanted >> w & 1u) && jw < ny && kw < nz) win.in_grid |= 1u << w;
+    }
+    return win;
+  }
+  // Column i's inside bits (0 for the window rows outside the grid).
+  KEYMESH_HOT_INLINE KEYMESH_HD unsigned column(const Window& win, Id i) const {
+    unsigned bits = 0;
+    for (int w = 0; w < 8; ++w)
+      if (win.in_grid >> w & 1u) bits |= static_cast<unsigned>(inside(i + win.start[w])) << w;
+    return bits;
+  }
+  // Bit a: the edge from grid point i of window row s (0-3) along axis a is
+  // cut; c0, c1 are columns i and i + 1.
+  KEYMESH_HOT_INLINE KEYMESH_HD unsigned cut_edges(int s, Id i, Id j, Id k, unsigned c0, unsigned c1) const {
+    const unsigned in = c0 >> s & 1u;
     unsigned m = 0;
-    if (i + 1 < nx && inside(p + 1) != in) m |= 1u;
-    if (j + 1 < ny && inside(p + nx) != in) m |= 2u;
-    if (k + 1 < nz && inside(p + nxy) != in) m |= 4u;
+    if (i + 1 < nx && (c1 >> s & 1u) != in) m |= 1u;
+    if (j + window_a(s) + 1 < ny && (c0 >> window_y(s) & 1u) != in) m |= 2u;
+    if (k + window_b(s) + 1 < nz && (c0 >> window_z(s) & 1u) != in) m |= 4u;
     return m;
   }
-  // Voxel (i, j, k)'s cube case: bit c set when its corner c is inside.
-  KEYMESH_HD unsigned cube_case(Id i, Id j, Id k) const {
-    const Id p0 = i + nx * j + nxy * k;
-    unsigned c = 0;
-    for (int corner = 0; corner < 8; ++corner) {
-      const Id q = p0 + (corner & 1) + nx * ((corner >> 1) & 1) + nxy * ((corner >> 2) & 1);
-      c |= static_cast<unsigned>(inside(q)) << corner;
-    }
-    return c;
+  // The cube case of the voxel between columns c0 and c1 (bit `corner` set
+  // when that corner is inside), as the sort plan's Classify numbers corners.
+  // Corner dx + 2 (dy + 2 dz) is bit dy + 2 dz of column c_dx: the low
+  // nibbles of c0 and c1 interleaved.
+  KEYMESH_HOT_INLINE KEYMESH_HD static unsigned cube_case(unsigned c0, unsigned c1) {
+    return spread(c0 & 15u) | spread(c1 & 15u) << 1;
+  }
+  KEYMESH_HOT_INLINE KEYMESH_HD static unsigned spread(unsigned x) {
+    x = (x | x << 2) & 0x33u;
+    return (x | x << 1) & 0x55u;
   }
   KEYMESH_HD bool has_voxels(Id j, Id k) const { return j + 1 < ny && k + 1 < nz; }
 };
@@ -84,10 +118,16 @@ struct CountRows {
   std::uint64_t* triangles;
   KEYMESH_HD void operator()(Id r) const {
     const Id j = r % g.ny, k = r / g.ny;
+    const bool voxels = g.has_voxels(j, k);
     std::uint64_t p = 0, t = 0;
-    for (Id i = 0; i < g.nx; ++i) p += count3(g.cut_edges(i, j, k));
-    if (g.has_voxels(j, k))
-      for (Id i = 0; i + 1 < g.nx; ++i) t += g.table->triangle_count[g.cube_case(i, j, k)];
+    const auto win = g.window(j, k, 0xfu);
+    unsigned c0 = g.column(win, 0);
+    for (Id i = 0; i < g.nx; ++i) {
+      const unsigned c1 = i + 1 < g.nx ? g.column(win, i + 1) : 0u;
+      p += count3(g.cut_edges(0, i, j, k, c0, c1));
+      if (voxels && i + 1 < g.nx) t += g.table->triangle_count[Rows<T>::cube_case(c0, c1)];
+      c0 = c1;
+    }
     points[r] = p;
     triangles[r] = t;
   }
@@ -99,16 +139,21 @@ struct WriteRowPoints {
   Rows<T> g;
   EdgeInterpolator<T> interp;
   PointOutputs<T> out;
-  const std::uint64_t* first;  // the isovalue's scan of CountRows' points
+  const std::uint64_t* first;  // the isovalue's scan of CountRows' points (rows + 1: the total last)
   Id base;                     // the isovalue's first point id
   Id iso;
   KEYMESH_HD void operator()(Id r) const {
     const Id j = r % g.ny, k = r / g.ny;
     Id id = base + static_cast<Id>(first[r]);
+    if (first[r + 1] == first[r]) return;  // no cut edge
+    const auto win = g.window(j, k, 0x7u);
+    unsigned c0 = g.column(win, 0);
     for (Id i = 0; i < g.nx; ++i) {
-      const unsigned m = g.cut_edges(i, j, k);
+      const unsigned c1 = i + 1 < g.nx ? g.column(win, i + 1) : 0u;
+      const unsigned m = g.cut_edges(0, i, j, k, c0, c1);
       for (int axis = 0; axis < 3; ++axis)
         if (m >> axis & 1u) out.write(interp, interp.at(i + g.nx * j + g.nxy * k, i, j, k, axis, iso), id++);
+      c0 = c1;
     }
   }
 };
@@ -117,28 +162,30 @@ struct WriteRowPoints {
 // A corner's edge starts at grid point (i + dx, j + dy, k + dz): its id is
 // that grid row's first, plus the row's cut edges before point i + dx, plus
 // the point's cut edges along a smaller axis. The four grid rows' counts run
-// along with i.
+// along with i, over a window of three columns.
 template <class T>
 struct WriteRowTriangles {
   Rows<T> g;
-  const std::uint64_t* point_first;
+  const std::uint64_t* point_first;     // rows + 1 (CountRows' scans, the totals last)
   const std::uint64_t* triangle_first;
   Id point_base, triangle_base;
   PointIndex* connectivity;
   KEYMESH_HD void operator()(Id r) const {
     const Id j = r % g.ny, k = r / g.ny;
-    if (!g.has_voxels(j, k)) return;
+    if (!g.has_voxels(j, k) || triangle_first[r + 1] == triangle_first[r]) return;
     Id first[4], before[4] = {0, 0, 0, 0};
+    const auto win = g.window(j, k, 0xffu);
+    unsigned c0 = g.column(win, 0), c1 = g.column(win, 1);
+    unsigned c2 = g.nx > 2 ? g.column(win, 2) : 0u;
     unsigned here[4], next[4];  // cut edges at points i and i + 1 of each row
     for (int s = 0; s < 4; ++s) {
-      const Id js = j + (s & 1), ks = k + (s >> 1);
-      first[s] = point_base + static_cast<Id>(point_first[js + g.ny * ks]);
-      here[s] = g.cut_edges(0, js, ks);
-      next[s] = g.cut_edges(1, js, ks);
+      first[s] = point_base + static_cast<Id>(point_first[j + window_a(s) + g.ny * (k + window_b(s))]);
+      here[s] = g.cut_edges(s, 0, j, k, c0, c1);
+      next[s] = g.cut_edges(s, 1, j, k, c1, c2);
     }
     PointIndex* o = connectivity + 3 * (triangle_base + static_cast<Id>(triangle_first[r]));
     for (Id i = 0; i + 1 < g.nx; ++i) {
-      const unsigned c = g.cube_case(i, j, k);
+      const unsigned c = Rows<T>::cube_case(c0, c1);
       const int corners = 3 * g.table->triangle_count[c];
       for (int n = 0; n < corners; ++n) {
         const CubeEdge& ce = g.table->edges[g.table->triangle_edges[c][n]];
@@ -147,10 +194,12 @@ struct WriteRowTriangles {
         const Id rank = ce.dx ? before[s] + count3(here[s]) + count3(next[s] & lower) : before[s] + count3(here[s] & lower);
         *o++ = static_cast<PointIndex>(first[s] + rank);
       }
+      c0 = c1, c1 = c2;  // columns i + 1, i + 2, i + 3
+      c2 = i + 3 < g.nx ? g.column(win, i + 3) : 0u;
       for (int s = 0; s < 4; ++s) {
         before[s] += count3(here[s]);
         here[s] = next[s];
-        next[s] = i + 2 < g.nx ? g.cut_edges(i + 2, j + (s & 1), k + (s >> 1)) : 0u;
+        next[s] = i + 2 < g.nx ? g.cut_edges(s, i + 2, j, k, c1, c2) : 0u;
       }
     }
   }
@@ -167,10 +216,8 @@ struct IsoRows {
 
 template <class T, class D>
 Rows<T> rows_of(const device_contour::Input<D, T>& in, double iso) {
-  const InsideTest<T> test(iso);
   const GridShape& s = in.shape;
-  return Rows<T>{Inside<T>{in.samples, test.threshold, test.all ? 2 : (test.none ? 1 : 0)}, s.nx, s.ny, s.nz, s.nxy,
-                 in.table.data()};
+  return Rows<T>{Inside<T>{in.samples, InsideTest<T>(iso).threshold}, s.nx, s.ny, s.nz, s.nxy, in.table.data()};
 }
 
 // Count and scan every isovalue's rows.
@@ -182,14 +229,18 @@ std::vector<IsoRows<D>> count_rows(const D& d, const device_contour::Input<D, T>
   Id points = 0, triangles = 0;
   for (std::size_t iso = 0; iso < iso_rows.size(); ++iso) {
     IsoRows<D>& ir = iso_rows[iso];
-    ir.point_first = d.template allocate<std::uint64_t>(rows);
-    ir.triangle_first = d.template allocate<std::uint64_t>(rows);
+    ir.point_first = d.template allocate<std::uint64_t>(rows + 1);  // + the total
+    ir.triangle_first = d.template allocate<std::uint64_t>(rows + 1);
     auto mark = d.begin_stage(&st.classify);
-    d.for_each(rows, CountRows<T>{rows_of(in, opt.isovalues[iso]), ir.point_first.data(), ir.triangle_first.data()});
+    const InsideTest<T> test(opt.isovalues[iso]);
+    const Id counted = test.none || test.all ? 0 : rows;  // no edge cut: every count 0
+    d.for_each(counted, CountRows<T>{rows_of(in, opt.isovalues[iso]), ir.point_first.data(), ir.triangle_first.data()});
+    device::fill(d, ir.point_first.data() + counted, rows + 1 - counted, std::uint64_t{0});
+    device::fill(d, ir.triangle_first.data() + counted, rows + 1 - counted, std::uint64_t{0});
     d.end_stage(mark);
     mark = d.begin_stage(&st.weld);
-    ir.points = static_cast<Id>(d.exclusive_scan(ir.point_first.data(), ir.point_first.data(), rows));
-    ir.triangles = static_cast<Id>(d.exclusive_scan(ir.triangle_first.data(), ir.triangle_first.data(), rows));
+    ir.points = static_cast<Id>(d.exclusive_scan(ir.point_first.data(), ir.point_first.data(), rows + 1));
+    ir.triangles = static_cast<Id>(d.exclusive_scan(ir.triangle_first.data(), ir.triangle_first.data(), rows + 1));
     d.end_stage(mark);
     ir.point_base = points, ir.triangle_base = triangles;
     points += ir.points, triangles += ir.triangles;
