@@ -14,6 +14,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/device/cpu_device.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/parallel/threads.hpp"
 #include "device_contour_cases.hpp"
@@ -204,4 +205,28 @@ TEST(DevicePlans, RefuseWhatThePlansLackByName) {
   opt.max_output_bytes = 0;
   opt.isovalues = {};
   EXPECT_THROW(generate::contour_plan_on_cpu_device(g, opt, DevicePlan::Structured), InputError);
+}
+
+TEST(DevicePlans, ResidentSamplesGiveTheUploadedMesh) {
+  // contour_plan_arrays_on reads the samples through a view of the grid's
+  // description (what cuda::contour_device hands it): the mesh equals the
+  // upload entry's.
+  const ImageGrid g = noise(15, 12, 10, 3);
+  ImageGrid description;
+  description.dims = g.dims, description.origin = g.origin, description.spacing = g.spacing;
+  description.type = g.type, description.name = g.name;
+  const device::CpuDevice d;
+  for (ContourOptions opt : option_sets({0.1, -0.35})) {
+    for (DevicePlan plan : {DevicePlan::Structured, DevicePlan::Sort, DevicePlan::VertexWeld}) {
+      generate::ContourStats st;
+      auto arrays = generate::contour_plan_arrays_on(d, description, g.data(), opt, plan, &st);
+      EXPECT_GT(arrays.triangles, 100);
+      const SurfaceMesh mesh =
+          generate::device_contour::to_host_mesh(d, std::move(arrays), g.name, opt, st);
+      keymesh::testing::expect_same_bits(mesh, generate::contour_plan_on_cpu_device(g, opt, plan),
+                                         describe(opt, "resident " + plan_name(plan)));
+    }
+  }
+  EXPECT_THROW(generate::contour_plan_arrays_on(d, description, nullptr, option_sets({0.1})[0], DevicePlan::Structured),
+               InputError);
 }

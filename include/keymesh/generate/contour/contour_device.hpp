@@ -428,6 +428,17 @@ ContourArrays<D> checked_contour_arrays(const D& d, const ImageGrid& grid, bool 
   });
 }
 
+// The grid's description (dims, spacing, origin, type, name) over samples
+// in the device's memory, a non-owning view (contour_arrays_on's input).
+inline ImageGrid samples_view(const ImageGrid& grid, const void* samples) {
+  if (!samples) throw InputError("contour: the volume's samples pointer is null");
+  ImageGrid view;
+  view.dims = grid.dims, view.origin = grid.origin, view.spacing = grid.spacing;
+  view.type = grid.type, view.name = grid.name;
+  view.external = static_cast<const std::byte*>(samples);
+  return view;
+}
+
 }  // namespace device_contour
 
 // The device path on device `d`: options checked as contour() checks them
@@ -451,13 +462,9 @@ template <class D>
 device_contour::ContourArrays<D> contour_arrays_on(const D& d, const ImageGrid& grid, const void* samples,
                                                    const ContourOptions& options, ContourStats* stats,
                                                    DeviceKeys keys = DeviceKeys::Narrowest) {
-  if (!samples) throw InputError("contour: the volume's samples pointer is null");
-  ImageGrid view;  // the grid's description over the device's samples
-  view.dims = grid.dims, view.origin = grid.origin, view.spacing = grid.spacing;
-  view.type = grid.type, view.name = grid.name;
-  view.external = static_cast<const std::byte*>(samples);
   ContourStats local;
-  return device_contour::checked_contour_arrays(d, view, true, options, stats ? *stats : local, keys);
+  return device_contour::checked_contour_arrays(d, device_contour::samples_view(grid, samples), true, options,
+                                                stats ? *stats : local, keys);
 }
 
 // Mirrors the arrays back (device_contour::MirrorBack) on the device.

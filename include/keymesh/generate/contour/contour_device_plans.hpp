@@ -74,4 +74,16 @@ SurfaceMesh contour_plan_on(const D& d, const ImageGrid& grid, const ContourOpti
   return device_contour::to_host_mesh(d, std::move(arrays), grid.name, options, st);
 }
 
+// `plan` on samples already in the device's memory (contour_arrays_on's
+// view: nothing uploaded), the mesh left there as device arrays.
+template <class D>
+device_contour::ContourArrays<D> contour_plan_arrays_on(const D& d, const ImageGrid& grid, const void* samples,
+                                                        const ContourOptions& options, DevicePlan plan,
+                                                        ContourStats* stats = nullptr,
+                                                        DeviceKeys keys = DeviceKeys::Narrowest) {
+  ContourStats local;
+  return device_contour::plan_arrays(d, device_contour::samples_view(grid, samples), true, options,
+                                     stats ? *stats : local, plan, keys);
+}
+
 }  // namespace keymesh::generate

@@ -48,7 +48,7 @@ KEYMESH_HOT_INLINE KEYMESH_HD unsigned count3(unsigned m) { return (m & 1u) + ((
 
 // A row walk reads each sample of a column once: the inside bits of column
 // i of the grid rows (j + a, k + b) around row (j, k), bit w for the w-th
-// (a, b) below. Bits 0-3 (a, b in {0, 1}) are the four grid rows a voxel
+// (a, b) of (0, 0) (1, 0) (0, 1) (1, 1) (2, 0) (2, 1) (0, 2) (1, 2). Bits 0-3 (a, b in {0, 1}) are the four grid rows a voxel
 // row's corners lie in (bit dy + 2 dz, so a cube case is two columns' low
 // nibbles); the others are the rows their y and z edges end in.
 // (Packed in integers: a constant array would need a copy in device memory.)
