@@ -55,6 +55,33 @@ def finish(skipped=None):
     sys.exit(0 if _results["failed"] == 0 else 1)
 
 
+def precomputed_reader():
+    """(numpy, tests/neuroglancer_precomputed) for the tests that read
+    Neuroglancer precomputed output; exits 77 (skipped) without numpy or
+    Debian's draco_decoder."""
+    try:
+        import numpy
+    except ImportError as e:
+        print(f"skipped: {e}")
+        sys.exit(77)
+    import neuroglancer_precomputed
+    if not neuroglancer_precomputed.DRACO_DECODER:
+        print("skipped: draco_decoder not found (Debian package draco)")
+        sys.exit(77)
+    return numpy, neuroglancer_precomputed
+
+
+def write_label_nrrd(path, volume):
+    """volume[x, y, z] (a numpy array, stored as uint8) as a raw NRRD, x fastest; returns path."""
+    import numpy as np
+    header = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: {volume.shape[0]} {volume.shape[1]} {volume.shape[2]}\n"
+              "spacings: 1 1 1\nencoding: raw\n\n")
+    with open(path, "wb") as f:
+        f.write(header.encode())
+        f.write(volume.astype(np.uint8).tobytes(order="F"))
+    return path
+
+
 def box_filtered_noise(shape, seed):
     """Uniform noise in [0, 1) of `shape` (z, y, x), box-filtered along each
     axis (periodic): blobs a few voxels wide, which coarsening pinches."""

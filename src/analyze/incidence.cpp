@@ -22,6 +22,8 @@ std::vector<std::uint32_t> cells_of_corners(const SurfaceMesh& m) {
   return cell;
 }
 
+}  // namespace
+
 void check_ids(const SurfaceMesh& m) {
   if (m.connectivity.size() > std::numeric_limits<std::uint32_t>::max())
     throw LimitError("incidence: more than 2^32 - 1 corners");
@@ -29,8 +31,6 @@ void check_ids(const SurfaceMesh& m) {
     if (Id{id} >= m.num_points())
       throw InputError("incidence: a cell refers to point " + std::to_string(id) + " out of range");
 }
-
-}  // namespace
 
 PointCells point_cells(const SurfaceMesh& m) {
   check_ids(m);

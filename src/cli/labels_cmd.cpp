@@ -117,7 +117,8 @@ int check_precomputed(const LabelsCli& o, LabelsJob& job) {
   }
   const std::string not_here = " does not apply to --format precomputed";
   if (o.coarsen) return refuse("--coarsen" + not_here + " (its levels of detail coarsen)");
-  if (!o.memory_limit.empty()) return refuse("--memory-limit" + not_here + " (run --chunk tasks instead)");
+  if (!o.memory_limit.empty() && !o.assemble)
+    return refuse("--memory-limit" + not_here + " but to --assemble (run --chunk tasks instead)");
   if (distributed::size() > 1) return refuse("mpirun" + not_here + " (run --chunk tasks instead)");
   if ((o.chunk.empty() ? 0 : 1) + (o.assemble ? 1 : 0) + (o.update.empty() ? 0 : 1) > 1)
     return refuse("--chunk, --assemble and --update exclude each other");
@@ -309,7 +310,9 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
                  "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
                  "label indices (e.g. 256M); the surfaces are merged by key, then smoothed and written whole "
                  "(not streamed: the output mesh); byte-identical to one in-memory run; " +
-                     io::accepted_plane_sources() + "; under mpirun -np P each rank streams its own rows")
+                     io::accepted_plane_sources() + "; under mpirun -np P each rank streams its own rows; with "
+                     "--format precomputed --assemble: the chunk pieces held at once (segments written in batches, "
+                     "the same bytes)")
       ->check(size_validator());
   add_precomputed_options(cmd, o);
   add_common_options(cmd, o.common);

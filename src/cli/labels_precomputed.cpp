@@ -4,7 +4,8 @@
 //   one call           every chunk's pieces, kept under DIR/chunks/, and the output;
 //   --chunk I J K      one chunk's pieces into DIR/chunks/ (a task; it holds only
 //                      its box's planes where the format can be read by planes);
-//   --assemble         the output from every chunk's kept pieces (after the tasks);
+//   --assemble         the output from every chunk's kept pieces (after the tasks;
+//                      with --memory-limit, in batches of segments of that size);
 //   --update CHUNKS    the chunks an edit inside CHUNKS can reach recomputed,
 //                      then the segments they held before or hold now rewritten.
 #include <algorithm>
@@ -129,12 +130,13 @@ Counts write_everything(const LabelsJob& job, const ImageGrid& grid, const ng::M
   return n;
 }
 
-// A chunk task's input: the volume read plane by plane where its format
-// allows (raw, NRRD, NIfTI, VTI, gzip-compressed ones too, Zarr, DICOM:
-// io/plane_source.hpp), so that the task holds only the planes of its box;
-// null otherwise (read whole).
-std::unique_ptr<PlaneSource> chunk_planes(const LabelsJob& job, const io::RawOptions* raw) {
-  if (!job.precomputed.chunk_given) return nullptr;
+// A chunk task's or the final step's input: the volume read plane by plane
+// where its format allows (raw, NRRD, NIfTI, VTI, gzip-compressed ones too,
+// Zarr, DICOM: io/plane_source.hpp), so that a task holds only the planes of
+// its box and the final step reads the header alone; null otherwise (read
+// whole).
+std::unique_ptr<PlaneSource> input_planes(const LabelsJob& job, const io::RawOptions* raw) {
+  if (!job.precomputed.chunk_given && !job.precomputed.assemble) return nullptr;
   try {
     return io::open_volume_planes(job.input, raw);
   } catch (const InputError&) {
@@ -222,10 +224,11 @@ int run_labels_precomputed(const LabelsJob& job) {
   StageTimer timer;
   const PrecomputedJob& pc = job.precomputed;
   const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
-  const std::unique_ptr<PlaneSource> planes = chunk_planes(job, raw);
+  const std::unique_ptr<PlaneSource> planes = input_planes(job, raw);
   // With planes, `grid` is the header only (no samples): the task reads its box.
   const ImageGrid grid = timer.run("read", [&] { return planes ? planes->header() : io::read_volume(job.input, raw); });
   std::uint64_t samples_read = planes ? 0 : static_cast<std::uint64_t>(grid.num_points());
+  std::size_t assemble_batches = 0;
   if (!planes) check_labels_memory(job, grid, {0, generate::LabelSlabs::total_rows(grid)});
   const auto o = multilod_options(job);
   const generate::MultilodGrid g = naming_input(job, [&] { return generate::multilod_grid(grid.dims, o); });
@@ -235,7 +238,9 @@ int run_labels_precomputed(const LabelsJob& job) {
   if (pc.chunk_given) {
     n = write_one_chunk(job, grid, planes.get(), layout, timer, samples_read), route = "chunk";
   } else if (pc.assemble) {
-    timer.run("assemble", [&] { ng::assemble_multilod(job.output, layout, {}, segment_names(job)); });
+    timer.run("assemble", [&] {
+      assemble_batches = ng::assemble_multilod(job.output, layout, {}, segment_names(job), job.memory_limit);
+    });
     route = "assemble";
   } else if (!pc.update.empty()) {
     n = update_chunks(job, grid, layout, timer), route = "update";
@@ -252,6 +257,7 @@ int run_labels_precomputed(const LabelsJob& job) {
             {"sharded", pc.sharded}, {"segments", n.segments.size()}, {"pieces", n.pieces},
             {"chunks_written", n.chunks}, {"triangles_per_lod", n.triangles_per_lod}, {"dims", grid.dims},
             {"samples_read", samples_read}});
+  if (pc.assemble) r["assemble_batches"] = assemble_batches;
   finish_report(job.common, std::move(r), job.threads, timer, PeakRss::Include);
   return 0;
 }

@@ -9,30 +9,10 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, report, run, tempdir  # noqa: E402
+from kmtest import check, finish, report, run, tempdir, precomputed_reader, write_label_nrrd  # noqa: E402
 
-try:
-    import numpy as np
-except ImportError as e:
-    print(f"skipped: {e}")
-    sys.exit(77)
-import neuroglancer_precomputed as ngp  # noqa: E402
-
-if not ngp.DRACO_DECODER:
-    print("skipped: draco_decoder not found (Debian package draco)")
-    sys.exit(77)
-
+np, ngp = precomputed_reader()
 D = tempdir()
-
-
-def write_nrrd(path, volume):
-    """volume[x, y, z] (uint8) as a raw NRRD, x fastest."""
-    header = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: {volume.shape[0]} {volume.shape[1]} {volume.shape[2]}\n"
-              "spacings: 1 1 1\nencoding: raw\n\n")
-    with open(path, "wb") as f:
-        f.write(header.encode())
-        f.write(volume.astype(np.uint8).tobytes(order="F"))
-    return path
 
 
 def atlas(shape, seed):
@@ -50,7 +30,7 @@ def atlas(shape, seed):
 
 
 VOLUME = atlas((40, 36, 30), 1)
-IN = write_nrrd(os.path.join(D, "atlas.nrrd"), VOLUME)
+IN = write_label_nrrd(os.path.join(D, "atlas.nrrd"), VOLUME)
 GRID = ["--lods", "3", "--chunk-shape", "16", "16", "16", "--smooth", "4"]
 
 
@@ -75,20 +55,17 @@ ONE = os.path.join(D, "one")
 precomputed(ONE, "--report", os.path.join(D, "one.json"))
 
 
-def face_points(fragment, axis, plane, chunk_shape):
-    """Decoded points of a fragment on the plane `axis` = plane; with
-    `chunk_shape`, only those off every lod-0 chunk edge line in the face
-    (points shared by four chunks: agreed at level 0 only, see
-    docs/decisions/labels-multilod-chunks.md)."""
+def face_points(fragment, axis, plane):
+    """Decoded points of a fragment on the plane `axis` = plane, those on the
+    face's border lines (lod-0 chunk edge lines, shared by four chunks)
+    included."""
     p = fragment.points
-    on = p[:, axis] == plane
-    if chunk_shape is not None:
-        for a in range(3):
-            if a != axis:
-                # lod-0 planes at -1 + k * shape (inside a node, quantized: within a step)
-                off = (p[:, a] + 1) / chunk_shape[a]
-                on &= np.abs(off - np.round(off)) * chunk_shape[a] > 1e-3
-    return {tuple(x) for x in p[on]}
+    return {tuple(x) for x in p[p[:, axis] == plane]}
+
+
+def noise(shape, seed):
+    """White noise of labels 1-4: thin, touching, self-touching regions that cross every chunk edge line."""
+    return np.random.default_rng(seed).integers(1, 5, shape).astype(np.uint8)
 
 
 def test_info_and_fragments():
@@ -110,10 +87,10 @@ def test_info_and_fragments():
 
 def faces_agree(out):
     """At every level, two neighbouring nodes' decoded points on their common
-    face are the same; at level 0 the face's edge lines included. Returns how
-    many points were compared."""
+    face are the same, the face's edge lines included. Returns how many points
+    were compared, and how many of them lie on a lod-0 chunk edge line."""
     info = ngp.read_info(out)
-    compared = 0
+    compared = on_lines = 0
     for s in ngp.segment_ids(out):
         mesh = ngp.read_segment(out, s, info)
         nodes = {(f.lod, tuple(f.position)): f for f in mesh.fragments if f.size}
@@ -124,29 +101,49 @@ def faces_agree(out):
                 nxt[axis] += 1
                 g = nodes.get((lod, tuple(nxt)))
                 plane = origin[axis] + size[axis]
-                lines = None if lod == 0 else mesh.manifest.chunk_shape
-                mine = face_points(f, axis, plane, lines)
-                theirs = face_points(g, axis, plane, lines) if g else set()
+                mine = face_points(f, axis, plane)
+                theirs = face_points(g, axis, plane) if g else set()
                 assert mine == theirs, (f"segment {s} lod {lod} node {pos} axis {axis}: "
                                         f"{len(mine ^ theirs)} of {len(mine | theirs)} points differ: "
                                         f"{sorted(mine - theirs)[:3]} / {sorted(theirs - mine)[:3]}")
                 compared += len(mine)
-    return compared
+                on_lines += sum(1 for x in mine if on_edge_line(x, axis, mesh.manifest.chunk_shape))
+    return compared, on_lines
+
+
+def on_edge_line(point, axis, chunk_shape):
+    """Whether a decoded point of the plane normal to `axis` lies on a lod-0
+    chunk plane along another axis too (planes at -1 + k * shape)."""
+    return any(((point[a] + 1) / chunk_shape[a]).is_integer() for a in range(3) if a != axis)
 
 
 def test_faces_agree_in_decoded_output():
-    assert faces_agree(ONE) > 100
+    compared, on_lines = faces_agree(ONE)
+    assert compared > 100 and on_lines > 10, (compared, on_lines)
+
+
+def test_noise_faces_agree_on_edge_lines():
+    """Noise volumes, both methods, 4 levels, 8^3 chunks: at every level the
+    face point sets agree, the points on chunk edge lines included."""
+    for seed, method in ((3, "surfacenets"), (4, "discrete-mc"), (5, "surfacenets")):
+        vol = write_label_nrrd(os.path.join(D, f"noise{seed}.nrrd"), noise((20, 19, 21), seed))
+        out = os.path.join(D, f"noise{seed}")
+        run("labels", vol, "-o", out, "--format", "precomputed", "--lods", "4", "--chunk-shape", "8", "8", "8",
+            "--method", method, "--smooth", str(seed))
+        compared, on_lines = faces_agree(out)
+        assert compared > 1000 and on_lines > 100, (seed, method, compared, on_lines)
 
 
 def test_issue_settings_discrete_mc_sharded():
     """The issue's check: 3 levels of detail, 32^3 chunks; here with discrete-mc and --sharded."""
-    big = write_nrrd(os.path.join(D, "big.nrrd"), atlas((70, 66, 60), 2))
+    big = write_label_nrrd(os.path.join(D, "big.nrrd"), atlas((70, 66, 60), 2))
     out = os.path.join(D, "big")
     run("labels", big, "-o", out, "--format", "precomputed", "--lods", "3", "--chunk-shape", "32", "32", "32",
         "--method", "discrete-mc", "--sharded")
     info = ngp.read_info(out)
     assert info["@type"] == "neuroglancer_multilod_draco" and "sharding" in info, info
-    assert faces_agree(out) > 100
+    compared, on_lines = faces_agree(out)
+    assert compared > 100 and on_lines > 10, (compared, on_lines)
 
 
 def test_chunk_tasks_and_assembly_equal_one_call():
@@ -166,7 +163,7 @@ def test_chunk_task_reads_only_its_planes():
     one call's, and a gzip NRRD (inflated in order, only the box's planes
     kept) gives the same bytes."""
     tall = atlas((20, 18, 80), 3)
-    raw = write_nrrd(os.path.join(D, "tall.nrrd"), tall)
+    raw = write_label_nrrd(os.path.join(D, "tall.nrrd"), tall)
     gz = os.path.join(D, "tall_gz.nrrd")
     with open(raw, "rb") as f:
         header, samples = f.read().split(b"\n\n", 1)
@@ -186,6 +183,20 @@ def test_chunk_task_reads_only_its_planes():
                 assert report(r_path)["samples_read"] == 20 * 18 * (hi - lo + 1) < whole, (k, report(r_path))
     precomputed(tasks, "--assemble", volume=raw)
     same_tree(one, tasks)
+    # The final step in batches (--memory-limit: each segment's pieces then a
+    # batch of their own), unsharded and sharded: the same bytes.
+    precomputed(tasks, "--assemble", "--memory-limit", "1K", "--report", os.path.join(D, "batches.json"), volume=raw)
+    same_tree(one, tasks)
+    segments = len(ngp.segment_ids(one))
+    assert segments > 3 and report(os.path.join(D, "batches.json"))["assemble_batches"] == segments
+    sharded_one, sharded_tasks = os.path.join(D, "tall_sharded_one"), os.path.join(D, "tall_sharded_tasks")
+    precomputed(sharded_one, "--sharded", volume=raw)
+    for k in range(6):
+        for j in range(2):
+            for i in range(2):
+                precomputed(sharded_tasks, "--sharded", "--chunk", i, j, k, volume=raw)
+    precomputed(sharded_tasks, "--sharded", "--assemble", "--memory-limit", "1K", volume=raw)
+    same_tree(sharded_one, sharded_tasks)
     from_gz, from_raw = os.path.join(D, "tall_gz_task"), os.path.join(D, "tall_raw_task")
     precomputed(from_gz, "--chunk", 1, 0, 3, "--report", os.path.join(D, "gz.json"), volume=gz)
     precomputed(from_raw, "--chunk", 1, 0, 3, volume=raw)
@@ -197,7 +208,7 @@ def test_update_equals_full_run():
     edited = VOLUME.copy()
     edited[0:15, 0:15, 0:15] = 0  # chunk (0, 0, 0) covers samples -1 .. 14
     edited[3:11, 3:11, 3:11] = 9  # a new label there
-    new = write_nrrd(os.path.join(D, "edited.nrrd"), edited)
+    new = write_label_nrrd(os.path.join(D, "edited.nrrd"), edited)
     updated = os.path.join(D, "updated")
     precomputed(updated)
     precomputed(updated, "--update", "0,0,0", "--report", os.path.join(D, "update.json"), volume=new)
@@ -236,7 +247,7 @@ def test_label_names():
     a malformed table is refused by file and line with nothing written."""
     d = os.path.join(D, "named")
     os.makedirs(d, exist_ok=True)
-    vol = write_nrrd(os.path.join(d, "atlas.nrrd"), VOLUME)
+    vol = write_label_nrrd(os.path.join(d, "atlas.nrrd"), VOLUME)
     with open(vol + ".txt", "w") as f:
         f.write("# id name\n0\tBackground\n" + "".join(f"{i} region_{i} {i + 1000}\n" for i in range(1, 9)))
     out = os.path.join(d, "ng")
@@ -264,6 +275,7 @@ check("info declares the multilod format; every fragment decodes", test_info_and
 check("a label table names the segments (segment_properties)", test_label_names)
 check("neighbouring nodes agree on their common face in the decoded output", test_faces_agree_in_decoded_output)
 check("3 levels, 32^3 chunks, discrete-mc, sharded: faces agree", test_issue_settings_discrete_mc_sharded)
+check("noise volumes, both methods, 4 levels: faces agree on chunk edge lines too", test_noise_faces_agree_on_edge_lines)
 check("chunk tasks + --assemble are byte-identical to one call", test_chunk_tasks_and_assembly_equal_one_call)
 check("a chunk task reads only its box's planes (raw and gzip NRRD): the same bytes",
       test_chunk_task_reads_only_its_planes)

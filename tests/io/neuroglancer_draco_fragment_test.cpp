@@ -1,8 +1,8 @@
 // A fragment's Draco bytes, decoded by Draco's own decoder: the int32
 // positions come back exactly (no Draco quantization: the format forbids
-// it), a triangle quantization made zero-area is kept (the writer's
-// documented choice), the bytes are the same on every call, and an empty
-// node is 0 bytes.
+// it), a zero-area triangle handed to the encoder is kept (the writer
+// merges points on one integer point before: coincident_points.hpp), the
+// bytes are the same on every call, and an empty node is 0 bytes.
 #include "io/neuroglancer/draco_fragment.hpp"
 
 #include <draco/compression/decode.h>

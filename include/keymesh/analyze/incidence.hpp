@@ -27,6 +27,10 @@ struct PointCells {
 };
 PointCells point_cells(const SurfaceMesh& mesh);
 
+// What point_cells and cell_neighbours refuse: more than 2^32 - 1 corners
+// (LimitError), a point id out of range (InputError).
+void check_ids(const SurfaceMesh& mesh);
+
 // For every corner k of every cell (the edge from corner k to the next
 // corner), the other cell across that edge: -1 on the boundary, -2 when the
 // edge is shared by more than two cells.

@@ -93,7 +93,13 @@ std::vector<std::uint64_t> kept_segments(const std::string& dir, const std::arra
 // pieces' segments of the re-run chunks). When the existing DIR/info differs
 // from this run's (sharding parameters, quantization, names), the whole
 // output is rewritten instead.
-void assemble_multilod(const std::string& dir, const MultilodLayout& layout, const std::vector<std::uint64_t>& segments,
-                       const SegmentNames& names = {});
+// `batch_bytes` (0: no bound) bounds the pieces held at once: the segments
+// (whole shards when sharded) are written in batches whose pieces take
+// about that much memory, every chunk file read once per batch; a segment
+// larger than the bound is a batch of its own. The bytes written do not
+// depend on it. Returns the number of batches (1 without a bound).
+std::size_t assemble_multilod(const std::string& dir, const MultilodLayout& layout,
+                              const std::vector<std::uint64_t>& segments, const SegmentNames& names = {},
+                              std::uint64_t batch_bytes = 0);
 
 }  // namespace keymesh::io::neuroglancer

@@ -11,17 +11,10 @@
 #include <utility>
 #include <vector>
 
+#include "keymesh/parallel/bits_needed.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::parallel {
-
-// Number of bits needed to represent `max_key` (0 for 0).
-template <class K>
-int bits_needed(K max_key) {
-  int b = 0;
-  while (b < int(sizeof(K) * 8) && (max_key >> b) != 0) ++b;
-  return b;
-}
 
 // The passes of sort_pairs over caller-owned arrays: the pairs start in
 // (keys, values) and end where the return value says (false: there; true:

@@ -6,6 +6,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
+#include "keymesh/generate/coarsen/coarsen_kernels.hpp"
 #include "keymesh/generate/coarsen/split_nonmanifold.hpp"
 #include "keymesh/mesh/unused_points.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -15,26 +16,8 @@
 
 namespace keymesh::generate {
 
-namespace {
-
-// A triangle as its point set: the smallest id first, the other two in
-// increasing order, and its orientation (+1 when rotating the smallest id to
-// the front leaves the other two increasing).
-struct TriangleSet {
-  std::uint32_t lo, mid, hi;
-  std::int8_t sign;
-};
-
-inline TriangleSet triangle_set(const PointIndex* C, Id t) {
-  const std::uint32_t v[3] = {C[3 * t], C[3 * t + 1], C[3 * t + 2]};
-  // Rotating the smallest id to the front keeps the orientation; the order
-  // of the other two then tells it.
-  const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
-  const std::uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
-  return TriangleSet{a, std::min(b, c), std::max(b, c), static_cast<std::int8_t>(b < c ? 1 : -1)};
-}
-
-}  // namespace
+using coarsening::TriangleSet;
+using coarsening::triangle_set;
 
 // Triangles grouped by their smallest point id (KEY-REDUCE, sort plan), and
 // each group's few triangles compared with one another; of every set of
@@ -97,11 +80,21 @@ Id remove_folds(SurfaceMesh& mesh) {
   return n - at;
 }
 
+void check_coarsen_input(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range) {
+  if (!mesh.all_triangles()) throw InputError("coarsen: the mesh has polygons; only triangles are coarsened");
+  if (static_cast<Id>(keys.size()) != mesh.num_points()) throw InputError("coarsen: one key per point is needed");
+  // The sort plan reads only the range's bits: a key past it would merge
+  // with another instead of being refused.
+  const auto past = std::find_if(keys.begin(), keys.end(), [&](std::uint64_t k) { return k >= key_range; });
+  if (past != keys.end())
+    throw InputError("coarsen: point " + std::to_string(past - keys.begin()) + "'s key " + std::to_string(*past) +
+                     " is outside the key range [0, " + std::to_string(key_range) + ")");
+}
+
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
                     CoarsenStats* stats) {
-  if (!mesh.all_triangles()) throw InputError("coarsen: the mesh has polygons; only triangles are coarsened");
+  check_coarsen_input(mesh, keys, key_range);
   const Id n = mesh.num_points();
-  if (static_cast<Id>(keys.size()) != n) throw InputError("coarsen: one key per point is needed");
   // The dense plan's table spans the key range (every grid point of the
   // volume, for a contour); past a few keys per point the sort plan (same
   // groups, same order) touches far less memory.
@@ -116,9 +109,7 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
     dst.assign(static_cast<std::size_t>(m * k), 0.f);
     parallel::for_each(m, [&](Id g) {
       for (int c = 0; c < k; ++c) {
-        double s = 0;
-        for (Id j = groups.offsets[g]; j < groups.offsets[g + 1]; ++j) s += in[groups.order[j] * std::size_t(k) + c];
-        dst[g * k + c] = static_cast<float>(s / double(groups.count(g)));
+        dst[g * k + c] = coarsening::group_mean(in.data(), k, c, groups.order.data(), groups.offsets[g], groups.offsets[g + 1]);
       }
     });
   };
@@ -127,11 +118,7 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
     Field h{f.name, f.components, {}};
     average(f.values, f.components, h.values);
     if (f.name == "Normals" && f.components == 3)
-      parallel::for_each(m, [&](Id g) {
-        float* v = &h.values[3 * g];
-        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
-      });
+      parallel::for_each(m, [&](Id g) { coarsening::renormalize(&h.values[3 * g]); });
     out.point_fields.push_back(std::move(h));
   }
   // Rewrite the triangles through the index map; keep those with three distinct points.
@@ -141,7 +128,7 @@ SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& k
   const std::uint32_t* map = groups.index_map.data();
   parallel::for_each(t_in, [&](Id t) {
     const std::uint32_t a = map[C[3 * t]], b = map[C[3 * t + 1]], c = map[C[3 * t + 2]];
-    keep[t] = (a != b && b != c && a != c) ? 1 : 0;
+    keep[t] = coarsening::distinct(a, b, c) ? 1 : 0;
   });
   const Id t_out = parallel::exclusive_scan(keep.data(), keep.data(), t_in + 1);
   out.connectivity.resize(static_cast<std::size_t>(3 * t_out));

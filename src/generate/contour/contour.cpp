@@ -212,7 +212,7 @@ struct PointWriter {
                     static_cast<std::uint64_t>(p.axis) + key_shift;
     if (out.coarse)
       out.coarse[id] = static_cast<std::uint64_t>(iso_index) * points_per_iso + point_shift +
-                       static_cast<std::uint64_t>(p.p0 + (p.t >= 0.5 ? s.stride[p.axis] : 0));
+                       static_cast<std::uint64_t>(interp.nearest_point(p));
   }
 };
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "keymesh/device/cpu_device.hpp"
+#include "keymesh/generate/coarsen/coarsen_device.hpp"
 
 namespace keymesh::generate {
 
@@ -23,14 +24,21 @@ void check_device_contour_options(const ContourOptions& opt) {
 }
 
 void check_device_plan_options(const ContourOptions& opt) {
-  if (opt.coarsen) not_on_device_path("coarsening (--coarsen)");
+  if (opt.history) not_on_device_path("per-point history (--history)");
   if (opt.output_arrays) not_on_device_path("writing into arrays the caller owns (output_arrays)");
   if (opt.total_planes) not_on_device_path("streamed (slab) contouring");
   if (opt.ghost_below || opt.ghost_above) not_on_device_path("a grid with ghost planes");
 }
 
+void refuse_device_coarsen(const ContourOptions& opt, const char* entry) {
+  if (opt.coarsen)
+    throw InputError(std::string("contour: coarsening (--coarsen) is not available through ") + entry +
+                     " (the device path's contour_coarsened_on coarsens)");
+}
+
 SurfaceMesh contour_on_cpu_device(const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
                                   DeviceKeys keys) {
+  if (options.coarsen) return contour_coarsened_on_cpu_device(grid, options, stats, keys);
   return contour_on(device::CpuDevice{}, grid, options, stats, keys);
 }
 

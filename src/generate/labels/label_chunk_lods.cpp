@@ -2,13 +2,14 @@
 // every point keyed by the nearest point of the grid of spacing 2^lod, kept
 // on the chunk face or box edge it lies on, and one KEY-REDUCE merges them
 // (coarsen_label_surface: positions averaged in key order, collapsed faces
-// dropped, opposite faces on the same points cancelled). Then the box points
-// the chunks sharing them would not all keep move into the chunk
-// (settle_box_points), so neighbouring chunks keep the same points on their
-// common face.
+// dropped, opposite faces on the same points cancelled). Then the boundary
+// is led past the edge-line points it does not cross
+// (reroute_line_boundaries), and the box points the chunks sharing them
+// would not all keep move into the chunk (settle_box_points), so
+// neighbouring chunks keep the same points on their common face, its border
+// lines included.
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <string>
 #include <tuple>
 
@@ -24,23 +25,6 @@ constexpr int kClassShift = 61;
 constexpr int kMovedBit = 60;      // a box point moved into its chunk
 constexpr int kSideShift = 57;     // then bit 57 + a: the chunk lies above the plane along a
 constexpr int kFieldBits = 19;
-
-// Which chunk planes a point lies on: bit a set when on one along axis a,
-// `upper` bit a when that is the chunk's upper plane.
-struct OnBox {
-  int axes = 0, upper = 0;
-  int count() const { return (axes & 1) + (axes >> 1 & 1) + (axes >> 2 & 1); }
-};
-
-OnBox on_box(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk) {
-  OnBox b;
-  for (int a = 0; a < 3; ++a) {
-    const bool low = p[a] == grid.plane(a, chunk[a]), high = p[a] == grid.plane(a, chunk[a] + 1);
-    b.axes |= (low || high) ? 1 << a : 0;
-    b.upper |= high ? 1 << a : 0;
-  }
-  return b;
-}
 
 // The coarse key of point p of a piece of `chunk` at spacing `step`.
 std::uint64_t coarse_key(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk,
@@ -70,31 +54,17 @@ std::uint64_t coarse_key(const float* p, const MultilodGrid& grid, const std::ar
   return static_cast<std::uint64_t>(cls) << kClassShift | fields;
 }
 
-// The box points the piece's boundary holds: the ends of its boundary
-// edges (the directed edges between box points its triangles leave
-// unpaired) on a face of the box. A face shared by two chunks has opposite
-// boundaries in them (the chain map of coarsening keeps level 0's, where
-// both chunks' triangles end on the same cut), so both hold the same points
-// of its inside; a box point off every boundary edge has its edges paired
-// within the chunk, and moving it keeps every segment a closed 2-cycle.
-std::vector<char> held_by_boundary(const MultilodPiece& piece, const std::vector<OnBox>& box) {
-  // Net directed edges between box points (smaller index first, +1 along).
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> net;
-  for (std::size_t t = 0; t < piece.triangles.size(); t += 3)
-    for (int m = 0; m < 3; ++m) {
-      const std::uint32_t a = piece.triangles[t + m], b = piece.triangles[t + (m + 1) % 3];
-      if (box[a].axes == 0 || box[b].axes == 0) continue;
-      net[{std::min(a, b), std::max(a, b)}] += a < b ? 1 : -1;
-    }
-  std::vector<char> held(box.size(), 0);
-  for (const auto& [edge, n] : net) {
-    if (n == 0) continue;
-    held[edge.first] = held[edge.second] = 1;
-  }
-  return held;
-}
-
 }  // namespace
+
+OnBox on_box(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk) {
+  OnBox b;
+  for (int a = 0; a < 3; ++a) {
+    const bool low = p[a] == grid.plane(a, chunk[a]), high = p[a] == grid.plane(a, chunk[a] + 1);
+    b.axes |= (low || high) ? 1 << a : 0;
+    b.upper |= high ? 1 << a : 0;
+  }
+  return b;
+}
 
 MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid) {
   MultilodPiece out;
@@ -115,6 +85,7 @@ MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid
   out.point_keys = std::move(s.keys);
   out.points.assign(s.mesh.points.begin(), s.mesh.points.end());
   out.triangles.assign(s.mesh.connectivity.begin(), s.mesh.connectivity.end());
+  reroute_line_boundaries(out, grid);
   settle_box_points(out, grid);
   return out;
 }
@@ -132,9 +103,10 @@ void settle_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
     for (int a = 0; a < 3; ++a) {
       const double margin = grid.margin(a, lod);
       if (box[i].count() == 2 && !(box[i].axes >> a & 1)) {
-        // A point on an edge line: at its grid point along the line (from its
-        // key alone), as the four chunks around the line may merge different
-        // points there.
+        // A point on an edge line: at its grid point along the line, from its
+        // key alone (so the same in the four chunks around the line, whatever
+        // the rounding of an average); one the boundary leaves then also
+        // moves off both its planes, below.
         const Id per_chunk = static_cast<Id>(std::ceil(static_cast<double>(grid.chunk_shape[a]) / step)) + 1;
         const Id field = static_cast<Id>(piece.point_keys[i] >> (kFieldBits * a) & ((std::uint64_t{1} << kFieldBits) - 1));
         const double lo = grid.plane(a, piece.chunk[a]), hi = grid.plane(a, piece.chunk[a] + 1);
@@ -142,7 +114,7 @@ void settle_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
         p[a] = static_cast<float>(std::clamp(at, lo + margin, hi - margin));
       } else if (!(box[i].axes >> a & 1)) {
         p[a] = off_chunk_planes(grid, a, p[a], margin);
-      } else if (!held[i] && box[i].count() == 1) {  // into the chunk, a key of its own
+      } else if (!held[i]) {  // into the chunk, a key of its own
         const bool upper = box[i].upper >> a & 1;
         p[a] = static_cast<float>(grid.plane(a, piece.chunk[a] + (upper ? 1 : 0)) + (upper ? -margin : margin));
         piece.point_keys[i] |= std::uint64_t{1} << kMovedBit | std::uint64_t{upper ? 0u : 1u} << (kSideShift + a);

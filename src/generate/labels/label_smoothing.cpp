@@ -25,6 +25,7 @@
 
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
+#include "keymesh/generate/labels/label_kernels.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {
@@ -94,31 +95,19 @@ void smooth_label_surface(LabelSurface& s, const LabelVolume& vol, LabelMethod m
   if (iterations <= 0 || points == 0) return;
   const Stencils st = build_stencils(s);
   std::vector<double> x(s.mesh.points.begin(), s.mesh.points.end()), next(x.size());
-  const bool constrained = method == LabelMethod::SurfaceNets;
-  auto step = [&](double factor) {
-    parallel::for_each(points, [&](Id p) {
-      const Id b = st.offsets[p], e = st.offsets[p + 1];
-      for (int a = 0; a < 3; ++a) {
-        double v = x[3 * p + a];
-        if (e > b && !((s.border_axes[p] >> a) & 1)) {
-          double sum = 0;
-          for (Id j = b; j < e; ++j) sum += x[3 * static_cast<Id>(st.neighbours[j]) + a];
-          v += factor * (sum / static_cast<double>(e - b) - v);
-          if (constrained) {
-            const double c = s.cell_centre[3 * p + a], h = 0.5 * vol.spacing[a];
-            v = std::clamp(v, c - h, c + h);
-          }
-        }
-        next[3 * p + a] = v;
-      }
-    }, 1024);
+  label_kernels::SmoothStep step{st.offsets.data(), st.neighbours.data(), s.border_axes.data(),
+                                 s.cell_centre.data(), {0.5 * vol.spacing[0], 0.5 * vol.spacing[1], 0.5 * vol.spacing[2]},
+                                 method == LabelMethod::SurfaceNets, 0.0, nullptr, nullptr};
+  auto run_step = [&](double factor) {
+    step.factor = factor, step.x = x.data(), step.next = next.data();
+    parallel::for_each(points, [&](Id p) { step(p); }, 1024);
     x.swap(next);
   };
   const double lambda = relaxation;
   const double mu = lambda / (0.1 * lambda - 1.0);  // 1/lambda + 1/mu = 0.1
   for (int it = 0; it < iterations; ++it) {
-    step(lambda);
-    if (!constrained) step(mu);
+    run_step(lambda);
+    if (!step.constrained) run_step(mu);
   }
   for (std::size_t i = 0; i < x.size(); ++i) s.mesh.points[i] = static_cast<float>(x[i]);
 }

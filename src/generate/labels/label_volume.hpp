@@ -10,6 +10,7 @@
 
 #include "keymesh/generate/labels/labels.hpp"
 #include "keymesh/mesh/image_grid.hpp"
+#include "keymesh/generate/labels/label_kernels.hpp"
 
 namespace keymesh::generate::detail {
 
@@ -59,6 +60,14 @@ struct LabelVolume {
   // Position of padded grid point (i, j, k) along axis a.
   double coord(int a, double i) const { return origin[a] + spacing[a] * (i - 1.0); }
 };
+
+// The volume's placement of points (label_kernels.hpp: what the device path
+// reads instead of the volume).
+inline label_kernels::Placement placement(const LabelVolume& v) {
+  return {{v.origin[0], v.origin[1], v.origin[2]},
+          {v.spacing[0], v.spacing[1], v.spacing[2]},
+          {v.dims[0], v.dims[1], v.dims[2]}};
+}
 
 // Voxel counts and bounding boxes (padded coordinates, [lo, hi]) per label
 // index, summed over the planes mapped so far.

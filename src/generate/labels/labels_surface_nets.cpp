@@ -16,6 +16,7 @@
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
+#include "keymesh/generate/labels/label_kernels.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {
@@ -103,15 +104,7 @@ struct CellCorners {
     return m;
   }
   int distinct(Id p) const {
-    LabelIndex seen[8];
-    int n = 0;
-    for (int c = 0; c < 8; ++c) {
-      const LabelIndex l = v.label(p + offset[c]);
-      bool dup = false;
-      for (int i = 0; i < n; ++i) dup = dup || seen[i] == l;
-      if (!dup) seen[n++] = l;
-    }
-    return n;
+    return label_kernels::distinct_corner_labels([&](int c) { return v.label(p + offset[c]); });
   }
 };
 
@@ -176,6 +169,14 @@ class EdgePolygons {
       for (int m = 0; m < 4; ++m)
         out[m] = static_cast<K>(cell - kAround[m][0] * cstride_[u] - kAround[m][1] * cstride_[v]);
     return 4;
+  }
+
+  // The network's quad of the edge from label a to label b (label_kernels::
+  // network_quad, the device path's too) as triangles t and t + 1.
+  void write_network_quad(Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b, Id t, Soup<K>& soup) const {
+    label_kernels::network_quad(i + j * cstride_[1] + k * cstride_[2], cstride_, axis, a < b, soup.keys.data() + 3 * t);
+    const LabelIndex lo = a < b ? a : b, hi = a < b ? b : a;
+    soup.pair[static_cast<std::size_t>(t)] = soup.pair[static_cast<std::size_t>(t + 1)] = (std::uint32_t{lo} << 16) | hi;
   }
 
   // Writes the triangles of the polygon of the edge from label a to label b
@@ -344,6 +345,11 @@ void generate_quads(const LabelVolume& vol, const Box& box, int only, std::pair<
   parallel::for_each_dynamic(rows, [&](Id r) {
     Id t = row_offsets[r];
     edges.visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b) {
+      if (only < 0) {
+        edges.write_network_quad(i, j, k, axis, a, b, t, soup);
+        t += 2;
+        return;
+      }
       K poly[8];
       const int n = edges.polygon(i, j, k, axis, a, poly);
       edges.write_fan(poly, n, a, b, t, soup);
@@ -368,6 +374,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
   out.border_axes.resize(static_cast<std::size_t>(base + n));
   if (vol.coarse_keys) out.coarse.resize(static_cast<std::size_t>(base + n));
   const Id cells = box.cells();
+  const label_kernels::Placement place = placement(vol);
   parallel::for_each(n, [&](Id pt) {
     const Id key = static_cast<Id>(point_keys[static_cast<std::size_t>(pt)]);
     const std::size_t at = static_cast<std::size_t>(base + pt);
@@ -422,14 +429,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
         for (int a = 0; a < 3; ++a) offset[a] = sum[a] / count;
       }
     }
-    std::uint8_t border = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double centre = vol.coord(a, static_cast<double>(g[a]) + 0.5);
-      out.cell_centre[3 * at + a] = static_cast<float>(centre);
-      out.mesh.points[3 * at + a] = static_cast<float>(centre + offset[a] * vol.spacing[a]);
-      if (g[a] == 0 || g[a] == vol.dims[a] - 2) border |= static_cast<std::uint8_t>(1u << a);
-    }
-    out.border_axes[at] = border;
+    out.border_axes[at] = place.cell_point(g, offset, &out.mesh.points[3 * at], &out.cell_centre[3 * at]);
     out.junction[at] = corners.distinct(first) >= 3;
     if (vol.coarse_keys) out.coarse[at] = vol.part_key(vol.block_key(g[0], g[1], g[2]), static_cast<LabelIndex>(only));
   }, 1024);

@@ -1,7 +1,6 @@
 #include "keymesh/generate/unstructured/dual.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -9,6 +8,7 @@
 #include "keymesh/analyze/incidence.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/progress.hpp"
+#include "keymesh/generate/unstructured/dual_kernels.hpp"
 #include "keymesh/mesh/fields.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/fresh_memory.hpp"
@@ -19,23 +19,25 @@ namespace keymesh::generate {
 namespace {
 
 // A thread's scratch for fans_of, reused from point to point: the fan being
-// walked, and per incident corner whether it is used and its link's ends.
+// walked, and per incident corner whether it is used, its link's ends and
+// its place in the walk.
 struct FanScratch {
-  std::vector<std::uint32_t> fan;
+  std::vector<std::uint32_t> fan, order;
   std::vector<std::uint8_t> used;
   std::vector<PointIndex> next, prev;
 };
 
 // Around point p, each incident corner of cell c gives the link a -> b
 // between the corner's next and previous points. The fans of p are the
-// chains of links; `visit(fan_corners, open)` is called for each fan with its
-// corners in walking order. Corner lists are short (the valence), so the
-// quadratic search is cheap; the links are looked up once per corner first.
+// chains of links (dual_kernels::walk_fans, the device path's walk too);
+// `visit(fan_corners, open)` is called for each fan with its corners in
+// walking order. The links are looked up once per corner first.
 template <class Visit>
 void fans_of(const SurfaceMesh& m, const analyze::PointCells& pc, Id p, FanScratch& sc, Visit&& visit) {
   const Id b = pc.offsets[p], k = pc.count(p);
   const auto n = static_cast<std::size_t>(k);
-  sc.used.assign(n, 0);
+  sc.used.resize(n);
+  sc.order.resize(n);
   sc.next.resize(n);
   sc.prev.resize(n);
   for (Id i = 0; i < k; ++i) {
@@ -45,44 +47,17 @@ void fans_of(const SurfaceMesh& m, const analyze::PointCells& pc, Id p, FanScrat
     sc.next[i] = m.connectivity[corner + 1 < end ? corner + 1 : begin];
     sc.prev[i] = m.connectivity[corner > begin ? corner - 1 : end - 1];
   }
-  const std::uint8_t* used = sc.used.data();
-  const PointIndex* next = sc.next.data();
-  const PointIndex* prev = sc.prev.data();
-  for (Id done = 0; done < k;) {
-    // Start a fan where no unused link leads in (an open fan's first cell);
-    // otherwise at the first unused corner (a closed fan).
-    Id start = -1;
-    for (Id i = 0; i < k && start < 0; ++i) {
-      if (used[i]) continue;
-      const PointIndex a = next[i];
-      bool led_into = false;
-      for (Id j = 0; j < k && !led_into; ++j) led_into = !used[j] && j != i && prev[j] == a;
-      if (!led_into) start = i;
-    }
-    const bool open = start >= 0;
-    if (!open)
-      for (Id i = 0; i < k && start < 0; ++i)
-        if (!used[i]) start = i;
-    sc.fan.clear();
-    for (Id cur = start; cur >= 0;) {
-      sc.used[cur] = 1;
-      ++done;
-      sc.fan.push_back(pc.corners[b + cur]);
-      const PointIndex want = prev[cur];
-      Id nxt = -1;
-      for (Id j = 0; j < k && nxt < 0; ++j)
-        if (!used[j] && next[j] == want) nxt = j;
-      cur = nxt;
-    }
-    visit(sc.fan, open);
-  }
+  dual_kernels::walk_fans(k, sc.next.data(), sc.prev.data(), sc.used.data(), sc.order.data(),
+                          [&](Id first, Id size, bool open) {
+                            sc.fan.clear();
+                            for (Id i = first; i < first + size; ++i) sc.fan.push_back(pc.corners[b + sc.order[i]]);
+                            visit(sc.fan, open);
+                          });
 }
 
-// A fan becomes a polygon when it has three corners at least, counting the
-// point itself for an open fan (which also needs two cells).
+// dual_kernels::fan_is_polygon for a walked fan.
 bool fan_is_polygon(const std::vector<std::uint32_t>& f, bool open) {
-  const Id size = static_cast<Id>(f.size()) + (open ? 1 : 0);
-  return size >= 3 && !(open && f.size() < 2);
+  return dual_kernels::fan_is_polygon(static_cast<Id>(f.size()), open);
 }
 
 // Pass 1 of the dual, by chunks of points: what each chunk contributes
@@ -148,24 +123,11 @@ void dual_points(const SurfaceMesh& m, const FanCounts& fc, int chunks, SurfaceM
     renormalise[i] = m.point_fields[i].name == "Normals" && m.point_fields[i].components == 3;
   parallel::for_each(F, [&](Id c) {
     const std::uint64_t b = m.cell_begin(c), e = m.cell_end(c);
-    const double w = 1.0 / double(e - b);
-    for (int x = 0; x < 3; ++x) {
-      double s = 0;
-      for (std::uint64_t k = b; k < e; ++k) s += m.points[3 * std::size_t(m.connectivity[k]) + x];
-      out.points[3 * c + x] = static_cast<float>(s * w);
-    }
+    dual_kernels::centroid_tuple(m.connectivity.data(), b, e, m.points.data(), 3, false, &out.points[3 * c]);
     for (std::size_t i = 0; i < m.point_fields.size(); ++i) {
       const Field& f = m.point_fields[i];
-      float* v = &out.point_fields[i].values[c * f.components];
-      for (int x = 0; x < f.components; ++x) {
-        double s = 0;
-        for (std::uint64_t k = b; k < e; ++k) s += f.values[std::size_t(m.connectivity[k]) * f.components + x];
-        v[x] = static_cast<float>(s * w);
-      }
-      if (renormalise[i]) {
-        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
-      }
+      dual_kernels::centroid_tuple(m.connectivity.data(), b, e, f.values.data(), f.components, renormalise[i] != 0,
+                                   &out.point_fields[i].values[c * f.components]);
     }
   });
   parallel::for_each_chunk(V, chunks, [&](Id lo, Id hi, int chunk) {

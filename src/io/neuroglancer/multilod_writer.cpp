@@ -1,6 +1,7 @@
 // The entry points of keymesh/io/neuroglancer.hpp: the one-call write, the
 // chunk tasks' piece store, and the final step (whole or `--update`).
 #include <filesystem>
+#include <map>
 #include <set>
 
 #include "io/mesh_bytes.hpp"
@@ -68,6 +69,53 @@ void write_all(const std::string& dir, const MultilodLayout& layout, const std::
                const SegmentNames& names) {
   const std::vector<SegmentFiles> files = encode_segments(layout, pieces_by_segment(pieces));
   write_output(dir, layout, files, names, sharding_of(layout, files.size()), OutputScope{});
+}
+
+// The pieces' memory per triangle, for batching: a triangle's three corners
+// (12 bytes) and about half a point (12 bytes of position, 8 of key), with
+// room for the vectors' slack and the segment's encoding.
+constexpr std::uint64_t kPieceBytesPerTriangle = 48;
+
+// The final step in batches of about `batch_bytes` of pieces: a first pass
+// over the chunk files counts each segment's triangles (no points decoded),
+// then each batch of segments (of whole shards when sharded, in increasing
+// order) is read, encoded and written. Each file depends only on its own
+// segment or shard, so the bytes are write_all's.
+std::size_t write_all_in_batches(const std::string& dir, const MultilodLayout& layout, const SegmentNames& names,
+                                 std::uint64_t batch_bytes) {
+  std::map<std::uint64_t, std::uint64_t> triangles;  // meshed segments
+  read_kept_pieces(dir, layout, [&](std::uint64_t segment, std::uint64_t n) {
+    if (n != 0) triangles[segment] += n;
+    return false;
+  });
+  const std::optional<ShardingSpec> sharding = sharding_of(layout, triangles.size());
+  // Batch units: a segment, or a shard's segments.
+  std::map<std::uint64_t, std::pair<std::vector<std::uint64_t>, std::uint64_t>> units;
+  for (const auto& [segment, n] : triangles) {
+    auto& unit = units[sharding ? shard_of(*sharding, segment) : segment];
+    unit.first.push_back(segment);
+    unit.second += n * kPieceBytesPerTriangle;
+  }
+  OutputParts parts(dir, layout, names, sharding);
+  std::size_t batches = 0;
+  auto flush = [&](std::set<std::uint64_t>& batch) {
+    if (batch.empty()) return;
+    ++batches;
+    const std::vector<ChunkPiece> pieces =
+        read_kept_pieces(dir, layout, [&](std::uint64_t segment, std::uint64_t) { return batch.count(segment) != 0; });
+    parts.add(encode_segments(layout, pieces_by_segment(pieces)));
+    batch.clear();
+  };
+  std::set<std::uint64_t> batch;
+  std::uint64_t held = 0;
+  for (const auto& [key, unit] : units) {
+    if (!batch.empty() && held + unit.second > batch_bytes) flush(batch), held = 0;
+    batch.insert(unit.first.begin(), unit.first.end());
+    held += unit.second;
+  }
+  flush(batch);
+  parts.finish();
+  return batches;
 }
 
 bool info_is(const std::string& dir, const std::string& expected) {
@@ -157,16 +205,21 @@ std::vector<std::uint64_t> kept_segments(const std::string& dir, const std::arra
   return {segments.begin(), segments.end()};
 }
 
-void assemble_multilod(const std::string& dir, const MultilodLayout& layout, const std::vector<std::uint64_t>& segments,
-                       const SegmentNames& names) {
+std::size_t assemble_multilod(const std::string& dir, const MultilodLayout& layout,
+                              const std::vector<std::uint64_t>& segments, const SegmentNames& names,
+                              std::uint64_t batch_bytes) {
   check_layout(layout);
   check_layout_record(dir, layout);
   OutputTransaction outputs;
-  if (segments.empty())
+  std::size_t batches = 1;
+  if (segments.empty() && batch_bytes != 0)
+    batches = write_all_in_batches(dir, layout, names, batch_bytes);
+  else if (segments.empty())
     write_all(dir, layout, read_kept_pieces(dir, layout, {}), names);
   else
     update(dir, layout, segments, names);
   outputs.commit();
+  return batches;
 }
 
 }  // namespace keymesh::io::neuroglancer

@@ -8,11 +8,10 @@
 //
 // A point outside the node's box by more than float rounding is an internal
 // error (std::logic_error): the meshing broke the contract, and clamping it
-// would hide a misplaced point. Triangles that quantization makes zero-area
-// (two corners rounding to one integer point) are kept, as Neuroglancer
-// draws them harmlessly and dropping them would open holes in the welded
-// fragment's connectivity; a triangle with two corners of one key is an
-// internal error (the meshing hands only proper triangles).
+// would hide a misplaced point. Points that round to one integer point stay
+// apart here; the writer merges them next (coincident_points.hpp). A
+// triangle with two corners of one key is an internal error (the meshing
+// hands only proper triangles).
 #include <array>
 #include <vector>
 

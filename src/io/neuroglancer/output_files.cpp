@@ -91,13 +91,13 @@ std::optional<ShardingSpec> sharding_of(const MultilodLayout& layout, std::size_
   return sharding_for(segments);
 }
 
-void write_output(const std::string& dir, const MultilodLayout& layout, const std::vector<SegmentFiles>& segments,
-                  const SegmentNames& names, const std::optional<ShardingSpec>& sharding, const OutputScope& scope) {
+OutputParts::OutputParts(const std::string& dir, const MultilodLayout& layout, const SegmentNames& names,
+                         const std::optional<ShardingSpec>& sharding)
+    : dir_(dir), sharding_(sharding), written_{"info"} {
   const fs::path root(dir);
   std::error_code ec;
   fs::create_directories(root, ec);
   if (ec) throw InputError(dir + ": cannot create the output directory: " + ec.message());
-  std::set<std::string> written{"info"};
   write_file(root / "info", info_json(layout, sharding, !names.empty()));
   const fs::path properties = root / kSegmentPropertiesDir / "info";
   if (!names.empty()) {
@@ -107,11 +107,22 @@ void write_output(const std::string& dir, const MultilodLayout& layout, const st
   } else {
     remove_at_commit(properties);
   }
-  if (sharding)
-    write_sharded(root, *sharding, segments, scope, written);
+}
+
+void OutputParts::add(const std::vector<SegmentFiles>& segments, const OutputScope& scope) {
+  if (sharding_)
+    write_sharded(dir_, *sharding_, segments, scope, written_);
   else
-    write_unsharded(root, segments, scope, written);
-  if (scope.full) remove_stale(root, written);
+    write_unsharded(dir_, segments, scope, written_);
+}
+
+void OutputParts::finish() { remove_stale(dir_, written_); }
+
+void write_output(const std::string& dir, const MultilodLayout& layout, const std::vector<SegmentFiles>& segments,
+                  const SegmentNames& names, const std::optional<ShardingSpec>& sharding, const OutputScope& scope) {
+  OutputParts parts(dir, layout, names, sharding);
+  parts.add(segments, scope);
+  if (scope.full) parts.finish();
 }
 
 }  // namespace keymesh::io::neuroglancer

@@ -12,6 +12,7 @@
 // those that became empty.
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -37,5 +38,22 @@ std::optional<ShardingSpec> sharding_of(const MultilodLayout& layout, std::size_
 
 void write_output(const std::string& dir, const MultilodLayout& layout, const std::vector<SegmentFiles>& segments,
                   const SegmentNames& names, const std::optional<ShardingSpec>& sharding, const OutputScope& scope);
+
+// The full output written in parts (the final step's batches): the
+// constructor writes info and the segment properties, each add() the files
+// of some segments (sharded: every segment of a shard in one call), finish()
+// removes the earlier outputs no part wrote. The files equal write_output's.
+class OutputParts {
+ public:
+  OutputParts(const std::string& dir, const MultilodLayout& layout, const SegmentNames& names,
+              const std::optional<ShardingSpec>& sharding);
+  void add(const std::vector<SegmentFiles>& segments, const OutputScope& scope = {});
+  void finish();
+
+ private:
+  std::string dir_;
+  std::optional<ShardingSpec> sharding_;
+  std::set<std::string> written_;
+};
 
 }  // namespace keymesh::io::neuroglancer

@@ -4,6 +4,9 @@
 #include <limits>
 
 #include "keymesh/core/error.hpp"
+#include "coincident_points.hpp"
+#include "collinear_triangles.hpp"
+#include "face_points.hpp"
 #include "manifest.hpp"
 #include "node_fragment.hpp"
 #include "octree_nodes.hpp"
@@ -51,8 +54,12 @@ SegmentFiles encode_segment(const MultilodLayout& layout, std::uint64_t segment,
       node_pieces.clear();
       for (; next != pieces.end() && (*next)->lod == lod && node_of(**next) == node; ++next) node_pieces.push_back(*next);
       std::string fragment;
-      if (!node_pieces.empty())
-        fragment = encode_draco_fragment(node_fragment(node_pieces, node_box(layout, lod, node), layout.vertex_quantization_bits));
+      if (!node_pieces.empty()) {
+        QuantizedMesh mesh = node_fragment(node_pieces, node_box(layout, lod, node), layout.vertex_quantization_bits);
+        settle_face_points(mesh, layout.vertex_quantization_bits, merge_coincident_points(mesh));
+        flip_collinear_triangles(mesh);
+        fragment = encode_draco_fragment(mesh);
+      }
       lods[lod].positions.push_back(node);
       lods[lod].sizes.push_back(fragment_size(fragment.size(), segment));
       files.data += fragment;

@@ -28,26 +28,9 @@ using generate::DeviceKeys;
 using generate::DevicePlan;
 using keymesh::testing::describe;
 using keymesh::testing::noise;
+using keymesh::testing::option_sets;
 
 namespace {
-
-// Every field option: none, each normal kind, curvature, no scalar.
-std::vector<ContourOptions> option_sets(const std::vector<double>& isovalues) {
-  std::vector<ContourOptions> sets;
-  for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average})
-    for (bool curvature : {false, true}) {
-      ContourOptions opt;
-      opt.isovalues = isovalues;
-      opt.normals = normals;
-      opt.curvature = curvature;
-      sets.push_back(opt);
-    }
-  ContourOptions bare;
-  bare.isovalues = isovalues;
-  bare.scalars = false;
-  sets.push_back(bare);
-  return sets;
-}
 
 std::string plan_name(DevicePlan plan) {
   return plan == DevicePlan::Structured ? "structured" : (plan == DevicePlan::Sort ? "sort" : "vertexweld");

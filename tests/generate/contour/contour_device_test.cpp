@@ -11,6 +11,7 @@
 #include <string>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/device/cpu_device.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/parallel/threads.hpp"
 #include "device_contour_cases.hpp"
@@ -23,26 +24,9 @@ using generate::ContourWeld;
 using generate::DeviceKeys;
 using keymesh::testing::describe;
 using keymesh::testing::noise;
+using keymesh::testing::option_sets;
 
 namespace {
-
-// The field options a test runs through: none, each normal kind, curvature.
-std::vector<ContourOptions> option_sets(const std::vector<double>& isovalues) {
-  std::vector<ContourOptions> sets;
-  for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average})
-    for (bool curvature : {false, true}) {
-      ContourOptions opt;
-      opt.isovalues = isovalues;
-      opt.normals = normals;
-      opt.curvature = curvature;
-      sets.push_back(opt);
-    }
-  ContourOptions bare;
-  bare.isovalues = isovalues;
-  bare.scalars = false;
-  sets.push_back(bare);
-  return sets;
-}
 
 // The device path (narrow and wide keys) against both KEY-REDUCE plans of
 // contour(); returns the triangles, for tests to check they did contour.
@@ -165,14 +149,17 @@ TEST(DeviceContour, RefusesWhatThePathLacksByName) {
   opt.weld = ContourWeld::VertexWeld;
   EXPECT_THROW(generate::contour_on_cpu_device(g, opt), InputError);
   opt.weld = ContourWeld::KeyReduce;
-  opt.coarsen = true;
+  opt.coarsen = true;  // the fine contour's entry refuses it (contour_coarsened_on coarsens)
   try {
-    generate::contour_on_cpu_device(g, opt);
+    generate::contour_on(device::CpuDevice{}, g, opt, nullptr);
     ADD_FAILURE() << "coarsening was not refused";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--coarsen"), std::string::npos) << e.what();
   }
   opt.coarsen = false;
+  opt.history = true;  // no history_t on this path: refused, not left out
+  EXPECT_THROW(generate::contour_on_cpu_device(g, opt), InputError);
+  opt.history = false;
   opt.isovalues = {};
   EXPECT_THROW(generate::contour_on_cpu_device(g, opt), InputError);  // contour()'s own input check
 }

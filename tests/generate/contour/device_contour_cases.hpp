@@ -4,6 +4,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/mesh/image_grid.hpp"
@@ -15,6 +16,28 @@ inline std::string describe(const generate::ContourOptions& opt, const std::stri
   std::ostringstream s;
   s << what << " normals " << int(opt.normals) << " curvature " << opt.curvature << " scalars " << opt.scalars;
   return s.str();
+}
+
+// The field options a device test runs through: none, each normal kind,
+// with and without curvature, no scalar (each with `coarsen` as given).
+inline std::vector<generate::ContourOptions> option_sets(const std::vector<double>& isovalues, bool coarsen = false) {
+  std::vector<generate::ContourOptions> sets;
+  for (auto normals : {generate::ContourNormals::None, generate::ContourNormals::Gradient,
+                       generate::ContourNormals::Average})
+    for (bool curvature : {false, true}) {
+      generate::ContourOptions opt;
+      opt.isovalues = isovalues;
+      opt.normals = normals;
+      opt.curvature = curvature;
+      opt.coarsen = coarsen;
+      sets.push_back(opt);
+    }
+  generate::ContourOptions bare;
+  bare.isovalues = isovalues;
+  bare.scalars = false;
+  bare.coarsen = coarsen;
+  sets.push_back(bare);
+  return sets;
 }
 
 // Uniform float noise in [-1, 1) (many small components, every cube case),

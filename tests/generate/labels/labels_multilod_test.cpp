@@ -58,16 +58,15 @@ std::uint32_t bits(float f) {
   return b;
 }
 
-// (key, position bits) of the piece's points lying on the plane `axis` = x:
-// at level 0 all, at coarser levels those inside the face (a point on a
-// chunk edge line, shared by four chunks, may be left in some of them only:
-// see labels_multilod.hpp).
+// (key, position bits) of the piece's points lying on the plane `axis` = x,
+// those on the face's border lines (chunk edge lines, shared by four chunks)
+// included.
 std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>> on_plane(const MultilodPiece* p, int axis,
                                                                                          double x) {
   std::set<std::tuple<std::uint64_t, std::uint32_t, std::uint32_t, std::uint32_t>> out;
   if (!p) return out;
   for (std::size_t i = 0; i < p->point_keys.size(); ++i)
-    if (p->points[3 * i + axis] == x && (p->lod == 0 || p->point_keys[i] >> 61 <= 3))
+    if (p->points[3 * i + axis] == x)
       out.emplace(p->point_keys[i], bits(p->points[3 * i]), bits(p->points[3 * i + 1]), bits(p->points[3 * i + 2]));
   return out;
 }
@@ -95,7 +94,7 @@ std::map<std::pair<std::uint64_t, std::uint64_t>, int> face_boundary(const Multi
 void expect_chunks_agree(const std::vector<MultilodPiece>& pieces, const generate::MultilodGrid& grid) {
   std::map<PieceId, const MultilodPiece*> by_id;
   for (const MultilodPiece& p : pieces) by_id[id_of(p)] = &p;
-  Id faces_with_points = 0;
+  Id faces_with_points = 0, coarse_line_points = 0;
   for (const MultilodPiece& p : pieces) {
     for (std::size_t i = 0; i < p.point_keys.size(); ++i) {
       if (i > 0) {
@@ -136,9 +135,11 @@ void expect_chunks_agree(const std::vector<MultilodPiece>& pieces, const generat
       EXPECT_EQ(face_boundary(&p, a, x, 1), face_boundary(it == by_id.end() ? nullptr : it->second, a, x, -1))
           << "boundary lod " << p.lod;
       faces_with_points += mine.empty() ? 0 : 1;
+      for (const auto& point : mine) coarse_line_points += p.lod > 0 && std::get<0>(point) >> 61 >= 4 ? 1 : 0;
     }
   }
   EXPECT_GT(faces_with_points, 0);  // the volumes cross chunk faces
+  EXPECT_GT(coarse_line_points, 0);  // and chunk edge lines at lod > 0
 }
 
 // Each segment's pieces of one level, welded by key: a closed 2-cycle (every

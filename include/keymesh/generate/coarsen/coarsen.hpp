@@ -31,6 +31,10 @@ Id remove_folds(SurfaceMesh& mesh);
 // (The structured contour applies the same rule in its own triangle pass,
 // src/generate/coarsen/coarse_folds.hpp, without comparing triangles.)
 
+// coarsen()'s input checks, whichever device runs it (InputError): triangles
+// only, one key per point, every key < key_range.
+void check_coarsen_input(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range);
+
 // `keys[p]` is point p's coarse key, every key < key_range (dense plan).
 SurfaceMesh coarsen(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range,
                     CoarsenStats* stats = nullptr);

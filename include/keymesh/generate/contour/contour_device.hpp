@@ -17,7 +17,9 @@
 // Averaged normals sum each point's face normals in contour()'s order (even
 // blocks of 4 voxel layers, then odd; corner order within), so they match too.
 // Not on this path (refused by name, check_device_contour_options):
-// VERTEX-WELD, coarsening, output arrays, slabs and ghost planes.
+// VERTEX-WELD, per-point history, output arrays, slabs and ghost planes. Coarsening is
+// contour_coarsened_on's (generate/coarsen/coarsen_device.hpp): these entries
+// refuse it, and with it on the arrays carry each point's coarse key.
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -31,6 +33,7 @@
 #include "keymesh/device/algorithms.hpp"
 #include "keymesh/device/key_groups.hpp"
 #include "keymesh/generate/device_normals.hpp"
+#include "keymesh/generate/device_surface.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
 #include "keymesh/generate/contour/layer_blocks.hpp"
@@ -47,7 +50,14 @@ enum class DeviceKeys { Narrowest, Wide };
 // The options this path refuses (InputError naming them, and what to use).
 void check_device_contour_options(const ContourOptions& options);
 
-// contour() through the device path on the CPU device.
+// The fine contour's entries (contour_on, contour_arrays_on) refuse
+// options.coarsen by name: `contour --coarsen` on a device is
+// contour_coarsened_on (generate/coarsen/coarsen_device.hpp), whose mesh
+// ends on the host. `entry` names the refusing entry.
+void refuse_device_coarsen(const ContourOptions& options, const char* entry);
+
+// contour() through the device path on the CPU device (with options.coarsen:
+// contour_coarsened_on_cpu_device, generate/coarsen/coarsen_device.hpp).
 SurfaceMesh contour_on_cpu_device(const ImageGrid& grid, const ContourOptions& options,
                                   ContourStats* stats = nullptr, DeviceKeys keys = DeviceKeys::Narrowest);
 
@@ -160,7 +170,15 @@ struct WritePoints {
   EdgeInterpolator<T> interp;
   const K* keys;
   PointOutputs<T> out;
-  KEYMESH_HD void operator()(Id p) const { out.write(interp, interp.locate(static_cast<std::uint64_t>(keys[p])), p); }
+  std::uint64_t* nearest;  // coarsening: the nearest grid point's key (contour()'s nearest_keys); null otherwise
+  KEYMESH_HD void operator()(Id p) const {
+    const auto e = interp.locate(static_cast<std::uint64_t>(keys[p]));
+    out.write(interp, e, p);
+    if (nearest)
+      nearest[p] = static_cast<std::uint64_t>(keys[p]) / static_cast<std::uint64_t>(interp.keys_per_iso) *
+                       static_cast<std::uint64_t>(interp.s.n) +
+                   static_cast<std::uint64_t>(interp.nearest_point(e));
+  }
 };
 
 // Stage 5's value of sorted position j for the blocks of one parity: its
@@ -308,6 +326,10 @@ struct ContourArrays {
   typename D::template Array<float> xyz;
   typename D::template Array<std::uint32_t> connectivity;
   PointFields<D> fields;
+  // With options.coarsen: every point's coarse key, the grid point nearest
+  // it on its edge + isovalue index x N (contour()'s nearest_keys), for
+  // coarsen_device.hpp to merge by; the averaged normals are left to it.
+  typename D::template Array<std::uint64_t> nearest;
   Id points = 0, triangles = 0;
 };
 
@@ -331,8 +353,10 @@ template <class D, class K, class T>
 void write_points(const D& d, const Input<D, T>& in, const device::KeyGroups<D, K>& g, const Soup<D, K>& soup,
                   const ContourOptions& opt, ContourArrays<D>& out) {
   const EdgeInterpolator<T> interp{in.samples, in.shape, in.isovalues.data(), 3 * in.shape.n};
-  d.for_each(out.points, WritePoints<T, K>{interp, g.unique_keys.data(), point_outputs<T>(d, out, opt, true)});
-  if (opt.normals == ContourNormals::Average)
+  out.nearest = d.template allocate<std::uint64_t>(opt.coarsen ? out.points : 0);
+  d.for_each(out.points, WritePoints<T, K>{interp, g.unique_keys.data(), point_outputs<T>(d, out, opt, true),
+                                           opt.coarsen ? out.nearest.data() : nullptr});
+  if (opt.normals == ContourNormals::Average && !opt.coarsen)
     out.fields.averaged_normal = averaged_normals(d, g, soup, out.xyz.data(), g.index_map.data());
 }
 
@@ -362,9 +386,22 @@ ContourArrays<D> contour_arrays_typed(const D& d, const ImageGrid& grid, const T
   return out;
 }
 
-// The arrays brought to the host as contour()'s mesh: its fields in
-// contour()'s order (the scalar, gradient normals, curvature, then averaged
-// normals). The download counts in the fields stage.
+// The fields asked for, named, in contour()'s order (the scalar, gradient
+// normals, curvature, then averaged normals; none when coarsening), even
+// when empty (no points).
+template <class D>
+std::vector<device_surface::Field<D>> point_fields(PointFields<D>&& f, const std::string& scalar_name,
+                                                   const ContourOptions& opt) {
+  std::vector<device_surface::Field<D>> out;
+  if (opt.scalars) out.push_back({scalar_name, 1, std::move(f.scalar)});
+  if (opt.normals == ContourNormals::Gradient) out.push_back({"Normals", 3, std::move(f.gradient_normal)});
+  if (opt.curvature) out.push_back({"mean_curvature", 1, std::move(f.curvature)});
+  if (opt.normals == ContourNormals::Average && !opt.coarsen) out.push_back({"Normals", 3, std::move(f.averaged_normal)});
+  return out;
+}
+
+// The arrays brought to the host as contour()'s mesh. The download counts
+// in the fields stage.
 template <class D>
 SurfaceMesh to_host_mesh(const D& d, ContourArrays<D>&& a, const std::string& scalar_name, const ContourOptions& opt,
                          ContourStats& st) {
@@ -372,13 +409,8 @@ SurfaceMesh to_host_mesh(const D& d, ContourArrays<D>&& a, const std::string& sc
   SurfaceMesh mesh;
   mesh.points = d.to_host(std::move(a.xyz));
   mesh.connectivity = d.to_host(std::move(a.connectivity));
-  auto field = [&](const std::string& name, int components, typename D::template Array<float>& values) {
-    mesh.point_fields.push_back(Field{name, components, d.to_host(std::move(values))});
-  };  // asked for, even when empty (no points)
-  if (opt.scalars) field(scalar_name, 1, a.fields.scalar);
-  if (opt.normals == ContourNormals::Gradient) field("Normals", 3, a.fields.gradient_normal);
-  if (opt.curvature) field("mean_curvature", 1, a.fields.curvature);
-  if (opt.normals == ContourNormals::Average) field("Normals", 3, a.fields.averaged_normal);
+  for (device_surface::Field<D>& f : point_fields(std::move(a.fields), scalar_name, opt))
+    mesh.point_fields.push_back(Field{f.name, f.components, d.to_host(std::move(f.values))});
   d.end_stage(mark);
   return mesh;
 }
@@ -446,6 +478,7 @@ inline ImageGrid samples_view(const ImageGrid& grid, const void* samples) {
 template <class D>
 SurfaceMesh contour_on(const D& d, const ImageGrid& grid, const ContourOptions& options, ContourStats* stats,
                        DeviceKeys keys = DeviceKeys::Narrowest) {
+  refuse_device_coarsen(options, "contour_on");
   ContourStats local;
   ContourStats& st = stats ? *stats : local;
   auto arrays = device_contour::checked_contour_arrays(d, grid, false, options, st, keys);
@@ -462,9 +495,10 @@ template <class D>
 device_contour::ContourArrays<D> contour_arrays_on(const D& d, const ImageGrid& grid, const void* samples,
                                                    const ContourOptions& options, ContourStats* stats,
                                                    DeviceKeys keys = DeviceKeys::Narrowest) {
+  const ImageGrid view = device_contour::samples_view(grid, samples);
+  refuse_device_coarsen(options, "contour_arrays_on");
   ContourStats local;
-  return device_contour::checked_contour_arrays(d, device_contour::samples_view(grid, samples), true, options,
-                                                stats ? *stats : local, keys);
+  return device_contour::checked_contour_arrays(d, view, true, options, stats ? *stats : local, keys);
 }
 
 // Mirrors the arrays back (device_contour::MirrorBack) on the device.

@@ -25,8 +25,9 @@ enum class DevicePlan { Structured, Sort, VertexWeld };
 // KeyReduceSort -> Sort, VertexWeld -> VertexWeld.
 DevicePlan device_plan_for(ContourWeld weld);
 
-// The options no device plan has (InputError naming them): coarsening,
-// output arrays, slabs and ghost planes.
+// The options no device plan has (InputError naming them): history, output
+// arrays, slabs and ghost planes. (Coarsening is contour_coarsened_on's,
+// generate/coarsen/coarsen_device.hpp; the plans' entries refuse it.)
 void check_device_plan_options(const ContourOptions& options);
 
 // contour() through `plan` on the CPU device (what ctest compares with contour()).
@@ -43,6 +44,7 @@ ContourArrays<D> plan_arrays(const D& d, const ImageGrid& grid, bool resident, c
                              ContourStats& st, DevicePlan plan, DeviceKeys keys) {
   check_contour_input(grid, options);
   check_device_plan_options(options);
+  refuse_device_coarsen(options, "contour_plan_on");
   if (plan == DevicePlan::Sort) {
     ContourOptions sort = options;
     sort.weld = ContourWeld::KeyReduceSort;

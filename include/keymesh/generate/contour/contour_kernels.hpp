@@ -257,6 +257,9 @@ struct EdgeInterpolator {
 
   // The grid point at the edge's far end (its first is p.p0).
   KEYMESH_HD Id far_end(const Point& p) const { return p.p0 + s.stride[p.axis]; }
+  // The grid point nearest the crossing on its edge (coarsening's key,
+  // paper Section 6.1): the far end from t = 0.5 on.
+  KEYMESH_HD Id nearest_point(const Point& p) const { return p.t >= 0.5 ? far_end(p) : p.p0; }
 
   // Mean curvature at the point: (|g|^2 tr H - g^T H g) / (2 |g|^3).
   KEYMESH_HD float mean_curvature(const Point& p) const {

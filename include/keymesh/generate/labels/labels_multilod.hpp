@@ -27,9 +27,13 @@
 // nearest point of the grid of spacing 2^k (relative to the chunk's corner),
 // except that points on a face of the chunk merge only with points on that
 // face (rounded within it) and points on a box edge only along that edge.
-// Points on the chunk's faces are kept even when no triangle is left on
-// them, so two neighbouring chunks have the same points on their common face
-// at every level, with no data from each other.
+// A point stays on the chunk's box only where the piece's boundary on a
+// face ends an edge there; the boundary is first led past every point on a
+// chunk edge line that the surface does not cross there (net), on each face
+// from that face's boundary alone. Any other box point moves into the chunk.
+// So two neighbouring chunks have the same points on their common face, its
+// border lines included, at every level, with no data from each other
+// (label_chunk_lines.cpp says why).
 //
 // Point keys (unique within a segment and level, equal in every chunk that
 // has the point; bits 61-63 a class):

@@ -20,6 +20,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/device/algorithms.hpp"
 #include "keymesh/device/key_groups.hpp"
+#include "keymesh/generate/device_surface.hpp"
 #include "keymesh/generate/unstructured/subdivide.hpp"
 #include "keymesh/generate/unstructured/subdivide_kernels.hpp"
 #include "keymesh/mesh/fields.hpp"
@@ -111,43 +112,13 @@ struct RepeatTuples {
   }
 };
 
+// A triangle mesh in device memory (device_surface.hpp, shared with coarsening).
 template <class D>
-struct Field {
-  std::string name;
-  int components = 1;
-  typename D::template Array<float> values;
-};
-
-// A triangle mesh in device memory.
+using Field = device_surface::Field<D>;
 template <class D>
-struct Surface {
-  typename D::template Array<float> points;
-  typename D::template Array<PointIndex> triangles;
-  std::vector<Field<D>> point_fields, cell_fields;
-  Id points_count = 0, triangle_count = 0;
-};
-
-template <class D>
-Surface<D> upload(const D& d, const SurfaceMesh& m) {
-  Surface<D> s{d.upload(m.points.data(), static_cast<Id>(m.points.size())),
-               d.upload(m.connectivity.data(), static_cast<Id>(m.connectivity.size())), {}, {}, m.num_points(),
-               m.num_cells()};
-  for (const keymesh::Field& f : m.point_fields)
-    s.point_fields.push_back({f.name, f.components, d.upload(f.values.data(), static_cast<Id>(f.values.size()))});
-  for (const keymesh::Field& f : m.cell_fields)
-    s.cell_fields.push_back({f.name, f.components, d.upload(f.values.data(), static_cast<Id>(f.values.size()))});
-  return s;
-}
-
-template <class D>
-SurfaceMesh download(const D& d, Surface<D>&& s) {
-  SurfaceMesh m;
-  m.points = d.to_host(std::move(s.points));
-  m.connectivity = d.to_host(std::move(s.triangles));
-  for (Field<D>& f : s.point_fields) m.point_fields.push_back({f.name, f.components, d.to_host(std::move(f.values))});
-  for (Field<D>& f : s.cell_fields) m.cell_fields.push_back({f.name, f.components, d.to_host(std::move(f.values))});
-  return m;
-}
+using Surface = device_surface::Surface<D>;
+using device_surface::download;
+using device_surface::upload;
 
 // The first field named "Normals" when it has 3 components, or -1
 // (SurfaceMesh::find_point_field's choice).
