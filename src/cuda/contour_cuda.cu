@@ -6,7 +6,9 @@
 // loop for the functors, every CUDA call checked). The functors are compiled
 // with --fmad=false so that every floating-point operation rounds as on the CPU.
 //
-// One code path, two entries:
+// The plan is the one --weld names (generate::device_plan_for: keyreduce ->
+// the structured count/scan/write plan, keyreduce-sort -> the sort plan,
+// vertexweld -> VERTEX-WELD); one code path, two entries:
 //   contour         host samples (uploaded), the mesh brought to the host;
 //   contour_device  samples already in device memory (read where they lie:
 //                   contour_arrays_on's view), the mesh left on the device in
@@ -30,6 +32,7 @@
 #include "keymesh/cuda/device_contour.hpp"
 #include "keymesh/device/cuda_device.cuh"
 #include "keymesh/generate/contour/contour_device.hpp"
+#include "keymesh/generate/contour/contour_device_plans.hpp"
 
 namespace keymesh::cuda {
 
@@ -116,7 +119,7 @@ SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& opt, 
   GpuSession session(-1);
   device::CudaStageEvents times(session.stream());
   const device::CudaDevice d{session.stream(), &times, device::CudaMemory::Pool};
-  SurfaceMesh mesh = generate::contour_on(d, grid, opt, &st);  // the upload counts in generate, the download in fields
+  SurfaceMesh mesh = generate::contour_plan_on(d, grid, opt, generate::device_plan_for(opt.weld), &st);  // the upload counts in generate, the download in fields
   times.add_times();
   st.device_peak_bytes = session.peak();
   return mesh;
@@ -136,7 +139,8 @@ DeviceMesh contour_device(const DeviceVolume& volume, const generate::ContourOpt
   device::CudaStageEvents times(session.stream());
   wait_for(volume.ready_after, session.stream());
   const device::CudaDevice d{session.stream(), &times, device::CudaMemory::Handed};
-  Arrays arrays = generate::contour_arrays_on(d, volume.grid, volume.samples, opt, &st);
+  Arrays arrays = generate::contour_plan_arrays_on(d, volume.grid, volume.samples, opt,
+                                                   generate::device_plan_for(opt.weld), &st);
   if (volume.mirror_back) {
     const auto mark = d.begin_stage(&st.fields);
     generate::mirror_back(d, arrays);

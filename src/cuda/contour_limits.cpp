@@ -20,7 +20,6 @@ constexpr Id kMaxItems = std::numeric_limits<int>::max();  // CUB's num_items
 }  // namespace
 
 void check_gpu_options(const generate::ContourOptions& opt) {
-  if (opt.weld == generate::ContourWeld::VertexWeld) not_on_gpu("VERTEX-WELD (--weld vertexweld)");
   if (opt.coarsen) not_on_gpu("coarsening (--coarsen)");
   if (opt.curvature) not_on_gpu("curvature (--curvature)");
   if (opt.history) not_on_gpu("per-point history (--history)");

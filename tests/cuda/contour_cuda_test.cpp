@@ -64,6 +64,28 @@ TEST(CudaContour, SphereMatchesTheCpuBitForBit) {
   }
 }
 
+// Each device plan --weld picks (structured, sort, VERTEX-WELD: generate::
+// device_plan_for) against the CPU with the same weld, every normals option.
+TEST(CudaContour, EveryPlanMatchesTheCpuBitForBit) {
+  SKIP_WITHOUT_GPU();
+  std::mt19937 rng(4);
+  ImageGrid noise;
+  noise.allocate({41, 23, 30}, ScalarType::Int16);
+  auto* v = reinterpret_cast<std::int16_t*>(noise.bytes.data());
+  for (Id p = 0; p < noise.num_points(); ++p) v[p] = static_cast<std::int16_t>(rng() % 200);
+  for (auto weld : {generate::ContourWeld::KeyReduce, generate::ContourWeld::KeyReduceSort,
+                    generate::ContourWeld::VertexWeld})
+    for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average}) {
+      ContourOptions o;
+      o.weld = weld;
+      o.normals = normals;
+      o.isovalues = {30.5, 12.0};
+      expect_identical(generate::spherical_distance(72), o);
+      o.isovalues = {99.5, 100.0};  // samples on the second isovalue
+      expect_identical(noise, o);
+    }
+}
+
 // The report's peak device memory: at least the samples (uploaded whole),
 // and bounded (the soup, sort buffers and mesh are a few times the output).
 TEST(CudaContour, ReportsPeakDeviceMemory) {

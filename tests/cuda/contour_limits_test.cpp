@@ -38,7 +38,6 @@ TEST(CudaLimits, UnsupportedOptionsAreRefusedByName) {
     const char* name;
   };
   const Case cases[] = {
-      {[](ContourOptions& c) { c.weld = generate::ContourWeld::VertexWeld; }, "VERTEX-WELD"},
       {[](ContourOptions& c) { c.coarsen = true; }, "coarsening"},
       {[](ContourOptions& c) { c.curvature = true; }, "curvature"},
       {[](ContourOptions& c) { c.output_arrays = [](Id, Id) { return generate::ContourArrays{}; }; }, "output_arrays"},

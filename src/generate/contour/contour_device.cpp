@@ -1,6 +1,7 @@
 // The voxel contour's device path (keymesh/generate/contour/contour_device.hpp)
 // on the CPU device: what ctest compares with contour() bit for bit.
 #include "keymesh/generate/contour/contour_device.hpp"
+#include "keymesh/generate/contour/contour_device_plans.hpp"
 
 #include <string>
 
@@ -19,6 +20,10 @@ namespace {
 
 void check_device_contour_options(const ContourOptions& opt) {
   if (opt.weld == ContourWeld::VertexWeld) not_on_device_path("VERTEX-WELD (--weld vertexweld)");
+  check_device_plan_options(opt);
+}
+
+void check_device_plan_options(const ContourOptions& opt) {
   if (opt.history) not_on_device_path("per-point history (--history)");
   if (opt.output_arrays) not_on_device_path("writing into arrays the caller owns (output_arrays)");
   if (opt.total_planes) not_on_device_path("streamed (slab) contouring");

@@ -134,26 +134,20 @@ struct BlockStarts {
   KEYMESH_HD void operator()(Id b) const { out[b] = base + 3 * static_cast<Id>(first[b * voxels_per_block]); }
 };
 
-// Stage 4: position and fields of every point from its key, as contour()'s
-// PointWriter computes them (derivatives_at when curvature is asked for,
-// whose gradient is gradient_at's).
-template <class T, class K>
-struct WritePoints {
-  EdgeInterpolator<T> interp;
-  const K* keys;
-  float* xyz;
+// Where a point's values go (null: not asked for), and their arithmetic, as
+// contour()'s PointWriter computes them (derivatives_at when curvature is
+// asked for, whose gradient is gradient_at's): every device plan writes its
+// points with this, so a point's bits do not depend on how its id was found.
+template <class T>
+struct PointOutputs {
+  float* xyz;  // null when the positions come from elsewhere (VERTEX-WELD's welded points)
   float* scalar;
   float* gradient_normal;
   float* curvature;
-  std::uint64_t* nearest;  // coarsening: the nearest grid point's key (contour()'s nearest_keys); null otherwise
-  KEYMESH_HD void operator()(Id p) const {
-    const auto e = interp.locate(static_cast<std::uint64_t>(keys[p]));
-    interp.position(e, xyz + 3 * p);
+  KEYMESH_HD void write(const EdgeInterpolator<T>& interp, const typename EdgeInterpolator<T>::Point& e,
+                        Id p) const {
+    if (xyz) interp.position(e, xyz + 3 * p);
     if (scalar) scalar[p] = interp.scalar(e);
-    if (nearest)
-      nearest[p] = static_cast<std::uint64_t>(keys[p]) / static_cast<std::uint64_t>(interp.keys_per_iso) *
-                       static_cast<std::uint64_t>(interp.s.n) +
-                   static_cast<std::uint64_t>(interp.nearest_point(e));
     if (!gradient_normal && !curvature) return;
     double d[2][9];
     Id ijk1[3] = {e.ijk[0], e.ijk[1], e.ijk[2]};
@@ -167,6 +161,23 @@ struct WritePoints {
       interp.gradient_at(interp.far_end(e), ijk1, d[1]);
     }
     if (gradient_normal) interp.gradient_normal(e, d[0], d[1], gradient_normal + 3 * p);
+  }
+};
+
+// Stage 4: position and fields of every point from its key.
+template <class T, class K>
+struct WritePoints {
+  EdgeInterpolator<T> interp;
+  const K* keys;
+  PointOutputs<T> out;
+  std::uint64_t* nearest;  // coarsening: the nearest grid point's key (contour()'s nearest_keys); null otherwise
+  KEYMESH_HD void operator()(Id p) const {
+    const auto e = interp.locate(static_cast<std::uint64_t>(keys[p]));
+    out.write(interp, e, p);
+    if (nearest)
+      nearest[p] = static_cast<std::uint64_t>(keys[p]) / static_cast<std::uint64_t>(interp.keys_per_iso) *
+                       static_cast<std::uint64_t>(interp.s.n) +
+                   static_cast<std::uint64_t>(interp.nearest_point(e));
   }
 };
 
@@ -322,26 +333,31 @@ struct ContourArrays {
   Id points = 0, triangles = 0;
 };
 
-// Stages 4 and 5: positions and fields of every point, from its key.
-template <class D, class K, class T>
-void write_points(const D& d, const Input<D, T>& in, const device::KeyGroups<D, K>& g, const Soup<D, K>& soup,
-                  const ContourOptions& opt, ContourArrays<D>& out) {
+// The mesh's point arrays for out.points points (positions when `with_xyz`;
+// the fields asked for), allocated, and where the point writer puts them.
+template <class T, class D>
+PointOutputs<T> point_outputs(const D& d, ContourArrays<D>& out, const ContourOptions& opt, bool with_xyz) {
   const bool gradient = opt.normals == ContourNormals::Gradient;
   const Id points = out.points;
-  out.xyz = d.template allocate_output<float>(3 * points);
+  if (with_xyz) out.xyz = d.template allocate_output<float>(3 * points);
   PointFields<D>& f = out.fields;
   f.scalar = d.template allocate_output<float>(opt.scalars ? points : 0);
   f.gradient_normal = d.template allocate_output<float>(gradient ? 3 * points : 0);
   f.curvature = d.template allocate_output<float>(opt.curvature ? points : 0);
-  out.nearest = d.template allocate<std::uint64_t>(opt.coarsen ? points : 0);
+  return PointOutputs<T>{with_xyz ? out.xyz.data() : nullptr, opt.scalars ? f.scalar.data() : nullptr,
+                         gradient ? f.gradient_normal.data() : nullptr, opt.curvature ? f.curvature.data() : nullptr};
+}
+
+// Stages 4 and 5: positions and fields of every point, from its key.
+template <class D, class K, class T>
+void write_points(const D& d, const Input<D, T>& in, const device::KeyGroups<D, K>& g, const Soup<D, K>& soup,
+                  const ContourOptions& opt, ContourArrays<D>& out) {
   const EdgeInterpolator<T> interp{in.samples, in.shape, in.isovalues.data(), 3 * in.shape.n};
-  d.for_each(points, WritePoints<T, K>{interp, g.unique_keys.data(), out.xyz.data(),
-                                       opt.scalars ? f.scalar.data() : nullptr,
-                                       gradient ? f.gradient_normal.data() : nullptr,
-                                       opt.curvature ? f.curvature.data() : nullptr,
-                                       opt.coarsen ? out.nearest.data() : nullptr});
+  out.nearest = d.template allocate<std::uint64_t>(opt.coarsen ? out.points : 0);
+  d.for_each(out.points, WritePoints<T, K>{interp, g.unique_keys.data(), point_outputs<T>(d, out, opt, true),
+                                           opt.coarsen ? out.nearest.data() : nullptr});
   if (opt.normals == ContourNormals::Average && !opt.coarsen)
-    f.averaged_normal = averaged_normals(d, g, soup, out.xyz.data(), g.index_map.data());
+    out.fields.averaged_normal = averaged_normals(d, g, soup, out.xyz.data(), g.index_map.data());
 }
 
 template <class D, class K, class T>
@@ -444,6 +460,17 @@ ContourArrays<D> checked_contour_arrays(const D& d, const ImageGrid& grid, bool 
   });
 }
 
+// The grid's description (dims, spacing, origin, type, name) over samples
+// in the device's memory, a non-owning view (contour_arrays_on's input).
+inline ImageGrid samples_view(const ImageGrid& grid, const void* samples) {
+  if (!samples) throw InputError("contour: the volume's samples pointer is null");
+  ImageGrid view;
+  view.dims = grid.dims, view.origin = grid.origin, view.spacing = grid.spacing;
+  view.type = grid.type, view.name = grid.name;
+  view.external = static_cast<const std::byte*>(samples);
+  return view;
+}
+
 }  // namespace device_contour
 
 // The device path on device `d`: options checked as contour() checks them
@@ -468,12 +495,8 @@ template <class D>
 device_contour::ContourArrays<D> contour_arrays_on(const D& d, const ImageGrid& grid, const void* samples,
                                                    const ContourOptions& options, ContourStats* stats,
                                                    DeviceKeys keys = DeviceKeys::Narrowest) {
-  if (!samples) throw InputError("contour: the volume's samples pointer is null");
+  const ImageGrid view = device_contour::samples_view(grid, samples);
   refuse_device_coarsen(options, "contour_arrays_on");
-  ImageGrid view;  // the grid's description over the device's samples
-  view.dims = grid.dims, view.origin = grid.origin, view.spacing = grid.spacing;
-  view.type = grid.type, view.name = grid.name;
-  view.external = static_cast<const std::byte*>(samples);
   ContourStats local;
   return device_contour::checked_contour_arrays(d, view, true, options, stats ? *stats : local, keys);
 }
