@@ -126,7 +126,7 @@ def test_noise_faces_agree_on_edge_lines():
     """Noise volumes, both methods, 4 levels, 8^3 chunks: at every level the
     face point sets agree, the points on chunk edge lines included."""
     for seed, method in ((3, "surfacenets"), (4, "discrete-mc"), (5, "surfacenets")):
-        vol = write_nrrd(os.path.join(D, f"noise{seed}.nrrd"), noise((20, 19, 21), seed))
+        vol = write_label_nrrd(os.path.join(D, f"noise{seed}.nrrd"), noise((20, 19, 21), seed))
         out = os.path.join(D, f"noise{seed}")
         run("labels", vol, "-o", out, "--format", "precomputed", "--lods", "4", "--chunk-shape", "8", "8", "8",
             "--method", method, "--smooth", str(seed))
@@ -163,7 +163,7 @@ def test_chunk_task_reads_only_its_planes():
     one call's, and a gzip NRRD (inflated in order, only the box's planes
     kept) gives the same bytes."""
     tall = atlas((20, 18, 80), 3)
-    raw = write_nrrd(os.path.join(D, "tall.nrrd"), tall)
+    raw = write_label_nrrd(os.path.join(D, "tall.nrrd"), tall)
     gz = os.path.join(D, "tall_gz.nrrd")
     with open(raw, "rb") as f:
         header, samples = f.read().split(b"\n\n", 1)
@@ -173,7 +173,7 @@ def test_chunk_task_reads_only_its_planes():
     one, tasks = os.path.join(D, "tall_one"), os.path.join(D, "tall_tasks")
     precomputed(one, volume=raw)
     whole = tall.size
-    halo = 4 + 4  # --smooth 4 (surface nets) + 4
+    halo = 2 * 4 + 4  # --smooth 4: surface nets reach 2 cells a step (the fold guard), + 4
     for k in range(6):  # (80 + 16) // 16 chunks along z
         for j in range(2):
             for i in range(2):
@@ -201,7 +201,7 @@ def test_chunk_task_reads_only_its_planes():
     precomputed(from_gz, "--chunk", 1, 0, 3, "--report", os.path.join(D, "gz.json"), volume=gz)
     precomputed(from_raw, "--chunk", 1, 0, 3, volume=raw)
     same_tree(from_gz, from_raw)
-    assert report(os.path.join(D, "gz.json"))["samples_read"] == 20 * 18 * (63 + 8 - (48 - 1 - 8) + 1)
+    assert report(os.path.join(D, "gz.json"))["samples_read"] == 20 * 18 * (63 + halo - (48 - 1 - halo) + 1)
 
 
 def test_update_equals_full_run():
