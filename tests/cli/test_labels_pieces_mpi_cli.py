@@ -29,7 +29,7 @@ import vtk  # noqa: E402
 from vtk.util import numpy_support as ns  # noqa: E402
 
 D = tempdir()
-SHAPE = (9, 8, 40)  # x, y, z: 42 padded rows, 14 a rank at -np 3, halos of 7 to 22 rows
+SHAPE = (9, 8, 64)  # x, y, z: 66 padded rows, 22 a rank at -np 3, halos of 10 to 16 rows (2 a step + 4 or 8)
 vol = boxes_in_noise(SHAPE, 36, [(5, np.s_[1:6, 2:7, 2:20]), (9, np.s_[3:8, 1:6, 12:37])], 0.35)
 VOL = write_raw(os.path.join(D, "mix.raw"), vol)
 RAW = ["--dims", *SHAPE, "--type", "int16"]
@@ -135,10 +135,12 @@ check("--memory-limit on every rank (one row per slab), surface nets per label: 
 
 
 def default_smoothing_on_a_tall_volume():
-    """Default smoothing (16 steps: halos of 20 rows, 36 for discrete-mc's
-    Taubin steps) on 162 padded rows over 3 ranks: no rank sees them all."""
+    """Default smoothing (16 steps: halos of 36 rows, 68 for discrete-mc's
+    Taubin steps; two rows a step) on 258 padded rows over 3 ranks: no rank
+    sees them all."""
     tall = os.path.join(D, "tall.raw")
     big = np.concatenate([vol, vol[:, :, ::-1], vol, vol[:, :, ::-1]], axis=2)
+    assert big.shape[2] == 256
     with open(tall, "wb") as f:
         f.write(big.tobytes(order="F"))
     raw = ["--dims", SHAPE[0], SHAPE[1], big.shape[2], "--type", "int16"]

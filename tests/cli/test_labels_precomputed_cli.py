@@ -173,7 +173,7 @@ def test_chunk_task_reads_only_its_planes():
     one, tasks = os.path.join(D, "tall_one"), os.path.join(D, "tall_tasks")
     precomputed(one, volume=raw)
     whole = tall.size
-    halo = 4 + 4  # --smooth 4 (surface nets) + 4
+    halo = 2 * 4 + 4  # --smooth 4: surface nets reach 2 cells a step (the fold guard), + 4
     for k in range(6):  # (80 + 16) // 16 chunks along z
         for j in range(2):
             for i in range(2):
@@ -201,7 +201,7 @@ def test_chunk_task_reads_only_its_planes():
     precomputed(from_gz, "--chunk", 1, 0, 3, "--report", os.path.join(D, "gz.json"), volume=gz)
     precomputed(from_raw, "--chunk", 1, 0, 3, volume=raw)
     same_tree(from_gz, from_raw)
-    assert report(os.path.join(D, "gz.json"))["samples_read"] == 20 * 18 * (63 + 8 - (48 - 1 - 8) + 1)
+    assert report(os.path.join(D, "gz.json"))["samples_read"] == 20 * 18 * (63 + halo - (48 - 1 - halo) + 1)
 
 
 def test_update_equals_full_run():

@@ -161,8 +161,9 @@ MultilodGrid multilod_grid(const std::array<Id, 3>& dims, const MultilodOptions&
 }
 
 Id multilod_halo(const MultilodOptions& options) {
-  const Id steps = options.labels.smooth_iterations * (options.labels.method == LabelMethod::SurfaceNets ? 1 : 2);
-  return steps + 4;  // a point of the chunk's triangles is a cell outside at most; stencils read 2 more samples
+  // A point of the chunk's triangles is a cell outside at most; stencils
+  // read 2 more samples.
+  return detail::smoothing_reach(options.labels) + 4;
 }
 
 std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options) {

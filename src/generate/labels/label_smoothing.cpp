@@ -19,13 +19,17 @@
 // clamped to its cell (the box between its 8 samples), as vtkSurfaceNets3D
 // constrains it. Discrete marching cubes: Taubin's lambda|mu steps
 // (lambda = relaxation, mu chosen for a pass band of 0.1), which do not
-// shrink the surface as plain Laplacian smoothing does.
+// shrink the surface as plain Laplacian smoothing does. After every step the
+// fold guard (label_fold_guard.cpp) shortens the moves that would turn a
+// triangle over or flatten it, which the steps did where three or more
+// labels meet (docs/decisions/labels-smoothing-folds.md).
 #include <algorithm>
 #include <cmath>
 
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/generate/labels/label_kernels.hpp"
+#include "label_fold_guard.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {
@@ -94,22 +98,39 @@ void smooth_label_surface(LabelSurface& s, const LabelVolume& vol, LabelMethod m
   const Id points = static_cast<Id>(s.junction.size());
   if (iterations <= 0 || points == 0) return;
   const Stencils st = build_stencils(s);
-  std::vector<double> x(s.mesh.points.begin(), s.mesh.points.end()), next(x.size());
+  const FoldGuard guard(s);
+  std::vector<double> x(s.mesh.points.begin(), s.mesh.points.end()), half(x.size()), candidate(x.size());
+  const bool constrained = method == LabelMethod::SurfaceNets;
   label_kernels::SmoothStep step{st.offsets.data(), st.neighbours.data(), s.border_axes.data(),
                                  s.cell_centre.data(), {0.5 * vol.spacing[0], 0.5 * vol.spacing[1], 0.5 * vol.spacing[2]},
-                                 method == LabelMethod::SurfaceNets, 0.0, nullptr, nullptr};
-  auto run_step = [&](double factor) {
-    step.factor = factor, step.x = x.data(), step.next = next.data();
+                                 constrained, 0.0, nullptr, nullptr};
+  // One Jacobi step from `from` into `to`.
+  auto run_step = [&](const std::vector<double>& from, std::vector<double>& to, double factor) {
+    step.factor = factor, step.x = from.data(), step.next = to.data();
     parallel::for_each(points, [&](Id p) { step(p); }, 1024);
-    x.swap(next);
   };
   const double lambda = relaxation;
   const double mu = lambda / (0.1 * lambda - 1.0);  // 1/lambda + 1/mu = 0.1
+  // The guard limits a whole iteration's move: Taubin's lambda and mu steps
+  // guarded apart would shrink without the inflation that balances it.
   for (int it = 0; it < iterations; ++it) {
-    run_step(lambda);
-    if (!step.constrained) run_step(mu);
+    if (constrained) {
+      run_step(x, candidate, lambda);
+    } else {
+      run_step(x, half, lambda);
+      run_step(half, candidate, mu);
+    }
+    guard.limit(x, candidate, half);
+    x.swap(half);
   }
   for (std::size_t i = 0; i < x.size(); ++i) s.mesh.points[i] = static_cast<float>(x[i]);
+}
+
+Id smoothing_reach(const LabelOptions& options) {
+  // An iteration's steps (Taubin: two) reach as many cells, and the guard
+  // one more: a point's move is checked against its neighbours' candidates.
+  const Id steps = options.method == LabelMethod::DiscreteMarchingCubes ? 2 : 1;
+  return static_cast<Id>(options.smooth_iterations) * (steps + 1);
 }
 
 }  // namespace keymesh::generate::detail

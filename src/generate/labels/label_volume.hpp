@@ -175,4 +175,9 @@ void coarsen_label_surface(LabelSurface& surface, LabelStats& stats);
 void smooth_label_surface(LabelSurface& surface, const LabelVolume& volume, LabelMethod method, int iterations,
                           double relaxation);
 
+// How many cells away a smoothed point's position may depend on (halo rows,
+// chunk halos): an iteration's steps plus one (the fold guard reads the
+// neighbours' moves).
+Id smoothing_reach(const LabelOptions& options);
+
 }  // namespace keymesh::generate::detail

@@ -250,9 +250,7 @@ void LabelSlabs::generate() {
 }
 
 Id LabelSlabs::halo_rows(const LabelOptions& options) {
-  const Id steps = static_cast<Id>(options.smooth_iterations) *
-                   (options.method == LabelMethod::DiscreteMarchingCubes ? 2 : 1);
-  return steps + (options.coarsen ? 8 : 4);
+  return detail::smoothing_reach(options) + (options.coarsen ? 8 : 4);
 }
 
 void LabelSlabs::generate_with_halo(Id halo) {
