@@ -256,13 +256,28 @@ def mpirun_command(P, *args, program=None):
         cmd.insert(1, "--allow-run-as-root")
     # One thread per rank: ranks are oversubscribed on small CI machines.
     # No CMA single-copy: containers without ptrace rights refuse it.
+    # A session directory of its own per test process: two mpiruns at once
+    # (ctest -j, or two test runs on one machine) raced to create the shared
+    # /tmp/ompi.<host>.<uid> ("mkdir ... File exists", orte_init failed).
     env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1",
-               OMPI_MCA_btl_vader_single_copy_mechanism="none")
+               OMPI_MCA_btl_vader_single_copy_mechanism="none", OMPI_MCA_orte_tmpdir_base=_mpi_session_base())
     if "ASAN_OPTIONS" in env:
         # make sanitize: OpenMPI's own allocations (MCA components, op tables)
         # are never freed; keymesh's leaks are checked by every other test.
         env["ASAN_OPTIONS"] += ":detect_leaks=0"
     return cmd + [program or KEYMESH, *map(str, args)], env
+
+
+_MPI_SESSION_BASE = []
+
+
+def _mpi_session_base():
+    """A temporary folder for OpenMPI's session files, one per test process."""
+    if not _MPI_SESSION_BASE:
+        import atexit
+        _MPI_SESSION_BASE.append(tempfile.mkdtemp(prefix="keymesh-ompi-"))
+        atexit.register(shutil.rmtree, _MPI_SESSION_BASE[0], ignore_errors=True)
+    return _MPI_SESSION_BASE[0]
 
 
 def mpirun(P, *args, expect=0, program=None):
