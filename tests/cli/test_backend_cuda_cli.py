@@ -91,10 +91,11 @@ def lacking_refused_by_name():
 
 def bad_input_as_on_the_cpu():
     plain = os.path.join(D, "plain.ply")  # no normals: Bezier refuses it
+    THIN = write_label_nrrd(os.path.join(D, "thin.nrrd"), np.arange(20).reshape(5, 1, 4))  # one plane: no cells
     run("contour", VTI, "-o", plain, "--iso", 4.5, "-q")
     cases = [
         ["contour", TETS, "-o", output("x", "ply"), "--iso", 1, "--array", "nope"],
-        ["contour", VTI, "-o", output("x", "ply"), "--iso", 1, "--array", "nope", "--coarsen"],
+        ["contour", THIN, "-o", output("x", "ply"), "--iso", 5.5, "--coarsen"],
         ["labels", VTI, "-o", output("x", "vtp"), "--smooth", 0],
         ["subdivide", plain, "-o", output("x", "ply"), "--scheme", "bezier"],
     ]
