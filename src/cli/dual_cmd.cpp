@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "command.hpp"
+#include "keymesh/backend/dual.hpp"
 #include "keymesh/generate/unstructured/dual.hpp"
 #include "keymesh/generate/report_fields.hpp"
 #include "keymesh/io/formats.hpp"
@@ -42,7 +43,8 @@ int run_dual(const DualCli& o, CommandRun& run) {
   check_work(estimate_dual(m.num_points(), m.num_cells(), m.connectivity.size(), field_components(m.point_fields)),
              memory_budget(o.common), o.input + ": dual");
   generate::DualStats st;
-  const SurfaceMesh d = run.stage("dual", [&] { return generate::dual(m, &st); });
+  const auto backend = generate::parse_option<generate::Backend>(o.common.backend);
+  const SurfaceMesh d = run.stage("dual", [&] { return backend::dual(m, backend, &st); });
   run.stage("write", [&] { io::write_mesh(d, o.output); });
   if (!o.common.quiet) {
     std::fprintf(stderr, "keymesh: %lld points, %lld polygons -> %s\n", (long long)d.num_points(),
@@ -55,10 +57,11 @@ int run_dual(const DualCli& o, CommandRun& run) {
   r["input_points"] = m.num_points();
   r["input_cells"] = m.num_cells();
   generate::visit_fields(st, into(r));
+  r["backend"] = o.common.backend;
   return run.finish(r, PeakRss::Include);
 }
 
-Register reg{make_cpu_command("dual", "the dual", add_dual_options, run_dual)};
+Register reg{make_run_command("dual", add_dual_options, run_dual)};
 
 }  // namespace
 

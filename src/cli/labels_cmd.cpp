@@ -9,6 +9,7 @@
 #include "command.hpp"
 #include "labels_job.hpp"
 #include "raw_input.hpp"
+#include "keymesh/backend/labels.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/generate/labels/labels.hpp"
@@ -154,7 +155,7 @@ SurfaceMesh labels_streamed(const LabelsJob& job, StageTimer& timer, generate::L
   return mesh;
 }
 
-// The volume read whole.
+// The volume read whole, contoured on the backend --backend names.
 SurfaceMesh labels_in_memory(const LabelsJob& job, StageTimer& timer, Progress& progress,
                              generate::LabelStats& stats, nlohmann::json& r) {
   progress.say("reading " + job.input);
@@ -165,12 +166,16 @@ SurfaceMesh labels_in_memory(const LabelsJob& job, StageTimer& timer, Progress& 
   r["dims"] = grid.dims;
   r["scalar_type"] = scalar_type_name(grid.type);
   return timer.run("labels", [&] {
-    return naming_input(job, [&] { return generate::contour_labels(grid, job.options, &stats); });
+    const auto backend = generate::parse_option<generate::Backend>(job.common.backend);
+    return naming_input(job, [&] { return backend::contour_labels(grid, job.options, backend, &stats); });
   });
 }
 
-// One process: the volume in memory, or streamed with --memory-limit.
+// One process: the volume in memory (on --backend's device), or streamed
+// with --memory-limit (the CPU only).
 int run_labels(const LabelsJob& job) {
+  if (job.memory_limit)
+    if (int rc = require_cpu_backend(job.common, "streaming (--memory-limit)")) return rc;
   StageTimer timer;
   Progress progress(job.common.quiet, file_size(job.input) > (64ll << 20));
   generate::LabelStats stats;
@@ -217,7 +222,7 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
             {"background", opt.background}, {"smooth", opt.smooth_iterations}, {"relaxation", opt.relaxation},
             {"coarsen", opt.coarsen}, {"distinct_labels", stats.distinct_labels},
             {"labels_extracted", stats.surfaces}, {"points", mesh.num_points()}, {"cells", mesh.num_cells()},
-            {"soup_points", stats.soup_corners}, {"threads", job.threads}});
+            {"soup_points", stats.soup_corners}, {"threads", job.threads}, {"backend", job.common.backend}});
   if (opt.coarsen) {
     r["triangles_before"] = stats.triangles_before_coarsening;
     r["triangles_after"] = mesh.num_cells();
@@ -318,20 +323,28 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   add_common_options(cmd, o.common);
 }
 
-// One process (run_labels), or under mpirun -np P each rank its rows.
+// One process (run_labels), or under mpirun -np P each rank its rows. The
+// GPU runs the one-process, in-memory path; the others refuse --backend cuda
+// by name.
 int run_labels_command(const LabelsCli& o, CommandRun& run) {
   LabelsJob job = job_of(o);
   job.threads = run.threads();
   if (int rc = check_precomputed(o, job)) return rc;
-  if (job.precomputed.on) return run_labels_precomputed(job);
+  if (job.precomputed.on) {
+    if (int rc = require_cpu_backend(o.common, "--format precomputed")) return rc;
+    return run_labels_precomputed(job);
+  }
   // One rank under mpirun writing .pvtp is the pieces path too (a piece and
   // its index), so a scaling series starts at -np 1 with the same files.
   const bool pieces = job.output.size() >= 5 && job.output.compare(job.output.size() - 5, 5, ".pvtp") == 0;
-  if (distributed::size() > 1 || (pieces && distributed::launched_by_mpi())) return run_distributed_labels(job);
+  if (distributed::size() > 1 || (pieces && distributed::launched_by_mpi())) {
+    if (int rc = require_cpu_backend(o.common, "labels under mpirun")) return rc;
+    return run_distributed_labels(job);
+  }
   return run_labels(job);
 }
 
-Register reg{make_cpu_command("labels", "labels", add_labels_options, run_labels_command)};
+Register reg{make_run_command("labels", add_labels_options, run_labels_command)};
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 
 #include "command.hpp"
 #include "keymesh/backend/contour.hpp"
+#include "keymesh/backend/dual.hpp"
 #include "keymesh/backend/subdivide.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/unstructured/contour_tets.hpp"
@@ -59,7 +60,7 @@ SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& 
     check_work(estimate_dual(mesh.num_points(), mesh.num_cells(), mesh.connectivity.size(),
                              field_components(mesh.point_fields)),
                memory_budget(o.common), o.input + ": pipeline --dual");
-  if (o.dual) mesh = timer.run("dual", [&] { return generate::dual(mesh); });
+  if (o.dual) mesh = timer.run("dual", [&] { return backend::dual(mesh, opt.backend); });
   return mesh;
 }
 
@@ -71,8 +72,6 @@ int run_pipeline(const PipelineCli& o) {
   }
   const int threads = apply_threads(o.common);
   StageTimer timer;
-  if (o.dual)
-    if (int rc = require_cpu_backend(o.common, "the dual")) return rc;
   nlohmann::json r;
   const SurfaceMesh mesh = run_stages(o, timer, r);
   timer.run("write", [&] { io::write_mesh(mesh, o.output); });

@@ -2,11 +2,13 @@
 // (KEYMESH_CUDA=OFF or no nvcc): every call says so by name, naming --backend cpu.
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/cuda/device_contour.hpp"
+#include "keymesh/cuda/surfaces.hpp"
 #include "keymesh/cuda/unstructured.hpp"
 
 #if !defined(KEYMESH_HAVE_CUDA)
 
 #include "contour_limits.hpp"
+#include "keymesh/generate/labels/labels_device.hpp"
 #include "unavailable.hpp"
 
 namespace keymesh::cuda {
@@ -42,6 +44,18 @@ SurfaceMesh subdivide(const SurfaceMesh&, const generate::SubdivideOptions&) { r
 UnstructuredGrid subdivide(const UnstructuredGrid&, const generate::SubdivideOptions&) { refuse_gpu(kBuiltWithout); }
 UnstructuredGrid tetrahedralize5(const ImageGrid&) { refuse_gpu(kBuiltWithout); }
 UnstructuredGrid tetrahedralize24(const ImageGrid&) { refuse_gpu(kBuiltWithout); }
+
+// The dual and label surface nets: the CPU's input checks, and the label
+// options the device path lacks, as the GPU build makes them.
+SurfaceMesh dual(const SurfaceMesh& mesh, generate::DualStats*) {
+  generate::check_dual_input(mesh);
+  refuse_gpu(kBuiltWithout);
+}
+SurfaceMesh contour_labels(const ImageGrid& grid, const generate::LabelOptions& options, generate::LabelStats*) {
+  generate::check_labels_input(grid, options);
+  generate::check_device_label_options(options);
+  refuse_gpu(kBuiltWithout);
+}
 
 }  // namespace keymesh::cuda
 

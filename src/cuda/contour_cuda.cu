@@ -8,7 +8,8 @@
 //
 // The plan is the one --weld names (generate::device_plan_for: keyreduce ->
 // the structured count/scan/write plan, keyreduce-sort -> the sort plan,
-// vertexweld -> VERTEX-WELD); one code path, two entries:
+// vertexweld -> VERTEX-WELD; with --coarsen, contour_coarsened.cuh's: the
+// contour's device arrays coarsened on the device); one code path, two entries:
 //   contour         host samples (uploaded), the mesh brought to the host;
 //   contour_device  samples already in device memory (read where they lie:
 //                   contour_arrays_on's view), the mesh left on the device in
@@ -25,6 +26,7 @@
 #include <string>
 #include <utility>
 
+#include "contour_coarsened.cuh"
 #include "contour_limits.hpp"
 #include "gpu_session.cuh"
 #include "keymesh/core/error.hpp"
@@ -119,7 +121,9 @@ SurfaceMesh contour(const ImageGrid& grid, const generate::ContourOptions& opt, 
   GpuSession session(-1);
   device::CudaStageEvents times(session.stream());
   const device::CudaDevice d{session.stream(), &times, device::CudaMemory::Pool};
-  SurfaceMesh mesh = generate::contour_plan_on(d, grid, opt, generate::device_plan_for(opt.weld), &st);  // the upload counts in generate, the download in fields
+  // The upload counts in generate, the download in fields (coarsen: the coarsening and the split).
+  SurfaceMesh mesh = opt.coarsen ? contour_coarsened_on_gpu(d, grid, opt, &st)
+                                 : generate::contour_plan_on(d, grid, opt, generate::device_plan_for(opt.weld), &st);
   times.add_times();
   st.device_peak_bytes = session.peak();
   return mesh;

@@ -20,7 +20,6 @@ constexpr Id kMaxItems = std::numeric_limits<int>::max();  // CUB's num_items
 }  // namespace
 
 void check_gpu_options(const generate::ContourOptions& opt) {
-  if (opt.coarsen) not_on_gpu("coarsening (--coarsen)");
   if (opt.curvature) not_on_gpu("curvature (--curvature)");
   if (opt.history) not_on_gpu("per-point history (--history)");
   if (opt.output_arrays) not_on_gpu("writing into arrays the caller owns (output_arrays)");
@@ -30,6 +29,9 @@ void check_gpu_options(const generate::ContourOptions& opt) {
 
 void check_device_volume(const DeviceVolume& volume, const generate::ContourOptions& opt) {
   check_gpu_options(opt);
+  // cuda::contour coarsens host samples; the device-resident entry hands out
+  // device arrays, and the coarsening's split runs on the host.
+  if (opt.coarsen) not_on_gpu("coarsening (--coarsen) of samples in device memory");
   // generate::check_contour_input's checks but the byte count: the samples
   // are not the grid's own (its bytes stay empty), they are device memory.
   if (opt.isovalues.empty()) throw InputError("contour: no isovalue given");

@@ -1,18 +1,25 @@
-// The dual's and label surface nets' device paths instantiated on the CUDA
-// device: nvcc compiles their functors (KEYMESH_HD) and the layer's launch
-// glue for them, so a change that breaks either on the GPU fails the CUDA
-// build (and `make gpu-check-build`), not a GPU run. No entry calls them yet:
-// cuda::dual and cuda::contour_labels come with a GPU session shared with
-// contour_cuda.cu (its stream, pool and stage events); ctest runs the same
-// templates on the CPU device (DeviceDual, DeviceLabels).
-#include "keymesh/device/cuda_device.cuh"
+// The dual and label surface nets on the GPU (keymesh/cuda/surfaces.hpp): their
+// device paths (dual_device.hpp, labels_device.hpp) on the CUDA device, in
+// gpu_session.cuh's session, compiled with --fmad=false as every functor of
+// this layer. ctest runs the same templates on the CPU device (DeviceDual,
+// DeviceLabels).
+#include "gpu_session.cuh"
+#include "keymesh/cuda/surfaces.hpp"
 #include "keymesh/generate/labels/labels_device.hpp"
 #include "keymesh/generate/unstructured/dual_device.hpp"
 
-namespace keymesh::generate {
+namespace keymesh::cuda {
 
-template SurfaceMesh dual_on<device::CudaDevice>(const device::CudaDevice&, const SurfaceMesh&, DualStats*);
-template SurfaceMesh contour_labels_on<device::CudaDevice>(const device::CudaDevice&, const ImageGrid&,
-                                                           const LabelOptions&, LabelStats*, bool);
+SurfaceMesh dual(const SurfaceMesh& mesh, generate::DualStats* stats) {
+  generate::check_dual_input(mesh);  // the CPU's refusals come first, with or without a GPU
+  return run_on_gpu([&](const device::CudaDevice& d) { return generate::dual_on(d, mesh, stats); });
+}
 
-}  // namespace keymesh::generate
+SurfaceMesh contour_labels(const ImageGrid& grid, const generate::LabelOptions& options,
+                           generate::LabelStats* stats) {
+  generate::check_labels_input(grid, options);  // the CPU's refusals, then what the device path lacks
+  generate::check_device_label_options(options);
+  return run_on_gpu([&](const device::CudaDevice& d) { return generate::contour_labels_on(d, grid, options, stats); });
+}
+
+}  // namespace keymesh::cuda

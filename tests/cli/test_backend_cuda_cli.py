@@ -1,6 +1,7 @@
 """`--backend cuda` on every command with a GPU path (issue 35): contour of a
-volume and of a tet grid, tetrahedralize (5 and 24 tets), subdivide
-(triangles linear and Bezier, tets), pipeline --subdivide.
+volume (plain and --coarsen) and of a tet grid, tetrahedralize (5 and 24
+tets), subdivide (triangles linear and Bezier, tets), dual, labels (surface
+nets, --smooth 0), pipeline --subdivide, --coarsen and --dual.
 
 Where the GPU cannot run them (a build without CUDA, as CI's, or no device,
 as the development machine), each exits 1 with one line that says why and
@@ -14,7 +15,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, run, tempdir  # noqa: E402
+import numpy as np  # noqa: E402
+from kmtest import check, finish, run, tempdir, write_label_nrrd  # noqa: E402
 
 D = tempdir()
 VTI = os.path.join(D, "sphere.vti")
@@ -23,10 +25,13 @@ SURFACE = os.path.join(D, "surface.ply")
 run("generate", "sphere", "--size", 12, "-o", VTI, "-q")
 run("tetrahedralize", VTI, "-o", TETS, "-q")
 run("contour", VTI, "-o", SURFACE, "--iso", 4.5, "--normals", "average", "-q")
+LABELS = write_label_nrrd(os.path.join(D, "labels.nrrd"),
+                          np.fromfunction(lambda x, y, z: (x // 3 + y // 4 + z // 5) % 4, (13, 11, 9), dtype=int))
 
 # (command, input, output extension, arguments)
 GPU_COMMANDS = [
     ("contour", VTI, "ply", ["--iso", 4.5, "--normals", "average"]),
+    ("contour", VTI, "ply", ["--iso", 4.5, "--iso", 2.5, "--normals", "average", "--coarsen"]),
     ("contour", TETS, "ply", ["--iso", 4.5, "--iso", 3.001, "--normals", "average"]),
     ("tetrahedralize", VTI, "vtu", ["--scheme", 5]),
     ("tetrahedralize", VTI, "vtu", ["--scheme", 24]),
@@ -35,6 +40,9 @@ GPU_COMMANDS = [
     ("subdivide", TETS, "vtu", ["--levels", 1]),
     ("pipeline", VTI, "ply", ["--iso", 4.5, "--subdivide", 1]),
     ("pipeline", TETS, "ply", ["--iso", 4.5]),
+    ("pipeline", VTI, "ply", ["--iso", 4.5, "--coarsen", "--dual"]),
+    ("dual", SURFACE, "ply", []),
+    ("labels", LABELS, "vtp", ["--smooth", 0]),
 ]
 
 
@@ -68,8 +76,7 @@ def lacking_refused_by_name():
         (["contour", TETS, "--iso", 4.5, "--coarsen"], "coarsening"),
         (["tetrahedralize", VTI, "--scheme", 24, "--weld", "vertexweld"], "VERTEX-WELD"),
         (["subdivide", SURFACE, "--weld", "vertexweld"], "VERTEX-WELD"),
-        (["pipeline", VTI, "--iso", 4.5, "--dual"], "the dual"),
-        (["dual", SURFACE], "the dual"),
+        (["labels", LABELS, "--smooth", 0, "--memory-limit", "1M"], "streaming (--memory-limit)"),
         (["quality", SURFACE], "quality"),
     ]
     for args, name in cases:
@@ -84,9 +91,12 @@ def lacking_refused_by_name():
 
 def bad_input_as_on_the_cpu():
     plain = os.path.join(D, "plain.ply")  # no normals: Bezier refuses it
+    THIN = write_label_nrrd(os.path.join(D, "thin.nrrd"), np.arange(20).reshape(5, 1, 4))  # one plane: no cells
     run("contour", VTI, "-o", plain, "--iso", 4.5, "-q")
     cases = [
         ["contour", TETS, "-o", output("x", "ply"), "--iso", 1, "--array", "nope"],
+        ["contour", THIN, "-o", output("x", "ply"), "--iso", 5.5, "--coarsen"],
+        ["labels", VTI, "-o", output("x", "vtp"), "--smooth", 0],
         ["subdivide", plain, "-o", output("x", "ply"), "--scheme", "bezier"],
     ]
     for args in cases:
@@ -98,5 +108,25 @@ def bad_input_as_on_the_cpu():
 
 check("--backend cuda: the GPU's output is the CPU's, or one line naming --backend cpu", gpu_runs_or_says_why)
 check("--backend cuda: what a GPU path lacks is refused by name", lacking_refused_by_name)
+
+
+def label_options_the_device_lacks():
+    # Refused by name (the device path's own words), after the CPU's checks.
+    cases = [
+        ([], "smoothing"),  # --smooth 16 by default
+        (["--smooth", 0, "--method", "discrete-mc"], "--method discrete-mc"),
+        (["--smooth", 0, "--per-label"], "--per-label"),
+        (["--smooth", 0, "--coarsen"], "--coarsen"),
+    ]
+    for args, name in cases:
+        out = output("refused", "vtp")
+        p = run("labels", LABELS, "-o", out, *args, "--backend", "cuda", expect=None)
+        assert p.returncode == 1, (args, p.returncode, p.stderr)
+        assert name in p.stderr and "(use --backend cpu)" in p.stderr, p.stderr
+        assert p.stderr.count("\n") == 1, p.stderr
+        assert not os.path.exists(out), out
+
+
 check("--backend cuda: bad input gets the CPU's message", bad_input_as_on_the_cpu)
+check("--backend cuda: what the label path lacks is refused by name", label_options_the_device_lacks)
 finish()

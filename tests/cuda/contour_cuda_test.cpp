@@ -123,7 +123,7 @@ TEST(CudaContour, RefusesWhatItDoesNotDoByName) {
   ContourOptions o;
   o.isovalues = {10.5};
   o.backend = Backend::Cuda;
-  o.coarsen = true;
+  o.curvature = true;
   EXPECT_THROW(backend::contour(generate::spherical_distance(24), o), InputError);
 }
 

@@ -28,17 +28,20 @@ std::string input_error_of(const ContourOptions& o) {
 }
 
 // Each option the GPU path does not implement is refused by its name, never
-// ignored; the defaults pass.
+// ignored; the defaults pass, and so does coarsening (cuda::contour runs it).
 TEST(CudaLimits, UnsupportedOptionsAreRefusedByName) {
   ContourOptions o;
   o.isovalues = {1.5};
   EXPECT_EQ(input_error_of(o), "");
+  ContourOptions coarsened = o;
+  coarsened.coarsen = true;
+  EXPECT_EQ(input_error_of(coarsened), "");
   struct Case {
     void (*set)(ContourOptions&);
     const char* name;
   };
   const Case cases[] = {
-      {[](ContourOptions& c) { c.coarsen = true; }, "coarsening"},
+      {[](ContourOptions& c) { c.history = true; }, "history"},
       {[](ContourOptions& c) { c.curvature = true; }, "curvature"},
       {[](ContourOptions& c) { c.output_arrays = [](Id, Id) { return generate::ContourArrays{}; }; }, "output_arrays"},
       {[](ContourOptions& c) { c.total_planes = 40; }, "slab"},
@@ -137,6 +140,10 @@ TEST(CudaLimits, DeviceVolumeChecks) {
   ContourOptions curvature = o;
   curvature.curvature = true;
   refused(v, curvature, "curvature");
+  // cuda::contour coarsens host samples; device-resident ones are refused.
+  ContourOptions coarsen = o;
+  coarsen.coarsen = true;
+  refused(v, coarsen, "coarsening (--coarsen) of samples in device memory");
   cuda::DeviceVolume huge = v;
   huge.grid.dims = {1292, 1292, 1292};
   EXPECT_THROW(cuda::check_device_volume(huge, o), LimitError);

@@ -17,9 +17,11 @@ bool available(std::string* why = nullptr);
 // CPU backend's for the same options (same key order, same arithmetic, the
 // same fixed merge order for averaged normals). Supports KeyReduce and
 // KeyReduceSort welds, normals none / gradient / average, scalars and
-// several isovalues; throws InputError naming what it does not support yet
-// (VERTEX-WELD, coarsening, curvature, output arrays, slabs, ghost planes:
-// src/cuda/contour_limits.hpp) and when no device is usable, LimitError past
+// several isovalues, and coarsening (options.coarsen: the contour's device
+// path, then coarsen_device.hpp's, equal to generate::contour's); throws
+// InputError naming what it does not support yet (curvature, history, output
+// arrays, slabs, ghost planes: src/cuda/contour_limits.hpp) and when no
+// device is usable, LimitError past
 // its sizes, past options.max_output_bytes (the CPU's check and message) and
 // when the device runs out of memory. After a fault that leaves the CUDA
 // context unusable, available() is false, saying why.

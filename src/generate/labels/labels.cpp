@@ -29,6 +29,11 @@ void detail::check_label_options(const LabelOptions& options) {
     throw InputError("labels: relaxation factor " + std::to_string(options.relaxation) + " is not in (0, 1]");
 }
 
+void check_labels_input(const ImageGrid& grid, const LabelOptions& options) {
+  detail::check_label_options(options);
+  detail::check_label_grid(grid, options);
+}
+
 SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats) {
   detail::check_label_options(options);
   LabelStats local;

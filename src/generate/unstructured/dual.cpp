@@ -169,6 +169,8 @@ void dual_polygons(const SurfaceMesh& m, const analyze::PointCells& pc, const Fa
 
 }  // namespace
 
+void check_dual_input(const SurfaceMesh& mesh) { analyze::check_ids(mesh); }
+
 SurfaceMesh dual(const SurfaceMesh& m, DualStats* stats) {
   const analyze::PointCells pc = analyze::point_cells(m);
   const Id V = m.num_points(), F = m.num_cells();

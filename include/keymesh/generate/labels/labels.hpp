@@ -126,6 +126,11 @@ struct LabelStats {
 
 SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats = nullptr);
 
+// contour_labels()'s refusals that need no scan of the samples (smoothing
+// options, the grid's dims and sample type, the background's magnitude), as
+// InputError: what another backend checks before it starts.
+void check_labels_input(const ImageGrid& grid, const LabelOptions& options);
+
 // Faces and distinct points per label pair of a mesh with a boundary_labels
 // cell field, in increasing (first, second): two KEY-REDUCE partitions (the
 // faces by pair, then the corners by (pair, point)). Empty without the field.

@@ -27,4 +27,8 @@ struct DualStats {
 
 SurfaceMesh dual(const SurfaceMesh& mesh, DualStats* stats = nullptr);
 
+// dual()'s refusal of bad input (point ids out of range: InputError), what
+// another backend checks before it starts.
+void check_dual_input(const SurfaceMesh& mesh);
+
 }  // namespace keymesh::generate
