@@ -9,6 +9,9 @@
 # docs/gpu-check.md says how the programs are checked and run.
 set(CMAKE_BUILD_TYPE Release CACHE STRING "")
 set(CMAKE_CUDA_ARCHITECTURES 90 CACHE STRING "")
+# The fatbinaries compressed for size: with every generator on the device the
+# three programs passed the 40 MB the issue allows (43.1 MB, 2026-11-29).
+set(CMAKE_CUDA_FLAGS "--compress-mode=size" CACHE STRING "")
 set(KEYMESH_GPU_CHECK ON CACHE BOOL "")
 set(KEYMESH_CUDA ON CACHE BOOL "")
 set(KEYMESH_GDCM OFF CACHE BOOL "")
