@@ -20,6 +20,7 @@
 #include "keymesh/cuda/device_contour.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
+#include "gpu_runs.hpp"
 
 using namespace keymesh;
 using generate::Backend;
@@ -27,12 +28,6 @@ using generate::ContourNormals;
 using generate::ContourOptions;
 
 namespace {
-
-#define SKIP_WITHOUT_GPU()                                     \
-  do {                                                         \
-    std::string why;                                           \
-    if (!cuda::available(&why)) GTEST_SKIP() << why;           \
-  } while (0)
 
 bool same_bits(const Array<float>& a, const Array<float>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);

@@ -22,6 +22,7 @@
 #include "keymesh/cuda/backend.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
+#include "gpu_runs.hpp"
 #include "same_bits.hpp"
 
 using namespace keymesh;
@@ -29,24 +30,11 @@ using generate::Backend;
 using generate::ContourNormals;
 using generate::ContourOptions;
 using generate::LabelOptions;
+using keymesh::testing::expect_gpu_twice;
 using keymesh::testing::expect_same_bits;
+using keymesh::testing::refusal;
 
 namespace {
-
-#define SKIP_WITHOUT_GPU()                           \
-  do {                                               \
-    std::string why;                                 \
-    if (!cuda::available(&why)) GTEST_SKIP() << why; \
-  } while (0)
-
-// The CPU's result, then two GPU runs: the first equal to the CPU's, the
-// second to the first.
-void expect_gpu_twice(const std::function<SurfaceMesh(Backend)>& run, const std::string& what) {
-  const SurfaceMesh cpu = run(Backend::Cpu);
-  const SurfaceMesh first = run(Backend::Cuda);
-  expect_same_bits(first, cpu, what + ": cuda = cpu");
-  expect_same_bits(run(Backend::Cuda), first, what + ": cuda run 2 = run 1");
-}
 
 ImageGrid noise(Id n, unsigned seed) {
   ImageGrid g;
@@ -100,16 +88,6 @@ ImageGrid label_noise(std::array<Id, 3> n, int labels, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> u(0, labels - 1);
   return test::label_map(n, [&](Id, Id, Id) { return u(rng); });
-}
-
-// The message of the InputError `f` throws ("" when it throws none).
-std::string refusal(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include "keymesh/generate/unstructured/contour_tets.hpp"
 #include "keymesh/generate/unstructured/subdivide.hpp"
 #include "keymesh/generate/unstructured/tetrahedralize.hpp"
+#include "gpu_runs.hpp"
 #include "same_bits.hpp"
 
 using namespace keymesh;
@@ -33,25 +34,11 @@ using generate::ContourNormals;
 using generate::ContourOptions;
 using generate::SubdivideOptions;
 using generate::SubdivideScheme;
+using keymesh::testing::expect_gpu_twice;
 using keymesh::testing::expect_same_bits;
+using keymesh::testing::refusal;
 
 namespace {
-
-#define SKIP_WITHOUT_GPU()                           \
-  do {                                               \
-    std::string why;                                 \
-    if (!cuda::available(&why)) GTEST_SKIP() << why; \
-  } while (0)
-
-// The CPU's result, then two GPU runs: the first equal to the CPU's, the
-// second to the first.
-template <class Result>
-void expect_gpu_twice(const std::function<Result(Backend)>& run, const std::string& what) {
-  const Result cpu = run(Backend::Cpu);
-  const Result first = run(Backend::Cuda);
-  expect_same_bits(first, cpu, what + ": cuda = cpu");
-  expect_same_bits(run(Backend::Cuda), first, what + ": cuda run 2 = run 1");
-}
 
 ImageGrid noise(Id n, unsigned seed) {
   ImageGrid g;
@@ -80,7 +67,7 @@ void expect_tets_contour(const UnstructuredGrid& g, const std::vector<double>& i
     ContourOptions o;
     o.isovalues = isovalues;
     o.normals = normals;
-    expect_gpu_twice<SurfaceMesh>(
+    expect_gpu_twice(
         [&](Backend b) {
           o.backend = b;
           return backend::contour(g, o);
@@ -100,23 +87,13 @@ void expect_subdivided(const SurfaceMesh& m, SubdivideScheme scheme, int levels,
   SubdivideOptions o;
   o.levels = levels;
   o.scheme = scheme;
-  expect_gpu_twice<SurfaceMesh>([&](Backend b) { return backend::subdivide(m, o, b); },
+  expect_gpu_twice([&](Backend b) { return backend::subdivide(m, o, b); },
                                 what + " scheme " + std::to_string(int(scheme)) + " levels " + std::to_string(levels));
 }
 
 void expect_tetrahedralized(const ImageGrid& g, int scheme, const std::string& what) {
-  expect_gpu_twice<UnstructuredGrid>([&](Backend b) { return backend::tetrahedralize(g, scheme, false, b); },
+  expect_gpu_twice([&](Backend b) { return backend::tetrahedralize(g, scheme, false, b); },
                                      what + " scheme " + std::to_string(scheme));
-}
-
-// The message of the InputError `f` throws ("" when it throws none).
-std::string refusal(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace
@@ -160,7 +137,7 @@ TEST(CudaSubdivide, TetsMatchTheCpuBitForBit) {
     for (int levels : {1, 2}) {
       o.levels = levels;
       const UnstructuredGrid g = tets_of(generate::spherical_distance(n));
-      expect_gpu_twice<UnstructuredGrid>([&](Backend b) { return backend::subdivide(g, o, b); },
+      expect_gpu_twice([&](Backend b) { return backend::subdivide(g, o, b); },
                                          "tets of sphere " + std::to_string(n) + " levels " + std::to_string(levels));
     }
 }
