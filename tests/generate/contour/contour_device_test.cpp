@@ -5,9 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <limits>
-#include <random>
 #include <string>
 
 #include "keymesh/core/error.hpp"
@@ -23,7 +20,11 @@ using generate::ContourOptions;
 using generate::ContourWeld;
 using generate::DeviceKeys;
 using keymesh::testing::describe;
+using keymesh::testing::integer_noise;
 using keymesh::testing::noise;
+using keymesh::testing::one_voxel_plate;
+using keymesh::testing::thin_grids;
+using keymesh::testing::with_nan_and_infinity;
 using keymesh::testing::option_sets;
 
 namespace {
@@ -50,17 +51,6 @@ Id expect_device_equals_cpu(const ImageGrid& g, const std::vector<double>& isova
   return triangles;
 }
 
-template <class T>
-ImageGrid integers(Id n, int lo, int hi, unsigned seed, ScalarType type) {
-  ImageGrid g;
-  g.allocate({n, n + 3, n - 2}, type);
-  T* v = static_cast<T*>(g.data());
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> u(lo, hi);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = static_cast<T>(u(rng));
-  return g;
-}
-
 }  // namespace
 
 TEST(DeviceContour, SpheresEqualTheCpuFastPath) {
@@ -82,36 +72,25 @@ TEST(DeviceContour, NoiseEqualsTheCpuFastPath) {
 
 TEST(DeviceContour, IntegerSamplesOnTheIsovalueEqualTheCpuFastPath) {
   // Whole-number samples, many exactly on the isovalue (inside: value >= iso).
-  EXPECT_GT(expect_device_equals_cpu(integers<std::uint8_t>(24, 0, 6, 3, ScalarType::UInt8), {3.0}, "uint8"), 1000);
-  EXPECT_GT(expect_device_equals_cpu(integers<std::int16_t>(21, -4, 4, 5, ScalarType::Int16), {0.0, 2.0}, "int16"),
+  EXPECT_GT(expect_device_equals_cpu(integer_noise<std::uint8_t>(24, 0, 6, 3, ScalarType::UInt8),
+            {3.0}, "uint8"), 1000);
+  EXPECT_GT(expect_device_equals_cpu(integer_noise<std::int16_t>(21, -4, 4, 5, ScalarType::Int16), {0.0, 2.0}, "int16"),
             1000);
-  EXPECT_GT(expect_device_equals_cpu(integers<std::int32_t>(19, -9, 9, 11, ScalarType::Int32), {-0.5}, "int32"), 1000);
-  EXPECT_GT(expect_device_equals_cpu(integers<double>(18, 0, 3, 13, ScalarType::Float64), {1.0}, "float64"), 1000);
+  EXPECT_GT(expect_device_equals_cpu(integer_noise<std::int32_t>(19, -9, 9, 11, ScalarType::Int32),
+            {-0.5}, "int32"), 1000);
+  EXPECT_GT(expect_device_equals_cpu(integer_noise<double>(18, 0, 3, 13, ScalarType::Float64), {1.0}, "float64"), 1000);
 }
 
 TEST(DeviceContour, NaNAndInfinitySamplesEqualTheCpuFastPath) {
-  ImageGrid g = generate::spherical_distance(30);
-  float* v = static_cast<float*>(g.data());
-  const float specials[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
-                            -std::numeric_limits<float>::infinity()};
-  for (Id i = 0; i < g.num_points(); i += 5) v[i] = specials[(i / 5) % 3];
+  const ImageGrid g = with_nan_and_infinity(generate::spherical_distance(30));
   EXPECT_GT(expect_device_equals_cpu(g, {11.5}, "NaN and inf"), 1000);
 }
 
 TEST(DeviceContour, ThinAndEmptyShapesEqualTheCpuFastPath) {
   // One voxel thick grids, and a one-voxel plate inside a volume.
   const ImageGrid sphere = generate::spherical_distance(20);
-  for (auto dims : {std::array<Id, 3>{2, 17, 19}, std::array<Id, 3>{23, 2, 2}, std::array<Id, 3>{9, 11, 2}}) {
-    ImageGrid g;
-    g.allocate({dims[0], dims[1], dims[2]}, ScalarType::Float32);
-    float* v = static_cast<float*>(g.data());
-    for (Id i = 0; i < g.num_points(); ++i) v[i] = static_cast<float>(std::sin(0.7 * double(i)));
-    EXPECT_GT(expect_device_equals_cpu(g, {0.1}, "thin grid"), 0);
-  }
-  ImageGrid plate;
-  plate.allocate({12, 12, 12}, ScalarType::UInt8);
-  auto* p = static_cast<std::uint8_t*>(plate.data());
-  for (Id i = 0; i < plate.num_points(); ++i) p[i] = (i / 144 == 5) ? 200 : 0;
+  for (const ImageGrid& g : thin_grids()) EXPECT_GT(expect_device_equals_cpu(g, {0.1}, "thin grid"), 0);
+  const ImageGrid plate = one_voxel_plate();
   EXPECT_GT(expect_device_equals_cpu(plate, {100.0}, "one-voxel plate"), 100);
   // Nothing inside, everything inside: empty meshes with the same (empty) fields.
   EXPECT_EQ(expect_device_equals_cpu(sphere, {1000.0}, "empty (none inside)"), 0);
