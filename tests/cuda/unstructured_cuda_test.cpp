@@ -27,8 +27,11 @@
 #include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "gpu_runs.hpp"
 #include "same_bits.hpp"
+#include "generate/unstructured/tet_grid_cases.hpp"
 
 using namespace keymesh;
+using keymesh::testing::tet_noise;
+using keymesh::testing::tets_of;
 using generate::Backend;
 using generate::ContourNormals;
 using generate::ContourOptions;
@@ -39,28 +42,6 @@ using keymesh::testing::expect_same_bits;
 using keymesh::testing::refusal;
 
 namespace {
-
-ImageGrid noise(Id n, unsigned seed) {
-  ImageGrid g;
-  g.allocate({n, n - 1, n + 2}, ScalarType::Float32);
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
-  return g;
-}
-
-// The 5-tet split of a grid with a second, two-component point field.
-UnstructuredGrid tets_of(const ImageGrid& grid) {
-  UnstructuredGrid g = generate::tetrahedralize5(grid);
-  Field f{"xy", 2, Array<float>(static_cast<std::size_t>(2 * g.num_points()))};
-  for (Id p = 0; p < g.num_points(); ++p) {
-    f.values[2 * p] = g.points[3 * p] + 2 * g.points[3 * p + 1];
-    f.values[2 * p + 1] = -g.points[3 * p + 2];
-  }
-  g.point_fields.push_back(std::move(f));
-  return g;
-}
 
 void expect_tets_contour(const UnstructuredGrid& g, const std::vector<double>& isovalues, const std::string& what) {
   for (auto normals : {ContourNormals::None, ContourNormals::Average}) {
@@ -101,7 +82,7 @@ void expect_tetrahedralized(const ImageGrid& g, int scheme, const std::string& w
 TEST(CudaTets, SphereNoiseAndNaNMatchTheCpuBitForBit) {
   SKIP_WITHOUT_GPU();
   expect_tets_contour(tets_of(generate::spherical_distance(18)), {7.3}, "sphere 18");
-  expect_tets_contour(tets_of(noise(11, 4)), {0.0, 0.25}, "noise");
+  expect_tets_contour(tets_of(tet_noise(11, 4)), {0.0, 0.25}, "noise");
   ImageGrid ints;
   ints.allocate({9, 10, 11}, ScalarType::Float32);
   float* v = static_cast<float*>(ints.data());

@@ -13,8 +13,11 @@
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "same_bits.hpp"
+#include "tet_grid_cases.hpp"
 
 using namespace keymesh;
+using keymesh::testing::tet_noise;
+using keymesh::testing::tets_of;
 using generate::ContourNormals;
 using generate::ContourOptions;
 
@@ -40,28 +43,6 @@ Id expect_device_equals_cpu(const UnstructuredGrid& g, const std::vector<double>
   return triangles;
 }
 
-// A grid's 5-tet split with a second field, x + 2y (interpolated too).
-UnstructuredGrid tets_of(const ImageGrid& grid) {
-  UnstructuredGrid g = generate::tetrahedralize5(grid);
-  Field f{"xy", 2, Array<float>(static_cast<std::size_t>(2 * g.num_points()))};
-  for (Id p = 0; p < g.num_points(); ++p) {
-    f.values[2 * p] = g.points[3 * p] + 2 * g.points[3 * p + 1];
-    f.values[2 * p + 1] = -g.points[3 * p + 2];
-  }
-  g.point_fields.push_back(std::move(f));
-  return g;
-}
-
-ImageGrid noise(Id n, unsigned seed) {
-  ImageGrid g;
-  g.allocate({n, n - 1, n + 2}, ScalarType::Float32);
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
-  return g;
-}
-
 }  // namespace
 
 TEST(DeviceTets, SphereEqualsTheCpuPath) {
@@ -71,7 +52,7 @@ TEST(DeviceTets, SphereEqualsTheCpuPath) {
 }
 
 TEST(DeviceTets, NoiseAndLeftHandedTetsEqualTheCpuPath) {
-  UnstructuredGrid g = tets_of(noise(11, 4));
+  UnstructuredGrid g = tets_of(tet_noise(11, 4));
   EXPECT_GT(expect_device_equals_cpu(g, {0.0}, "noise"), 1000);
   // Every other tet mirrored (two corners swapped): its triangles are wound back.
   for (Id t = 0; t < g.num_cells(); t += 2) {
