@@ -29,7 +29,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 from run import machine  # noqa: E402
-from scaling_ops import ops_doc, run_ops  # noqa: E402
+from scaling_ops import SERIES, ops_doc, run_ops  # noqa: E402
 
 
 def mpirun_cmd(P):
@@ -247,11 +247,17 @@ def ops_only(keymesh, args, t0):
     def progress(text):
         print(f"[{time.time() - t0:6.1f} s] {text}", flush=True)
 
+    only = args.only or SERIES
     with tempfile.TemporaryDirectory(prefix="keymesh-scaling-") as work:
-        rows = run_ops(keymesh, list(range(1, args.max_ranks + 1)), args.reps, work, progress, mpirun_cmd)
+        rows = run_ops(keymesh, list(range(1, args.max_ranks + 1)), args.reps, work, progress, mpirun_cmd, only)
     mach = machine()
     os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
-    with open(os.path.join(HERE, "results", "scaling_ops.jsonl"), "w") as f:
+    kept = os.path.join(HERE, "results", "scaling_ops.jsonl")
+    if args.only and os.path.exists(kept):  # the other series' rows of an earlier run, measured the same day only
+        old = [json.loads(line) for line in open(kept)]
+        old = [r for r in old if r["series"] not in only and r["machine"]["date"] == mach["date"]]
+        rows = old + rows
+    with open(kept, "w") as f:
         for r in rows:
             f.write(json.dumps({**r, "machine": mach}) + "\n")
     load = (min(r["loadavg"] for r in rows), max(r["loadavg"] for r in rows))
@@ -268,6 +274,9 @@ def main():
     ap.add_argument("--render", action="store_true", help="only rewrite the doc from bench/results/scaling.jsonl")
     ap.add_argument("--ops-only", action="store_true",
                     help="only the labels and coarsening series (scaling_ops.py): their part of the doc is replaced")
+    ap.add_argument("--only", action="append", choices=SERIES,
+                    help="with --ops-only: run this series again (repeatable); the others' rows come from "
+                         "bench/results/scaling_ops.jsonl when measured the same day")
     args = ap.parse_args()
     if not shutil.which("mpirun"):
         raise SystemExit("scaling: no mpirun (install openmpi-bin)")

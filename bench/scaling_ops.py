@@ -8,7 +8,7 @@ measured by `make scaling` (bench/scaling.py) beside the contour:
   labels weak:   a banded label map 160 x 160 x (64 P + 1) (64 rows per rank),
                  both outputs;
   coarsened contour: the sphere 256^3 with --coarsen --normals average,
-                 gathered only (its pieces are refused: docs/decisions/labels-pieces-halo.md).
+                 gathered and as .pvtp pieces (halo layers, docs/decisions/contour-coarsen-pieces.md).
 
 Every gathered file is checked byte-identical to the single-process run and
 every set of pieces is checked to hold the single-process point and triangle
@@ -64,7 +64,7 @@ def _row(series, P, mode, runs, single):
             "single_process_peak_mib": statistics.median(r["peak_rss_mib"] for r in single),
             "peak_mib_max_rank": statistics.median(_peak(r) for r in runs),
             "peak_mib_rank0": statistics.median(r["peak_rss_mib"] for r in runs),
-            "halo_rows": d.get("halo_rows", 0), "bytes_exchanged": d.get("bytes_exchanged", 0),
+            "halo_rows": d.get("halo_rows", d.get("halo_layers", 0)), "bytes_exchanged": d.get("bytes_exchanged", 0),
             "loadavg": round(os.getloadavg()[0], 2)}
 
 
@@ -95,18 +95,27 @@ def _coarsen_series(keymesh, sphere, ranks, reps, work, rows, progress, mpirun_c
     ref = os.path.join(work, "coarse_ref.ply")
     single = [_run(base + ["-o", ref, "--report", rep], rep, 0, mpirun_cmd) for _ in range(reps)]
     for P in ranks:
-        out = os.path.join(work, f"coarse{P}.ply")
-        runs = [_run(base + ["-o", out, "--report", rep], rep, P, mpirun_cmd) for _ in range(reps)]
-        if open(out, "rb").read() != open(ref, "rb").read():
-            raise SystemExit(f"scaling: contour --coarsen -np {P}: gathered file differs from the single-process run")
-        row = _row("coarsen", P, "gathered", runs, single)
-        rows.append(row)
-        progress(f"coarsen -np {P}: {row['seconds_total']:.3f} s, rank 0 peak {row['peak_mib_rank0']:.0f} MiB")
+        for mode, ext in (("gathered", ".ply"), ("pieces", ".pvtp")):
+            out = os.path.join(work, f"coarse{P}_{mode}{ext}")
+            runs = [_run(base + ["-o", out, "--report", rep], rep, P, mpirun_cmd) for _ in range(reps)]
+            if mode == "gathered" and open(out, "rb").read() != open(ref, "rb").read():
+                raise SystemExit(f"scaling: contour --coarsen -np {P}: gathered file differs from the single-process run")
+            if (runs[0]["points"], runs[0]["cells"]) != (single[0]["points"], single[0]["cells"]):
+                raise SystemExit(f"scaling: contour --coarsen -np {P} {mode}: counts differ from the single-process run")
+            row = _row("coarsen", P, mode, runs, single)
+            rows.append(row)
+            progress(f"coarsen -np {P} {mode}: {row['seconds_total']:.3f} s, peak {row['peak_mib_max_rank']:.0f} MiB "
+                     f"(rank 0 {row['peak_mib_rank0']:.0f} MiB)")
 
 
-def run_ops(keymesh, ranks, reps, work, progress, mpirun_cmd):
+SERIES = ("labels-strong", "labels-weak", "coarsen")
+
+
+def run_ops(keymesh, ranks, reps, work, progress, mpirun_cmd, only=SERIES):
     rows = []
-    if os.path.exists(ATLAS):
+    if "labels-strong" not in only:
+        pass
+    elif os.path.exists(ATLAS):
         _labels_series(keymesh, "labels-strong", lambda P: (ATLAS, []), ranks, reps, work, rows, progress, mpirun_cmd)
     else:
         progress(f"labels strong series skipped: {ATLAS} not found (mricron-data)")
@@ -118,10 +127,12 @@ def run_ops(keymesh, ranks, reps, work, progress, mpirun_cmd):
             write_bands(path, *dims)
         return path, ["--dims", *map(str, dims), "--type", "uint8"]
 
-    _labels_series(keymesh, "labels-weak", bands, ranks, reps, work, rows, progress, mpirun_cmd)
-    sphere = os.path.join(work, "sphere256.raw")
-    subprocess.run([keymesh, "generate", "sphere", "--size", "256", "-o", sphere, "-q"], check=True)
-    _coarsen_series(keymesh, sphere, ranks, reps, work, rows, progress, mpirun_cmd)
+    if "labels-weak" in only:
+        _labels_series(keymesh, "labels-weak", bands, ranks, reps, work, rows, progress, mpirun_cmd)
+    if "coarsen" in only:
+        sphere = os.path.join(work, "sphere256.raw")
+        subprocess.run([keymesh, "generate", "sphere", "--size", "256", "-o", sphere, "-q"], check=True)
+        _coarsen_series(keymesh, sphere, ranks, reps, work, rows, progress, mpirun_cmd)
     return rows
 
 
@@ -147,14 +158,14 @@ def ops_doc(rows):
          "made, so its share is bit-identical to one process (docs/decisions/labels-pieces-halo.md); the distributed "
          "KEY-REDUCE numbers the points. Any other output file is gathered on rank 0, byte-identical to one process. "
          "`contour --coarsen` with `-o X.pvtp` writes pieces too (halo layers, grown while a chain of the "
-         "non-manifold split reaches past them: docs/decisions/contour-coarsen-pieces.md); its series below is the "
-         "gathered file, not yet measured in pieces. 'peak MiB, busiest rank' is the "
+         "non-manifold split reaches past them: docs/decisions/contour-coarsen-pieces.md; 'halo rows' is its halo "
+         "layers). 'peak MiB, busiest rank' is the "
          "largest peak over the ranks with pieces, rank 0's when gathered (the other ranks then hold only their "
          "slab).\n"]
     for name, title in (("labels-strong", "Labels, strong: AAL atlas 181 x 217 x 181, 116 labels, "
                                           "surface nets, 16 smoothing steps"),
                         ("labels-weak", "Labels, weak: banded label map 160 x 160 x (64P + 1), 7 labels, 16 smoothing steps"),
-                        ("coarsen", "Coarsened contour: sphere 256^3, --coarsen --normals average (gathered)")):
+                        ("coarsen", "Coarsened contour: sphere 256^3, --coarsen --normals average")):
         rs = [r for r in rows if r["series"] == name]
         if rs:
             L += [f"## {title}\n"] + _table(rs)
