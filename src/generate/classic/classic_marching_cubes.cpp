@@ -14,7 +14,7 @@
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/scan.hpp"
-#include "../contour/history_t.hpp"
+#include "generate/contour/history_t.hpp"
 
 namespace keymesh::generate {
 
