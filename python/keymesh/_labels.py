@@ -31,7 +31,7 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
                    origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0), method: str = "surface_nets",
                    labels: Optional[Sequence[int]] = None, background: int = 0, per_label: bool = False,
                    smoothing: bool = True, smoothing_iterations: int = 16, relaxation: float = 0.5,
-                   coarsen: bool = False, threads: int = 0) -> LabelMesh:
+                   coarsen: bool = False, threads: int = 0, history: bool = False) -> LabelMesh:
     """Surfaces between the regions of a label map, welded by history keys.
 
     Args:
@@ -62,6 +62,18 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
             collapse are dropped, label pairs kept; each label's surface
             stays closed (not necessarily 2-manifold).
         threads: worker threads, 0 = all cores.
+        history: add point_data["history_key"] (uint64) and
+            point_data["history_t"] (float32), as ``keymesh labels
+            --history`` writes them (docs/HISTORY.md): each point's element
+            of the volume padded with one sample of background all round
+            (array index (i, j, k) is padded point
+            ``p = np.ravel_multi_index((i + 1, j + 1, k + 1), shape + 2, order="F")``):
+            discrete marching cubes its edge ``3 * p + axis`` (t = 0.5, the
+            midpoint), surface nets its cell ``16 * p + slot`` (p the
+            cell's lowest corner; slot 0-3 the cell's loop, 4 + 2 * axis +
+            arc a per-label face point; t = 0.5, the cell's centre). The
+            unsmoothed point's, whatever the smoothing. Not with coarsen
+            (keymesh.Error).
 
     Returns:
         LabelMesh: points (n, 3) float32, cells (m, 3) uint32,
@@ -78,7 +90,7 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
                                         for i, v in enumerate(np.asarray(labels, dtype=object).reshape(-1))]
     parts, info = _ext.contour_labels(
         volume, spacing, origin, method, wanted, int_arg(background, "background"), bool(per_label), iterations,
-        float(relaxation), bool(coarsen), _threads(threads))
+        float(relaxation), bool(coarsen), _threads(threads), bool(history))
     last_labels_info.clear()
     last_labels_info.update(info)
     return _mesh(parts, LabelMesh)

@@ -135,7 +135,8 @@ def _old_lorensen(volume, level, spacing, gradient_direction, threads, progress)
 def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Sequence[float] = (1., 1., 1.),
                    gradient_direction: str = 'descent', step_size: int = 1, allow_degenerate: bool = True,
                    method: str = 'lewiner', mask: Any = None, threads: int = 0,
-                   progress: Optional[Callable[[str, float], Any]] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                   progress: Optional[Callable[[str, float], Any]] = None,
+                   history: bool = False) -> Tuple[np.ndarray, ...]:
     """Marching cubes with scikit-image's arguments and results, welded by edge keys.
 
     ``verts, faces, normals, values = keymesh.marching_cubes(volume, level, spacing=s)``
@@ -172,6 +173,17 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
             does not depend on it.
         progress: keymesh only: progress(stage, fraction) between stages;
             Ctrl-C raises KeyboardInterrupt at the next stage.
+        history: keymesh only: also return history_key (V,) uint64 and
+            history_t (V,) float32 (docs/HISTORY.md), the key keymesh.contour
+            gives the same edge of the same array: ``3 * np.ravel_multi_index(
+            lo, volume.shape, order="F") + A``, ``lo`` the array index of the
+            lower end of the point's edge along array axis ``A`` (with
+            step_size, an edge of step_size samples from a multiple of it);
+            ``verts[:, A] == np.float32(lo[A] + step_size * np.float64(t)) *
+            spacing[A]`` (the cross axes: ``lo * spacing``). A cube centre
+            point (method='lewiner') has key ``3 * N + ravel_multi_index(its
+            lowest corner)``, N = volume.size, and t 0.5. Not with
+            method='_lorensen' (ValueError).
 
     Returns:
         verts (V, 3) float32 (float64 when spacing is not all ones), faces
@@ -199,6 +211,9 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
     else:
         mc33 = None
     if method == '_lorensen':
+        if history:
+            raise ValueError("history: method='_lorensen' (scikit-image 0.19's old code) keeps no edge keys; "
+                             "use method='lorensen' or 'lewiner'")
         if mask is not None:
             raise NotImplementedError(
                 'Parameter `mask` is not implemented for method "_lorensen" and will be ignored.')
@@ -220,8 +235,9 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
         mask = _mask_bytes(mask)
 
     threads = int_arg(threads, "threads", INT32)
-    vertices, faces, normals, values = _ext.marching_cubes(
-        volume, float(level), _case_table(), step_size, mask, gradient_direction == 'descent', threads, progress, mc33)
+    arrays = _ext.marching_cubes(volume, float(level), _case_table(), step_size, mask, gradient_direction == 'descent',
+                                 threads, progress, mc33, bool(history))
+    vertices, faces, normals, values = arrays[:4]
     # scikit-image's order: "no surface" before a bad gradient_direction
     # (which it checks only once it has a surface to wind).
     if not len(vertices):
@@ -231,5 +247,5 @@ def marching_cubes(volume: Any, level: Optional[float] = None, *, spacing: Seque
     if not np.array_equal(spacing, (1, 1, 1)):
         vertices = vertices * np.r_[spacing]
     if allow_degenerate:
-        return vertices, faces, normals, values
-    return _remove_degenerate_faces(vertices.astype(np.float32), faces, normals, values)
+        return (vertices, faces, normals, values) + tuple(arrays[4:])
+    return _remove_degenerate_faces(vertices.astype(np.float32), faces, normals, values, *arrays[4:])

@@ -228,7 +228,8 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
                    origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0), method: str = "surface_nets",
                    labels: Optional[Sequence[int]] = None, background: int = 0, per_label: bool = False,
                    smoothing: bool = True, smoothing_iterations: int = 16, relaxation: float = 0.5,
-                   coarsen: bool = False, threads: int = 1, compute: bool = True, scheduler: Any = None):
+                   coarsen: bool = False, threads: int = 1, compute: bool = True, scheduler: Any = None,
+                   history: bool = False):
     """Surfaces of a chunked 3-D Dask label map: ``keymesh.contour_labels`` of
     the whole array, bit for bit.
 
@@ -244,7 +245,7 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
         array: a 3-D integer dask.array.Array (uint8, int8, uint16, int16,
             int32); other arrays are wrapped with da.from_array.
         spacing, origin, method, labels, background, per_label, smoothing,
-        smoothing_iterations, relaxation, coarsen: as keymesh.contour_labels
+        smoothing_iterations, relaxation, coarsen, history: as keymesh.contour_labels
             (smoothing and coarsening run in the merge task, on the welded
             mesh, as the in-memory call runs them).
         threads: worker threads of each slab's task (default 1); the merge
@@ -264,7 +265,7 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
     threads = _threads(threads)
     wanted = [] if labels is None else [int(v) for v in np.asarray(labels).reshape(-1)]
     options = (str(method), wanted, int(background), bool(per_label),
-               int(smoothing_iterations) if smoothing else 0, float(relaxation), bool(coarsen))
+               int(smoothing_iterations) if smoothing else 0, float(relaxation), bool(coarsen), bool(history))
     whole = tuple(array.shape)
     slabs = [(array[:, :, f0:f1], f0, rows) for rows, f0, f1 in _label_slabs(array)]
     delayed = lambda f: dask.delayed(f, pure=True)  # noqa: E731

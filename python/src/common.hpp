@@ -222,6 +222,9 @@ std::vector<Field> fields_from_python(const py::object& data, py::ssize_t rows, 
 generate::LabelOptions label_options(const std::string& method, const std::vector<std::int64_t>& labels,
                                      std::int64_t background, bool per_label, int smoothing_iterations,
                                      double relaxation, bool coarsen);
+// point_data["history_key"] (uint64) added to mesh_to_python's parts when
+// `history` (labels.cpp): contour_labels' and the Dask merge's.
+py::tuple with_history_key(py::tuple parts, std::vector<std::uint64_t>&& history_key, bool history);
 
 // keymesh.contour's arguments as the library's options (contour.cpp):
 // ValueError for no isovalue, a non-finite one, an unknown normals, weld or

@@ -62,10 +62,13 @@ class SlabSource final : public PlaneSource {
 };
 
 // contour_labels' options, as a tuple (method, labels, background,
-// per_label, smoothing_iterations, relaxation, coarsen).
+// per_label, smoothing_iterations, relaxation, coarsen, history).
 generate::LabelOptions options_of(const py::tuple& o) {
-  return label_options(o[0].cast<std::string>(), o[1].cast<std::vector<std::int64_t>>(), o[2].cast<std::int64_t>(),
-                       o[3].cast<bool>(), o[4].cast<int>(), o[5].cast<double>(), o[6].cast<bool>());
+  generate::LabelOptions opt =
+      label_options(o[0].cast<std::string>(), o[1].cast<std::vector<std::int64_t>>(), o[2].cast<std::int64_t>(),
+                    o[3].cast<bool>(), o[4].cast<int>(), o[5].cast<double>(), o[6].cast<bool>());
+  opt.history = o.size() > 7 && o[7].cast<bool>();
+  return opt;
 }
 
 using Rows = std::pair<Id, Id>;
@@ -120,15 +123,17 @@ py::tuple merge(const py::dtype& dtype, const std::array<Id, 3>& whole, const py
   check_threads(threads);
   SlabSource source(py::none(), 0, whole, spacing, origin);
   source.set_type(scalar_type_of(dtype, "volume"));
-  generate::LabelSlabs slabs(source, options_of(options), kNoLimit, {0, 0});
+  const generate::LabelOptions opt = options_of(options);
+  generate::LabelSlabs slabs(source, opt, kNoLimit, {0, 0});
   slabs.set_labels(labels);
   slabs.set_counts(all_bytes(counts));
   const std::vector<Bytes> all = all_bytes(slab_pieces);
+  std::vector<std::uint64_t> history_key;
   SurfaceMesh mesh = run_released(threads, [&] {
     for (const Bytes& b : all) slabs.add_pieces(b);
-    return slabs.finish();
+    return slabs.finish(opt.history ? &history_key : nullptr);
   });
-  return mesh_to_python(std::move(mesh));
+  return with_history_key(mesh_to_python(std::move(mesh)), std::move(history_key), opt.history);
 }
 
 }  // namespace

@@ -23,10 +23,11 @@ generate::LabelMethod parse_method(const std::string& s) {
 py::tuple contour_labels(const py::object& volume, const py::object& spacing, const py::object& origin,
                          const std::string& method, const std::vector<std::int64_t>& labels,
                          std::int64_t background, bool per_label, int smoothing_iterations, double relaxation,
-                         bool coarsen, int threads) {
+                         bool coarsen, int threads, bool history) {
   check_threads(threads);
-  const generate::LabelOptions opt =
+  generate::LabelOptions opt =
       label_options(method, labels, background, per_label, smoothing_iterations, relaxation, coarsen);
+  opt.history = history;
   const ImageGrid* grid = nullptr;
   ArrayVolume view;
   if (py::isinstance<Volume>(volume)) {
@@ -38,15 +39,27 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
     grid = &view.grid;
   }
   generate::LabelStats stats;
-  SurfaceMesh mesh = run_released(threads, [&] { return generate::contour_labels(*grid, opt, &stats); });
+  std::vector<std::uint64_t> history_key;
+  SurfaceMesh mesh = run_released(threads, [&] {
+    return generate::contour_labels(*grid, opt, &stats, history ? &history_key : nullptr);
+  });
   py::dict info;
   generate::visit_stage_seconds(stats, into(info));
   info["distinct_labels"] = stats.distinct_labels;
   info["surfaces"] = stats.surfaces;
-  return py::make_tuple(mesh_to_python(std::move(mesh)), info);
+  return py::make_tuple(with_history_key(mesh_to_python(std::move(mesh)), std::move(history_key), history), info);
 }
 
 }  // namespace
+
+// The labels' history_key (the padded grid's, in the array's frame: the
+// volume is read in Fortran order, axis 0 = x) as point_data["history_key"].
+py::tuple with_history_key(py::tuple parts, std::vector<std::uint64_t>&& history_key, bool history) {
+  if (!history) return parts;
+  const auto n = static_cast<py::ssize_t>(history_key.size());
+  parts[3].cast<py::dict>()["history_key"] = adopt(std::move(history_key), {n});
+  return parts;
+}
 
 generate::LabelOptions label_options(const std::string& method, const std::vector<std::int64_t>& labels,
                                      std::int64_t background, bool per_label, int smoothing_iterations,
@@ -67,6 +80,7 @@ void register_labels(py::module_& m) {
         py::arg("origin") = py::none(), py::arg("method") = "surface_nets",
         py::arg("labels") = std::vector<std::int64_t>{}, py::arg("background") = 0, py::arg("per_label") = false,
         py::arg("smoothing_iterations") = 16, py::arg("relaxation") = 0.5, py::arg("coarsen") = false, py::arg("threads") = 0,
+        py::arg("history") = false,
         "Surfaces of a label map; returns ((points, cells, offsets, point_data, cell_data), info). "
         "Use keymesh.contour_labels, which wraps this in a Mesh.");
 }

@@ -42,7 +42,7 @@ generate::Mc33Tables mc33_from_python(const py::dict& tables) {
 
 py::tuple marching_cubes(const py::array_t<float, py::array::c_style>& volume, double level,
                          const py::object& table_obj, int step, const py::object& mask_obj, bool descent,
-                         int threads, const py::object& callback, const py::object& mc33_obj) {
+                         int threads, const py::object& callback, const py::object& mc33_obj, bool history) {
   check_threads(threads);
   const PythonProgress progress(callback);
   if (volume.ndim() != 3) throw py::value_error("Input volume should be a 3D numpy array.");
@@ -56,6 +56,7 @@ py::tuple marching_cubes(const py::array_t<float, py::array::c_style>& volume, d
   opt.level = level;
   opt.step = step;
   opt.descent = descent;
+  opt.history = history;
   py::array_t<std::uint8_t, py::array::c_style> mask;
   if (!mask_obj.is_none()) {
     mask = checked_array<std::uint8_t>(mask_obj, "mask");
@@ -69,8 +70,11 @@ py::tuple marching_cubes(const py::array_t<float, py::array::c_style>& volume, d
       threads, progress, [&] { return generate::classic_marching_cubes(volume.data(), shape, table, opt); });
   const auto v = static_cast<py::ssize_t>(r.values.size());
   const auto f = static_cast<py::ssize_t>(r.faces.size() / 3);
-  return py::make_tuple(adopt(std::move(r.vertices), {v, 3}), adopt(std::move(r.faces), {f, 3}),
-                        adopt(std::move(r.normals), {v, 3}), adopt(std::move(r.values), {v}));
+  py::tuple out = py::make_tuple(adopt(std::move(r.vertices), {v, 3}), adopt(std::move(r.faces), {f, 3}),
+                                 adopt(std::move(r.normals), {v, 3}), adopt(std::move(r.values), {v}));
+  if (!history) return out;
+  return py::make_tuple(out[0], out[1], out[2], out[3], adopt(std::move(r.history_key), {v}),
+                        adopt(std::move(r.history_t), {v}));
 }
 
 // scikit-image's remove_degenerate_faces, rule for rule: a face with two
@@ -140,9 +144,9 @@ py::array classic_table_array() {
 void register_marching_cubes(py::module_& m) {
   m.def("marching_cubes", &marching_cubes, py::arg("volume"), py::arg("level"), py::arg("table") = py::none(),
         py::arg("step") = 1, py::arg("mask") = py::none(), py::arg("descent") = true, py::arg("threads") = 0,
-        py::arg("progress") = py::none(), py::arg("mc33") = py::none(),
+        py::arg("progress") = py::none(), py::arg("mc33") = py::none(), py::arg("history") = false,
         "scikit-image-compatible marching cubes on a C-ordered float32 volume; returns (verts, faces, "
-        "normals, values) at unit spacing; mc33: {name: int8 array} of Lewiner's tables for "
+        "normals, values) at unit spacing, and (history_key, history_t) with history; mc33: {name: int8 array} of Lewiner's tables for "
         "method='lewiner'. Use keymesh.marching_cubes.");
   m.def("remove_degenerate_faces", &remove_degenerate_faces, py::arg("vertices"), py::arg("faces"),
         py::arg("arrays"), "scikit-image's remove_degenerate_faces: (vertices, faces int64, *arrays).");

@@ -34,6 +34,7 @@ struct LabelsCli {
   double relaxation = 0.5;
   std::string memory_limit;  // stream the volume in slabs
   bool coarsen = false;
+  bool history = false;  // history_key and history_t per point (.vtp, .pvtp pieces)
   RawInputCli raw_input;
   CommonOptions common;
   // --format precomputed and its options (labels_precomputed.cpp).
@@ -63,6 +64,7 @@ LabelsJob job_of(const LabelsCli& o) {
   opt.smooth_iterations = o.smooth;
   opt.relaxation = o.relaxation;
   opt.coarsen = o.coarsen;
+  opt.history = o.history;
   if (!o.memory_limit.empty()) parse_size(o.memory_limit, job.memory_limit);  // checked by its validator
   job.common = o.common;
   PrecomputedJob& pc = job.precomputed;
@@ -133,17 +135,37 @@ int check_precomputed(const LabelsCli& o, LabelsJob& job) {
   return 0;
 }
 
+// --history's usage errors (exit 2, said by rank 0): the output must hold
+// a UInt64 point array (.vtp; .pvtp pieces under mpirun), the points must
+// each come from one element (no --coarsen).
+int refuse_history_usage(const LabelsCli& o) {
+  if (!o.history) return 0;
+  std::string why;
+  const std::string ext = io::file_extension(o.output);
+  if (o.format == "precomputed")
+    why = "--history does not apply to --format precomputed (Neuroglancer's meshes hold no point arrays)";
+  else if (o.coarsen)
+    why = "--history with --coarsen: a coarsened point merges the points of several cells or edges, so it has no "
+          "one element";
+  else if (ext != ".vtp" && !(ext == ".pvtp" && distributed::launched_by_mpi()))
+    why = "--history writes history_key as UInt64, which only .vtp holds (" + o.output + ")";
+  if (why.empty()) return 0;
+  if (distributed::rank() == 0) std::fprintf(stderr, "keymesh labels: %s (docs/HISTORY.md)\n", printable(why).c_str());
+  return 2;
+}
+
 Id held_rows(const ImageGrid& header) { return generate::LabelSlabs::total_rows(header); }
 
 // --memory-limit: the volume streamed in slabs of z-planes. Returns the
 // mesh; `r` gets the keys only this path reports.
-SurfaceMesh labels_streamed(const LabelsJob& job, StageTimer& timer, generate::LabelStats& stats, nlohmann::json& r) {
+SurfaceMesh labels_streamed(const LabelsJob& job, StageTimer& timer, generate::LabelStats& stats, nlohmann::json& r,
+                            std::vector<std::uint64_t>& history_key) {
   auto source = io::open_volume_planes(job.input, job.raw_given ? &job.raw : nullptr);
   check_labels_memory(job, source->header(), {0, held_rows(source->header())});
   generate::LabelStreamStats ss;
   SurfaceMesh mesh = timer.run("labels", [&] {
     return naming_input(job, [&] {
-      return generate::contour_labels_streamed(*source, job.options, job.memory_limit, &stats, &ss);
+      return generate::contour_labels_streamed(*source, job.options, job.memory_limit, &stats, &ss, &history_key);
     });
   });
   timer.add("read", ss.read);
@@ -157,7 +179,7 @@ SurfaceMesh labels_streamed(const LabelsJob& job, StageTimer& timer, generate::L
 
 // The volume read whole, contoured on the backend --backend names.
 SurfaceMesh labels_in_memory(const LabelsJob& job, StageTimer& timer, Progress& progress,
-                             generate::LabelStats& stats, nlohmann::json& r) {
+                             generate::LabelStats& stats, nlohmann::json& r, std::vector<std::uint64_t>& history_key) {
   progress.say("reading " + job.input);
   const io::RawOptions* raw = job.raw_given ? &job.raw : nullptr;
   const ImageGrid grid = timer.run("read", [&] { return io::read_volume(job.input, raw); });
@@ -167,7 +189,7 @@ SurfaceMesh labels_in_memory(const LabelsJob& job, StageTimer& timer, Progress& 
   r["scalar_type"] = scalar_type_name(grid.type);
   return timer.run("labels", [&] {
     const auto backend = generate::parse_option<generate::Backend>(job.common.backend);
-    return naming_input(job, [&] { return backend::contour_labels(grid, job.options, backend, &stats); });
+    return naming_input(job, [&] { return backend::contour_labels(grid, job.options, backend, &stats, &history_key); });
   });
 }
 
@@ -180,10 +202,11 @@ int run_labels(const LabelsJob& job) {
   Progress progress(job.common.quiet, file_size(job.input) > (64ll << 20));
   generate::LabelStats stats;
   nlohmann::json r;
-  const SurfaceMesh mesh =
-      job.memory_limit ? labels_streamed(job, timer, stats, r) : labels_in_memory(job, timer, progress, stats, r);
+  std::vector<std::uint64_t> history_key;
+  const SurfaceMesh mesh = job.memory_limit ? labels_streamed(job, timer, stats, r, history_key)
+                                            : labels_in_memory(job, timer, progress, stats, r, history_key);
   progress.say("writing " + job.output);
-  write_labels_outputs(job, mesh, stats, std::move(r), timer);
+  write_labels_outputs(job, mesh, stats, std::move(r), timer, history_key);
   return 0;
 }
 
@@ -205,13 +228,16 @@ void check_labels_memory(const LabelsJob& job, const ImageGrid& header, std::pai
 }
 
 void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
-                          nlohmann::json r, StageTimer& timer) {
+                          nlohmann::json r, StageTimer& timer, const std::vector<std::uint64_t>& history_key) {
   const std::string ext = std::filesystem::path(job.output).extension().string();
   if (ext != ".vtp" && ext != ".ply" && !job.common.quiet)
     std::fprintf(stderr, "keymesh: warning: %s: %s files have no cell data; boundary_labels is not written "
                          "(use .vtp or .ply)\n", printable(job.output).c_str(),
                  printable(ext).c_str());
-  timer.run("write", [&] { io::write_mesh(mesh, job.output); });
+  timer.run("write", [&] {
+    if (job.options.history) io::write_vtp(mesh, job.output, nullptr, nullptr, {{"history_key", &history_key}});
+    else io::write_mesh(mesh, job.output);
+  });
   if (!job.common.quiet)
     std::fprintf(stderr, "keymesh: %lld labels, %lld points, %lld triangles -> %s\n",
                  static_cast<long long>(stats.surfaces), static_cast<long long>(mesh.num_points()),
@@ -220,7 +246,7 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
   const generate::LabelOptions& opt = job.options;
   r.update({{"input", job.input}, {"output", job.output}, {"method", job.method}, {"per_label", opt.per_label},
             {"background", opt.background}, {"smooth", opt.smooth_iterations}, {"relaxation", opt.relaxation},
-            {"coarsen", opt.coarsen}, {"distinct_labels", stats.distinct_labels},
+            {"coarsen", opt.coarsen}, {"history", opt.history}, {"distinct_labels", stats.distinct_labels},
             {"labels_extracted", stats.surfaces}, {"points", mesh.num_points()}, {"cells", mesh.num_cells()},
             {"soup_points", stats.soup_corners}, {"threads", job.threads}, {"backend", job.common.backend}});
   if (opt.coarsen) {
@@ -310,6 +336,13 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
                "after smoothing, merge the points of each 2x2x2 block of cells (surfacenets) or nearest grid "
                "point (discrete-mc), averaging positions; faces that collapse are dropped, label pairs kept; "
                "every label's surface stays closed, not always 2-manifold");
+  cmd.add_flag("--history", o.history,
+               "per point, where it came from (docs/HISTORY.md): point arrays history_key (UInt64, in the grid "
+               "padded with one sample all round, p = i + 1 + (nx + 2) * (j + 1 + (ny + 2) * (k + 1)) for sample "
+               "(i, j, k): discrete-mc the edge 3 * p + axis, surfacenets 16 * p + slot, p the cell's first corner, "
+               "slot its loop or face point) and history_t (Float32: 0.5, the edge's midpoint or the cell's centre); "
+               "the unsmoothed point's, whatever --smooth; .vtp output (.pvtp pieces under mpirun), not with "
+               "--coarsen or --format precomputed");
   o.raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32");
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
@@ -329,6 +362,7 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
 int run_labels_command(const LabelsCli& o, CommandRun& run) {
   LabelsJob job = job_of(o);
   job.threads = run.threads();
+  if (int rc = refuse_history_usage(o)) return rc;
   if (int rc = check_precomputed(o, job)) return rc;
   if (job.precomputed.on) {
     if (int rc = require_cpu_backend(o.common, "--format precomputed")) return rc;

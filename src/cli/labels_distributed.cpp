@@ -42,7 +42,8 @@ void write_merged(const LabelsJob& job, generate::LabelSlabs& slabs, const Image
   const int ranks = static_cast<int>(pieces.size());
   const Id total_rows = generate::LabelSlabs::total_rows(header);
   for (int q = 1; q < ranks; ++q) slabs.add_pieces(pieces[static_cast<std::size_t>(q)]);
-  const SurfaceMesh mesh = slabs.finish();
+  std::vector<std::uint64_t> history_key;
+  const SurfaceMesh mesh = slabs.finish(&history_key);
   nlohmann::json r;
   r["dims"] = header.dims;
   r["scalar_type"] = scalar_type_name(header.type);
@@ -54,7 +55,7 @@ void write_merged(const LabelsJob& job, generate::LabelSlabs& slabs, const Image
   }
   r["ranks"] = ranks;
   r["distributed"] = {{"ranks", ranks}, {"output", "gathered"}, {"per_rank", per_rank}};
-  write_labels_outputs(job, mesh, slabs.stats(), std::move(r), timer);
+  write_labels_outputs(job, mesh, slabs.stats(), std::move(r), timer, history_key);
 }
 
 }  // namespace

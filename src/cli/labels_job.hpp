@@ -63,9 +63,10 @@ decltype(auto) naming_input(const LabelsJob& job, F&& f) {
 void check_labels_memory(const LabelsJob& job, const ImageGrid& header, std::pair<Id, Id> rows);
 
 // Writes the mesh, the summary line and the report (`r` holds what the run
-// adds: dims, scalar_type, stream, distributed).
+// adds: dims, scalar_type, stream, distributed); with --history (.vtp,
+// checked) the history_key array beside the mesh's history_t field.
 void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
-                          nlohmann::json r, StageTimer& timer);
+                          nlohmann::json r, StageTimer& timer, const std::vector<std::uint64_t>& history_key = {});
 
 // --format precomputed: Neuroglancer's multi-resolution meshes in the
 // directory job.output (one call, a chunk task, the assembly or an update).

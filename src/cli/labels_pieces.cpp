@@ -129,12 +129,16 @@ void write_labels_pieces(const LabelsJob& job, generate::LabelSlabs& slabs, cons
   });
   timer.add("read", slabs.stream_stats().read);
   distributed::OwnPiece w = timer.run("number", [&] {
-    return distributed::own_piece({piece.mesh, piece.ghost_face, piece.order_key, piece.row, piece.segments}, rows);
+    return distributed::own_piece(
+        {piece.mesh, piece.ghost_face, piece.order_key, piece.row, piece.segments, piece.history_key}, rows);
   });
   nlohmann::json pairs = job.common.report_path.empty() ? nlohmann::json::array() : pair_shares(piece, rows);
   piece = generate::LabelPiece{};
   timer.run("write", [&] {
-    write_piece_files(w.mesh, w.ids, io::PieceGhosts{std::move(w.point_ghosts), std::move(w.cell_ghosts)}, job.output);
+    std::vector<io::UInt64PointArray> history;
+    if (job.options.history) history.push_back({"history_key", &w.history_key});
+    write_piece_files(w.mesh, w.ids, io::PieceGhosts{std::move(w.point_ghosts), std::move(w.cell_ghosts)}, job.output,
+                      history);
   });
   const auto entries = distributed::gather_bytes(rank_entry(rows, slabs, w, std::move(pairs), timer));
   if (distributed::rank() == 0) report_pieces(job, header, slabs.stats(), w.total_points, entries, halo, timer);

@@ -23,6 +23,7 @@ struct PipelineCli {
   std::string input, output;
   std::vector<double> isovalues;
   bool coarsen = false, curvature = false, dual = false;
+  bool history = false;  // the contour's history_key and history_t (the contour stage alone)
   int subdivide = 0;
   std::string scheme = "linear";
   std::string normals = "average";
@@ -30,8 +31,11 @@ struct PipelineCli {
 };
 
 // Contour, then the optional stages in the paper's order, all in memory.
-SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& r) {
+SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& r,
+                       std::vector<std::uint64_t>& history_key) {
   generate::ContourOptions opt;
+  opt.history = o.history;
+  std::vector<std::uint64_t>* keys = o.history ? &history_key : nullptr;
   opt.isovalues = o.isovalues;
   opt.coarsen = o.coarsen;
   opt.curvature = o.curvature;
@@ -41,10 +45,10 @@ SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& 
   SurfaceMesh mesh;
   if (io::is_grid_file(o.input)) {
     const UnstructuredGrid g = timer.run("read", [&] { return io::read_grid(o.input); });
-    mesh = timer.run("contour", [&] { return backend::contour(g, opt); });
+    mesh = timer.run("contour", [&] { return backend::contour(g, opt, nullptr, keys); });
   } else {
     const ImageGrid g = timer.run("read", [&] { return io::read_volume(o.input); });
-    mesh = timer.run("contour", [&] { return backend::contour(g, opt); });
+    mesh = timer.run("contour", [&] { return backend::contour(g, opt, nullptr, keys); });
   }
   r["contour_cells"] = mesh.num_cells();
   if (o.subdivide > 0) {
@@ -64,8 +68,28 @@ SurfaceMesh run_stages(const PipelineCli& o, StageTimer& timer, nlohmann::json& 
   return mesh;
 }
 
+// --history: the contour's arrays, which name one input element per point
+// only when no later stage makes points of several (docs/HISTORY.md).
+int refuse_history_usage(const PipelineCli& o) {
+  if (!o.history) return 0;
+  std::string why;
+  if (o.coarsen)
+    why = "--history with --coarsen: a coarsened point merges crossings of several edges, so it has no one edge";
+  else if (o.subdivide > 0)
+    why = "--history with --subdivide: a subdivision point lies between two or more contour points, so it has no "
+          "one input edge";
+  else if (o.dual)
+    why = "--history with --dual: a dual point is a face's centre, made of several contour points";
+  else if (io::file_extension(o.output) != ".vtp")
+    why = "--history writes history_key as UInt64, which only .vtp holds (" + o.output + ")";
+  if (why.empty()) return 0;
+  std::fprintf(stderr, "keymesh pipeline: %s (docs/HISTORY.md)\n", printable(why).c_str());
+  return 2;
+}
+
 int run_pipeline(const PipelineCli& o) {
   if (int rc = refuse_non_finite_isovalues("pipeline", o.isovalues)) return rc;
+  if (int rc = refuse_history_usage(o)) return rc;
   if (o.scheme == "bezier" && o.normals == "none") {
     std::fprintf(stderr, "keymesh pipeline: --scheme bezier needs --normals average or gradient\n");
     return 2;
@@ -73,8 +97,12 @@ int run_pipeline(const PipelineCli& o) {
   const int threads = apply_threads(o.common);
   StageTimer timer;
   nlohmann::json r;
-  const SurfaceMesh mesh = run_stages(o, timer, r);
-  timer.run("write", [&] { io::write_mesh(mesh, o.output); });
+  std::vector<std::uint64_t> history_key;
+  const SurfaceMesh mesh = run_stages(o, timer, r, history_key);
+  timer.run("write", [&] {
+    if (o.history) io::write_vtp(mesh, o.output, nullptr, nullptr, {{"history_key", &history_key}});
+    else io::write_mesh(mesh, o.output);
+  });
   say_written(o.common, mesh.num_points(), mesh.num_cells(), "cells", o.output);
   r.update(files_and_counts(o.input, o.output, mesh.num_points(), mesh.num_cells()));
   finish_report(o.common, r, threads, timer, PeakRss::Include);
@@ -99,6 +127,10 @@ void add_pipeline_options(CLI::App& cmd, PipelineCli& o) {
   cmd.add_option("--normals", o.normals, "none, gradient or average (bezier needs normals)")
       ->check(one_of<generate::ContourNormals>());
   cmd.add_flag("--dual", o.dual, "finish with the dual mesh");
+  cmd.add_flag("--history", o.history,
+               "per point, the contour's history_key (UInt64) and history_t (Float32), as keymesh contour --history "
+               "writes them (docs/HISTORY.md): the contour stage alone (not with --coarsen, --subdivide or --dual, "
+               "whose points merge or interpolate several), .vtp output");
   add_common_options(cmd, o.common);
 }
 

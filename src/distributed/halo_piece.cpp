@@ -91,6 +91,7 @@ std::vector<PointIndex> take_points(const HaloMesh& h, const Share& share, std::
     if (!share.point[p]) continue;
     local[p] = static_cast<PointIndex>(w.ids.size());
     w.ids.push_back(g.ids[at]);
+    if (!h.history_key.empty()) w.history_key.push_back(h.history_key[p]);
     w.mesh.points.insert(w.mesh.points.end(), m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3);
     const bool owned = owns(rows, h.row[p]);
     w.point_ghosts.push_back(owned ? 0 : 1);
@@ -130,7 +131,8 @@ void take_cells(const SurfaceMesh& m, const Share& share, const std::vector<Poin
 
 OwnPiece own_piece(const HaloMesh& h, std::pair<Id, Id> rows) {
   if (h.ghost_face.size() != static_cast<std::size_t>(h.mesh.num_cells()) ||
-      h.order_key.size() != static_cast<std::size_t>(h.mesh.num_points()) || h.row.size() != h.order_key.size())
+      h.order_key.size() != static_cast<std::size_t>(h.mesh.num_points()) || h.row.size() != h.order_key.size() ||
+      (!h.history_key.empty() && h.history_key.size() != h.order_key.size()))
     throw InputError("distributed pieces: marks for " + std::to_string(h.ghost_face.size()) + " triangles and " +
                      std::to_string(h.order_key.size()) + " points, not " + std::to_string(h.mesh.num_cells()) +
                      " and " + std::to_string(h.mesh.num_points()) + " (internal error)");

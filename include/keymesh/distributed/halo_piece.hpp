@@ -32,11 +32,13 @@ struct HaloMesh {
   std::span<const std::uint64_t> order_key; // per point, ascending
   std::span<const Id> row;                  // per point: the row that owns it
   int segments = 1;
+  std::span<const std::uint64_t> history_key = {};  // per point, or empty: carried to OwnPiece's
 };
 
 struct OwnPiece {
   SurfaceMesh mesh;                         // own triangles, then the ghost cells
   std::vector<std::uint64_t> ids;           // global id of each point
+  std::vector<std::uint64_t> history_key;   // each point's (HaloMesh::history_key), or empty
   std::vector<std::uint8_t> point_ghosts;   // 1 (DUPLICATEPOINT): another rank owns it
   std::vector<std::uint8_t> cell_ghosts;    // 1 (DUPLICATECELL): a ghost cell
   Id own_triangles = 0, points_owned = 0;

@@ -14,6 +14,7 @@
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/scan.hpp"
+#include "generate/contour/history_t.hpp"
 
 namespace keymesh::generate {
 
@@ -565,6 +566,32 @@ struct ClassicRun {
     });
   }
 
+  // Point p's history (ClassicMarchingCubes::history_key): its key in the
+  // array's frame and the float t that gives its vertex along the edge back.
+  void history(Id p, const double xyz[3], std::uint64_t& key_out, float& t_out) const {
+    const std::uint64_t key = groups.unique_keys[p];
+    const std::uint64_t n0 = static_cast<std::uint64_t>(g.n0), n1 = static_cast<std::uint64_t>(g.n1);
+    const bool centre_point = key >= centre_keys();
+    const Id c = static_cast<Id>(centre_point ? key - centre_keys() : key / 3);
+    // Coarse (X, Y, Z), x fastest, over cubes (centres) or coarse points (edges).
+    const Id nx = centre_point ? g.cx : g.px, ny = centre_point ? g.cy : g.py;
+    const Id X = c % nx, Y = (c / nx) % ny, Z = c / (nx * ny);
+    const std::uint64_t at = static_cast<std::uint64_t>(Z * g.step) +
+                             n0 * (static_cast<std::uint64_t>(Y * g.step) + n1 * static_cast<std::uint64_t>(X * g.step));
+    if (centre_point) {
+      key_out = 3 * n0 * n1 * static_cast<std::uint64_t>(g.n2) + at;
+      t_out = 0.5f;
+      return;
+    }
+    const int axis = static_cast<int>(key % 3);  // 0 = x = array axis 2
+    key_out = 3 * at + static_cast<std::uint64_t>(2 - axis);
+    const double lo = static_cast<double>((axis == 0 ? X : axis == 1 ? Y : Z) * g.step);
+    const double step = static_cast<double>(g.step);
+    const float written = static_cast<float>(xyz[axis]);
+    const double t = (xyz[axis] - lo) / step;
+    t_out = nearest_float_t(t, [&](float f) { return static_cast<float>(lo + step * static_cast<double>(f)) == written; });
+  }
+
   // Position of point p's edge crossing (x, y, z): scikit-image's base +
   // step * f / ff with ff the weight sum and f the far corner's weight along
   // the edge (the cross axes are whole numbers).
@@ -675,9 +702,17 @@ struct ClassicRun {
             if (b != a && kCorner[k][b] != kCorner[c][b]) same = false;
           if (same) (kCorner[k][a] == 0 ? g_low[c][a] : g_high[c][a]) = k;
         }
+    if (o.history) {
+      out.history_key.resize(static_cast<std::size_t>(points));
+      out.history_t.resize(static_cast<std::size_t>(points));
+    }
     for_each_reporting(points, "marching cubes: points", 0.7, 0.95, 256, [&](Id p) {
       double xyz[3];
       crossing(p, xyz);
+      if (o.history) {
+        const std::size_t at = static_cast<std::size_t>(point_id[p]);
+        history(p, xyz, out.history_key[at], out.history_t[at]);
+      }
       float n[3] = {0, 0, 0};
       const float value = normal_and_value(p, g_low, g_high, n);
       double length = 0;

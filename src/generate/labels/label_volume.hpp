@@ -127,6 +127,9 @@ struct LabelSurface {
   // generate_with_halo): 1 where a halo row made it (another rank's
   // triangle). Empty otherwise. Kept through the merge and coarsening.
   std::vector<std::uint8_t> ghost_face;
+  // Per point, with LabelOptions::history: its history_key (label_history.cpp),
+  // set by finish_label_mesh from `keys`.
+  std::vector<std::uint64_t> history_key;
 };
 
 // Appends the parts (their own points each) to `out`, in order.
@@ -162,6 +165,10 @@ void check_label_options(const LabelOptions& options);
 // before the generator's own fields: the mesh contour_labels returns.
 SurfaceMesh finish_label_mesh(LabelSurface& surface, const LabelVolume& volume, const LabelOptions& options,
                               LabelStats& stats);
+
+// --history (label_history.cpp): the surface's history_key from its point
+// keys (kept: LabelVolume::keep_keys or window) and the point field history_t.
+void add_label_history(LabelSurface& surface, const LabelVolume& volume, const LabelOptions& options);
 
 // --coarsen (label_coarsen.cpp): merges the points by coarse key, averaging
 // their positions; drops faces that collapse and cancels faces of one label

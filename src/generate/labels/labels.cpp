@@ -27,6 +27,9 @@ void detail::check_label_options(const LabelOptions& options) {
     throw InputError("labels: smoothing iterations " + std::to_string(options.smooth_iterations) + " is negative");
   if (!(options.relaxation > 0.0 && options.relaxation <= 1.0))
     throw InputError("labels: relaxation factor " + std::to_string(options.relaxation) + " is not in (0, 1]");
+  if (options.history && options.coarsen)
+    throw InputError("labels: history with coarsening: a coarsened point merges the points of several cells or "
+                     "edges, so it has no one element to name");
 }
 
 void check_labels_input(const ImageGrid& grid, const LabelOptions& options) {
@@ -34,7 +37,8 @@ void check_labels_input(const ImageGrid& grid, const LabelOptions& options) {
   detail::check_label_grid(grid, options);
 }
 
-SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats) {
+SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats,
+                           std::vector<std::uint64_t>* history_key) {
   detail::check_label_options(options);
   LabelStats local;
   LabelStats& st = stats ? *stats : local;
@@ -44,6 +48,7 @@ SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, L
   detail::LabelVolume vol = detail::scan_labels(grid, options);
   vol.coarse_keys = options.coarsen;
   vol.per_label = options.per_label;
+  vol.keep_keys = options.history;
   progress::report(options.method == LabelMethod::SurfaceNets ? "surface nets" : "discrete marching cubes", 0.1);
   st.scan = seconds_since(t0);
   st.distinct_labels = vol.distinct_in_grid;
@@ -52,11 +57,14 @@ SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, L
   detail::LabelSurface surface = options.method == LabelMethod::SurfaceNets
                                      ? detail::surface_nets(vol, options.per_label, st)
                                      : detail::discrete_marching_cubes(vol, options.per_label, st);
-  return detail::finish_label_mesh(surface, vol, options, st);
+  SurfaceMesh mesh = detail::finish_label_mesh(surface, vol, options, st);
+  if (history_key) *history_key = std::move(surface.history_key);
+  return mesh;
 }
 
 SurfaceMesh detail::finish_label_mesh(LabelSurface& surface, const LabelVolume& vol, const LabelOptions& options,
                                       LabelStats& st) {
+  if (options.history) detail::add_label_history(surface, vol, options);
   auto t0 = Clock::now();
   if (options.smooth_iterations > 0) progress::report("smooth", 0.6);
   detail::smooth_label_surface(surface, vol, options.method, options.smooth_iterations, options.relaxation);

@@ -310,10 +310,12 @@ detail::LabelSurface LabelSlabs::Impl::merged(std::vector<Id>* part_points) {
   return surface;
 }
 
-SurfaceMesh LabelSlabs::finish() {
+SurfaceMesh LabelSlabs::finish(std::vector<std::uint64_t>* history_key) {
   Impl& m = *impl_;
   detail::LabelSurface surface = m.merged(nullptr);
-  return detail::finish_label_mesh(surface, m.vol, m.options, m.st);
+  SurfaceMesh mesh = detail::finish_label_mesh(surface, m.vol, m.options, m.st);
+  if (history_key) *history_key = std::move(surface.history_key);
+  return mesh;
 }
 
 LabelPiece LabelSlabs::finish_piece() {
@@ -323,6 +325,7 @@ LabelPiece LabelSlabs::finish_piece() {
   LabelPiece piece;
   piece.mesh = detail::finish_label_mesh(surface, m.vol, m.options, m.st);
   piece.ghost_face = std::move(surface.ghost_face);
+  piece.history_key = std::move(surface.history_key);
   piece.segments = detail::point_rows(m.vol, m.options, surface.keys, part_points, piece.order_key, piece.row);
   return piece;
 }
@@ -331,12 +334,13 @@ const LabelStats& LabelSlabs::stats() const { return impl_->st; }
 const LabelStreamStats& LabelSlabs::stream_stats() const { return impl_->ss; }
 
 SurfaceMesh contour_labels_streamed(PlaneSource& source, const LabelOptions& options, std::size_t memory_limit,
-                                    LabelStats* stats, LabelStreamStats* stream_stats) {
+                                    LabelStats* stats, LabelStreamStats* stream_stats,
+                                    std::vector<std::uint64_t>* history_key) {
   LabelSlabs slabs(source, options, memory_limit);
   slabs.set_labels({slabs.distinct_labels()});
   slabs.set_counts({slabs.count_labels()});
   slabs.generate();
-  SurfaceMesh mesh = slabs.finish();
+  SurfaceMesh mesh = slabs.finish(history_key);
   if (stats) *stats = slabs.stats();
   if (stream_stats) *stream_stats = slabs.stream_stats();
   return mesh;

@@ -78,6 +78,9 @@ struct ClassicMarchingCubesOptions {
   // classic table is then not used. InputError when a table is missing or
   // out of range.
   const Mc33Tables* mc33 = nullptr;
+  // Per-point history (docs/HISTORY.md): ClassicMarchingCubes::history_key
+  // and history_t.
+  bool history = false;
 };
 
 struct ClassicMarchingCubes {
@@ -85,6 +88,15 @@ struct ClassicMarchingCubes {
   std::vector<std::int32_t> faces;      // (F, 3)
   std::vector<float> normals;           // (V, 3), unit or zero, axis 0 first
   std::vector<float> values;            // (V,)
+  // With options.history, per point, in the frame keymesh.contour gives the
+  // same array (array axis A is its axis A, N = n0 n1 n2): an edge point's
+  // 3 * (i0 + n0 (i1 + n1 i2)) + A, (i0, i1, i2) the lower end of its edge
+  // (of step samples) along array axis A, and t the float32 nearest the
+  // crossing's fraction of it among those giving the vertex back as
+  // float32(i_A + step * double(t)); a cube centre (Marching Cubes 33)
+  // 3N + (i0 + n0 (i1 + n1 i2)) of its lowest corner, t 0.5.
+  std::vector<std::uint64_t> history_key;
+  std::vector<float> history_t;
 };
 
 // Throws InputError for a dimension below 2 or step < 1, LimitError past

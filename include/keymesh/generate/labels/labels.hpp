@@ -104,6 +104,13 @@ struct LabelOptions {
   // Coarsening after smoothing (see the header comment): points merged by a
   // coarser key, faces that collapse dropped, label pairs kept.
   bool coarsen = false;
+  // Per-point history (docs/HISTORY.md): the point field history_t and,
+  // through contour_labels()'s history_key, each point's element of the
+  // padded grid (discrete MC: its edge 3 * point + axis; surface nets:
+  // 16 * the cell's first corner + its loop or face point). Keys and t do
+  // not depend on smoothing (the unsmoothed point's), threads or slabs.
+  // Refused (InputError) with coarsen: a coarse point merges several.
+  bool history = false;
 };
 
 struct LabelPairCount {
@@ -124,7 +131,9 @@ struct LabelStats {
   Id soup_corners = 0;      // triangle corners before welding
 };
 
-SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats = nullptr);
+// history_key, with options.history: receives every point's key.
+SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats = nullptr,
+                           std::vector<std::uint64_t>* history_key = nullptr);
 
 // contour_labels()'s refusals that need no scan of the samples (smoothing
 // options, the grid's dims and sample type, the background's magnitude), as

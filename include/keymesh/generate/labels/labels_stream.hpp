@@ -59,6 +59,7 @@ struct LabelPiece {
   std::vector<std::uint64_t> order_key;
   std::vector<Id> row;
   int segments = 1;
+  std::vector<std::uint64_t> history_key;  // per point, with LabelOptions::history
 };
 
 // The passes of a streamed label map, for one process or one rank. A
@@ -101,8 +102,9 @@ class LabelSlabs {
   // received, appended in the order the processes' rows run.
   std::vector<std::byte> pieces_bytes() const;
   void add_pieces(const std::vector<std::byte>& bytes);
-  // The pieces held merged by key, smoothed, with the label fields.
-  SurfaceMesh finish();
+  // The pieces held merged by key, smoothed, with the label fields;
+  // history_key (LabelOptions::history) receives every point's key.
+  SurfaceMesh finish(std::vector<std::uint64_t>* history_key = nullptr);
 
   static Id total_rows(const ImageGrid& header) { return header.dims[2] + 2; }
   const LabelStats& stats() const;
@@ -117,6 +119,7 @@ class LabelSlabs {
 // samples and label indices held at once (at least three planes of each);
 // the output mesh comes on top.
 SurfaceMesh contour_labels_streamed(PlaneSource& source, const LabelOptions& options, std::size_t memory_limit,
-                                    LabelStats* stats = nullptr, LabelStreamStats* stream_stats = nullptr);
+                                    LabelStats* stats = nullptr, LabelStreamStats* stream_stats = nullptr,
+                                    std::vector<std::uint64_t>* history_key = nullptr);
 
 }  // namespace keymesh::generate
