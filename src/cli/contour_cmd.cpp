@@ -132,7 +132,8 @@ ContourResult run_streamed(const ContourCli& o, const generate::ContourOptions& 
   r["memory_limit"] = limit;
   r["stream"] = {{"slabs", ss.slabs},         {"planes_per_slab", ss.planes_per_slab},
                  {"slab_bytes", ss.slab_bytes}, {"read", ss.read},
-                 {"contour", ss.contour},       {"merge", ss.merge}};
+                 {"contour", ss.contour},       {"merge", ss.merge},
+                 {"fine_points", ss.fine_points}, {"most_fine_points_held", ss.most_fine_points_held}};
   return result;
 }
 

@@ -9,7 +9,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/retained_blocks.hpp"
-#include "keymesh/generate/coarsen/coarsen.hpp"
+#include "generate/coarsen/coarsen_slabs.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/mesh/normals.hpp"
@@ -61,21 +61,17 @@ Id planes_per_slab(const ImageGrid& head, std::size_t memory_limit, bool ghosts)
 struct SlabPoints {
   std::uint64_t per_iso;
   bool average;
-  bool coarsen;
   std::vector<std::uint64_t> keys;
-  std::vector<std::uint64_t> nearest;  // with coarsen: each point's nearest grid point (coarse key)
   std::vector<float> points;
   std::vector<Field> fields;  // every point field of the slabs, concatenated
   std::vector<std::vector<std::uint32_t>> corners;  // per isovalue
   LayerGrid layers;                                  // for the averaged normals' blocks
 
-  void append(const SurfaceMesh& m, const std::vector<std::uint64_t>& slab_keys,
-              const std::vector<std::uint64_t>& slab_nearest) {
+  void append(const SurfaceMesh& m, const std::vector<std::uint64_t>& slab_keys) {
     const std::uint64_t base = keys.size();
     if (base + slab_keys.size() > std::numeric_limits<std::uint32_t>::max())
       throw LimitError("contour --memory-limit: more than 2^32 - 1 points before merging");
     keys.insert(keys.end(), slab_keys.begin(), slab_keys.end());
-    nearest.insert(nearest.end(), slab_nearest.begin(), slab_nearest.end());
     points.insert(points.end(), m.points.begin(), m.points.end());
     if (fields.empty())
       for (const Field& f : m.point_fields) fields.push_back(Field{f.name, f.components, {}});
@@ -89,10 +85,9 @@ struct SlabPoints {
 
   // KEY-REDUCE over the slabs' points: a shared plane's points appear
   // twice, with equal bits; the first of each group stands for it, and the
-  // index map takes every slab point to its merged point. With coarsen,
-  // `merged_nearest` receives the merged points' coarse keys; `merged_keys`,
-  // when given, their edge keys.
-  SurfaceMesh merge(std::vector<std::uint64_t>& merged_nearest, std::vector<std::uint64_t>* merged_keys) const {
+  // index map takes every slab point to its merged point. `merged_keys`,
+  // when given, receives the merged points' edge keys.
+  SurfaceMesh merge(std::vector<std::uint64_t>* merged_keys) const {
     const Id n = static_cast<Id>(keys.size());
     const auto g = keyreduce::partition_sort(keys.data(), n,
                                              parallel::bits_needed<std::uint64_t>(per_iso * corners.size() - 1),
@@ -103,10 +98,8 @@ struct SlabPoints {
     for (const Field& f : fields)
       mesh.point_fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(unique * f.components))});
     std::vector<std::uint64_t> point_keys(average || merged_keys ? static_cast<std::size_t>(unique) : 0);
-    merged_nearest.resize(coarsen ? static_cast<std::size_t>(unique) : 0);
     parallel::for_each(unique, [&](Id p) {
       const Id first = g.order[g.offsets[p]];
-      if (coarsen) merged_nearest[p] = nearest[first];
       if (!point_keys.empty()) point_keys[p] = keys[first];
       for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
       for (std::size_t i = 0; i < fields.size(); ++i) {
@@ -134,32 +127,21 @@ void add_stats(ContourStats& total, const ContourStats& st) {
   total.key_bits = st.key_bits;
 }
 
-}  // namespace
-
-SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
-                             ContourStats* stats, StreamStats* stream_stats,
-                             std::vector<std::uint64_t>* point_keys) {
-  const retained_blocks::KeepNothing within_the_budget;
+// The slabs read and contoured one after the other (global keys; with
+// coarsen, each fine point's nearest grid point too), each handed to
+// `take(mesh, keys, nearest, k0, k_last, last)`.
+template <class Take>
+void for_each_slab(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit, StreamStats& ss,
+                   ContourStats& total, Take take) {
   const ImageGrid& head = source.header();
-  check_streamable(head, options);
   const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];
   // Gradient normals and curvature take central differences across a
   // slab's border: each slab reads a ghost plane on either side.
   const bool ghosts = options.normals == ContourNormals::Gradient || options.curvature;
   const Id planes = planes_per_slab(head, memory_limit, ghosts);
-  StreamStats ss;
   ss.planes_per_slab = planes;
   ss.slab_bytes = static_cast<std::size_t>(std::min(planes + (ghosts ? 2 : 0), nz)) *
                   static_cast<std::size_t>(nx * ny) * scalar_size(head.type);
-  // Coarsening averages a grid point's crossings, which two slabs may
-  // share: the slabs' fine points are merged by edge key first, then the
-  // whole is coarsened by nearest grid point, as one contour does; averaged
-  // normals then come from the coarse mesh.
-  const bool average = options.normals == ContourNormals::Average && !options.coarsen;
-  SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, options.coarsen, {}, {}, {}, {}, {}, {}};
-  all.corners.resize(options.isovalues.size());
-  all.layers = LayerGrid{static_cast<std::uint64_t>(nx * ny), nz - 1, static_cast<Id>(options.isovalues.size())};
-  ContourStats total;
   ImageGrid slab;
   slab.spacing = head.spacing;
   slab.origin = head.origin;
@@ -167,7 +149,7 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   ContourOptions opt = options;
   opt.total_planes = nz;
   opt.coarsen = false;
-  if (options.normals == ContourNormals::Average) opt.normals = ContourNormals::None;  // summed per slab, merged across slabs
+  if (options.normals == ContourNormals::Average) opt.normals = ContourNormals::None;  // summed after the slabs
   for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
     const Id count = std::min(planes, nz - k0);
     const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
@@ -184,20 +166,65 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
     const SurfaceMesh m = contour(slab, opt, &st, &slab_keys, options.coarsen ? &slab_nearest : nullptr);
     add_stats(total, st);
     ss.contour += seconds_since(t0);
-    all.append(m, slab_keys, slab_nearest);
+    take(m, slab_keys, slab_nearest, k0, k0 + count - 1, k0 + count == nz);
     ++ss.slabs;
   }
   free_storage(slab.bytes);
-  auto t0 = Clock::now();
-  std::vector<std::uint64_t> nearest;
-  SurfaceMesh mesh = all.merge(nearest, point_keys);
-  ss.merge = seconds_since(t0);
+}
+
+// --coarsen: every slab's coarse points finished as soon as the slab above
+// them is read (coarsen/coarsen_slabs.hpp); averaged normals then come from
+// the coarse mesh, as the in-memory contour makes them.
+SurfaceMesh coarsen_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats& total, StreamStats& ss) {
+  SlabCoarsening coarse(source.header().dims.data(), static_cast<Id>(options.isovalues.size()));
+  double seconds = 0;
+  for_each_slab(source, options, memory_limit, ss, total,
+                [&](const SurfaceMesh& m, const std::vector<std::uint64_t>& keys,
+                    const std::vector<std::uint64_t>& nearest, Id k0, Id k_last, bool last) {
+                  const auto t0 = Clock::now();
+                  coarse.add_slab(m, keys, nearest, k0, k_last, last);
+                  seconds += seconds_since(t0);
+                });
+  const auto t0 = Clock::now();
+  SurfaceMesh mesh = coarse.finish();
+  if (options.normals == ContourNormals::Average) average_normals(mesh);
+  total.coarsen = seconds + seconds_since(t0);
+  total.triangles_before_coarsening = coarse.fine_triangles();
+  ss.fine_points = coarse.fine_points();
+  ss.most_fine_points_held = coarse.most_fine_points_held();
+  return mesh;
+}
+
+}  // namespace
+
+SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats* stats, StreamStats* stream_stats,
+                             std::vector<std::uint64_t>* point_keys) {
+  const retained_blocks::KeepNothing within_the_budget;
+  const ImageGrid& head = source.header();
+  check_streamable(head, options);
+  StreamStats ss;
+  ContourStats total;
+  SurfaceMesh mesh;
   if (options.coarsen) {
-    t0 = Clock::now();
-    total.triangles_before_coarsening = mesh.num_cells();
-    mesh = coarsen(mesh, nearest, static_cast<std::uint64_t>(nx * ny * nz) * options.isovalues.size());
-    if (options.normals == ContourNormals::Average) average_normals(mesh);
-    total.coarsen = seconds_since(t0);
+    mesh = coarsen_streamed(source, options, memory_limit, total, ss);
+  } else {
+    const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];
+    const bool average = options.normals == ContourNormals::Average;
+    SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, {}, {}, {}, {}, {}};
+    all.corners.resize(options.isovalues.size());
+    all.layers = LayerGrid{static_cast<std::uint64_t>(nx * ny), nz - 1, static_cast<Id>(options.isovalues.size())};
+    for_each_slab(source, options, memory_limit, ss, total,
+                  [&](const SurfaceMesh& m, const std::vector<std::uint64_t>& keys,
+                      const std::vector<std::uint64_t>&, Id, Id, bool) {
+                    all.append(m, keys);
+                    ss.most_fine_points_held = static_cast<Id>(all.keys.size());
+                  });
+    const auto t0 = Clock::now();
+    mesh = all.merge(point_keys);
+    ss.fine_points = mesh.num_points();
+    ss.merge = seconds_since(t0);
   }
   if (stats) *stats = total;
   if (stream_stats) *stream_stats = ss;
