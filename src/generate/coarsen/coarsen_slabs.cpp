@@ -14,6 +14,10 @@ namespace keymesh::generate {
 
 namespace {
 
+// A thin slab finishes a few thousand points: a parallel region for them
+// costs more than the means (threads spin at its barrier).
+constexpr Id kPointsPerTask = 1 << 15;
+
 // coarsening::group_mean's arithmetic (summed in double from +0 in the
 // group's order, divided by the count, rounded once) over a group whose
 // members are numbered the carried points first, then the slab's.
@@ -105,7 +109,7 @@ void SlabCoarsening::finish_points(Isovalue& iso, const SlabRange& s) {
     for (int c = 0; c < 3; ++c)
       iso.xyz[3 * (at + p) + c] = mean(carried.xyz.data(), s.fine.points.data() + 3 * s.begin, nc, 3, c,
                                        g.order.data(), g.offsets[p], g.offsets[p + 1]);
-  });
+  }, kPointsPerTask);
   for (std::size_t f = 0; f < field_shapes_.size(); ++f) {
     const int k = field_shapes_[f].components;
     Array<float>& dst = iso.fields[f];
@@ -116,7 +120,7 @@ void SlabCoarsening::finish_points(Isovalue& iso, const SlabRange& s) {
         dst[k * (at + p) + c] = mean(carried.fields[f].data(), s.fine.point_fields[f].values.data() + k * s.begin, nc,
                                      k, c, g.order.data(), g.offsets[p], g.offsets[p + 1]);
       if (normals) coarsening::renormalize(&dst[3 * (at + p)]);
-    });
+    }, kPointsPerTask);
   }
   iso.current.keys.resize(static_cast<std::size_t>(done));
   for (Id p = 0; p < done; ++p) iso.current.keys[p] = g.unique_keys[p] + first;
