@@ -79,8 +79,9 @@ void SlabCoarsening::add_slab(const SurfaceMesh& fine, const std::vector<std::ui
     const Id end = std::lower_bound(keys.begin(), keys.end(), (i + 1) * per_iso) - keys.begin();
     finish_points(iso, SlabRange{fine, keys, nearest, begin, end, k0, k_last, last, static_cast<Id>(i)});
   }
-  add_triangles(fine, keys, nearest);
-  for (std::size_t i = 0; i < isos_.size(); ++i) number_waiting(isos_[i], static_cast<Id>(i), k_last, last);
+  for (Isovalue& iso : isos_) number_waiting(iso);
+  add_triangles(fine, keys, nearest, k_last, last);
+  for (std::size_t i = 0; i < isos_.size(); ++i) decide_folds(isos_[i], static_cast<Id>(i), k_last, last);
 }
 
 // Groups the carried crossings and the slab's by coarse key (KEY-REDUCE,
@@ -144,34 +145,34 @@ void SlabCoarsening::finish_points(Isovalue& iso, const SlabRange& s) {
   iso.carried = std::move(next);
 }
 
-// Every fine triangle as its points' coarse keys, in order, after those
-// still waiting; collapsed ones dropped (coarsen()'s rule).
+// Every fine triangle, in order, as local ids when its points are finished
+// and none waits before it, or else as its points' coarse keys, to wait for
+// the next slab (only the last voxel layer's do); collapsed ones dropped
+// (coarsen()'s rule).
 void SlabCoarsening::add_triangles(const SurfaceMesh& fine, const std::vector<std::uint64_t>& keys,
-                                   const std::vector<std::uint64_t>& nearest) {
+                                   const std::vector<std::uint64_t>& nearest, Id k_last, bool last) {
   const std::uint64_t per_iso = 3 * static_cast<std::uint64_t>(points_per_iso_);
   const Id n = fine.num_cells();
   fine_triangles_ += n;
   for (Id t = 0; t < n; ++t) {
     const PointIndex* c = &fine.connectivity[3 * t];
-    const std::uint64_t a = nearest[c[0]], b = nearest[c[1]], d = nearest[c[2]];
-    if (a == b || b == d || a == d) continue;
-    std::vector<std::uint64_t>& waiting = isos_[static_cast<std::size_t>(keys[c[0]] / per_iso)].waiting;
-    waiting.insert(waiting.end(), {a, b, d});
+    const std::uint64_t k[3] = {nearest[c[0]], nearest[c[1]], nearest[c[2]]};
+    if (k[0] == k[1] || k[1] == k[2] || k[0] == k[2]) continue;
+    Isovalue& iso = isos_[static_cast<std::size_t>(keys[c[0]] / per_iso)];
+    const bool finished =
+        last || (plane_of(k[0]) < k_last && plane_of(k[1]) < k_last && plane_of(k[2]) < k_last);
+    if (finished && iso.waiting.empty())
+      for (std::uint64_t key : k) iso.triangles.push_back(local_id(iso, key));
+    else
+      iso.waiting.insert(iso.waiting.end(), {k[0], k[1], k[2]});
   }
 }
 
-// The waiting triangles whose points are all numbered, in order (they stop
-// at the first with a point on the last plane read), their folds removed.
-void SlabCoarsening::number_waiting(Isovalue& iso, Id iso_index, Id k_last, bool last) const {
-  const std::size_t n = iso.waiting.size() / 3;
-  std::size_t t = 0;
-  for (; t < n; ++t) {
-    const std::uint64_t* k = &iso.waiting[3 * t];
-    if (!last && (plane_of(k[0]) == k_last || plane_of(k[1]) == k_last || plane_of(k[2]) == k_last)) break;
-    for (int c = 0; c < 3; ++c) iso.triangles.push_back(local_id(iso, k[c]));
-  }
-  iso.waiting.erase(iso.waiting.begin(), iso.waiting.begin() + static_cast<std::ptrdiff_t>(3 * t));
-  decide_folds(iso, iso_index, k_last, last);
+// The triangles that waited for this slab: their points are finished now
+// (planes k0 - 1 and k0 of this slab).
+void SlabCoarsening::number_waiting(Isovalue& iso) const {
+  for (std::uint64_t key : iso.waiting) iso.triangles.push_back(local_id(iso, key));
+  iso.waiting.clear();
 }
 
 // Folds: a set of equal triangles lies in the voxel layers around its

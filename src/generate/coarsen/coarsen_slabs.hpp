@@ -82,8 +82,8 @@ class SlabCoarsening {
   void take_fields(const SurfaceMesh& fine);
   void finish_points(Isovalue& iso, const SlabRange& slab);
   void add_triangles(const SurfaceMesh& fine, const std::vector<std::uint64_t>& keys,
-                     const std::vector<std::uint64_t>& nearest);
-  void number_waiting(Isovalue& iso, Id iso_index, Id k_last, bool last) const;
+                     const std::vector<std::uint64_t>& nearest, Id k_last, bool last);
+  void number_waiting(Isovalue& iso) const;
   void decide_folds(Isovalue& iso, Id iso_index, Id k_last, bool last) const;
   PointIndex local_id(const Isovalue& iso, std::uint64_t key) const;
   Id plane_of(std::uint64_t coarse_key) const;
