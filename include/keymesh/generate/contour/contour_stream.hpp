@@ -49,4 +49,15 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
                              ContourStats* stats = nullptr, StreamStats* stream_stats = nullptr,
                              std::vector<std::uint64_t>* point_keys = nullptr);
 
+// Planes [lo, hi] of the grid (lo < hi; ghost planes outside them read
+// where the grid has them and the options need them), streamed under
+// `memory_limit` and merged: the mesh, global edge keys (`keys`) and, when
+// given, nearest grid points that contour() of that slab with global keys
+// gives (first_plane, total_planes and ghosts set as for a distributed
+// rank). For a rank of the distributed contour under --memory-limit.
+// Fine points only: options.coarsen and averaged normals are the caller's.
+SurfaceMesh contour_planes_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                                    Id lo, Id hi, std::vector<std::uint64_t>& keys,
+                                    std::vector<std::uint64_t>* nearest = nullptr, StreamStats* stream_stats = nullptr);
+
 }  // namespace keymesh::generate
