@@ -132,7 +132,8 @@ ContourResult run_streamed(const ContourCli& o, const generate::ContourOptions& 
   r["memory_limit"] = limit;
   r["stream"] = {{"slabs", ss.slabs},         {"planes_per_slab", ss.planes_per_slab},
                  {"slab_bytes", ss.slab_bytes}, {"read", ss.read},
-                 {"contour", ss.contour},       {"merge", ss.merge}};
+                 {"contour", ss.contour},       {"merge", ss.merge},
+                 {"fine_points", ss.fine_points}, {"most_fine_points_held", ss.most_fine_points_held}};
   return result;
 }
 
@@ -231,17 +232,21 @@ bool runs_distributed(const ContourCli& o) {
 }
 
 // Usage errors of the distributed contour (exit 2, said once by rank 0).
+// --memory-limit streams each rank's planes, except where a rank must hold
+// them together: --balance (counted, then kept) and coarsened pieces (halo
+// layers contoured and coarsened as one part).
 int refuse_distributed_usage(const ContourCli& o) {
   const bool tets = !o.raw_input.given() && io::is_grid_file(o.input);
-  if (!tets && o.memory_limit.empty()) return 0;
-  if (distributed::rank() == 0) {
-    if (tets)
-      std::fprintf(stderr, "keymesh contour: %s: marching tetrahedra is not distributed; run it as one process\n",
-                   o.input.c_str());
-    else
-      std::fprintf(stderr, "keymesh contour: --memory-limit is for one process; under mpirun each rank holds only "
-                           "its slab\n");
-  }
+  std::string why;
+  if (tets)
+    why = o.input + ": marching tetrahedra is not distributed; run it as one process";
+  else if (!o.memory_limit.empty() && o.balance)
+    why = "--memory-limit with --balance under mpirun: balancing holds each rank's equal slab; drop one of them";
+  else if (!o.memory_limit.empty() && o.coarsen && io::file_extension(o.output) == ".pvtp")
+    why = "--memory-limit with --coarsen and .pvtp pieces under mpirun: each rank coarsens its slab and halo as "
+          "one part; write a gathered file (.vtp, .ply ...) or drop --memory-limit";
+  if (why.empty()) return 0;
+  if (distributed::rank() == 0) std::fprintf(stderr, "keymesh contour: %s\n", why.c_str());
   return 2;
 }
 
@@ -314,8 +319,9 @@ void add_contour_options(CLI::App& cmd, ContourCli& o) {
                "output, not with --coarsen");
   o.raw_input.add_options(cmd);
   cmd.add_option("--memory-limit", o.memory_limit,
-                 "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G); "
-                 "the output is byte-identical (averaged normals: within float rounding); " +
+                 "stream the volume in slabs of z-planes holding at most SIZE bytes of samples (e.g. 256M, 2G; "
+                 "under mpirun per rank, over its own planes); the output is byte-identical (averaged normals: "
+                 "within float rounding); " +
                      io::accepted_plane_sources())
       ->check(size_validator());
   cmd.add_flag("--gather", o.gather,

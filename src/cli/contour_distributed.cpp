@@ -27,6 +27,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 nlohmann::json rank_json(const distributed::RankStats& s) {
   return {{"first_plane", s.first_plane},       {"planes", s.planes},
+          {"slabs", s.slabs},
           {"points", s.points},                 {"points_owned", s.points_owned},
           {"triangles", s.triangles},           {"keys_requested", s.keys_requested},
           {"bytes_sent", s.bytes_sent},         {"read", s.read},
@@ -124,6 +125,13 @@ void report_distributed(const ContourCli& o, const PlaneSource& source, double t
   write_report(o.common.report_path, r);
 }
 
+// --memory-limit: bytes of samples a rank holds at once (0: its whole slab).
+std::size_t memory_limit(const ContourCli& o) {
+  std::size_t limit = 0;
+  if (!o.memory_limit.empty()) parse_size(o.memory_limit, limit);  // checked by its validator
+  return limit;
+}
+
 }  // namespace
 
 int run_distributed_contour(const ContourCli& o, const generate::ContourOptions& options, int threads) {
@@ -138,7 +146,7 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
   const std::unique_ptr<PlaneSource> source = open_slab_source(o, options);
   if (pieces && o.coarsen) return run_coarse_pieces(o, options, *source, threads);
   distributed::ContourPiece piece =
-      timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance); });
+      timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance, memory_limit(o)); });
   const double total_points = static_cast<double>(piece.numbering.total);
   nlohmann::json coarsening;
   if (pieces)

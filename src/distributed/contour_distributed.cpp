@@ -16,6 +16,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
 #include "keymesh/distributed/mpi.hpp"
+#include "keymesh/generate/contour/contour_stream.hpp"
 #include "keymesh/generate/coarsen/coarsen.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/mesh/normals.hpp"
@@ -188,14 +189,11 @@ ImageGrid read_slab(PlaneSource& source, HeldSlab held, Id first, Id last) {
 // the gather treats them); with averaged normals, `normal_sums` gets
 // KEY-REDUCE's merge over this rank's triangles.
 void contour_slab(PlaneSource& source, HeldSlab held, const generate::ContourOptions& options, ContourPiece& piece,
-                  Id first, Id last, Id below, Id above, std::vector<Vec3f>& normal_sums) {
+                  Id first, Id last, Id below, Id above, std::size_t memory_limit, std::vector<Vec3f>& normal_sums) {
   const ImageGrid& head = source.header();
   const Id nz = head.dims[2], nxy = head.dims[0] * head.dims[1];
   RankStats& st = piece.stats;
   auto t0 = Clock::now();
-  ImageGrid slab = read_slab(source, std::move(held), first, last);
-  st.read += seconds_since(t0);
-  t0 = Clock::now();
   generate::ContourOptions opt = options;
   opt.first_plane = first;
   opt.total_planes = nz;
@@ -212,8 +210,22 @@ void contour_slab(PlaneSource& source, HeldSlab held, const generate::ContourOpt
   piece.average = options.normals == generate::ContourNormals::Average && !options.coarsen;
   piece.layer_grid = generate::LayerGrid{static_cast<std::uint64_t>(nxy), nz - 1, static_cast<Id>(options.isovalues.size())};
   if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
-  piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
-  free_storage(slab.bytes);
+  if (memory_limit) {
+    // --memory-limit: the rank's planes in slabs, merged by key: the same
+    // mesh and keys as one contour of them.
+    generate::StreamStats ss;
+    piece.mesh = generate::contour_planes_streamed(source, opt, memory_limit, first + below, last - above, piece.keys,
+                                                   options.coarsen ? &piece.nearest : nullptr, &ss);
+    st.read += ss.read;
+    st.slabs = static_cast<double>(ss.slabs);
+  } else {
+    st.slabs = 1;
+    ImageGrid slab = read_slab(source, std::move(held), first, last);
+    st.read += seconds_since(t0);
+    t0 = Clock::now();
+    piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
+    free_storage(slab.bytes);
+  }
   if (piece.average) normal_sums = point_normal_sums(piece.mesh);
   st.contour = seconds_since(t0);
 }
@@ -253,7 +265,8 @@ void number_piece(ContourPiece& piece, const generate::ContourOptions& options, 
 
 }  // namespace
 
-ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance_work) {
+ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance_work,
+                           std::size_t memory_limit) {
   int P = 1, r = 0;
   mpi().Comm_size(mpi().comm_world, &P);
   mpi().Comm_rank(mpi().comm_world, &r);
@@ -279,7 +292,8 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   // timed apart): an error on any rank ends every rank here.
   std::vector<Vec3f> normal_sums;
   const std::string error = error_of([&] {
-    contour_slab(source, std::move(held), options, piece, lo - below, hi + above, below, above, normal_sums);
+    contour_slab(source, std::move(held), options, piece, lo - below, hi + above, below, above, memory_limit,
+                 normal_sums);
   });
   auto t0 = Clock::now();
   share(error);

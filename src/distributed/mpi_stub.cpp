@@ -33,7 +33,7 @@ GlobalNumbering number_keys(std::span<const std::uint64_t>, int, const std::func
   not_built();
 }
 void require_distributable(const ImageGrid&, const generate::ContourOptions&, int) { not_built(); }
-ContourPiece contour_piece(PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }
+ContourPiece contour_piece(PlaneSource&, const generate::ContourOptions&, bool, std::size_t) { not_built(); }
 SurfaceMesh gather(ContourPiece&, std::vector<std::uint64_t>*) { not_built(); }
 GhostedPiece ghosted_piece(ContourPiece&) { not_built(); }
 std::vector<Id> slab_bounds(PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }

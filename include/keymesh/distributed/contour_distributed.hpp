@@ -21,6 +21,7 @@ namespace keymesh::distributed {
 // What one rank did, for the report and docs/SCALING.md.
 struct RankStats {
   double first_plane = 0, planes = 0;        // its slab
+  double slabs = 0;                          // the parts it was read in (more than 1 under --memory-limit)
   double points = 0, points_owned = 0, triangles = 0;
   double keys_requested = 0, bytes_sent = 0; // in the key exchange
   // Seconds: reading the slab, balancing (counting its layers' triangles and
@@ -62,8 +63,11 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 // With `balance`, the slab boundaries move so that every rank gets about the
 // same work (triangles per layer counted on the equal split first, then
 // shared); without, every rank gets the same number of voxel layers. The
-// output is the same either way.
-ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance);
+// output is the same either way. With `memory_limit` (bytes of samples
+// held at once, not with balance), the rank streams its planes in slabs
+// (generate::contour_planes_streamed): the same piece.
+ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance,
+                           std::size_t memory_limit = 0);
 
 // Collective: the voxel layers of every rank, rank q's [bounds[q],
 // bounds[q + 1]): equal counts, or balanced as contour_piece balances them.

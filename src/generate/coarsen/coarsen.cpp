@@ -19,14 +19,14 @@ namespace keymesh::generate {
 using coarsening::TriangleSet;
 using coarsening::triangle_set;
 
-// Triangles grouped by their smallest point id (KEY-REDUCE, sort plan), and
-// each group's few triangles compared with one another; of every set of
-// equal triangles the first of the winning orientation is kept when the
-// orientations do not cancel.
-Id remove_folds(SurfaceMesh& mesh) {
-  const Id n = mesh.num_cells();
-  if (n == 0) return 0;
-  const PointIndex* C = mesh.connectivity.data();
+namespace {
+
+// Which of n triangles the folds remove (drop[t] = 1), grouped by their
+// smallest point id (KEY-REDUCE, sort plan), each group's few triangles
+// compared with one another; of every set of equal triangles the first of
+// the winning orientation is kept when the orientations do not cancel.
+// False when no set repeats (drop then all 0).
+bool folded_triangles(const PointIndex* C, Id n, Id num_points, std::vector<std::uint8_t>& drop) {
   std::vector<TriangleSet> tri(static_cast<std::size_t>(n));
   std::vector<std::uint32_t> lo(static_cast<std::size_t>(n));
   parallel::for_each(n, [&](Id t) {
@@ -34,9 +34,9 @@ Id remove_folds(SurfaceMesh& mesh) {
     lo[t] = tri[t].lo;
   });
   const auto g = keyreduce::partition_sort(lo.data(), n, parallel::bits_needed<std::uint32_t>(
-                                                             static_cast<std::uint32_t>(mesh.num_points() - 1)),
+                                                             static_cast<std::uint32_t>(num_points - 1)),
                                            keyreduce::Order::Build);
-  std::vector<std::uint8_t> drop(static_cast<std::size_t>(n), 0);  // by triangle
+  drop.assign(static_cast<std::size_t>(n), 0);
   std::vector<std::uint8_t> folded_any(static_cast<std::size_t>(g.num_groups()), 0);
   parallel::for_each(g.num_groups(), [&](Id grp) {
     const Id b = g.offsets[grp], e = g.offsets[grp + 1];
@@ -61,7 +61,16 @@ Id remove_folds(SurfaceMesh& mesh) {
       }
     }
   });
-  if (std::find(folded_any.begin(), folded_any.end(), 1) == folded_any.end()) return 0;
+  return std::find(folded_any.begin(), folded_any.end(), 1) != folded_any.end();
+}
+
+}  // namespace
+
+Id remove_folds(SurfaceMesh& mesh) {
+  const Id n = mesh.num_cells();
+  if (n == 0) return 0;
+  std::vector<std::uint8_t> drop;
+  if (!folded_triangles(mesh.connectivity.data(), n, mesh.num_points(), drop)) return 0;
   // Pack the kept triangles and their cell fields' tuples in place, in
   // order (each moves to a lower index).
   Id at = 0;
@@ -78,6 +87,26 @@ Id remove_folds(SurfaceMesh& mesh) {
   mesh.connectivity.resize(static_cast<std::size_t>(3 * at));
   for (Field& f : mesh.cell_fields) f.values.resize(static_cast<std::size_t>(at * f.components));
   return n - at;
+}
+
+Id remove_complete_folds(Array<PointIndex>& connectivity, Id first_triangle, PointIndex complete_below) {
+  const Id n = static_cast<Id>(connectivity.size() / 3) - first_triangle;
+  PointIndex* W = connectivity.data() + 3 * first_triangle;
+  const PointIndex top = n > 0 ? *std::max_element(W, W + 3 * n) : 0;
+  std::vector<std::uint8_t> drop;
+  const bool folds = n > 0 && folded_triangles(W, n, static_cast<Id>(top) + 1, drop);
+  auto complete = [&](Id t) {
+    return W[3 * t] < complete_below && W[3 * t + 1] < complete_below && W[3 * t + 2] < complete_below;
+  };
+  Id at = 0, left = -1;
+  for (Id t = 0; t < n; ++t) {
+    if (folds && drop[t] && complete(t)) continue;
+    if (left < 0 && !complete(t)) left = at;
+    for (int k = 0; k < 3; ++k) W[3 * at + k] = W[3 * t + k];
+    ++at;
+  }
+  connectivity.resize(static_cast<std::size_t>(3 * (first_triangle + at)));
+  return first_triangle + (left < 0 ? at : left);
 }
 
 void check_coarsen_input(const SurfaceMesh& mesh, const std::vector<std::uint64_t>& keys, std::uint64_t key_range) {

@@ -3,13 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/core/free_storage.hpp"
 #include "keymesh/core/retained_blocks.hpp"
-#include "keymesh/generate/coarsen/coarsen.hpp"
+#include "generate/coarsen/coarsen_slabs.hpp"
 #include "keymesh/generate/contour/contour_kernels.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/mesh/normals.hpp"
@@ -61,9 +62,8 @@ Id planes_per_slab(const ImageGrid& head, std::size_t memory_limit, bool ghosts)
 struct SlabPoints {
   std::uint64_t per_iso;
   bool average;
-  bool coarsen;
   std::vector<std::uint64_t> keys;
-  std::vector<std::uint64_t> nearest;  // with coarsen: each point's nearest grid point (coarse key)
+  std::vector<std::uint64_t> nearest;  // each point's nearest grid point, when the slabs gave them
   std::vector<float> points;
   std::vector<Field> fields;  // every point field of the slabs, concatenated
   std::vector<std::vector<std::uint32_t>> corners;  // per isovalue
@@ -89,10 +89,10 @@ struct SlabPoints {
 
   // KEY-REDUCE over the slabs' points: a shared plane's points appear
   // twice, with equal bits; the first of each group stands for it, and the
-  // index map takes every slab point to its merged point. With coarsen,
-  // `merged_nearest` receives the merged points' coarse keys; `merged_keys`,
-  // when given, their edge keys.
-  SurfaceMesh merge(std::vector<std::uint64_t>& merged_nearest, std::vector<std::uint64_t>* merged_keys) const {
+  // index map takes every slab point to its merged point. `merged_keys`
+  // and `merged_nearest`, when given, receive the merged points' edge keys
+  // and nearest grid points.
+  SurfaceMesh merge(std::vector<std::uint64_t>* merged_keys, std::vector<std::uint64_t>* merged_nearest) const {
     const Id n = static_cast<Id>(keys.size());
     const auto g = keyreduce::partition_sort(keys.data(), n,
                                              parallel::bits_needed<std::uint64_t>(per_iso * corners.size() - 1),
@@ -103,10 +103,10 @@ struct SlabPoints {
     for (const Field& f : fields)
       mesh.point_fields.push_back(Field{f.name, f.components, Array<float>(static_cast<std::size_t>(unique * f.components))});
     std::vector<std::uint64_t> point_keys(average || merged_keys ? static_cast<std::size_t>(unique) : 0);
-    merged_nearest.resize(coarsen ? static_cast<std::size_t>(unique) : 0);
+    if (merged_nearest) merged_nearest->resize(static_cast<std::size_t>(unique));
     parallel::for_each(unique, [&](Id p) {
       const Id first = g.order[g.offsets[p]];
-      if (coarsen) merged_nearest[p] = nearest[first];
+      if (merged_nearest) (*merged_nearest)[p] = nearest[first];
       if (!point_keys.empty()) point_keys[p] = keys[first];
       for (int x = 0; x < 3; ++x) mesh.points[3 * p + x] = points[3 * first + x];
       for (std::size_t i = 0; i < fields.size(); ++i) {
@@ -134,32 +134,28 @@ void add_stats(ContourStats& total, const ContourStats& st) {
   total.key_bits = st.key_bits;
 }
 
-}  // namespace
+// Which planes to stream, [lo, hi] of the whole grid, and whether each
+// fine point's nearest grid point is wanted.
+struct PlaneWindow {
+  Id lo, hi;
+  bool nearest;
+};
 
-SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
-                             ContourStats* stats, StreamStats* stream_stats,
-                             std::vector<std::uint64_t>* point_keys) {
-  const retained_blocks::KeepNothing within_the_budget;
+// The slabs of `window` read and contoured one after the other (global
+// keys; ghost planes outside the window where the grid has them), each
+// handed to `take(mesh, keys, nearest, k0, k_last, last)`.
+template <class Take>
+void for_each_slab(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit, PlaneWindow window,
+                   StreamStats& ss, ContourStats& total, Take take) {
   const ImageGrid& head = source.header();
-  check_streamable(head, options);
   const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];
   // Gradient normals and curvature take central differences across a
   // slab's border: each slab reads a ghost plane on either side.
   const bool ghosts = options.normals == ContourNormals::Gradient || options.curvature;
   const Id planes = planes_per_slab(head, memory_limit, ghosts);
-  StreamStats ss;
   ss.planes_per_slab = planes;
   ss.slab_bytes = static_cast<std::size_t>(std::min(planes + (ghosts ? 2 : 0), nz)) *
                   static_cast<std::size_t>(nx * ny) * scalar_size(head.type);
-  // Coarsening averages a grid point's crossings, which two slabs may
-  // share: the slabs' fine points are merged by edge key first, then the
-  // whole is coarsened by nearest grid point, as one contour does; averaged
-  // normals then come from the coarse mesh.
-  const bool average = options.normals == ContourNormals::Average && !options.coarsen;
-  SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, options.coarsen, {}, {}, {}, {}, {}, {}};
-  all.corners.resize(options.isovalues.size());
-  all.layers = LayerGrid{static_cast<std::uint64_t>(nx * ny), nz - 1, static_cast<Id>(options.isovalues.size())};
-  ContourStats total;
   ImageGrid slab;
   slab.spacing = head.spacing;
   slab.origin = head.origin;
@@ -167,9 +163,9 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
   ContourOptions opt = options;
   opt.total_planes = nz;
   opt.coarsen = false;
-  if (options.normals == ContourNormals::Average) opt.normals = ContourNormals::None;  // summed per slab, merged across slabs
-  for (Id k0 = 0; k0 < nz - 1; k0 += planes - 1) {
-    const Id count = std::min(planes, nz - k0);
+  if (options.normals == ContourNormals::Average) opt.normals = ContourNormals::None;  // summed after the slabs
+  for (Id k0 = window.lo; k0 < window.hi; k0 += planes - 1) {
+    const Id count = std::min(planes, window.hi + 1 - k0);
     const Id below = ghosts && k0 > 0 ? 1 : 0, above = ghosts && k0 + count < nz ? 1 : 0;
     auto t0 = Clock::now();
     slab.allocate({nx, ny, below + count + above}, head.type);
@@ -181,25 +177,98 @@ SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options,
     opt.ghost_above = above;
     std::vector<std::uint64_t> slab_keys, slab_nearest;
     ContourStats st;
-    const SurfaceMesh m = contour(slab, opt, &st, &slab_keys, options.coarsen ? &slab_nearest : nullptr);
+    const SurfaceMesh m = contour(slab, opt, &st, &slab_keys, window.nearest ? &slab_nearest : nullptr);
     add_stats(total, st);
     ss.contour += seconds_since(t0);
-    all.append(m, slab_keys, slab_nearest);
+    take(m, slab_keys, slab_nearest, k0, k0 + count - 1, k0 + count == window.hi + 1);
     ++ss.slabs;
   }
   free_storage(slab.bytes);
-  auto t0 = Clock::now();
-  std::vector<std::uint64_t> nearest;
-  SurfaceMesh mesh = all.merge(nearest, point_keys);
-  ss.merge = seconds_since(t0);
+}
+
+// --coarsen: every slab's coarse points finished as soon as the slab above
+// them is read (coarsen/coarsen_slabs.hpp); averaged normals then come from
+// the coarse mesh, as the in-memory contour makes them.
+SurfaceMesh coarsen_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats& total, StreamStats& ss) {
+  SlabCoarsening coarse(source.header().dims.data(), static_cast<Id>(options.isovalues.size()));
+  double seconds = 0;
+  const Id nz = source.header().dims[2];
+  for_each_slab(source, options, memory_limit, PlaneWindow{0, nz - 1, true}, ss, total,
+                [&](const SurfaceMesh& m, const std::vector<std::uint64_t>& keys,
+                    const std::vector<std::uint64_t>& nearest, Id k0, Id k_last, bool last) {
+                  const auto t0 = Clock::now();
+                  coarse.add_slab(m, keys, nearest, k0, k_last, last);
+                  seconds += seconds_since(t0);
+                });
+  const auto t0 = Clock::now();
+  SurfaceMesh mesh = coarse.finish();
+  if (options.normals == ContourNormals::Average) average_normals(mesh);
+  total.coarsen = seconds + seconds_since(t0);
+  total.triangles_before_coarsening = coarse.fine_triangles();
+  ss.fine_points = coarse.fine_points();
+  ss.most_fine_points_held = coarse.most_fine_points_held();
+  return mesh;
+}
+
+}  // namespace
+
+SurfaceMesh contour_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                             ContourStats* stats, StreamStats* stream_stats,
+                             std::vector<std::uint64_t>* point_keys) {
+  const retained_blocks::KeepNothing within_the_budget;
+  const ImageGrid& head = source.header();
+  check_streamable(head, options);
+  StreamStats ss;
+  ContourStats total;
+  SurfaceMesh mesh;
   if (options.coarsen) {
-    t0 = Clock::now();
-    total.triangles_before_coarsening = mesh.num_cells();
-    mesh = coarsen(mesh, nearest, static_cast<std::uint64_t>(nx * ny * nz) * options.isovalues.size());
-    if (options.normals == ContourNormals::Average) average_normals(mesh);
-    total.coarsen = seconds_since(t0);
+    mesh = coarsen_streamed(source, options, memory_limit, total, ss);
+  } else {
+    const Id nx = head.dims[0], ny = head.dims[1], nz = head.dims[2];
+    const bool average = options.normals == ContourNormals::Average;
+    SlabPoints all{3ull * static_cast<std::uint64_t>(nx * ny * nz), average, {}, {}, {}, {}, {}, {}};
+    all.corners.resize(options.isovalues.size());
+    all.layers = LayerGrid{static_cast<std::uint64_t>(nx * ny), nz - 1, static_cast<Id>(options.isovalues.size())};
+    for_each_slab(source, options, memory_limit, PlaneWindow{0, nz - 1, false}, ss, total,
+                  [&](const SurfaceMesh& m, const std::vector<std::uint64_t>& keys,
+                      const std::vector<std::uint64_t>& nearest, Id, Id, bool) {
+                    all.append(m, keys, nearest);
+                    ss.most_fine_points_held = static_cast<Id>(all.keys.size());
+                  });
+    const auto t0 = Clock::now();
+    mesh = all.merge(point_keys, nullptr);
+    ss.fine_points = mesh.num_points();
+    ss.merge = seconds_since(t0);
   }
   if (stats) *stats = total;
+  if (stream_stats) *stream_stats = ss;
+  return mesh;
+}
+
+SurfaceMesh contour_planes_streamed(PlaneSource& source, const ContourOptions& options, std::size_t memory_limit,
+                                    Id lo, Id hi, std::vector<std::uint64_t>& keys,
+                                    std::vector<std::uint64_t>* nearest, StreamStats* stream_stats) {
+  const retained_blocks::KeepNothing within_the_budget;
+  const ImageGrid& head = source.header();
+  check_streamable(head, options);
+  if (options.coarsen || options.normals == ContourNormals::Average || lo < 0 || hi >= head.dims[2] || lo >= hi)
+    throw std::logic_error("contour_planes_streamed: fine points only, without averaged normals, in the grid");
+  const Id nxy = head.dims[0] * head.dims[1], nz = head.dims[2];
+  StreamStats ss;
+  ContourStats total;
+  SlabPoints all{3ull * static_cast<std::uint64_t>(nxy * nz), false, {}, {}, {}, {}, {}, {}};
+  all.corners.resize(options.isovalues.size());
+  for_each_slab(source, options, memory_limit, PlaneWindow{lo, hi, nearest != nullptr}, ss, total,
+                [&](const SurfaceMesh& m, const std::vector<std::uint64_t>& slab_keys,
+                    const std::vector<std::uint64_t>& slab_nearest, Id, Id, bool) {
+                  all.append(m, slab_keys, slab_nearest);
+                  ss.most_fine_points_held = static_cast<Id>(all.keys.size());
+                });
+  const auto t0 = Clock::now();
+  SurfaceMesh mesh = all.merge(&keys, nearest);
+  ss.merge = seconds_since(t0);
+  ss.fine_points = mesh.num_points();
   if (stream_stats) *stream_stats = ss;
   return mesh;
 }

@@ -155,6 +155,52 @@ TEST(Coarsen, RemoveFoldsFollowsItsRule) {
   }
 }
 
+// remove_complete_folds, as the streamed coarsening calls it: the triangles
+// come in two batches, every triangle on points below T in the first; the
+// first call decides only the sets below T, the second (after the rest is
+// appended, everything complete) the others. The result is remove_folds'
+// over the whole list, and the first call's return is the first triangle it
+// left undecided.
+TEST(Coarsen, RemoveCompleteFoldsInBatchesEqualsRemoveFolds) {
+  std::mt19937 rng(11);
+  for (int round = 0; round < 20; ++round) {
+    const std::uint32_t points = 6 + rng() % 10, below = 3 + rng() % (points - 4);
+    auto triangle = [&](bool low) {
+      std::array<std::uint32_t, 3> v{};
+      do {
+        for (auto& x : v) x = rng() % points;
+      } while (v[0] == v[1] || v[1] == v[2] || v[0] == v[2] ||
+               low != (std::max({v[0], v[1], v[2]}) < below));
+      return v;
+    };
+    Array<PointIndex> first, second;
+    for (int t = 0, n = 1 + static_cast<int>(rng() % 300); t < n; ++t) {
+      const auto v = triangle(rng() % 2 == 0);  // below T or not, mixed
+      first.insert(first.end(), v.begin(), v.end());
+    }
+    for (int t = 0, n = static_cast<int>(rng() % 300); t < n; ++t) {
+      const auto v = triangle(false);
+      second.insert(second.end(), v.begin(), v.end());
+    }
+    SurfaceMesh whole;
+    whole.points.assign(3 * points, 0.f);
+    whole.connectivity = first;
+    whole.connectivity.insert(whole.connectivity.end(), second.begin(), second.end());
+    generate::remove_folds(whole);
+    Array<PointIndex> got = first;
+    const Id left = generate::remove_complete_folds(got, 0, below);
+    for (Id t = 0; t < left; ++t)
+      EXPECT_LT(std::max({got[3 * t], got[3 * t + 1], got[3 * t + 2]}), below) << "round " << round;
+    if (left < static_cast<Id>(got.size() / 3)) {
+      EXPECT_GE(std::max({got[3 * left], got[3 * left + 1], got[3 * left + 2]}), below) << "round " << round;
+    }
+    got.insert(got.end(), second.begin(), second.end());
+    const Id end = generate::remove_complete_folds(got, left, points);  // every set complete now
+    EXPECT_EQ(end, static_cast<Id>(got.size() / 3)) << "round " << round;
+    EXPECT_EQ(got, whole.connectivity) << "round " << round;
+  }
+}
+
 // Coarsening in the contour's pass (the structured plan) equals coarsen()
 // over the fine mesh (the sort plan's path) with NaN samples, which put
 // their crossings midway (nearest the far end).

@@ -241,3 +241,45 @@ TEST(ContourStream, SlabsGiveTheWholeVolumesHistory) {
 }
 
 }  // namespace
+
+// contour_planes_streamed (a distributed rank's planes under
+// --memory-limit): the mesh, global keys and nearest grid points that one
+// contour() of those planes read whole gives (ghost planes from outside
+// them where the grid has them), at any limit.
+TEST(ContourStream, PlanesStreamedEqualOneReadOfThem) {
+  const ImageGrid g = generate::spherical_distance(30);
+  const std::size_t plane = 30 * 30 * sizeof(float);
+  for (auto normals : {generate::ContourNormals::None, generate::ContourNormals::Gradient}) {
+    ContourOptions o;
+    o.isovalues = {9.5, 13.25};
+    o.normals = normals;
+    o.curvature = normals == generate::ContourNormals::Gradient;
+    const Id ghosts = o.curvature ? 1 : 0;
+    for (auto [lo, hi] : {std::array<Id, 2>{0, 12}, {7, 29}, {11, 19}}) {
+      const Id below = lo > 0 ? ghosts : 0, above = hi < 29 ? ghosts : 0;
+      ImageGrid slab;
+      slab.spacing = g.spacing, slab.origin = g.origin;
+      slab.allocate({30, 30, hi - lo + 1 + below + above}, g.type);
+      std::memcpy(slab.bytes.data(), g.bytes.data() + plane * static_cast<std::size_t>(lo - below),
+                  plane * static_cast<std::size_t>(hi - lo + 1 + below + above));
+      ContourOptions one = o;
+      one.first_plane = lo - below, one.total_planes = 30, one.ghost_below = below, one.ghost_above = above;
+      std::vector<std::uint64_t> keys, nearest;
+      const SurfaceMesh ref = generate::contour(slab, one, nullptr, &keys, &nearest);
+      ASSERT_GT(ref.num_cells(), 0);
+      for (std::size_t planes : {4u, 6u, 40u}) {
+        SCOPED_TRACE("planes " + std::to_string(lo) + ".." + std::to_string(hi) + " in slabs of " +
+                     std::to_string(planes));
+        GridPlanes src(g);
+        std::vector<std::uint64_t> got_keys, got_nearest;
+        generate::StreamStats ss;
+        const SurfaceMesh m =
+            generate::contour_planes_streamed(src, o, planes * plane, lo, hi, got_keys, &got_nearest, &ss);
+        expect_same(ref, m);
+        EXPECT_EQ(got_keys, keys);
+        EXPECT_EQ(got_nearest, nearest);
+        EXPECT_EQ(ss.slabs, src.reads);
+      }
+    }
+  }
+}

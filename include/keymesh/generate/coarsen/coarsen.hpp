@@ -29,6 +29,13 @@ struct CoarsenStats {
 // cancel, repeats facing one way are kept once (the kept one's cell field
 // tuples with it). Returns the number removed.
 Id remove_folds(SurfaceMesh& mesh);
+// The same over the triangles from `first_triangle` on of a triangle list
+// without cell fields, for the sets of equal triangles whose points are all
+// below `complete_below` (the others may still gain members: they are left
+// as they are, to be decided again). Returns the first triangle from
+// first_triangle on that was left undecided (the end when none). For the
+// streamed coarsening's slabs (coarsen/coarsen_slabs.hpp).
+Id remove_complete_folds(Array<PointIndex>& connectivity, Id first_triangle, PointIndex complete_below);
 // (The structured contour applies the same rule in its own triangle pass,
 // src/generate/coarsen/coarse_folds.hpp, without comparing triangles.)
 
