@@ -2,13 +2,13 @@
 back by the independent reader tests/neuroglancer_precomputed.py (Debian's
 draco_decoder) and judged by `keymesh check --self-intersections` (exact
 predicates): every segment's fragments of one level joined at their exact
-quantized positions hold no zero-area triangle, and at level 0 no crossing
-pair where the segment's own surface (`--per-label`, the same smoothing) has
-none: the cut at the chunk planes and the writer's quantization add none.
-
-Not asserted: crossings at levels >= 1 (the coarsening makes some) and those
-the smoothed surface already has (docs/decisions/labels-multilod-chunks.md,
-"Crossing triangles after the cut")."""
+quantized positions hold no zero-area triangle, at level 0 no crossing pair
+where the segment's own surface (`--per-label`, the same smoothing) has none
+(the cut at the chunk planes and the writer's quantization add none), and at
+levels >= 1 no crossing pair at all (the coarsening's fold guard,
+docs/decisions/labels-lod-fold-guard.md; 4 and 10 pairs at most per segment
+and level before it). Volumes with many junctions:
+test_labels_precomputed_lods_cli.py."""
 import os
 import sys
 
@@ -80,6 +80,8 @@ def expect_clean(out, volume, segments, *options):
     clean = [s for s in segments if surface[s] == (0, 0)]
     added = {s: found[(s, 0)][0] for s in clean if found[(s, 0)][0]}
     assert not added, f"lod-0 crossing pairs where the segment's surface has none: {added}"
+    coarse = {k: c for k, (c, z) in found.items() if k[1] > 0 and c}
+    assert not coarse, f"crossing pairs at levels >= 1 (segment, lod): {coarse}"
     return clean
 
 
@@ -103,7 +105,8 @@ def test_aal_atlas():
     assert clean == [1, 2, 3, 4, 5, 6], clean  # every segment's own surface crosses nowhere
 
 
-check("ellipsoids: no zero-area triangle at any level, no lod-0 crossing the surface lacks", test_ellipsoids)
+check("ellipsoids: no zero-area triangle at any level, no crossing at lods >= 1 nor one at lod 0 the surface lacks",
+      test_ellipsoids)
 if os.path.exists(AAL):
-    check("AAL atlas: no zero-area triangle at any level, no lod-0 crossing", test_aal_atlas)
+    check("AAL atlas: no zero-area triangle, no crossing pair, at any level", test_aal_atlas)
 finish(None if os.path.exists(AAL) else f"{AAL} not present (Debian package mricron)")
