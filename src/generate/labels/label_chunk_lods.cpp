@@ -9,6 +9,7 @@
 // that cross, until none is left to split.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "keymesh/core/error.hpp"
@@ -20,6 +21,8 @@ namespace keymesh::generate::detail {
 namespace {
 
 constexpr int kFieldBits = 19;
+
+void join_box_points(MultilodPiece& piece, const MultilodGrid& grid);  // below
 
 // The coarse key of inner point p of a piece of `chunk` at spacing `step`
 // (class 0).
@@ -68,7 +71,50 @@ MultilodPiece coarsened_piece(const MultilodPiece& finer, const MultilodGrid& gr
     for (int a = 0; a < 3; ++a)
       if (!(b.axes >> a & 1)) p[a] = off_chunk_planes(grid, a, p[a], grid.margin(a, lod));
   }
+  join_box_points(out, grid);
   return out;
+}
+
+// Box points of one kind (the same planes) whose positions quantize (at the
+// piece's level, as the writer does) within one step of each other along
+// every axis take the position of the one of least key among them (chains
+// included), so the writer merges them into one point
+// (io/neuroglancer/coincident_points.hpp). Below a quantization step apart
+// they would fold the triangles between them once quantized. Decided from
+// the points' kinds and positions alone, which every chunk that holds them
+// has alike.
+void join_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
+  const int lod = static_cast<int>(piece.lod);
+  const double top = std::ldexp(1.0, grid.vertex_quantization_bits) - 1;
+  using Cell = std::array<std::int64_t, 5>;  // kind (axes, upper), quantized x, y, z
+  std::map<Cell, std::uint32_t> at;
+  const std::size_t n = piece.point_keys.size();
+  std::vector<std::uint32_t> root(n);
+  for (std::uint32_t i = 0; i < n; ++i) root[i] = i;
+  auto find = [&](std::uint32_t i) { while (root[i] != i) i = root[i] = root[root[i]]; return i; };
+  for (std::uint32_t i = 0; i < n; ++i) {  // in key order: a root is its set's least key
+    const float* p = piece.points.data() + 3 * i;
+    const OnBox b = on_box(p, grid, piece.chunk);
+    if (!b.axes) continue;
+    Cell c{b.axes, b.upper, 0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+      const double size = std::ldexp(static_cast<double>(grid.chunk_shape[a]), lod);
+      const double origin = grid.grid_origin[a] + static_cast<double>(piece.chunk[a] >> lod) * size;
+      c[2 + a] = static_cast<std::int64_t>(std::llround((p[a] - origin) / size * top));
+    }
+    for (int d = 0; d < 27; ++d) {
+      const Cell nb{c[0], c[1], c[2] + d % 3 - 1, c[3] + d / 3 % 3 - 1, c[4] + d / 9 - 1};
+      const auto f = at.find(nb);
+      if (f == at.end()) continue;
+      const std::uint32_t u = find(f->second), v = find(i);
+      root[std::max(u, v)] = std::min(u, v);
+    }
+    at.emplace(c, i);
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t r = find(i);
+    if (r != i) std::copy_n(piece.points.begin() + 3 * r, 3, piece.points.begin() + 3 * i);
+  }
 }
 
 }  // namespace
