@@ -2,9 +2,11 @@
 // every inner point keyed by the nearest point of the grid of spacing 2^lod
 // and one KEY-REDUCE merges them (coarsen_label_surface: positions averaged
 // in key order, collapsed faces dropped, opposite faces on the same points
-// cancelled); the points on the chunk's box keep their keys and positions,
-// so neighbouring chunks keep the same points on their common face, its
-// border lines included, at every level. Then the fold guard
+// cancelled); the points on the chunk's box keep their keys and positions
+// (but for the level's margin, and box points closer than a quantization
+// step joined: join_box_points), so neighbouring chunks keep the same points
+// on their common face, its border lines included, at every level. Then the
+// fold guard
 // (label_lod_fold_guard.cpp) splits back the inner clusters of triangles
 // that cross, until none is left to split.
 #include <algorithm>

@@ -27,7 +27,10 @@
 // points cancelled) over keys = the nearest point of the grid of spacing 2^k
 // (relative to the chunk's corner); its points on the chunk's box (faces and
 // edge lines) keep their level-0 keys and positions at every level (a
-// coordinate off the planes only kept at the level's margin). So two
+// coordinate off the planes only kept at the level's margin; box points on
+// the same planes that quantize within one step of each other at the level
+// take the position of the least key among them, for the writer to merge,
+// decided from their positions alone). So two
 // neighbouring chunks have the same points on their common face, its border
 // lines included, at every level, with no data from each other. A fold
 // guard (label_lod_fold_guard.cpp) then splits back into their finer points
