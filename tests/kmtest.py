@@ -309,3 +309,54 @@ def require_mpi(*probe):
     if p.returncode != 0:
         print(f"mpirun does not start keymesh here (exit {p.returncode}):\n{p.stderr}")
         sys.exit(1)
+
+
+def write_triangles_ply(path, points, triangles):
+    """points (n x 3) and triangles (m x 3 point ids) as a binary PLY; returns path."""
+    import numpy as np
+    with open(path, "wb") as f:
+        f.write((f"ply\nformat binary_little_endian 1.0\nelement vertex {len(points)}\nproperty float x\n"
+                 f"property float y\nproperty float z\nelement face {len(triangles)}\n"
+                 "property list uchar int vertex_indices\nend_header\n").encode())
+        f.write(np.asarray(points, "<f4").tobytes())
+        faces = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
+        faces["n"], faces["i"] = 3, triangles
+        f.write(faces.tobytes())
+    return path
+
+
+def self_intersections(points, triangles, path):
+    """(crossing pairs, zero-area triangles) of a triangle mesh by `keymesh
+    check --self-intersections` (exact predicates), written to `path` (PLY)."""
+    import re
+    write_triangles_ply(path, points, triangles)
+    out = run("check", path, "--self-intersections", expect=None).stdout
+    m = re.search(r"self-intersections (\d+) \(pairs of cells\), zero-area triangles (\d+)", out)
+    assert m, out
+    return int(m.group(1)), int(m.group(2))
+
+
+def precomputed_level_crossings(ngp, out, segments, scratch):
+    """{(segment, lod): (crossing pairs, zero-area triangles, triangles)} of a
+    precomputed output: each segment's decoded fragments of one level (every
+    chunk's) joined at their exact global quantized coordinates (node *
+    (2^bits - 1) + value, integers exact in float32), one point per position,
+    so crossings between triangles of neighbouring chunks count too."""
+    import numpy as np
+    info = ngp.read_info(out)
+    top = 2 ** info["vertex_quantization_bits"] - 1
+    found = {}
+    for s in segments:
+        mesh = ngp.read_segment(out, s, info)
+        for lod in range(mesh.manifest.num_lods):
+            frags = [f for f in mesh.fragments if f.lod == lod and f.size]
+            if not frags:
+                continue
+            at = np.concatenate([np.array(f.position) * top + f.quantized for f in frags])
+            first = np.cumsum([0] + [len(f.quantized) for f in frags])
+            tris = np.concatenate([f.triangles + b for f, b in zip(frags, first)])
+            points, index = np.unique(at, axis=0, return_inverse=True)
+            path = os.path.join(scratch, f"segment_{s}_lod_{lod}.ply")
+            pairs, zero = self_intersections(points.astype(np.float64), index.reshape(-1)[tris], path)
+            found[(s, lod)] = (pairs, zero, len(tris))
+    return found

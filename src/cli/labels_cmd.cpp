@@ -275,8 +275,9 @@ void add_precomputed_options(CLI::App& cmd, LabelsCli& o) {
       ->check(CLI::IsMember({"precomputed"}));
   o.precomputed_only = {
       cmd.add_option("--lods", o.lods,
-                     "levels of detail (default 3): level k merges each chunk's points to the grid of spacing 2^k, "
-                     "points on a chunk face only within that face, so neighbouring chunks agree on it")
+                     "levels of detail (default 3): level k merges each chunk's inner points to the grid of spacing "
+                     "2^k (points on its faces kept as they are, so neighbouring chunks agree on them), splitting "
+                     "back merges whose triangles would cross")
           ->check(CLI::Range(1, 20)),
       cmd.add_option("--chunk-shape", o.chunk_shape,
                      "samples per lod-0 chunk along x y z (default 32 32 32, at least 2); chunk (i, j, k) covers "

@@ -2,19 +2,19 @@
 back by the independent reader tests/neuroglancer_precomputed.py (Debian's
 draco_decoder) and judged by `keymesh check --self-intersections` (exact
 predicates): every segment's fragments of one level joined at their exact
-quantized positions hold no zero-area triangle, and at level 0 no crossing
-pair where the segment's own surface (`--per-label`, the same smoothing) has
-none: the cut at the chunk planes and the writer's quantization add none.
-
-Not asserted: crossings at levels >= 1 (the coarsening makes some) and those
-the smoothed surface already has (docs/decisions/labels-multilod-chunks.md,
-"Crossing triangles after the cut")."""
+quantized positions hold no zero-area triangle, at level 0 no crossing pair
+where the segment's own surface (`--per-label`, the same smoothing) has none
+(the cut at the chunk planes and the writer's quantization add none), and at
+levels >= 1 no crossing pair at all (the coarsening's fold guard,
+docs/decisions/labels-lod-fold-guard.md; 4 and 10 pairs at most per segment
+and level before it). Volumes with many junctions:
+test_labels_precomputed_lods_cli.py."""
 import os
-import re
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, run, tempdir, precomputed_reader, write_label_nrrd  # noqa: E402
+from kmtest import (check, finish, precomputed_level_crossings, precomputed_reader, run, self_intersections,  # noqa: E402
+                    tempdir, write_label_nrrd)
 
 np, ngp = precomputed_reader()
 D = tempdir()
@@ -34,47 +34,15 @@ def ellipsoids(shape, seed):
     return v
 
 
-def write_ply(path, points, triangles):
-    with open(path, "wb") as f:
-        f.write((f"ply\nformat binary_little_endian 1.0\nelement vertex {len(points)}\nproperty float x\n"
-                 f"property float y\nproperty float z\nelement face {len(triangles)}\n"
-                 "property list uchar int vertex_indices\nend_header\n").encode())
-        f.write(np.asarray(points, "<f4").tobytes())
-        faces = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
-        faces["n"], faces["i"] = 3, triangles
-        f.write(faces.tobytes())
-
-
 def crossings(points, triangles, name):
     """(crossing pairs, zero-area triangles) by `keymesh check --self-intersections`."""
-    path = os.path.join(D, name + ".ply")
-    write_ply(path, points, triangles)
-    out = run("check", path, "--self-intersections", expect=None).stdout
-    m = re.search(r"self-intersections (\d+) \(pairs of cells\), zero-area triangles (\d+)", out)
-    assert m, out
-    return int(m.group(1)), int(m.group(2))
+    return self_intersections(points, triangles, os.path.join(D, name + ".ply"))
 
 
 def levels(out, segments):
     """{(segment, lod): (crossing pairs, zero-area triangles)} of the decoded
-    fragments of each level joined: points at their exact global quantized
-    coordinates (node * (2^bits - 1) + value, integers exact in float32), one
-    point per position."""
-    info = ngp.read_info(out)
-    top = 2 ** info["vertex_quantization_bits"] - 1
-    found = {}
-    for s in segments:
-        mesh = ngp.read_segment(out, s, info)
-        for lod in range(mesh.manifest.num_lods):
-            frags = [f for f in mesh.fragments if f.lod == lod and f.size]
-            if not frags:
-                continue
-            at = np.concatenate([np.array(f.position) * top + f.quantized for f in frags])
-            first = np.cumsum([0] + [len(f.quantized) for f in frags])
-            tris = np.concatenate([f.triangles + b for f, b in zip(frags, first)])
-            points, index = np.unique(at, axis=0, return_inverse=True)
-            found[(s, lod)] = crossings(points.astype(np.float64), index.reshape(-1)[tris], f"{s}_{lod}")
-    return found
+    fragments of each level joined (kmtest.precomputed_level_crossings)."""
+    return {k: v[:2] for k, v in precomputed_level_crossings(ngp, out, segments, D).items()}
 
 
 def surface_crossings(volume, segments, *options):
@@ -112,6 +80,8 @@ def expect_clean(out, volume, segments, *options):
     clean = [s for s in segments if surface[s] == (0, 0)]
     added = {s: found[(s, 0)][0] for s in clean if found[(s, 0)][0]}
     assert not added, f"lod-0 crossing pairs where the segment's surface has none: {added}"
+    coarse = {k: c for k, (c, z) in found.items() if k[1] > 0 and c}
+    assert not coarse, f"crossing pairs at levels >= 1 (segment, lod): {coarse}"
     return clean
 
 
@@ -135,7 +105,8 @@ def test_aal_atlas():
     assert clean == [1, 2, 3, 4, 5, 6], clean  # every segment's own surface crosses nowhere
 
 
-check("ellipsoids: no zero-area triangle at any level, no lod-0 crossing the surface lacks", test_ellipsoids)
+check("ellipsoids: no zero-area triangle at any level, no crossing at lods >= 1 nor one at lod 0 the surface lacks",
+      test_ellipsoids)
 if os.path.exists(AAL):
-    check("AAL atlas: no zero-area triangle at any level, no lod-0 crossing", test_aal_atlas)
+    check("AAL atlas: no zero-area triangle, no crossing pair, at any level", test_aal_atlas)
 finish(None if os.path.exists(AAL) else f"{AAL} not present (Debian package mricron)")

@@ -1,17 +1,18 @@
 // A chunk piece one level coarser (see keymesh/generate/labels/labels_multilod.hpp):
-// every point keyed by the nearest point of the grid of spacing 2^lod, kept
-// on the chunk face or box edge it lies on, and one KEY-REDUCE merges them
-// (coarsen_label_surface: positions averaged in key order, collapsed faces
-// dropped, opposite faces on the same points cancelled). Then the boundary
-// is led past the edge-line points it does not cross
-// (reroute_line_boundaries), and the box points the chunks sharing them
-// would not all keep move into the chunk (settle_box_points), so
-// neighbouring chunks keep the same points on their common face, its border
-// lines included.
+// every inner point keyed by the nearest point of the grid of spacing 2^lod
+// and one KEY-REDUCE merges them (coarsen_label_surface: positions averaged
+// in key order, collapsed faces dropped, opposite faces on the same points
+// cancelled); the points on the chunk's box keep their keys and positions
+// (but for the level's margin, and box points closer than a quantization
+// step joined: join_box_points), so neighbouring chunks keep the same points
+// on their common face, its border lines included, at every level. Then the
+// fold guard
+// (label_lod_fold_guard.cpp) splits back the inner clusters of triangles
+// that cross, until none is left to split.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
-#include <tuple>
 
 #include "keymesh/core/error.hpp"
 #include "label_chunks.hpp"
@@ -21,37 +22,101 @@ namespace keymesh::generate::detail {
 
 namespace {
 
-constexpr int kClassShift = 61;
-constexpr int kMovedBit = 60;      // a box point moved into its chunk
-constexpr int kSideShift = 57;     // then bit 57 + a: the chunk lies above the plane along a
 constexpr int kFieldBits = 19;
 
-// The coarse key of point p of a piece of `chunk` at spacing `step`.
+void join_box_points(MultilodPiece& piece, const MultilodGrid& grid);  // below
+
+// The coarse key of inner point p of a piece of `chunk` at spacing `step`
+// (class 0).
 std::uint64_t coarse_key(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk,
                          double step) {
-  const OnBox b = on_box(p, grid, chunk);
   std::uint64_t fields = 0;
-  int free_axis = 0, plane_axis = 0;
   for (int d = 0; d < 3; ++d) {
     const Id c = chunk[d];
     const Id per_chunk = static_cast<Id>(std::ceil(static_cast<double>(grid.chunk_shape[d]) / step)) + 1;
-    Id field = 0;
-    if (b.axes >> d & 1) {
-      plane_axis = d;
-      field = (b.upper >> d & 1 ? c + 1 : c) * per_chunk;
-    } else {
-      free_axis = d;
-      field = c * per_chunk + std::llround((static_cast<double>(p[d]) - grid.plane(d, c)) / step);
-    }
+    const Id field = c * per_chunk + std::llround((static_cast<double>(p[d]) - grid.plane(d, c)) / step);
     if (field >= (Id{1} << kFieldBits))
       throw LimitError("labels: " + std::to_string(grid.chunks[d]) + " chunks of " +
                        std::to_string(grid.chunk_shape[d]) + " samples along an axis are past what a multilod "
                        "output's point keys hold at level spacing " + std::to_string(step));
     fields |= static_cast<std::uint64_t>(field) << (kFieldBits * d);
   }
-  const int n = b.count();
-  const int cls = n == 0 ? 0 : n == 1 ? 1 + plane_axis : n == 2 ? 4 + free_axis : 7;
-  return static_cast<std::uint64_t>(cls) << kClassShift | fields;
+  return fields;
+}
+
+// The piece of `finer` coarsened by the given keys (one per finer point),
+// every coordinate of a point off the chunk planes (all of an inner point's,
+// a box point's along the planes it does not lie on) at the level's margin.
+// Box points keep their keys, so they keep their positions, save for that
+// margin, which moves a coordinate from its value alone: alike in every
+// chunk that holds the point.
+MultilodPiece coarsened_piece(const MultilodPiece& finer, const MultilodGrid& grid, const std::vector<std::uint64_t>& keys) {
+  MultilodPiece out;
+  out.segment = finer.segment;
+  out.lod = finer.lod + 1;
+  out.chunk = finer.chunk;
+  LabelSurface s;
+  s.mesh.points.assign(finer.points.begin(), finer.points.end());
+  s.mesh.connectivity.assign(finer.triangles.begin(), finer.triangles.end());
+  s.pair.assign(finer.triangles.size() / 3, 0);
+  s.keys = finer.point_keys;  // so that coarsening leaves the coarse keys of the points it keeps
+  s.coarse = keys;
+  LabelStats stats;
+  coarsen_label_surface(s, stats);
+  out.point_keys = std::move(s.keys);
+  out.points.assign(s.mesh.points.begin(), s.mesh.points.end());
+  out.triangles.assign(s.mesh.connectivity.begin(), s.mesh.connectivity.end());
+  const int lod = static_cast<int>(out.lod);
+  for (std::size_t i = 0; i < out.point_keys.size(); ++i) {
+    float* p = out.points.data() + 3 * i;
+    const OnBox b = on_box(p, grid, out.chunk);
+    for (int a = 0; a < 3; ++a)
+      if (!(b.axes >> a & 1)) p[a] = off_chunk_planes(grid, a, p[a], grid.margin(a, lod));
+  }
+  join_box_points(out, grid);
+  return out;
+}
+
+// Box points of one kind (the same planes) whose positions quantize (at the
+// piece's level, as the writer does) within one step of each other along
+// every axis take the position of the one of least key among them (chains
+// included), so the writer merges them into one point
+// (io/neuroglancer/coincident_points.hpp). Below a quantization step apart
+// they would fold the triangles between them once quantized. Decided from
+// the points' kinds and positions alone, which every chunk that holds them
+// has alike.
+void join_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
+  const int lod = static_cast<int>(piece.lod);
+  const double top = std::ldexp(1.0, grid.vertex_quantization_bits) - 1;
+  using Cell = std::array<std::int64_t, 5>;  // kind (axes, upper), quantized x, y, z
+  std::map<Cell, std::uint32_t> at;
+  const std::size_t n = piece.point_keys.size();
+  std::vector<std::uint32_t> root(n);
+  for (std::uint32_t i = 0; i < n; ++i) root[i] = i;
+  auto find = [&](std::uint32_t i) { while (root[i] != i) i = root[i] = root[root[i]]; return i; };
+  for (std::uint32_t i = 0; i < n; ++i) {  // in key order: a root is its set's least key
+    const float* p = piece.points.data() + 3 * i;
+    const OnBox b = on_box(p, grid, piece.chunk);
+    if (!b.axes) continue;
+    Cell c{b.axes, b.upper, 0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+      const double size = std::ldexp(static_cast<double>(grid.chunk_shape[a]), lod);
+      const double origin = grid.grid_origin[a] + static_cast<double>(piece.chunk[a] >> lod) * size;
+      c[2 + a] = static_cast<std::int64_t>(std::llround((p[a] - origin) / size * top));
+    }
+    for (int d = 0; d < 27; ++d) {
+      const Cell nb{c[0], c[1], c[2] + d % 3 - 1, c[3] + d / 3 % 3 - 1, c[4] + d / 9 - 1};
+      const auto f = at.find(nb);
+      if (f == at.end()) continue;
+      const std::uint32_t u = find(f->second), v = find(i);
+      root[std::max(u, v)] = std::min(u, v);
+    }
+    at.emplace(c, i);
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t r = find(i);
+    if (r != i) std::copy_n(piece.points.begin() + 3 * r, 3, piece.points.begin() + 3 * i);
+  }
 }
 
 }  // namespace
@@ -67,74 +132,18 @@ OnBox on_box(const float* p, const MultilodGrid& grid, const std::array<std::uin
 }
 
 MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid) {
-  MultilodPiece out;
-  out.segment = finer.segment;
-  out.lod = finer.lod + 1;
-  out.chunk = finer.chunk;
-  const double step = std::ldexp(1.0, static_cast<int>(out.lod));
-  const std::size_t points = finer.point_keys.size();
-  LabelSurface s;
-  s.mesh.points.assign(finer.points.begin(), finer.points.end());
-  s.mesh.connectivity.assign(finer.triangles.begin(), finer.triangles.end());
-  s.pair.assign(finer.triangles.size() / 3, 0);
-  s.keys = finer.point_keys;  // so that coarsening leaves the coarse keys of the points it keeps
-  s.coarse.resize(points);
-  for (std::size_t i = 0; i < points; ++i) s.coarse[i] = coarse_key(finer.points.data() + 3 * i, grid, finer.chunk, step);
-  LabelStats stats;
-  coarsen_label_surface(s, stats);
-  out.point_keys = std::move(s.keys);
-  out.points.assign(s.mesh.points.begin(), s.mesh.points.end());
-  out.triangles.assign(s.mesh.connectivity.begin(), s.mesh.connectivity.end());
-  reroute_line_boundaries(out, grid);
-  settle_box_points(out, grid);
-  return out;
-}
-
-void settle_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
-  const std::size_t n = piece.point_keys.size();
-  std::vector<OnBox> box(n);
-  for (std::size_t i = 0; i < n; ++i) box[i] = on_box(piece.points.data() + 3 * i, grid, piece.chunk);
-  const std::vector<char> held = held_by_boundary(piece, box);
-  const int lod = static_cast<int>(piece.lod);
-  const double step = std::ldexp(1.0, lod);
-  bool moved = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    float* p = piece.points.data() + 3 * i;
-    for (int a = 0; a < 3; ++a) {
-      const double margin = grid.margin(a, lod);
-      if (box[i].count() == 2 && !(box[i].axes >> a & 1)) {
-        // A point on an edge line: at its grid point along the line, from its
-        // key alone (so the same in the four chunks around the line, whatever
-        // the rounding of an average); one the boundary leaves then also
-        // moves off both its planes, below.
-        const Id per_chunk = static_cast<Id>(std::ceil(static_cast<double>(grid.chunk_shape[a]) / step)) + 1;
-        const Id field = static_cast<Id>(piece.point_keys[i] >> (kFieldBits * a) & ((std::uint64_t{1} << kFieldBits) - 1));
-        const double lo = grid.plane(a, piece.chunk[a]), hi = grid.plane(a, piece.chunk[a] + 1);
-        const double at = lo + static_cast<double>(field - static_cast<Id>(piece.chunk[a]) * per_chunk) * step;
-        p[a] = static_cast<float>(std::clamp(at, lo + margin, hi - margin));
-      } else if (!(box[i].axes >> a & 1)) {
-        p[a] = off_chunk_planes(grid, a, p[a], margin);
-      } else if (!held[i]) {  // into the chunk, a key of its own
-        const bool upper = box[i].upper >> a & 1;
-        p[a] = static_cast<float>(grid.plane(a, piece.chunk[a] + (upper ? 1 : 0)) + (upper ? -margin : margin));
-        piece.point_keys[i] |= std::uint64_t{1} << kMovedBit | std::uint64_t{upper ? 0u : 1u} << (kSideShift + a);
-        moved = true;
-      }
-    }
+  const double step = std::ldexp(1.0, static_cast<int>(finer.lod + 1));
+  std::vector<std::uint64_t> keys(finer.point_keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const float* p = finer.points.data() + 3 * i;
+    keys[i] = on_box(p, grid, finer.chunk).axes ? finer.point_keys[i] : coarse_key(p, grid, finer.chunk, step);
   }
-  if (!moved) return;
-  // Keys increasing again: renumber the points in key order.
-  std::vector<std::uint32_t> order(n), rank(n);
-  for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return piece.point_keys[a] < piece.point_keys[b]; });
-  MultilodPiece sorted = piece;
-  for (std::size_t r = 0; r < n; ++r) {
-    rank[order[r]] = static_cast<std::uint32_t>(r);
-    sorted.point_keys[r] = piece.point_keys[order[r]];
-    std::copy_n(piece.points.begin() + 3 * order[r], 3, sorted.points.begin() + 3 * r);
+  // Each round splits at least one cluster for good (a split point is never
+  // split again), so this ends.
+  for (;;) {
+    MultilodPiece out = coarsened_piece(finer, grid, keys);
+    if (!split_clusters(keys, clusters_to_split(out, grid))) return out;
   }
-  for (std::uint32_t& c : sorted.triangles) c = rank[c];
-  piece = std::move(sorted);
 }
 
 }  // namespace keymesh::generate::detail

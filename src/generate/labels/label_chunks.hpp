@@ -1,7 +1,8 @@
 #pragma once
 // Internal to the multilod label surfaces (labels_multilod.hpp): one
 // segment's surface cut into lod-0 chunk pieces (label_chunk_clip.cpp) and
-// each piece coarsened per level (label_chunk_lods.cpp).
+// each piece coarsened per level (label_chunk_lods.cpp) under a fold guard
+// (label_lod_fold_guard.cpp).
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -43,8 +44,25 @@ ChunkTriangles triangles_by_chunk(const SegmentSurface& surface, const MultilodG
 MultilodPiece clip_to_chunk(const SegmentSurface& surface, const MultilodGrid& grid, const std::array<Id, 3>& chunk,
                          const std::uint32_t* triangles, Id count);
 
-// The piece one level coarser (lod + 1), from `finer`.
+// The piece one level coarser (lod + 1), from `finer`: its inner points
+// coarsened, its points on the chunk's box kept (label_chunk_lods.cpp), and
+// the inner clusters of crossing triangles split back until none is left to
+// split (label_lod_fold_guard.cpp).
 MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid);
+
+// The coarsening's fold guard (label_lod_fold_guard.cpp). The keys of the
+// inner coarse points (class 0, not yet split) at a corner of a triangle of
+// `coarse` that, at the positions the writer quantizes its points to,
+// crosses another triangle of it or is a line (three distinct collinear
+// points); increasing.
+std::vector<std::uint64_t> clusters_to_split(const MultilodPiece& coarse, const MultilodGrid& grid);
+// The finer points whose coarse key is one of `clusters` (increasing) get
+// keys of their own: class 0, bit 60 set, their rank in the cluster (in
+// index order, at most 63: the 64th on stay together) in bits 54-59 and the
+// cluster's three grid fields in 18 bits each (a cluster whose fields do not
+// fit, past 2^18 / 2 samples along an axis, stays whole). False when no
+// point changed.
+bool split_clusters(std::vector<std::uint64_t>& coarse_keys, const std::vector<std::uint64_t>& clusters);
 
 // Which chunk planes of the piece's chunk a point lies on: bit a of `axes`
 // set when on one along axis a, bit a of `upper` when that is the chunk's
@@ -54,35 +72,5 @@ struct OnBox {
   int count() const { return (axes & 1) + (axes >> 1 & 1) + (axes >> 2 & 1); }
 };
 OnBox on_box(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk);
-
-// The box points the piece's boundary holds: the ends of its boundary
-// edges (the directed edges between box points its triangles leave
-// unpaired). A face shared by two chunks has opposite boundaries in them
-// (the chain map of coarsening keeps level 0's, where both chunks' triangles
-// end on the same cut), so both hold the same points of it; a box point off
-// every boundary edge has its edges paired within the chunk, and moving it
-// keeps every segment a closed 2-cycle.
-std::vector<char> held_by_boundary(const MultilodPiece& piece, const std::vector<OnBox>& box);
-
-// A coarse piece's boundary (the directed edges between box points its
-// triangles leave unpaired) led past the points on the chunk's edge lines
-// that it does not cross: on each face at such a point, the boundary edges
-// in (x -> K) and out (K -> y), which balance, are paired in key order and
-// each pair closed by a triangle (y, K, x), so the face's boundary runs
-// x -> y instead. Decided from the face's boundary alone, so the two chunks
-// of a face lead it alike; a line point is then held by the boundary in all
-// four chunks around its line (a crossing) or in none.
-void reroute_line_boundaries(MultilodPiece& piece, const MultilodGrid& grid);
-
-// A coarse piece's points on the chunk's box kept there only where the
-// piece's boundary (the directed edges its triangles leave unpaired) holds
-// them: they end a boundary edge on a face of the box. Any other box point
-// (its triangles close up around it: a tube across the face shrunk to a
-// point) moves into the chunk by the level's margin, with a key of its own.
-// A point on an edge line that stays sits at its key's grid point along the
-// line (from its key alone); one the boundary leaves moves into the chunk
-// along both planes. Then every other coordinate keeps the margin from the
-// chunk planes.
-void settle_box_points(MultilodPiece& piece, const MultilodGrid& grid);
 
 }  // namespace keymesh::generate::detail

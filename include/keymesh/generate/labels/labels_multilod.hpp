@@ -21,19 +21,22 @@
 // chunk edge line), so every chunk that has it computes the same bits; so
 // two neighbouring chunks have the same points on their common face.
 //
-// Level k >= 1: the chunk's level k-1 piece, points merged by one KEY-REDUCE
-// (label_coarsen.cpp: positions averaged in key order, collapsed faces
-// dropped, opposite faces on the same points cancelled) over keys = the
-// nearest point of the grid of spacing 2^k (relative to the chunk's corner),
-// except that points on a face of the chunk merge only with points on that
-// face (rounded within it) and points on a box edge only along that edge.
-// A point stays on the chunk's box only where the piece's boundary on a
-// face ends an edge there; the boundary is first led past every point on a
-// chunk edge line that the surface does not cross there (net), on each face
-// from that face's boundary alone. Any other box point moves into the chunk.
-// So two neighbouring chunks have the same points on their common face, its
-// border lines included, at every level, with no data from each other
-// (label_chunk_lines.cpp says why).
+// Level k >= 1: the chunk's level k-1 piece, its inner points (those off
+// the chunk's box) merged by one KEY-REDUCE (label_coarsen.cpp: positions
+// averaged in key order, collapsed faces dropped, opposite faces on the same
+// points cancelled) over keys = the nearest point of the grid of spacing 2^k
+// (relative to the chunk's corner); its points on the chunk's box (faces and
+// edge lines) keep their level-0 keys and positions at every level (a
+// coordinate off the planes only kept at the level's margin; box points on
+// the same planes that quantize within one step of each other at the level
+// take the position of the least key among them, for the writer to merge,
+// decided from their positions alone). So two
+// neighbouring chunks have the same points on their common face, its border
+// lines included, at every level, with no data from each other. A fold
+// guard (label_lod_fold_guard.cpp) then splits back into their finer points
+// the inner clusters at a corner of a triangle that crosses another (at the
+// positions the writer quantizes to), until none is left to split: no level
+// has a crossing pair (docs/decisions/labels-lod-fold-guard.md).
 //
 // Point keys (unique within a segment and level, equal in every chunk that
 // has the point; bits 61-63 a class):
@@ -46,11 +49,12 @@
 //     (cz << 43 | cy << 25 | cx << 7) | rank: the unit cell of the padded
 //     grid holding the point (floor), and its rank among that cell's points
 //     of the class, by the points they are made from.
-//   level k >= 1: class 0 inside the chunk, 1-3 on a face normal to
-//     axis class-1, 4-6 on a chunk edge line along axis class-4; then three
-//     20-bit fields (z << 40 | y << 20 | x): along a free axis
+//   level k >= 1: points on the chunk's box keep their level-0 keys; an
+//     inner point has class 0 and three 19-bit fields (z << 38 | y << 19 | x):
 //     chunk * (R + 1) + round((coordinate - chunk corner) / 2^k) with
-//     R = ceil(chunk_shape / 2^k), along a plane's axis plane * (R + 1).
+//     R = ceil(chunk_shape / 2^k); one the fold guard split out of its
+//     cluster has bit 60 set, its rank in the cluster in bits 54-59 and the
+//     cluster's fields in 18 bits each (z << 36 | y << 18 | x).
 // So volumes are limited to 2^18 - 2 samples along an axis (LimitError).
 //
 // Chunk tasks: multilod_chunk_pieces meshes the chunk's box grown by
