@@ -39,10 +39,8 @@ constexpr double kLeast = 0.05;
 constexpr double kLeastJunction = 0.5;
 constexpr double kFractions[4] = {1.0, 0.5, 0.25, 0.125};
 
-// ((q - p) x (r - p)) . n
-double orientation(const double* p, const double* q, const double* r, const double* n) {
-  const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
-  const double v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+// (u x v) . n, u = q - p and v = r - p the sides of triangle (p, q, r)
+double orientation(const double* u, const double* v, const double* n) {
   return (u[1] * v[2] - u[2] * v[1]) * n[0] + (u[2] * v[0] - u[0] * v[2]) * n[1] + (u[0] * v[1] - u[1] * v[0]) * n[2];
 }
 
@@ -81,30 +79,48 @@ FoldGuard::FoldGuard(const LabelSurface& s) : corners_(s.mesh.connectivity) {
   }, 256);
 }
 
-bool FoldGuard::keeps(Id p, const double* at, const std::vector<double>& x, const std::vector<double>& candidate) const {
+bool FoldGuard::keeps(Id p, const double* at, const std::vector<double>& x, const std::vector<double>& candidate,
+                      const std::vector<std::uint8_t>& moved) const {
   for (Id j = offsets_[p]; j < offsets_[p + 1]; ++j) {
     const Id t = triangles_[j];
     const std::uint32_t* c = corners_.data() + 3 * t;
     const int k = c[0] == p ? 0 : (c[1] == p ? 1 : 2);
     const Id q = c[(k + 1) % 3], r = c[(k + 2) % 3];
-    for (const auto* qs : {&x, &candidate})
-      for (const auto* rs : {&x, &candidate})
-        if (!(orientation(at, qs->data() + 3 * q, rs->data() + 3 * r, normal_.data() + 3 * t) >= least_[t]))
-          return false;
+    // The sides from `at` to q's and r's ends (present, candidate): a
+    // corner that does not move has one end, and its second combinations
+    // would repeat the first's value bit for bit.
+    double u[2][3], v[2][3];
+    const int nq = moved[q] ? 2 : 1, nr = moved[r] ? 2 : 1;
+    for (int e = 0; e < 2; ++e) {
+      const double* qe = (e == 0 ? x : candidate).data() + 3 * q;
+      const double* re = (e == 0 ? x : candidate).data() + 3 * r;
+      for (int a = 0; a < 3; ++a) u[e][a] = qe[a] - at[a], v[e][a] = re[a] - at[a];
+    }
+    const double* n = normal_.data() + 3 * t;
+    for (int eq = 0; eq < nq; ++eq)
+      for (int er = 0; er < nr; ++er)
+        if (!(orientation(u[eq], v[er], n) >= least_[t])) return false;
   }
   return true;
 }
 
 void FoldGuard::limit(const std::vector<double>& x, const std::vector<double>& candidate,
                       std::vector<double>& out) const {
-  parallel::for_each(static_cast<Id>(offsets_.size()) - 1, [&](Id p) {
+  const Id points = static_cast<Id>(offsets_.size()) - 1;
+  std::vector<std::uint8_t> moved(static_cast<std::size_t>(points));
+  parallel::for_each(points, [&](Id p) {
+    const double* from = x.data() + 3 * p;
+    const double* to = candidate.data() + 3 * p;
+    moved[p] = to[0] != from[0] || to[1] != from[1] || to[2] != from[2];
+  }, 4096);
+  parallel::for_each(points, [&](Id p) {
     const double* from = x.data() + 3 * p;
     const double* to = candidate.data() + 3 * p;
     double at[3] = {from[0], from[1], from[2]};
-    if (to[0] != from[0] || to[1] != from[1] || to[2] != from[2]) {
+    if (moved[p]) {
       for (double f : kFractions) {
         for (int a = 0; a < 3; ++a) at[a] = from[a] + f * (to[a] - from[a]);
-        if (keeps(p, at, x, candidate)) break;
+        if (keeps(p, at, x, candidate, moved)) break;
         for (int a = 0; a < 3; ++a) at[a] = from[a];
       }
     }
