@@ -39,8 +39,15 @@ constexpr double kLeast = 0.05;
 constexpr double kLeastJunction = 0.5;
 constexpr double kFractions[4] = {1.0, 0.5, 0.25, 0.125};
 
-// (u x v) . n, u = q - p and v = r - p the sides of triangle (p, q, r)
-double orientation(const double* u, const double* v, const double* n) {
+// Two doubles, one per lane of an SSE2 register: two of a triangle's four
+// end combinations at once, each lane the scalar operations in the scalar
+// order (no contraction: -ffp-contract=off), so the same bits as one by one.
+using Pair = double __attribute__((vector_size(16)));
+
+// ((q - p) x (r - p)) . n for r at both ends r0, r1 (the lanes).
+Pair orientations(const double* p, const double* q, const double* r0, const double* r1, const double* n) {
+  const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+  const Pair v[3] = {Pair{r0[0], r1[0]} - p[0], Pair{r0[1], r1[1]} - p[1], Pair{r0[2], r1[2]} - p[2]};
   return (u[1] * v[2] - u[2] * v[1]) * n[0] + (u[2] * v[0] - u[0] * v[2]) * n[1] + (u[0] * v[1] - u[1] * v[0]) * n[2];
 }
 
@@ -79,48 +86,30 @@ FoldGuard::FoldGuard(const LabelSurface& s) : corners_(s.mesh.connectivity) {
   }, 256);
 }
 
-bool FoldGuard::keeps(Id p, const double* at, const std::vector<double>& x, const std::vector<double>& candidate,
-                      const std::vector<std::uint8_t>& moved) const {
+bool FoldGuard::keeps(Id p, const double* at, const std::vector<double>& x, const std::vector<double>& candidate) const {
   for (Id j = offsets_[p]; j < offsets_[p + 1]; ++j) {
     const Id t = triangles_[j];
     const std::uint32_t* c = corners_.data() + 3 * t;
     const int k = c[0] == p ? 0 : (c[1] == p ? 1 : 2);
     const Id q = c[(k + 1) % 3], r = c[(k + 2) % 3];
-    // The sides from `at` to q's and r's ends (present, candidate): a
-    // corner that does not move has one end, and its second combinations
-    // would repeat the first's value bit for bit.
-    double u[2][3], v[2][3];
-    const int nq = moved[q] ? 2 : 1, nr = moved[r] ? 2 : 1;
-    for (int e = 0; e < 2; ++e) {
-      const double* qe = (e == 0 ? x : candidate).data() + 3 * q;
-      const double* re = (e == 0 ? x : candidate).data() + 3 * r;
-      for (int a = 0; a < 3; ++a) u[e][a] = qe[a] - at[a], v[e][a] = re[a] - at[a];
+    for (const auto* qs : {&x, &candidate}) {
+      const Pair d = orientations(at, qs->data() + 3 * q, x.data() + 3 * r, candidate.data() + 3 * r, normal_.data() + 3 * t);
+      if (!(d[0] >= least_[t] && d[1] >= least_[t])) return false;
     }
-    const double* n = normal_.data() + 3 * t;
-    for (int eq = 0; eq < nq; ++eq)
-      for (int er = 0; er < nr; ++er)
-        if (!(orientation(u[eq], v[er], n) >= least_[t])) return false;
   }
   return true;
 }
 
 void FoldGuard::limit(const std::vector<double>& x, const std::vector<double>& candidate,
                       std::vector<double>& out) const {
-  const Id points = static_cast<Id>(offsets_.size()) - 1;
-  std::vector<std::uint8_t> moved(static_cast<std::size_t>(points));
-  parallel::for_each(points, [&](Id p) {
-    const double* from = x.data() + 3 * p;
-    const double* to = candidate.data() + 3 * p;
-    moved[p] = to[0] != from[0] || to[1] != from[1] || to[2] != from[2];
-  }, 4096);
-  parallel::for_each(points, [&](Id p) {
+  parallel::for_each(static_cast<Id>(offsets_.size()) - 1, [&](Id p) {
     const double* from = x.data() + 3 * p;
     const double* to = candidate.data() + 3 * p;
     double at[3] = {from[0], from[1], from[2]};
-    if (moved[p]) {
+    if (to[0] != from[0] || to[1] != from[1] || to[2] != from[2]) {
       for (double f : kFractions) {
         for (int a = 0; a < 3; ++a) at[a] = from[a] + f * (to[a] - from[a]);
-        if (keeps(p, at, x, candidate, moved)) break;
+        if (keeps(p, at, x, candidate)) break;
         for (int a = 0; a < 3; ++a) at[a] = from[a];
       }
     }

@@ -23,9 +23,7 @@ class FoldGuard {
   void limit(const std::vector<double>& x, const std::vector<double>& candidate, std::vector<double>& out) const;
 
  private:
-  // moved: per point, 1 where its candidate differs from x.
-  bool keeps(Id p, const double* at, const std::vector<double>& x, const std::vector<double>& candidate,
-             const std::vector<std::uint8_t>& moved) const;
+  bool keeps(Id p, const double* at, const std::vector<double>& x, const std::vector<double>& candidate) const;
 
   const Array<PointIndex>& corners_;  // the mesh's connectivity, 3 per triangle
   std::vector<Id> offsets_;                    // per point, into triangles_
