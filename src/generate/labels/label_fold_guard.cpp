@@ -93,7 +93,8 @@ bool FoldGuard::keeps(Id p, const double* at, const std::vector<double>& x, cons
     const int k = c[0] == p ? 0 : (c[1] == p ? 1 : 2);
     const Id q = c[(k + 1) % 3], r = c[(k + 2) % 3];
     for (const auto* qs : {&x, &candidate}) {
-      const Pair d = orientations(at, qs->data() + 3 * q, x.data() + 3 * r, candidate.data() + 3 * r, normal_.data() + 3 * t);
+      const Pair d =
+          orientations(at, qs->data() + 3 * q, x.data() + 3 * r, candidate.data() + 3 * r, normal_.data() + 3 * t);
       if (!(d[0] >= least_[t] && d[1] >= least_[t])) return false;
     }
   }
