@@ -2,17 +2,21 @@
 """Proves that a change left keymesh's outputs alone: runs the main commands
 and formats with two builds and compares every output file byte for byte.
 
-    python3 scripts/same_outputs.py --before /path/to/old/keymesh --after build/keymesh [--keep DIR]
+    python3 scripts/same_outputs.py --before /path/to/old/keymesh --after build/keymesh [--keep DIR] [--only REGEX]
 
 Inputs are built-in (`keymesh generate`) or from Debian packages the Makefile
 installs (brainsmall.den from libvolpack1-dev, ch2.nii.gz from mricron-data).
 Each case runs with --threads 1 and --threads 2 under the new build too, so
-the comparison also shows thread-count independence. Exits 1 and lists the
-files that differ; 0 when every file is identical.
+the comparison also shows thread-count independence. A directory output
+(--format precomputed) must hold the same file names, each byte for byte.
+--only runs the cases whose name matches REGEX (with the cases whose output
+they read). Exits 1 and lists the outputs that differ; 0 when every one is
+identical.
 """
 import argparse
 import filecmp
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -21,6 +25,9 @@ import tempfile
 BRAIN = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"
 HEAD = "/usr/share/mricron/templates/ch2.nii.gz"
 AAL = "/usr/share/mricron/templates/aal.nii.gz"
+# Neuroglancer multi-resolution output: -o names a directory (DIR/chunks too),
+# compared file by file.
+NG_GRID = "--format precomputed --lods 3 --chunk-shape 32 32 32"
 
 # (name, arguments after the command name; {in:NAME} is an input, {out} the output path)
 CASES = [
@@ -66,6 +73,10 @@ CASES = [
     ("labels-nets-raw", f"labels {AAL} -o {{out}}.ply --smooth 0"),
     ("labels-mc", f"labels {AAL} -o {{out}}.vtp --method discrete-mc --labels 3,17,40"),
     ("labels-per-label", f"labels {AAL} -o {{out}}.vtp --per-label --labels 5,6,7"),
+    ("labels-ng", f"labels {AAL} -o {{out}}.ng {NG_GRID}"),
+    ("labels-ng-sharded", f"labels {AAL} -o {{out}}.ng {NG_GRID} --sharded"),
+    ("labels-ng-balls", f"labels {{in:balls.nrrd}} -o {{out}}.ng {NG_GRID}"),
+    ("labels-ng-balls-sharded", f"labels {{in:balls.nrrd}} -o {{out}}.ng {NG_GRID} --sharded"),
     ("mpi-contour", "mpirun:2 contour {in:s96.vti} -o {out}.vtp --iso 46.3 --normals gradient"),
     ("mpi-contour-3", f"mpirun:3 contour {HEAD} -o {{out}}.ply --iso 90.5 --balance"),
     ("contour-glb", f"contour {HEAD} -o {{out}}.glb --iso 90.5 --normals average"),
@@ -77,12 +88,22 @@ CASES = [
 
 # A DICOM series (tests/dicom_series.py, pydicom) and a Zarr array (zlib
 # chunks, one left to fill_value) of a 48^3 distance field: Debian's
-# python3, which has pydicom and zarr.
+# python3, which has pydicom and zarr. And a label map (tests/kmtest.py's
+# write_label_nrrd) of touching balls, one reaching the border, and a slab of
+# two-label noise, which crosses every chunk face: 70 x 60 x 50 uint8.
 FOLDER_INPUTS = """
 import os, sys
 import numpy as np, numcodecs, zarr
 sys.path.insert(0, os.path.join(sys.argv[1], "tests"))
 from dicom_series import write_dicom_series
+from kmtest import write_label_nrrd
+x, y, z = np.meshgrid(np.arange(70), np.arange(60), np.arange(50), indexing="ij")
+balls = np.zeros(x.shape, np.uint8)
+for label, (cx, cy, cz, r) in enumerate([(20, 20, 20, 14), (38, 25, 22, 11), (60, 50, 40, 15), (35, 45, 30, 9)], 1):
+    balls[(x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2 <= r * r] = label
+slab = (z >= 36) & (z < 41)
+balls[slab] = np.where(np.random.default_rng(7).random(balls[slab].shape) < 0.5, 5, 6)
+write_label_nrrd(os.path.join(sys.argv[2], "balls.nrrd"), balls)
 z, y, x = np.mgrid[0:48, 0:48, 0:48]
 field = np.sqrt((x - 24.0) ** 2 + (y - 24.0) ** 2 + (z - 24.0) ** 2)
 write_dicom_series(os.path.join(sys.argv[2], "series"), (field * 2).astype(np.int16), slope=0.5, intercept=0)
@@ -140,10 +161,13 @@ def main():
     ap.add_argument("--before", required=True)
     ap.add_argument("--after", required=True)
     ap.add_argument("--keep", help="write outputs here instead of a temporary folder")
+    ap.add_argument("--only", help="run only the cases whose name matches this regular expression")
     a = ap.parse_args()
     if not MPIRUN:
         print("note: no mpirun, the mpirun: cases are left out")
         CASES[:] = [c for c in CASES if not c[1].startswith("mpirun:")]
+    if a.only:
+        CASES[:] = selected_cases(a.only)
     tmp = a.keep or tempfile.mkdtemp(prefix="keymesh-same-")
     os.makedirs(tmp, exist_ok=True)
     try:
@@ -151,6 +175,35 @@ def main():
     finally:
         if not a.keep:  # 1.3 GB a run: left in /tmp, a day of runs filled the disk
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def selected_cases(pattern):
+    """The cases matching pattern, and those whose outputs they read ({in:CASE}), in CASES' order."""
+    names = {name for name, _ in CASES if re.search(pattern, name)}
+    templates = dict(CASES)
+    pending = list(names)
+    while pending:
+        for key in [k.split("}")[0] for k in templates[pending.pop()].split("{in:")[1:]]:
+            if key in templates and key not in names:
+                names.add(key)
+                pending.append(key)
+    return [c for c in CASES if c[0] in names]
+
+
+def files_under(top):
+    """Paths of every file below the directory top, relative to it."""
+    return sorted(os.path.relpath(os.path.join(root, f), top) for root, _, fs in os.walk(top) for f in fs)
+
+
+def same_output(a, b):
+    """A file byte for byte; a directory (--format precomputed): the same
+    file names, every file byte for byte."""
+    if not os.path.isdir(a):
+        return not os.path.isdir(b) and filecmp.cmp(a, b, shallow=False)
+    names = files_under(a)
+    if not os.path.isdir(b) or names != files_under(b):
+        return False
+    return bool(names) and all(filecmp.cmp(os.path.join(a, n), os.path.join(b, n), shallow=False) for n in names)
 
 
 def compare_outputs(a, tmp):
@@ -186,7 +239,7 @@ def compare_outputs(a, tmp):
         else:
             for build in ("after", "after2"):
                 compared += 1
-                same = filecmp.cmp(outs["before"], outs[build], shallow=False)
+                same = same_output(outs["before"], outs[build])
                 print(f"{'same ' if same else 'DIFF '} {name:20s} {os.path.basename(outs[build])}")
                 if not same:
                     differ.append(f"{name} ({build})")

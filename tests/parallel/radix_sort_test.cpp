@@ -70,6 +70,38 @@ TEST_P(RadixSortThreads, ManyDuplicates) {
   expect_sorted_like_stable_sort(keys, kp::bits_needed(16u));
 }
 
+// Below about passes x buckets / 8 pairs the sort compares instead of
+// running passes: both sides of that size, 64- and 32-bit keys, with
+// duplicates, give the stable order.
+TEST_P(RadixSortThreads, FewAndManyPairsAlike) {
+  std::mt19937_64 rng(9);
+  for (std::size_t n : {2u, 3u, 17u, 100u, 767u, 768u, 769u, 1535u, 1536u, 1537u, 5000u}) {
+    std::vector<std::uint64_t> keys(n);
+    for (auto& k : keys) k = (rng() % 40) << (rng() % 2 ? 50 : 3);
+    expect_sorted_like_stable_sort(keys, 64);
+    std::vector<std::uint32_t> small(n);
+    for (auto& k : small) k = static_cast<std::uint32_t>(rng() % 60) << 20;
+    expect_sorted_like_stable_sort(small, 32);
+  }
+}
+
+// Bits above significant_bits are not sorted on (the caller promises none):
+// the comparison sort for few pairs and the passes for many order alike.
+TEST_P(RadixSortThreads, OnlyTheSignificantBitsOrder) {
+  std::mt19937_64 rng(10);
+  for (std::size_t n : {50u, 20000u}) {
+    std::vector<std::uint64_t> keys(n);
+    for (auto& k : keys) k = rng();
+    std::vector<std::uint32_t> values(n);
+    std::iota(values.begin(), values.end(), 0u);
+    std::vector<std::uint32_t> expected = values;
+    std::stable_sort(expected.begin(), expected.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return (keys[a] & 0xFFFFF) < (keys[b] & 0xFFFFF); });
+    kp::sort_pairs(keys, values, 20);
+    EXPECT_EQ(values, expected) << n << " pairs";
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Threads, RadixSortThreads, ::testing::Values(1, 2, 3));
 
 TEST(BitsNeeded, Values) {

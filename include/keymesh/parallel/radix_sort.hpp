@@ -6,6 +6,7 @@
 // which every key has the same digit are skipped. Each pass histograms fixed
 // contiguous chunks and scatters them in chunk order: the result is the
 // stable order, independent of the thread count.
+#include <algorithm>
 #include <cstdint>
 #include <type_traits>
 #include <utility>
@@ -15,6 +16,17 @@
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::parallel {
+
+// The stable order of the pairs by their keys' low `significant_bits`
+// (the order the passes make), by comparisons, in place.
+template <class K, class V>
+void stable_sort_pairs_by_low_bits(K* keys, V* values, Id n, int significant_bits) {
+  const K mask = significant_bits >= int(sizeof(K) * 8) ? ~K{0} : static_cast<K>((K{1} << significant_bits) - 1);
+  std::vector<std::pair<K, V>> pairs(static_cast<std::size_t>(n));
+  for (Id i = 0; i < n; ++i) pairs[static_cast<std::size_t>(i)] = {keys[i], values[i]};
+  std::stable_sort(pairs.begin(), pairs.end(), [mask](const auto& a, const auto& b) { return (a.first & mask) < (b.first & mask); });
+  for (Id i = 0; i < n; ++i) keys[i] = pairs[static_cast<std::size_t>(i)].first, values[i] = pairs[static_cast<std::size_t>(i)].second;
+}
 
 // The passes of sort_pairs over caller-owned arrays: the pairs start in
 // (keys, values) and end where the return value says (false: there; true:
@@ -32,6 +44,13 @@ bool sort_pairs_passes(K* keys, V* values, K* keys_tmp, V* values_tmp, Id n, int
   const int digit_bits = (significant_bits + passes - 1) / passes;
   const Id buckets = Id{1} << digit_bits;
   const K mask = static_cast<K>(buckets - 1);
+  // Few pairs (a weld of one chunk's piece): every pass zeroes, scans and
+  // offsets 2^digit_bits buckets, more work than comparing the pairs; the
+  // comparison sort makes the same stable order.
+  if (n * 8 < passes * buckets) {
+    stable_sort_pairs_by_low_bits(keys, values, n, significant_bits);
+    return false;
+  }
 
   const int chunks = chunk_count(n, 1 << 15);
   std::vector<Id> hist_store(static_cast<std::size_t>(chunks * buckets));

@@ -118,12 +118,13 @@ struct Clipper {
   }
 
   // Keeps the part of the polygon on one side of the plane axis = x (below:
-  // coordinates <= x), in place.
-  void clip(std::vector<ClipPoint>& poly, std::vector<Side>& sides, int axis, double x, bool below) {
+  // coordinates <= x), in place; out and out_sides: scratch (kept between
+  // calls, so a clip allocates nothing once they have grown).
+  void clip(std::vector<ClipPoint>& poly, std::vector<Side>& sides, std::vector<ClipPoint>& out,
+            std::vector<Side>& out_sides, int axis, double x, bool below) {
     stage = axis;
     auto inside = [&](const ClipPoint& c) { return below ? c.p[axis] <= x : c.p[axis] >= x; };
-    std::vector<ClipPoint> out;
-    std::vector<Side> out_sides;
+    out.clear(), out_sides.clear();
     const std::size_t n = poly.size();
     for (std::size_t j = 0; j < n; ++j) {
       const ClipPoint& P = poly[j];
@@ -243,8 +244,8 @@ MultilodPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, c
   double lo[3], hi[3];
   for (int d = 0; d < 3; ++d) lo[d] = grid.plane(d, chunk[d]), hi[d] = grid.plane(d, chunk[d] + 1);
   std::vector<ClipPoint> corners;
-  std::vector<ClipPoint> poly;
-  std::vector<Side> sides;
+  std::vector<ClipPoint> poly, clipped;
+  std::vector<Side> sides, clipped_sides;
   for (Id j = 0; j < count; ++j) {
     const std::uint32_t* t = s.triangles.data() + 3 * static_cast<std::size_t>(triangles[j]);
     Clipper clipper{s, grid, {t[0], t[1], t[2]}, lo, hi};
@@ -257,8 +258,8 @@ MultilodPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, c
       for (int d = 0; d < 3; ++d) inside = inside && poly.back().p[d] > lo[d] && poly.back().p[d] < hi[d];
     }
     for (int d = 0; d < 3 && !inside; ++d) {
-      clipper.clip(poly, sides, d, lo[d], false);
-      clipper.clip(poly, sides, d, hi[d], true);
+      clipper.clip(poly, sides, clipped, clipped_sides, d, lo[d], false);
+      clipper.clip(poly, sides, clipped, clipped_sides, d, hi[d], true);
     }
     for (std::size_t m = 1; m + 1 < poly.size(); ++m) {  // a fan from the first point
       corners.push_back(poly[0]);

@@ -39,10 +39,15 @@ constexpr double kLeast = 0.05;
 constexpr double kLeastJunction = 0.5;
 constexpr double kFractions[4] = {1.0, 0.5, 0.25, 0.125};
 
-// ((q - p) x (r - p)) . n
-double orientation(const double* p, const double* q, const double* r, const double* n) {
+// Two doubles, one per lane of an SSE2 register: two of a triangle's four
+// end combinations at once, each lane the scalar operations in the scalar
+// order (no contraction: -ffp-contract=off), so the same bits as one by one.
+using Pair = double __attribute__((vector_size(16)));
+
+// ((q - p) x (r - p)) . n for r at both ends r0, r1 (the lanes).
+Pair orientations(const double* p, const double* q, const double* r0, const double* r1, const double* n) {
   const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
-  const double v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+  const Pair v[3] = {Pair{r0[0], r1[0]} - p[0], Pair{r0[1], r1[1]} - p[1], Pair{r0[2], r1[2]} - p[2]};
   return (u[1] * v[2] - u[2] * v[1]) * n[0] + (u[2] * v[0] - u[0] * v[2]) * n[1] + (u[0] * v[1] - u[1] * v[0]) * n[2];
 }
 
@@ -87,10 +92,11 @@ bool FoldGuard::keeps(Id p, const double* at, const std::vector<double>& x, cons
     const std::uint32_t* c = corners_.data() + 3 * t;
     const int k = c[0] == p ? 0 : (c[1] == p ? 1 : 2);
     const Id q = c[(k + 1) % 3], r = c[(k + 2) % 3];
-    for (const auto* qs : {&x, &candidate})
-      for (const auto* rs : {&x, &candidate})
-        if (!(orientation(at, qs->data() + 3 * q, rs->data() + 3 * r, normal_.data() + 3 * t) >= least_[t]))
-          return false;
+    for (const auto* qs : {&x, &candidate}) {
+      const Pair d =
+          orientations(at, qs->data() + 3 * q, x.data() + 3 * r, candidate.data() + 3 * r, normal_.data() + 3 * t);
+      if (!(d[0] >= least_[t] && d[1] >= least_[t])) return false;
+    }
   }
   return true;
 }

@@ -10,7 +10,7 @@
 #include <tuple>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/for_each_task.hpp"
 #include "label_chunks.hpp"
 #include "label_volume.hpp"
 
@@ -98,15 +98,19 @@ std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelO
   std::vector<LabelSurface> parts = opt.method == LabelMethod::SurfaceNets
                                         ? detail::surface_nets_rows(vol, true, rows, stats)
                                         : detail::discrete_marching_cubes_rows(vol, rows, stats);
+  // A task per segment: most are too small for a parallel loop's threads to
+  // pay (smoothing's loops run 16 times per segment), and each segment's
+  // result is its own.
   std::vector<SegmentSurface> out(parts.size());
-  for (std::size_t s = 0; s < parts.size(); ++s) {
+  parallel::for_each_task(static_cast<Id>(parts.size()), [&](Id i) {
+    const std::size_t s = static_cast<std::size_t>(i);
     detail::smooth_label_surface(parts[s], vol, opt.method, opt.smooth_iterations, opt.relaxation);
     out[s].segment = static_cast<std::uint64_t>(vol.values[vol.selected[s]]);
     out[s].keys = global_keys(parts[s], vol, s, opt.method, offset);
     out[s].points.assign(parts[s].mesh.points.begin(), parts[s].mesh.points.end());
     out[s].triangles.assign(parts[s].mesh.connectivity.begin(), parts[s].mesh.connectivity.end());
     parts[s] = LabelSurface{};
-  }
+  });
   return out;
 }
 
@@ -180,19 +184,21 @@ std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const Multilod
   };
   std::vector<Task> tasks;
   std::vector<detail::ChunkTriangles> by_chunk(segments.size());
-  for (std::size_t s = 0; s < segments.size(); ++s) {
+  parallel::for_each_task(static_cast<Id>(segments.size()), [&](Id s) {
     detail::move_off_chunk_planes(segments[s], mg);
     by_chunk[s] = detail::triangles_by_chunk(segments[s], mg);
+  });
+  for (std::size_t s = 0; s < segments.size(); ++s) {
     for (std::size_t c = 0; c < by_chunk[s].chunk.size(); ++c)
       tasks.push_back({s, by_chunk[s].chunk[c], by_chunk[s].offsets[c], by_chunk[s].offsets[c + 1] - by_chunk[s].offsets[c]});
   }
   std::vector<std::vector<MultilodPiece>> results(tasks.size());
-  parallel::for_each_dynamic(static_cast<Id>(tasks.size()), [&](Id t) {
+  parallel::for_each_task(static_cast<Id>(tasks.size()), [&](Id t) {  // a LimitError reaches the caller
     const Task& task = tasks[static_cast<std::size_t>(t)];
     results[static_cast<std::size_t>(t)] =
         chunk_levels(segments[task.segment], mg, chunk_index(mg, task.chunk),
                      by_chunk[task.segment].triangles.data() + task.first, task.count);
-  }, 1);
+  });
   std::vector<MultilodPiece> pieces;
   for (auto& r : results)
     for (auto& p : r) pieces.push_back(std::move(p));

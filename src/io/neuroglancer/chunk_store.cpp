@@ -117,7 +117,11 @@ std::string chunk_pieces_path(const std::string& dir, const std::array<std::uint
 std::string layout_record_path(const std::string& dir) { return (std::filesystem::path(dir) / "chunks" / "layout.json").string(); }
 
 std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const std::vector<ChunkPiece>& pieces) {
+  std::size_t bytes = 0;  // the payload's size: grown once, not by doubling
+  for (const ChunkPiece& p : pieces)
+    bytes += 8 + 4 + 8 + 8 + 8 * p.point_keys.size() + 4 * p.points.size() + 4 * p.triangles.size();
   std::string payload;
+  payload.reserve(bytes);
   for (const ChunkPiece& p : pieces) {
     put(payload, p.segment);
     put(payload, p.lod);
@@ -128,12 +132,14 @@ std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const
     put(payload, p.triangles.data(), p.triangles.size());
   }
   std::string out(kMagic, sizeof kMagic);
+  out.reserve(kHeaderBytes + payload.size());
   put(out, kVersion);
   put(out, chunk.data(), 3);
   put<std::uint64_t>(out, pieces.size());
   put<std::uint64_t>(out, payload.size());
   put(out, crc(payload.data(), payload.size()));
-  return out + payload;
+  out += payload;
+  return out;
 }
 
 std::vector<ChunkPiece> decode_chunk_pieces(const std::string& path, const std::array<std::uint32_t, 3>& chunk,

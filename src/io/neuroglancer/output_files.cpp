@@ -1,7 +1,6 @@
 #include "output_files.hpp"
 
 #include <algorithm>
-#include <exception>
 #include <filesystem>
 #include <map>
 #include <regex>
@@ -11,7 +10,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/output_transaction.hpp"
-#include "keymesh/parallel/for_each.hpp"
+#include "keymesh/parallel/for_each_task.hpp"
 
 namespace keymesh::io::neuroglancer {
 
@@ -72,16 +71,9 @@ void write_sharded(const fs::path& dir, const ShardingSpec& spec, const std::vec
 std::vector<SegmentFiles> encode_segments(const MultilodLayout& layout,
                                           const std::vector<std::pair<std::uint64_t, std::vector<const ChunkPiece*>>>& groups) {
   std::vector<SegmentFiles> files(groups.size());
-  std::vector<std::exception_ptr> errors(groups.size());
-  parallel::for_each_dynamic(static_cast<Id>(groups.size()), [&](Id i) {
-    try {
-      files[i] = encode_segment(layout, groups[i].first, groups[i].second);
-    } catch (...) {
-      errors[i] = std::current_exception();
-    }
-  }, 1);
-  for (const std::exception_ptr& e : errors)
-    if (e) std::rethrow_exception(e);  // the first segment's error, whatever the thread count
+  // The first segment's error, whatever the thread count.
+  parallel::for_each_task(static_cast<Id>(groups.size()),
+                          [&](Id i) { files[i] = encode_segment(layout, groups[i].first, groups[i].second); });
   std::erase_if(files, [](const SegmentFiles& f) { return f.manifest.empty(); });
   return files;
 }

@@ -89,12 +89,17 @@ struct SmoothStep {
   double* next;
   KEYMESH_HD void operator()(Id p) const {
     const Id b = offsets[p], e = offsets[p + 1];
+    // The neighbours' sums, all three axes in one pass over the stencil
+    // (each axis still summed in neighbour order).
+    double sum[3] = {0, 0, 0};
+    for (Id j = b; j < e; ++j) {
+      const double* q = x + 3 * static_cast<Id>(neighbours[j]);
+      sum[0] += q[0], sum[1] += q[1], sum[2] += q[2];
+    }
     for (int a = 0; a < 3; ++a) {
       double v = x[3 * p + a];
       if (e > b && !((border_axes[p] >> a) & 1)) {
-        double sum = 0;
-        for (Id j = b; j < e; ++j) sum += x[3 * static_cast<Id>(neighbours[j]) + a];
-        v += factor * (sum / static_cast<double>(e - b) - v);
+        v += factor * (sum[a] / static_cast<double>(e - b) - v);
         if (constrained) {
           const double c = cell_centre[3 * p + a], lo = c - half[a], hi = c + half[a];
           v = v < lo ? lo : (hi < v ? hi : v);  // std::clamp(v, lo, hi)
