@@ -112,7 +112,7 @@ def main():
              + ("" if args.cuda else " -DKEYMESH_CUDA=OFF"))
     env = dict(os.environ, CI="true", CCACHE_DISABLE="1")
     jobs = f"JOBS={args.jobs}"
-    rev = subprocess.check_output(["git", "log", "--oneline", "-1"], cwd=clone, text=True).strip()
+    rev = subprocess.check_output(["git", "log", "-1", "--format=%h %<(72,trunc)%s"], cwd=clone, text=True).strip()
     print(f"{rev}\n{args.jobs} jobs, load {os.getloadavg()[0]:.1f}", flush=True)
     phases = [
         phase("build", ["make", "build", jobs, f"CMAKE_FLAGS={flags}"], clone, env, clone),
