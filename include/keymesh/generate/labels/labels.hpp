@@ -122,6 +122,9 @@ struct LabelStats {
   Id distinct_labels = 0;   // in the volume, background counted
   Id surfaces = 0;          // labels extracted
   Id soup_corners = 0;      // triangle corners before welding
+  // Smoothing moves the fold guard shortened or refused, summed over the
+  // points and the iterations (label_fold_guard.cpp).
+  Id guard_shortened = 0;
 };
 
 SurfaceMesh contour_labels(const ImageGrid& grid, const LabelOptions& options, LabelStats* stats = nullptr);
