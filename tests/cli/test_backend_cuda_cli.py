@@ -1,5 +1,5 @@
 """`--backend cuda` on every command with a GPU path (issue 35): contour of a
-volume (plain and --coarsen) and of a tet grid, tetrahedralize (5 and 24
+volume (plain, --curvature and --coarsen) and of a tet grid, tetrahedralize (5 and 24
 tets), subdivide (triangles linear and Bezier, tets), dual, labels (surface
 nets, smoothed with its fold guard and --smooth 0), pipeline --subdivide,
 --coarsen and --dual.
@@ -33,6 +33,8 @@ LABELS = write_label_nrrd(os.path.join(D, "labels.nrrd"),
 GPU_COMMANDS = [
     ("contour", VTI, "ply", ["--iso", 4.5, "--normals", "average"]),
     ("contour", VTI, "ply", ["--iso", 4.5, "--iso", 2.5, "--normals", "average", "--coarsen"]),
+    ("contour", VTI, "vtp", ["--iso", 4.5, "--normals", "gradient", "--curvature"]),
+    ("contour", VTI, "vtp", ["--iso", 4.5, "--curvature", "--coarsen"]),
     ("contour", TETS, "ply", ["--iso", 4.5, "--iso", 3.001, "--normals", "average"]),
     ("tetrahedralize", VTI, "vtu", ["--scheme", 5]),
     ("tetrahedralize", VTI, "vtu", ["--scheme", 24]),
