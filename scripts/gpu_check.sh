@@ -9,7 +9,8 @@
 # the written meshes) on generated inputs from 64^3 to 1024^3, twice, with the
 # paper's Table 1 counts; the same for `tetrahedralize` (5 and 24 tets),
 # `contour` of a tet grid and `subdivide` (tets, triangles linear and Bezier)
-# at a small and a large size; runs compute-sanitizer's memcheck on small cases;
+# at a small and a large size, `contour --curvature` and `labels` (smoothed,
+# the fold guard acting); runs compute-sanitizer's memcheck on small cases;
 # runs the 2^32-triangle checkerboard in its own process; times 512^3 and
 # 1024^3 with CUDA events (keymesh_gpu_timing). Writes summary.json and
 # gpu_check.log into $OUT (default ./gpu-check-out).
@@ -213,8 +214,10 @@ if [ -n "$KEYMESH" ]; then
       compare "sphere 256^3, 3 isovalues, averaged normals" "$WORK/sphere$n.vti" \
         --iso 30.5 --iso 60.001 --iso 100 --normals average
       compare "sphere 256^3, gradient normals" "$WORK/sphere$n.vti" --iso 90.25 --normals gradient
+      compare_command "sphere 256^3, gradient normals and curvature" vtp contour "$WORK/sphere$n.vti" --iso 90.25 \
+        --normals gradient --curvature
     fi
-    rm -f "$WORK/sphere$n.vti" "$WORK"/*.cpu.ply
+    rm -f "$WORK/sphere$n.vti" "$WORK"/*.cpu.ply "$WORK"/*.cpu.vtp
   done
   # Integer noise with samples on the isovalue (128), and float32 random bits
   # (NaN and inf among them).
@@ -272,6 +275,26 @@ if [ -n "$KEYMESH" ]; then
   for n in $U_SIZES; do unstructured "$n"; done
 else
   skip "keymesh tetrahedralize, contour (tets), subdivide: cuda against cpu" "the keymesh command does not run here"
+fi
+
+# ---- label surface nets: CPU against GPU, byte for byte ------------------------
+# uint8 noise folded to 6 labels (three or more meet in most cells: the fold
+# guard shortens many moves): the network smoothed as by default (16
+# iterations, the fold guard) at 48^3 and 96^3 (4 M triangles), and 40 strong
+# iterations at 48^3, each written by the CPU once and by the GPU twice,
+# cmp'd (.vtp).
+SIX_LABELS=$(for i in $(seq 0 255); do printf '\\%03o' $((i % 6)); done)
+if [ -n "$KEYMESH" ]; then
+  for n in 48 96; do
+    head -c $((n * n * n)) /dev/urandom | tr '\000-\377' "$SIX_LABELS" >"$WORK/labels$n.raw"
+    compare_command "labels, 6 labels of noise ${n}^3, --smooth 16" vtp labels "$WORK/labels$n.raw" \
+      --dims $n $n $n --type uint8 --smooth 16
+    [ $n = 48 ] && compare_command "labels, 6 labels of noise 48^3, --smooth 40 --relaxation 1" vtp labels \
+      "$WORK/labels$n.raw" --dims $n $n $n --type uint8 --smooth 40 --relaxation 1
+    rm -f "$WORK/labels$n.raw" "$WORK"/*.cpu.vtp
+  done
+else
+  skip "keymesh labels: cuda against cpu" "the keymesh command does not run here"
 fi
 
 # ---- compute-sanitizer ---------------------------------------------------------

@@ -115,8 +115,7 @@ std::string in_python_words(std::string message) {
   using Words = std::pair<std::string, std::string>;
   for (const auto& [cli, python] :
        {Words{"--backend cuda", "backend='cuda'"}, Words{"--backend cpu", "backend='cpu'"},
-        Words{"(--weld vertexweld)", "(weld='vertexweld')"}, Words{"(--coarsen)", "(coarsen=True)"},
-        Words{"(--curvature)", "(curvature=True)"}})
+        Words{"(--weld vertexweld)", "(weld='vertexweld')"}, Words{"(--coarsen)", "(coarsen=True)"}})
     for (auto at = message.find(cli); at != std::string::npos; at = message.find(cli, at + python.size()))
       message.replace(at, cli.size(), python);
   return message;

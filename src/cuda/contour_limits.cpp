@@ -20,7 +20,6 @@ constexpr Id kMaxItems = std::numeric_limits<int>::max();  // CUB's num_items
 }  // namespace
 
 void check_gpu_options(const generate::ContourOptions& opt) {
-  if (opt.curvature) not_on_gpu("curvature (--curvature)");
   if (opt.history) not_on_gpu("per-point history (--history)");
   if (opt.output_arrays) not_on_gpu("writing into arrays the caller owns (output_arrays)");
   if (opt.total_planes) not_on_gpu("streamed (slab) contouring");

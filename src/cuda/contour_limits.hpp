@@ -14,8 +14,7 @@ namespace keymesh::cuda {
 
 // Options the GPU path does not implement are refused by name (InputError,
 // "--backend cuda: ... (use --backend cpu)") instead of being ignored:
-// curvature, per-point history, output arrays a caller owns, slabs, and
-// ghost planes (the CPU's own check refuses those outside a slab). Coarsening
+// per-point history, output arrays a caller owns, slabs, and ghost planes (the CPU's own check refuses those outside a slab). Coarsening
 // runs on the GPU (contour_coarsened.cuh) but for device-resident samples
 // (check_device_volume refuses it).
 void check_gpu_options(const generate::ContourOptions& options);

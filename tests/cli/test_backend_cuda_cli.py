@@ -1,7 +1,8 @@
 """`--backend cuda` on every command with a GPU path (issue 35): contour of a
-volume (plain and --coarsen) and of a tet grid, tetrahedralize (5 and 24
+volume (plain, --curvature and --coarsen) and of a tet grid, tetrahedralize (5 and 24
 tets), subdivide (triangles linear and Bezier, tets), dual, labels (surface
-nets, --smooth 0), pipeline --subdivide, --coarsen and --dual.
+nets, smoothed with its fold guard and --smooth 0), pipeline --subdivide,
+--coarsen and --dual.
 
 Where the GPU cannot run them (a build without CUDA, as CI's, or no device,
 as the development machine), each exits 1 with one line that says why and
@@ -32,6 +33,8 @@ LABELS = write_label_nrrd(os.path.join(D, "labels.nrrd"),
 GPU_COMMANDS = [
     ("contour", VTI, "ply", ["--iso", 4.5, "--normals", "average"]),
     ("contour", VTI, "ply", ["--iso", 4.5, "--iso", 2.5, "--normals", "average", "--coarsen"]),
+    ("contour", VTI, "vtp", ["--iso", 4.5, "--normals", "gradient", "--curvature"]),
+    ("contour", VTI, "vtp", ["--iso", 4.5, "--curvature", "--coarsen"]),
     ("contour", TETS, "ply", ["--iso", 4.5, "--iso", 3.001, "--normals", "average"]),
     ("tetrahedralize", VTI, "vtu", ["--scheme", 5]),
     ("tetrahedralize", VTI, "vtu", ["--scheme", 24]),
@@ -43,6 +46,8 @@ GPU_COMMANDS = [
     ("pipeline", VTI, "ply", ["--iso", 4.5, "--coarsen", "--dual"]),
     ("dual", SURFACE, "ply", []),
     ("labels", LABELS, "vtp", ["--smooth", 0]),
+    ("labels", LABELS, "vtp", []),  # --smooth 16 by default
+    ("labels", LABELS, "vtp", ["--smooth", 5, "--relaxation", 0.9]),
 ]
 
 
@@ -113,10 +118,9 @@ check("--backend cuda: what a GPU path lacks is refused by name", lacking_refuse
 def label_options_the_device_lacks():
     # Refused by name (the device path's own words), after the CPU's checks.
     cases = [
-        ([], "smoothing"),  # --smooth 16 by default
-        (["--smooth", 0, "--method", "discrete-mc"], "--method discrete-mc"),
-        (["--smooth", 0, "--per-label"], "--per-label"),
-        (["--smooth", 0, "--coarsen"], "--coarsen"),
+        (["--method", "discrete-mc"], "--method discrete-mc"),
+        (["--per-label"], "--per-label"),
+        (["--coarsen"], "--coarsen"),
     ]
     for args, name in cases:
         out = output("refused", "vtp")

@@ -56,6 +56,8 @@ TEST(CudaContour, SphereMatchesTheCpuBitForBit) {
     expect_identical(generate::spherical_distance(64), o);
     o.isovalues = {10.25, 20.001, 31.0};  // several isovalues, one touching samples exactly
     expect_identical(generate::spherical_distance(64), o);
+    o.curvature = true;  // mean_curvature from the grid's derivatives, as on the CPU
+    expect_identical(generate::spherical_distance(64), o);
   }
 }
 
@@ -77,6 +79,8 @@ TEST(CudaContour, EveryPlanMatchesTheCpuBitForBit) {
       o.isovalues = {30.5, 12.0};
       expect_identical(generate::spherical_distance(72), o);
       o.isovalues = {99.5, 100.0};  // samples on the second isovalue
+      expect_identical(noise, o);
+      o.curvature = true;
       expect_identical(noise, o);
     }
 }
@@ -118,7 +122,7 @@ TEST(CudaContour, RefusesWhatItDoesNotDoByName) {
   ContourOptions o;
   o.isovalues = {10.5};
   o.backend = Backend::Cuda;
-  o.curvature = true;
+  o.history = true;
   EXPECT_THROW(backend::contour(generate::spherical_distance(24), o), InputError);
 }
 

@@ -28,7 +28,8 @@ std::string input_error_of(const ContourOptions& o) {
 }
 
 // Each option the GPU path does not implement is refused by its name, never
-// ignored; the defaults pass, and so does coarsening (cuda::contour runs it).
+// ignored; the defaults pass, and so do coarsening and curvature (the device
+// path runs them).
 TEST(CudaLimits, UnsupportedOptionsAreRefusedByName) {
   ContourOptions o;
   o.isovalues = {1.5};
@@ -36,13 +37,16 @@ TEST(CudaLimits, UnsupportedOptionsAreRefusedByName) {
   ContourOptions coarsened = o;
   coarsened.coarsen = true;
   EXPECT_EQ(input_error_of(coarsened), "");
+  ContourOptions curved = o;
+  curved.curvature = true;
+  curved.coarsen = true;
+  EXPECT_EQ(input_error_of(curved), "");
   struct Case {
     void (*set)(ContourOptions&);
     const char* name;
   };
   const Case cases[] = {
       {[](ContourOptions& c) { c.history = true; }, "history"},
-      {[](ContourOptions& c) { c.curvature = true; }, "curvature"},
       {[](ContourOptions& c) { c.output_arrays = [](Id, Id) { return generate::ContourArrays{}; }; }, "output_arrays"},
       {[](ContourOptions& c) { c.total_planes = 40; }, "slab"},
       {[](ContourOptions& c) { c.ghost_below = 1; }, "ghost planes"},
@@ -137,9 +141,9 @@ TEST(CudaLimits, DeviceVolumeChecks) {
   ContourOptions no_iso = o;
   no_iso.isovalues.clear();
   refused(v, no_iso, "no isovalue");
-  ContourOptions curvature = o;
+  ContourOptions curvature = o;  // runs on the GPU (the device path computes it)
   curvature.curvature = true;
-  refused(v, curvature, "curvature");
+  EXPECT_NO_THROW(cuda::check_device_volume(v, curvature));
   // cuda::contour coarsens host samples; device-resident ones are refused.
   ContourOptions coarsen = o;
   coarsen.coarsen = true;

@@ -14,6 +14,7 @@
 #include <string>
 #include <utility>
 
+#include "generate/labels/argmax_noise.hpp"
 #include "generate/labels/label_map.hpp"
 #include "keymesh/backend/contour.hpp"
 #include "keymesh/backend/dual.hpp"
@@ -80,7 +81,7 @@ SurfaceMesh sphere_surface(Id n, double iso) {
 
 LabelOptions unsmoothed() {
   LabelOptions o;
-  o.smooth_iterations = 0;  // the device path's smoothing is refused (its fold guard runs on the CPU only)
+  o.smooth_iterations = 0;  // the network alone (smoothing has its own tests)
   return o;
 }
 
@@ -144,6 +145,29 @@ TEST(CudaLabels, NoiseBlobsAndSelectionsMatchTheCpuBitForBit) {
   labels(label_noise({19, 17, 15}, 6, 3), "selection and background");
 }
 
+// Smoothed, the fold guard included: atlas-like volumes (many labels in
+// blobs, three or more meeting all over), where the guard shortens moves,
+// at the default smoothing, a few iterations and many strong ones.
+TEST(CudaLabels, SmoothedWithTheFoldGuardMatchesTheCpuBitForBit) {
+  SKIP_WITHOUT_GPU();
+  const ImageGrid atlas = test::argmax_noise({40, 36, 32}, 12, 2, 2);
+  const ImageGrid noise40 = label_noise({31, 29, 23}, 40, 2);
+  for (auto [iterations, relaxation] : {std::pair{16, 0.5}, std::pair{3, 0.5}, std::pair{40, 1.0}}) {
+    LabelOptions o;
+    o.smooth_iterations = iterations;
+    o.relaxation = relaxation;
+    const std::string what = " smooth " + std::to_string(iterations);
+    generate::LabelStats cpu, gpu;
+    expect_gpu_twice([&](Backend b) { return backend::contour_labels(atlas, o, b, b == Backend::Cpu ? &cpu : &gpu); },
+                     "argmax noise of 12 labels" + what);
+    EXPECT_GT(cpu.guard_shortened, 0);
+    EXPECT_EQ(gpu.guard_shortened, cpu.guard_shortened);
+    expect_gpu_twice([&](Backend b) { return backend::contour_labels(noise40, o, b); }, "noise of 40 labels" + what);
+  }
+  const ImageGrid empty = test::label_map({5, 4, 3}, [](Id, Id, Id) { return 0; });
+  expect_gpu_twice([&](Backend b) { return backend::contour_labels(empty, LabelOptions{}, b); }, "empty, smoothed");
+}
+
 TEST(CudaLabels, LargeVolumeMatchesTheCpuBitForBit) {
   SKIP_WITHOUT_GPU();
   const ImageGrid g = test::label_map({200, 190, 180}, [](Id i, Id j, Id k) {
@@ -151,6 +175,7 @@ TEST(CudaLabels, LargeVolumeMatchesTheCpuBitForBit) {
     return int(d / 900 % 7);
   });
   expect_gpu_twice([&](Backend b) { return backend::contour_labels(g, unsmoothed(), b); }, "shells 200");
+  expect_gpu_twice([&](Backend b) { return backend::contour_labels(g, LabelOptions{}, b); }, "shells 200, smooth 16");
 }
 
 // Bad input is refused by the GPU path with the CPU's own message, before
@@ -190,7 +215,6 @@ TEST(BackendSurfaces, WhatTheLabelPathLacksIsRefusedByName) {
       {"discrete-mc", [](LabelOptions& o) { o.method = generate::LabelMethod::DiscreteMarchingCubes; }},
       {"--per-label", [](LabelOptions& o) { o.per_label = true; }},
       {"--coarsen", [](LabelOptions& o) { o.coarsen = true; }},
-      {"smoothing", [](LabelOptions& o) { o.smooth_iterations = 16; }},
   };
   for (const auto& [name, set] : cases) {
     LabelOptions o = unsmoothed();

@@ -206,14 +206,15 @@ def test_backend_argument():
 def test_backend_cuda_without_gpu_raises_cleanly():
     volume = field_of(np.float32)
     for call in (lambda: keymesh.contour(volume, 5.5, backend="cuda"),
-                 lambda: keymesh.contour(DLPackOnly(volume), 5.5, backend="cuda")):
+                 lambda: keymesh.contour(DLPackOnly(volume), 5.5, backend="cuda"),
+                 lambda: keymesh.contour(volume, 5.5, backend="cuda", curvature=True)):  # the GPU has it
         with pytest.raises(keymesh.Error, match=r"^backend='cuda': ") as e:
             call()
         assert "--backend" not in str(e.value)
         assert NO_GPU in str(e.value)
     # Options the GPU has no path for are refused by name first, in any build.
-    with pytest.raises(keymesh.Error, match="curvature"):
-        keymesh.contour(volume, 5.5, backend="cuda", curvature=True)
+    with pytest.raises(keymesh.Error, match="per-point history"):
+        keymesh.contour(volume, 5.5, backend="cuda", history=True)
     assert keymesh.contour(volume, 5.5).n_cells > 0  # the interpreter goes on
 
 

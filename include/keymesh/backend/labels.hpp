@@ -10,7 +10,7 @@ namespace keymesh::backend {
 // Backend::Cpu: generate::contour_labels. Backend::Cuda: its input checks
 // that need no scan (generate::check_labels_input, the same InputError), then
 // what the device path lacks refused by name (generate::check_device_label_options:
-// --method discrete-mc, --per-label, --coarsen, --history, smoothing; "(use --backend
+// --method discrete-mc, --per-label, --coarsen, --history; "(use --backend
 // cpu)"), then cuda::contour_labels (InputError naming --backend cpu without
 // a usable GPU).
 SurfaceMesh contour_labels(const ImageGrid& grid, const generate::LabelOptions& options, generate::Backend backend,

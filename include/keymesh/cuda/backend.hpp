@@ -16,10 +16,10 @@ bool available(std::string* why = nullptr);
 // Marching cubes + KEY-REDUCE on the GPU; the mesh is byte-identical to the
 // CPU backend's for the same options (same key order, same arithmetic, the
 // same fixed merge order for averaged normals). Supports KeyReduce and
-// KeyReduceSort welds, normals none / gradient / average, scalars and
-// several isovalues, and coarsening (options.coarsen: the contour's device
+// KeyReduceSort welds, normals none / gradient / average, curvature, scalars
+// and several isovalues, and coarsening (options.coarsen: the contour's device
 // path, then coarsen_device.hpp's, equal to generate::contour's); throws
-// InputError naming what it does not support yet (curvature, history, output
+// InputError naming what it does not support yet (history, output
 // arrays, slabs, ghost planes: src/cuda/contour_limits.hpp) and when no
 // device is usable, LimitError past
 // its sizes, past options.max_output_bytes (the CPU's check and message) and

@@ -93,12 +93,12 @@ Stencils build_stencils(const LabelSurface& s) {
 
 }  // namespace
 
-void smooth_label_surface(LabelSurface& s, const LabelVolume& vol, LabelMethod method, int iterations,
-                          double relaxation) {
+Id smooth_label_surface(LabelSurface& s, const LabelVolume& vol, LabelMethod method, int iterations,
+                        double relaxation) {
   const Id points = static_cast<Id>(s.junction.size());
-  if (iterations <= 0 || points == 0) return;
+  if (iterations <= 0 || points == 0) return 0;
   const Stencils st = build_stencils(s);
-  const FoldGuard guard(s);
+  FoldGuard guard(s);
   std::vector<double> x(s.mesh.points.begin(), s.mesh.points.end()), half(x.size()), candidate(x.size());
   const bool constrained = method == LabelMethod::SurfaceNets;
   label_kernels::SmoothStep step{st.offsets.data(), st.neighbours.data(), s.border_axes.data(),
@@ -124,6 +124,7 @@ void smooth_label_surface(LabelSurface& s, const LabelVolume& vol, LabelMethod m
     x.swap(half);
   }
   for (std::size_t i = 0; i < x.size(); ++i) s.mesh.points[i] = static_cast<float>(x[i]);
+  return guard.shortened();
 }
 
 Id smoothing_reach(const LabelOptions& options) {

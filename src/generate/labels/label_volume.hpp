@@ -178,9 +178,10 @@ void add_label_history(LabelSurface& surface, const LabelVolume& volume, const L
 void coarsen_label_surface(LabelSurface& surface, LabelStats& stats);
 
 // Smooths the surface's points in place (label_smoothing.cpp): Jacobi
-// iterations over neighbour lists built by KEY-REDUCE.
-void smooth_label_surface(LabelSurface& surface, const LabelVolume& volume, LabelMethod method, int iterations,
-                          double relaxation);
+// iterations over neighbour lists built by KEY-REDUCE. Returns the moves
+// the fold guard shortened or refused (LabelStats::guard_shortened).
+Id smooth_label_surface(LabelSurface& surface, const LabelVolume& volume, LabelMethod method, int iterations,
+                        double relaxation);
 
 // How many cells away a smoothed point's position may depend on (halo rows,
 // chunk halos): an iteration's steps plus one (the fold guard reads the

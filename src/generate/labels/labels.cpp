@@ -67,7 +67,8 @@ SurfaceMesh detail::finish_label_mesh(LabelSurface& surface, const LabelVolume& 
   if (options.history) detail::add_label_history(surface, vol, options);
   auto t0 = Clock::now();
   if (options.smooth_iterations > 0) progress::report("smooth", 0.6);
-  detail::smooth_label_surface(surface, vol, options.method, options.smooth_iterations, options.relaxation);
+  st.guard_shortened +=
+      detail::smooth_label_surface(surface, vol, options.method, options.smooth_iterations, options.relaxation);
   st.smooth = seconds_since(t0);
   if (options.coarsen) detail::coarsen_label_surface(surface, st);
 

@@ -21,10 +21,6 @@ void check_device_label_options(const LabelOptions& options) {
   if (options.per_label) refuse("--per-label");
   if (options.coarsen) refuse("--coarsen");
   if (options.history) refuse("per-point history (--history)");
-  // The CPU's smoothing limits every step by its fold guard (label_fold_guard.cpp,
-  // docs/decisions/labels-smoothing-folds.md); until the guard runs on the
-  // device too, the device path's unguarded steps would not give its bits.
-  if (options.smooth_iterations > 0) refuse("smoothing (its fold guard; --smooth 0 runs)");
 }
 
 ScannedLabels scan_labels_for_device(const ImageGrid& grid, const LabelOptions& options) {

@@ -1,7 +1,7 @@
 // Label surface nets' device path (src/generate/labels/labels_device.hpp)
 // run on the CPU device equals contour_labels(), the CPU path, bit for bit:
-// points, triangles, boundary_labels, smoothed or not, at 1 and several
-// threads, with 32- and 64-bit cell keys.
+// points, triangles, boundary_labels, smoothed (the fold guard included) or
+// not, at 1 and several threads, with 32- and 64-bit cell keys.
 #include "keymesh/generate/labels/labels_device.hpp"
 
 #include <gtest/gtest.h>
@@ -16,6 +16,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "argmax_noise.hpp"
 #include "label_map.hpp"
 #include "same_bits.hpp"
 
@@ -31,13 +32,19 @@ generate::LabelOptions smoothed(int iterations, double relaxation = 0.5) {
   return o;
 }
 
-// The device path equals the CPU path without smoothing (smoothing is
-// refused until the fold guard runs on the device), at 1 and 3 threads and
-// with 64-bit keys; returns the CPU's mesh.
+// The smoothings compared: none, the default (16 iterations, relaxation
+// 0.5), a few, and many strong ones (where the fold guard shortens most).
+constexpr std::pair<int, double> kSmoothings[] = {{0, 0.5}, {16, 0.5}, {3, 0.5}, {40, 1.0}};
+
+// The device path equals the CPU path, unsmoothed and smoothed as in
+// kSmoothings, at 1 and 3 threads and with 64-bit keys, the moves the fold
+// guard shortened included; returns the CPU's stats of the default
+// smoothing and its mesh unsmoothed.
 SurfaceMesh expect_device_equals_cpu(const ImageGrid& g, const std::string& what,
-                                     generate::LabelOptions base = generate::LabelOptions{}) {
+                                     generate::LabelOptions base = generate::LabelOptions{},
+                                     generate::LabelStats* default_smoothing = nullptr) {
   SurfaceMesh first;
-  for (auto [iterations, relaxation] : {std::pair{0, 0.5}}) {
+  for (auto [iterations, relaxation] : kSmoothings) {
     generate::LabelOptions o = base;
     o.smooth_iterations = iterations, o.relaxation = relaxation;
     generate::LabelStats cpu_stats, device_stats;
@@ -51,9 +58,14 @@ SurfaceMesh expect_device_equals_cpu(const ImageGrid& g, const std::string& what
       EXPECT_EQ(device_stats.soup_corners, cpu_stats.soup_corners) << name.str();
       EXPECT_EQ(device_stats.distinct_labels, cpu_stats.distinct_labels) << name.str();
       EXPECT_EQ(device_stats.surfaces, cpu_stats.surfaces) << name.str();
+      EXPECT_EQ(device_stats.guard_shortened, cpu_stats.guard_shortened) << name.str();
     }
     parallel::set_thread_count(0);
-    first = cpu;
+    if (iterations == 0) {
+      first = cpu;
+      EXPECT_EQ(cpu_stats.guard_shortened, 0) << name.str();
+    }
+    if (iterations == 16 && default_smoothing) *default_smoothing = cpu_stats;
   }
   return first;
 }
@@ -101,6 +113,27 @@ TEST(DeviceLabels, VoronoiBlobsWithJunctionsEqualTheCpuPath) {
     const SurfaceMesh m = expect_device_equals_cpu(blobs({24, 20, 17}, labels, 3u), "blobs " + std::to_string(labels));
     EXPECT_GT(m.num_cells(), 2000);
   }
+}
+
+// Atlas-like volumes (many labels in blobs, three or more meeting all over):
+// where the fold guard acts, so the device path runs it, not only the steps.
+TEST(DeviceLabels, AtlasLikeJunctionsWhereTheFoldGuardActsEqualTheCpuPath) {
+  const struct {
+    int labels, passes;
+    std::uint64_t seed;
+  } cases[] = {{5, 2, 1}, {12, 2, 2}, {40, 1, 5}};
+  for (const auto& c : cases) {
+    ImageGrid g = test::argmax_noise({20, 18, 16}, c.labels, c.seed, c.passes);
+    g.spacing = {0.9, 1.0, 1.3};
+    generate::LabelStats smoothed_stats;
+    std::ostringstream what;
+    what << "argmax noise of " << c.labels << " labels, " << c.passes << " passes";
+    expect_device_equals_cpu(g, what.str(), {}, &smoothed_stats);
+    EXPECT_GT(smoothed_stats.guard_shortened, 0) << what.str();
+  }
+  generate::LabelStats blobs_stats;
+  expect_device_equals_cpu(blobs({24, 20, 17}, 25, 4u), "blobs 25, guarded", {}, &blobs_stats);
+  EXPECT_GT(blobs_stats.guard_shortened, 0);
 }
 
 TEST(DeviceLabels, ThinOneVoxelStructuresEqualTheCpuPath) {
@@ -162,8 +195,8 @@ TEST(DeviceLabels, RefusesWhatItLacksByName) {
   o.coarsen = true;
   EXPECT_NE(message(o).find("--coarsen"), std::string::npos);
   o = {};
-  o.smooth_iterations = 16;
-  EXPECT_NE(message(o).find("smoothing"), std::string::npos);
+  o.smooth_iterations = 16;  // smoothing runs, its fold guard too
+  EXPECT_EQ(message(o), "no error");
   // And what the CPU path refuses: a float volume, a bad relaxation.
   ImageGrid f;
   f.allocate({2, 2, 2}, ScalarType::Float32);

@@ -2,8 +2,9 @@
 // The label generators' per-element work shared by their CPU paths
 // (labels_surface_nets.cpp, label_smoothing.cpp) and the device path
 // (labels_device.hpp), so that both give the same bits: the surface nets
-// network's quad of an edge, a cell's point, the junction test, and one
-// Jacobi step of the smoothing.
+// network's quad of an edge, a cell's point, the junction test, one
+// Jacobi step of the smoothing and its fold guard.
+#include <cmath>
 #include <cstdint>
 
 #include "keymesh/core/device.hpp"
@@ -107,6 +108,88 @@ struct SmoothStep {
       }
       next[3 * p + a] = v;
     }
+  }
+};
+
+// The fold guard of the smoothing (label_fold_guard.cpp has the why): the
+// orientation of triangle (p, q, r) against the unit normal n it had
+// unsmoothed, ((q - p) x (r - p)) . n; unsmoothed it is twice the area.
+KEYMESH_HD inline double orientation(const double* p, const double* q, const double* r, const double* n) {
+  const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+  const double v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+  return (u[1] * v[2] - u[2] * v[1]) * n[0] + (u[2] * v[0] - u[0] * v[2]) * n[1] + (u[0] * v[1] - u[1] * v[0]) * n[2];
+}
+
+// Per triangle t, from the unsmoothed points: its unit normal and the least
+// orientation the guard keeps, a fraction of twice its area: 0.05 in
+// general, 0.5 with a junction corner (three or more labels meet), where
+// 0.05 still let triangles of sheets meeting there cross (measured in
+// docs/decisions/labels-smoothing-folds.md). A triangle degenerate
+// unsmoothed keeps a zero normal and least 1: its corners stay.
+struct GuardFrame {
+  const float* points;
+  const std::uint32_t* corners;  // 3 per triangle
+  const std::uint8_t* junction;  // per point
+  double* normal;                // 3 per triangle
+  double* least;                 // per triangle
+  KEYMESH_HD void operator()(Id t) const {
+    double c[3][3];
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) c[k][a] = points[3 * static_cast<Id>(corners[3 * t + k]) + a];
+    const double u[3] = {c[1][0] - c[0][0], c[1][1] - c[0][1], c[1][2] - c[0][2]};
+    const double v[3] = {c[2][0] - c[0][0], c[2][1] - c[0][1], c[2][2] - c[0][2]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const double twice_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int a = 0; a < 3; ++a) normal[3 * t + a] = twice_area > 0 ? n[a] / twice_area : 0.0;
+    const bool at_junction = junction[corners[3 * t]] || junction[corners[3 * t + 1]] || junction[corners[3 * t + 2]];
+    least[t] = twice_area > 0 ? (at_junction ? 0.5 : 0.05) * twice_area : 1.0;
+  }
+};
+
+// One guarded move of point p: out = x + f (candidate - x), f the largest of
+// 1, 1/2, 1/4, 1/8 for which each of p's triangles keeps its orientation at
+// least at its `least` with each other corner at either end of that
+// corner's own move (D is linear in each corner, so the four combinations
+// bound it whatever fraction the neighbours take), else 0 (p stays). A move
+// shortened or refused counts in shortened[p].
+struct GuardStep {
+  const std::uint32_t* corners;        // 3 per triangle
+  const Id* offsets;                   // per point + 1, into point_corners
+  const std::uint32_t* point_corners;  // each point's corners (3 t + k), any order
+  const double* normal;
+  const double* least;
+  const double* x;
+  const double* candidate;
+  double* out;
+  std::uint32_t* shortened;
+  KEYMESH_HD bool keeps(Id p, const double at[3]) const {
+    for (Id j = offsets[p]; j < offsets[p + 1]; ++j) {
+      const Id t = point_corners[j] / 3, k = point_corners[j] % 3;
+      const Id q = corners[3 * t + (k + 1) % 3], r = corners[3 * t + (k + 2) % 3];
+      const double* qs[2] = {x + 3 * q, candidate + 3 * q};
+      const double* rs[2] = {x + 3 * r, candidate + 3 * r};
+      for (int i = 0; i < 2; ++i)
+        for (int m = 0; m < 2; ++m)
+          if (!(orientation(at, qs[i], rs[m], normal + 3 * t) >= least[t])) return false;
+    }
+    return true;
+  }
+  KEYMESH_HD void operator()(Id p) const {
+    const double* from = x + 3 * p;
+    const double* to = candidate + 3 * p;
+    double at[3] = {from[0], from[1], from[2]};
+    if (to[0] != from[0] || to[1] != from[1] || to[2] != from[2]) {
+      bool kept = false;
+      int tries = 0;
+      for (double f = 1.0; tries < 4 && !kept; f *= 0.5, ++tries) {  // 1, 1/2, 1/4, 1/8: exact
+        for (int a = 0; a < 3; ++a) at[a] = from[a] + f * (to[a] - from[a]);
+        kept = keeps(p, at);
+        if (!kept)
+          for (int a = 0; a < 3; ++a) at[a] = from[a];
+      }
+      if (tries > 1 || !kept) ++shortened[p];
+    }
+    for (int a = 0; a < 3; ++a) out[3 * p + a] = at[a];
   }
 };
 

@@ -129,6 +129,9 @@ struct LabelStats {
   Id distinct_labels = 0;   // in the volume, background counted
   Id surfaces = 0;          // labels extracted
   Id soup_corners = 0;      // triangle corners before welding
+  // Smoothing moves the fold guard shortened or refused, summed over the
+  // points and the iterations (label_fold_guard.cpp).
+  Id guard_shortened = 0;
 };
 
 // history_key, with options.history: receives every point's key.

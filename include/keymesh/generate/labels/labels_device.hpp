@@ -12,8 +12,9 @@
 //   cell (centre, junction, border axes: label_kernels) ->
 //   smoothing: the directed quad sides as (from, to) keys, sorted and made
 //   unique (each point's neighbours in increasing order), junctions keeping
-//   their junction neighbours; then Jacobi steps, one for_each per step
-//   (label_kernels::SmoothStep, the CPU path's) ->
+//   their junction neighbours; then per iteration a Jacobi step and the
+//   fold guard, one for_each each (label_kernels::SmoothStep and GuardStep,
+//   the CPU path's) ->
 //   boundary_labels from each triangle's pair.
 // Equal to contour_labels() bit for bit for the network, with any
 // smoothing, label selection and background (ctest runs it on the CPU
@@ -308,24 +309,60 @@ Stencils<D> stencils(const D& d, const Surface<D>& s) {
   return st;
 }
 
-// Surface nets' smoothing (Laplacian steps clamped to the cell), in double
-// as the CPU path does.
+// The fold guard's inputs (label_fold_guard.cpp's): each triangle's frame,
+// each point's corners (the connectivity's positions grouped by point by a
+// stable radix sort; every point has corners, so run p is point p's) and
+// its count of shortened moves.
 template <class D>
-void smooth(const D& d, Surface<D>& s, const ScannedLabels& sc, const LabelOptions& options) {
+struct Guard {
+  typename D::template Array<double> normal, least;
+  typename D::template Array<Id> offsets;
+  typename D::template Array<std::uint32_t> point_corners, shortened;
+};
+
+template <class D>
+Guard<D> guard(const D& d, const Surface<D>& s) {
+  const Id P = s.points_count, T = s.triangles, n = 3 * T;
+  Guard<D> g{d.template allocate<double>(3 * T), d.template allocate<double>(T), {},
+             d.template allocate<std::uint32_t>(n), d.template allocate<std::uint32_t>(P)};
+  d.for_each(T, label_kernels::GuardFrame{s.points.data(), s.connectivity.data(), s.junction.data(), g.normal.data(),
+                                          g.least.data()});
+  auto keys = d.template allocate<std::uint32_t>(n);
+  device::copy(d, s.connectivity.data(), n, keys.data());
+  device::iota(d, g.point_corners.data(), n);
+  d.sort_pairs(keys.data(), g.point_corners.data(), n, parallel::bits_needed(static_cast<std::uint32_t>(P - 1)));
+  g.offsets = device::run_length(d, keys.data(), n).offsets;
+  device::fill(d, g.shortened.data(), P, std::uint32_t{0});
+  return g;
+}
+
+// Surface nets' smoothing (Laplacian steps clamped to the cell, each
+// iteration's moves limited by the fold guard), in double as the CPU path
+// does; st.guard_shortened counts the moves the guard shortened or refused.
+template <class D>
+void smooth(const D& d, Surface<D>& s, const ScannedLabels& sc, const LabelOptions& options, LabelStats& st) {
   const Id P = s.points_count;
   if (options.smooth_iterations <= 0 || P == 0) return;
-  const Stencils<D> st = stencils(d, s);
-  auto x = d.template allocate<double>(3 * P), next = d.template allocate<double>(3 * P);
+  const Stencils<D> stencil = stencils(d, s);
+  Guard<D> g = guard(d, s);
+  auto x = d.template allocate<double>(3 * P), candidate = d.template allocate<double>(3 * P),
+       next = d.template allocate<double>(3 * P);
   d.for_each(3 * P, Convert<float, double>{s.points.data(), x.data()});
-  label_kernels::SmoothStep step{st.offsets.data(), st.neighbours.data(), s.border_axes.data(), s.centre.data(),
-                                 {0.5 * sc.place.spacing[0], 0.5 * sc.place.spacing[1], 0.5 * sc.place.spacing[2]}, true,
-                                 options.relaxation, nullptr, nullptr};
+  label_kernels::SmoothStep step{stencil.offsets.data(), stencil.neighbours.data(), s.border_axes.data(),
+                                 s.centre.data(), {0.5 * sc.place.spacing[0], 0.5 * sc.place.spacing[1],
+                                 0.5 * sc.place.spacing[2]}, true, options.relaxation, nullptr, candidate.data()};
+  label_kernels::GuardStep limit{s.connectivity.data(), g.offsets.data(), g.point_corners.data(), g.normal.data(),
+                                 g.least.data(), nullptr, candidate.data(), nullptr, g.shortened.data()};
   for (int it = 0; it < options.smooth_iterations; ++it) {
-    step.x = x.data(), step.next = next.data();
+    step.x = x.data();
     d.for_each(P, step);
+    limit.x = x.data(), limit.out = next.data();
+    d.for_each(P, limit);
     std::swap(x, next);
   }
   d.for_each(3 * P, Convert<double, float>{x.data(), s.points.data()});
+  auto total = d.template allocate<Id>(P);
+  st.guard_shortened = d.exclusive_scan(g.shortened.data(), total.data(), P);
 }
 
 // The mesh contour_labels returns: points, triangles, boundary_labels.
@@ -371,7 +408,7 @@ SurfaceMesh contour_labels_on(const D& d, const ImageGrid& grid, const LabelOpti
                      ? network<D, std::uint32_t>(d, sc, vol, st)
                      : network<D, std::uint64_t>(d, sc, vol, st);
   mark = d.begin_stage(&st.smooth);
-  smooth(d, s, sc, options);
+  smooth(d, s, sc, options, st);
   d.end_stage(mark);
   return to_mesh(d, std::move(s), sc);
 }
