@@ -14,7 +14,8 @@
 //  - averaged normals: summed over the merged mesh in the blocks of voxel
 //    layers the whole contour sums them in (generate/layer_blocks.hpp, as
 //    the streamed and MPI contours do); coarsening: the merged fine mesh
-//    coarsened by its points' nearest grid points, as contour_streamed does.
+//    coarsened by its points' nearest grid points at once, as the in-memory
+//    --coarsen does (the slab-by-slab streamed one gives the same bytes).
 //  - a C-ordered volume was contoured with its axes reversed: mirrored back
 //    last, as keymesh.contour does.
 #include <limits>
