@@ -66,7 +66,8 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
 // --coarsen into OUT.pvtp under mpirun: every rank its piece of the coarse
 // surface, made from its layers and a halo (distributed/coarse_pieces.hpp),
 // nothing gathered; welded by their global ids, the one process's output.
+// memory_limit (--memory-limit, 0: none) streams the rank's planes in slabs.
 int run_coarse_pieces(const ContourCli& o, const generate::ContourOptions& options, PlaneSource& source,
-                      int threads);
+                      int threads, std::size_t memory_limit);
 
 }  // namespace keymesh::cli

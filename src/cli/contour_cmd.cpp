@@ -232,9 +232,9 @@ bool runs_distributed(const ContourCli& o) {
 }
 
 // Usage errors of the distributed contour (exit 2, said once by rank 0).
-// --memory-limit streams each rank's planes, except where a rank must hold
-// them together: --balance (counted, then kept) and coarsened pieces (halo
-// layers contoured and coarsened as one part).
+// --memory-limit streams each rank's planes (its halo layers too, for
+// coarsened pieces), except with --balance, which counts the equal slab's
+// layers and keeps it.
 int refuse_distributed_usage(const ContourCli& o) {
   const bool tets = !o.raw_input.given() && io::is_grid_file(o.input);
   std::string why;
@@ -242,9 +242,6 @@ int refuse_distributed_usage(const ContourCli& o) {
     why = o.input + ": marching tetrahedra is not distributed; run it as one process";
   else if (!o.memory_limit.empty() && o.balance)
     why = "--memory-limit with --balance under mpirun: balancing holds each rank's equal slab; drop one of them";
-  else if (!o.memory_limit.empty() && o.coarsen && io::file_extension(o.output) == ".pvtp")
-    why = "--memory-limit with --coarsen and .pvtp pieces under mpirun: each rank coarsens its slab and halo as "
-          "one part; write a gathered file (.vtp, .ply ...) or drop --memory-limit";
   if (why.empty()) return 0;
   if (distributed::rank() == 0) std::fprintf(stderr, "keymesh contour: %s\n", why.c_str());
   return 2;

@@ -26,7 +26,7 @@ namespace {
 std::vector<std::byte> rank_entry(const distributed::CoarsePiece& c, const StageTimer& timer) {
   const distributed::OwnPiece& w = c.piece;
   const nlohmann::json e = {{"first_layer", c.first_layer}, {"layers", c.layers},
-                            {"halo_layers", c.halo_layers}, {"attempts", c.attempts},
+                            {"halo_layers", c.halo_layers}, {"attempts", c.attempts}, {"slabs", c.slabs},
                             {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
                             {"triangles", w.own_triangles},
                             {"ghost_triangles", w.mesh.num_cells() - w.own_triangles},
@@ -92,10 +92,10 @@ void report_coarse_pieces(const ContourCli& o, const ImageGrid& header, long lon
 }  // namespace
 
 int run_coarse_pieces(const ContourCli& o, const generate::ContourOptions& options, PlaneSource& source,
-                      int threads) {
+                      int threads, std::size_t memory_limit) {
   StageTimer timer;
   distributed::CoarsePiece c =
-      timer.run("contour", [&] { return distributed::coarse_piece(source, options, o.balance); });
+      timer.run("contour", [&] { return distributed::coarse_piece(source, options, o.balance, memory_limit); });
   timer.run("write", [&] {
     distributed::OwnPiece& w = c.piece;
     write_piece_files(w.mesh, w.ids, io::PieceGhosts{std::move(w.point_ghosts), std::move(w.cell_ghosts)}, o.output);

@@ -144,7 +144,7 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
   }
   StageTimer timer;
   const std::unique_ptr<PlaneSource> source = open_slab_source(o, options);
-  if (pieces && o.coarsen) return run_coarse_pieces(o, options, *source, threads);
+  if (pieces && o.coarsen) return run_coarse_pieces(o, options, *source, threads, memory_limit(o));
   distributed::ContourPiece piece =
       timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance, memory_limit(o)); });
   const double total_points = static_cast<double>(piece.numbering.total);

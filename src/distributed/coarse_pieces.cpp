@@ -333,7 +333,8 @@ void count_owned(CoarsePiece& out, const SurfaceMesh& mesh, const std::vector<Id
 
 }  // namespace
 
-CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance) {
+CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance,
+                         std::size_t memory_limit) {
   const ImageGrid& head = source.header();
   const int P = size(), r = rank();
   require_distributable(head, options, P);
@@ -353,7 +354,8 @@ CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& op
     out.halo_layers = h;
     const Id first = std::max<Id>(0, lo - h), end = std::min(g.layers, hi + h);
     FineLayers fine;
-    agreed([&] { fine = contour_layers(source, options, first, end); });
+    agreed([&] { fine = contour_layers(source, options, first, end, memory_limit); });
+    out.slabs += fine.slabs;
     out.read += fine.read;
     out.contour += fine.contour;
     auto t0 = Clock::now();

@@ -316,24 +316,34 @@ std::vector<Id> slab_bounds(PlaneSource& source, const generate::ContourOptions&
   return bounds;
 }
 
-FineLayers contour_layers(PlaneSource& source, const generate::ContourOptions& options, Id first, Id end) {
+FineLayers contour_layers(PlaneSource& source, const generate::ContourOptions& options, Id first, Id end,
+                          std::size_t memory_limit) {
   const ImageGrid& head = source.header();
   const Id nz = head.dims[2];
   // Derivatives read a ghost plane beyond the layers, where the grid has one.
   const bool ghosts = options.normals == generate::ContourNormals::Gradient || options.curvature;
   const Id below = ghosts && first > 0 ? 1 : 0, above = ghosts && end < nz - 1 ? 1 : 0;
+  generate::ContourOptions opt = options;
+  opt.total_planes = nz;
+  opt.coarsen = false;  // the caller coarsens the layers with their nearest grid points
+  if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
   FineLayers out;
   auto t0 = Clock::now();
+  if (memory_limit) {
+    // The planes in slabs (their ghost planes read alike), merged by key.
+    generate::StreamStats ss;
+    out.mesh = generate::contour_planes_streamed(source, opt, memory_limit, first, end, out.keys, &out.nearest, &ss);
+    out.read = ss.read;
+    out.contour = seconds_since(t0) - ss.read;
+    out.slabs = ss.slabs;
+    return out;
+  }
   ImageGrid slab = read_slab(source, HeldSlab{}, first - below, end + above);
   out.read = seconds_since(t0);
   t0 = Clock::now();
-  generate::ContourOptions opt = options;
   opt.first_plane = first - below;
-  opt.total_planes = nz;
   opt.ghost_below = below;
   opt.ghost_above = above;
-  opt.coarsen = false;  // the caller coarsens the layers with their nearest grid points
-  if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
   out.mesh = generate::contour(slab, opt, nullptr, &out.keys, &out.nearest);
   out.contour = seconds_since(t0);
   return out;

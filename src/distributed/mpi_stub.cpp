@@ -37,7 +37,7 @@ ContourPiece contour_piece(PlaneSource&, const generate::ContourOptions&, bool, 
 SurfaceMesh gather(ContourPiece&, std::vector<std::uint64_t>*) { not_built(); }
 GhostedPiece ghosted_piece(ContourPiece&) { not_built(); }
 std::vector<Id> slab_bounds(PlaneSource&, const generate::ContourOptions&, bool) { not_built(); }
-FineLayers contour_layers(PlaneSource&, const generate::ContourOptions&, Id, Id) { not_built(); }
+FineLayers contour_layers(PlaneSource&, const generate::ContourOptions&, Id, Id, std::size_t) { not_built(); }
 std::vector<RankStats> gather_stats(const RankStats&) { not_built(); }
 
 }  // namespace keymesh::distributed

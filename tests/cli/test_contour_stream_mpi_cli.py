@@ -7,9 +7,12 @@ rest of the distributed contour is unchanged. Checked: with -np 2 and 3 the
 gathered file is byte-identical to one process (two isovalues; gradient
 normals and curvature with their ghost planes; averaged normals; coarsened
 with averaged normals), the .pvtp pieces are byte-identical to the pieces
-written without a limit, and the two combinations that hold a rank's
-planes whole (--balance; --coarsen into pieces) are refused by name, said
-once."""
+written without a limit, and so are the coarsened pieces (--coarsen into
+.pvtp: each rank streams its layers and halo layers, merged by key into the
+fine mesh one read gives, at -np 2 and 3 and two limits; a plate one voxel
+thick makes the halo grow, its planes read again through the same streamed
+path). --balance, which holds a rank's planes whole, is refused by name,
+said once."""
 import os
 import sys
 
@@ -58,19 +61,66 @@ def pieces_equal():
         assert read(limited[:-5] + name) == read(whole[:-5] + name), f"piece {name} differs"
 
 
-def refused(*args, says):
-    p = mpirun(2, "contour", SPHERE, "--iso", 12.5, "-q", "--memory-limit", 4 * PLANE, *args, expect=2)
-    assert p.stderr.count(says) == 1, p.stderr
+def same_files(a, b, names):
+    for name in names:
+        assert read(os.path.join(a, name)) == read(os.path.join(b, name)), f"{name} differs"
 
 
-def refusals():
-    refused("-o", os.path.join(D, "x.vtp"), "--balance", says="--memory-limit with --balance under mpirun")
-    refused("-o", os.path.join(D, "x.pvtp"), "--coarsen", says="--memory-limit with --coarsen and .pvtp pieces")
-    assert not os.path.exists(os.path.join(D, "x.pvtp"))
+def coarse_pieces(src, args, P, limits, tag):
+    """Runs --coarsen into .pvtp without a limit and with each of `limits`
+    (bytes); asserts every piece and the index are byte-identical and every
+    rank streamed; returns the limited runs' distributed reports."""
+    names = ["x.pvtp"] + [f"x_{q}.vtp" for q in range(P)]
+    whole = os.path.join(D, f"{tag}_whole_{P}")
+    os.makedirs(whole, exist_ok=True)
+    mpirun(P, "contour", *src, "-o", os.path.join(whole, "x.pvtp"), "-q", "--coarsen", *args)
+    reports = []
+    for limit in limits:
+        sub = os.path.join(D, f"{tag}_{P}_{limit}")
+        os.makedirs(sub, exist_ok=True)
+        rep = os.path.join(sub, "r.json")
+        mpirun(P, "contour", *src, "-o", os.path.join(sub, "x.pvtp"), "-q", "--coarsen", "--memory-limit", limit,
+               "--report", rep, *args)
+        same_files(whole, sub, names)
+        d = report(rep)["distributed"]
+        assert d["output"] == "pieces" and len(d["per_rank"]) == P, d
+        assert all(q["slabs"] > q["attempts"] for q in d["per_rank"]), d["per_rank"]  # each attempt streamed
+        reports.append(d)
+    return reports
+
+
+def coarse_pieces_equal():
+    for P in (2, 3):
+        coarse_pieces([SPHERE], ["--iso", 12.5, "--normals", "average"], P, (3 * PLANE, 7 * PLANE), "sphere")
+
+
+def plate_halo_grows_streamed():
+    import numpy as np
+    nx, ny, nz = 33, 29, 40
+    v = np.zeros((nz, ny, nx), np.float32)
+    rng = np.random.default_rng(5)
+    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((nz, 21))
+    v[:, 4:25, 15] = 0.3 * rng.random((nz, 21))
+    v[:, 4:25, 17] = 0.3 * rng.random((nz, 21))
+    path = os.path.join(D, "plate.raw")
+    v.tofile(path)
+    d = coarse_pieces([path, "--dims", nx, ny, nz], ["--iso", 0.55], 3, (4 * nx * ny * 4,), "plate")[0]
+    assert d["attempts"] >= 2, d  # the halo grew: its planes were read again, streamed
+
+
+def refusal():
+    p = mpirun(2, "contour", SPHERE, "--iso", 12.5, "-q", "--memory-limit", 4 * PLANE, "-o",
+               os.path.join(D, "x.vtp"), "--balance", expect=2)
+    assert p.stderr.count("--memory-limit with --balance under mpirun") == 1, p.stderr
+    assert not os.path.exists(os.path.join(D, "x.vtp"))
 
 
 check("-np 2 and 3 --memory-limit: gathered file byte-identical to one process (isovalues, normals, coarsen)",
       gathered_equal)
 check("-np 2 --memory-limit -o X.pvtp: pieces byte-identical to the pieces without a limit", pieces_equal)
-check("--memory-limit with --balance, or with --coarsen into pieces: refused by name, said once", refusals)
+check("-np 2 and 3 --coarsen --normals average -o X.pvtp, two limits: pieces byte-identical to no limit",
+      coarse_pieces_equal)
+check("-np 3 --coarsen -o X.pvtp, a plate that grows the halo: streamed pieces byte-identical to no limit",
+      plate_halo_grows_streamed)
+check("--memory-limit with --balance: refused by name, said once", refusal)
 finish()

@@ -17,6 +17,7 @@
 // the whole volume. The pieces, welded by their global ids, are then the
 // one process's output: its points in its order with the same bits
 // (averaged normals included), its triangles.
+#include <cstddef>
 #include <cstdint>
 
 #include "keymesh/distributed/halo_piece.hpp"
@@ -29,6 +30,7 @@ struct CoarsePiece {
   Id first_layer = 0, layers = 0;
   Id halo_layers = 0;           // the halo that passed the check
   int attempts = 0;             // halos tried (1: the first passed)
+  Id slabs = 0;                 // reads of planes, all attempts (one each without --memory-limit)
   Id triangles_before = 0;      // fine triangles of its own layers
   // check_fans' counts at the points it owns (their share of the whole's).
   Id nonmanifold_edges = 0, nonmanifold_vertices = 0, boundary_edges = 0;
@@ -38,7 +40,11 @@ struct CoarsePiece {
 // The halo first tried, in voxel layers.
 constexpr Id kFirstCoarseHalo = 8;
 
-// Collective: this rank's piece of the coarsened contour.
-CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance);
+// Collective: this rank's piece of the coarsened contour. A non-zero
+// `memory_limit` (--memory-limit, bytes of samples) reads every attempt's
+// planes in slabs within it and merges them by key into the fine mesh one
+// read gives (contour_layers), so the pieces are those made without it.
+CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& options, bool balance,
+                         std::size_t memory_limit = 0);
 
 }  // namespace keymesh::distributed

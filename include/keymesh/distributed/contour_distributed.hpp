@@ -76,13 +76,18 @@ std::vector<Id> slab_bounds(PlaneSource& source, const generate::ContourOptions&
 // The fine surface of voxel layers [first, end) with every point's global
 // edge key and nearest grid point (its coarse key), read from `source` (a
 // ghost plane either side for derivatives, as contour_piece reads them);
-// averaged normals are left to the caller. Not collective.
+// averaged normals are left to the caller. Not collective. A non-zero
+// `memory_limit` (--memory-limit) streams the planes in slabs of at most
+// that many bytes, merged by key: the same mesh, keys and nearest grid
+// points as one read (generate::contour_planes_streamed).
 struct FineLayers {
   SurfaceMesh mesh;
   std::vector<std::uint64_t> keys, nearest;
   double read = 0, contour = 0;  // seconds
+  Id slabs = 1;                  // reads made
 };
-FineLayers contour_layers(PlaneSource& source, const generate::ContourOptions& options, Id first, Id end);
+FineLayers contour_layers(PlaneSource& source, const generate::ContourOptions& options, Id first, Id end,
+                          std::size_t memory_limit = 0);
 
 // Collective: rank 0 returns the whole mesh (points in global id order,
 // triangles isovalue by isovalue in rank order: the single-process file;
