@@ -215,6 +215,45 @@ def triangles_of(poly):
     return conn.reshape(-1, 3)
 
 
+def welded_vtk_pieces(index, P, n_points, piece_rows, point_array=None):
+    """A .pvtp's pieces read by VTK's parallel reader and welded by their
+    GlobalPointIds: the points (float32, by global id), the named point
+    array (float32 rows by id, or None), and piece_rows(piece, triangles in
+    global ids, owned mask) of every non-empty piece. Every copy of a point
+    (and of its array row) must agree bit for bit, and every id be held."""
+    import numpy as np
+    import vtk
+    from vtk.util import numpy_support as ns
+    reader = vtk.vtkXMLPPolyDataReader()
+    reader.SetFileName(index)
+    pts = np.full((n_points, 3), np.nan, np.float32)
+    arr = None
+    rows = []
+    for q in range(P):
+        reader.UpdatePiece(q, P, 0)
+        piece = reader.GetOutput()
+        if piece.GetNumberOfPoints() == 0:
+            continue
+        gid = ns.vtk_to_numpy(piece.GetPointData().GetGlobalIds()).astype(np.int64)
+        p = ns.vtk_to_numpy(piece.GetPoints().GetData()).astype(np.float32)
+        assert gid.min() >= 0 and gid.max() < n_points, (gid.min(), gid.max(), n_points)
+        seen = ~np.isnan(pts[gid, 0])
+        assert np.array_equal(pts[gid[seen]].view(np.uint32), p[seen].view(np.uint32)), "pieces disagree on a point"
+        pts[gid] = p
+        a = piece.GetPointData().GetArray(point_array) if point_array else None
+        if a is not None:
+            a = ns.vtk_to_numpy(a).astype(np.float32).reshape(len(gid), -1)
+            if arr is None:
+                arr = np.full((n_points, a.shape[1]), np.nan, np.float32)
+            assert np.array_equal(arr[gid[seen]].view(np.uint32), a[seen].view(np.uint32)), \
+                f"pieces disagree on a {point_array} row"
+            arr[gid] = a
+        ghost = ns.vtk_to_numpy(piece.GetCellData().GetArray("vtkGhostType")) & 1
+        rows.append(piece_rows(piece, gid[triangles_of(piece)], ghost == 0))
+    assert not np.isnan(pts).any(), "a global id no piece holds"
+    return pts, arr, rows
+
+
 def canonical_mesh(points, tris):
     """Points sorted lexicographically and triangles renumbered accordingly,
     each rotated to start at its smallest id and the list sorted: two meshes

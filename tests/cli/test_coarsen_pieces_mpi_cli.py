@@ -26,11 +26,10 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from kmtest import (box_filtered_noise, check, finish, mpirun, read_polydata, report, require_mpi,  # noqa: E402
-                    require_vtk, run, tempdir)
+                    require_vtk, run, tempdir, triangles_of, welded_vtk_pieces)
 
 require_vtk()
 import numpy as np  # noqa: E402
-import vtk  # noqa: E402
 from vtk.util import numpy_support as ns  # noqa: E402
 
 D = tempdir()
@@ -43,15 +42,6 @@ COUNTS = ("triangles_before", "triangles_after", "nonmanifold_edges", "nonmanifo
 require_mpi("contour", *SRC, "--iso", 0.5, "-o", os.path.join(D, "probe.vtp"), "-q")
 
 
-def triangles(poly):
-    if poly.GetPolys().GetNumberOfCells() == 0:
-        return np.zeros((0, 3), np.int64)
-    conn = ns.vtk_to_numpy(poly.GetPolys().GetConnectivityArray()).astype(np.int64)
-    offs = ns.vtk_to_numpy(poly.GetPolys().GetOffsetsArray())
-    assert (np.diff(offs) == 3).all(), "not all cells are triangles"
-    return conn.reshape(-1, 3)
-
-
 def sorted_rows(tris):
     return tris[np.lexsort(tris.T[::-1])] if len(tris) else tris
 
@@ -62,32 +52,12 @@ def normals(poly):
 
 
 def welded_by_vtk(index, P, n_points):
-    """The pieces read by VTK's parallel reader, welded by GlobalPointIds:
+    """The pieces welded by GlobalPointIds (kmtest.welded_vtk_pieces):
     points and normals (float32, by id; every copy of a point must agree)
     and the pieces' own triangles in global ids, sorted."""
-    reader = vtk.vtkXMLPPolyDataReader()
-    reader.SetFileName(index)
-    pts = np.full((n_points, 3), np.nan, np.float32)
-    nrm = np.full((n_points, 3), np.nan, np.float32)
-    rows = []
-    for q in range(P):
-        reader.UpdatePiece(q, P, 0)
-        piece = reader.GetOutput()
-        if piece.GetNumberOfPoints() == 0:
-            continue
-        gid = ns.vtk_to_numpy(piece.GetPointData().GetGlobalIds()).astype(np.int64)
-        p = ns.vtk_to_numpy(piece.GetPoints().GetData()).astype(np.float32)
-        n = normals(piece)
-        assert gid.min() >= 0 and gid.max() < n_points, (gid.min(), gid.max(), n_points)
-        seen = ~np.isnan(pts[gid, 0])
-        assert np.array_equal(pts[gid[seen]].view(np.uint32), p[seen].view(np.uint32)), "pieces disagree on a point"
-        pts[gid] = p
-        if n is not None:
-            assert np.array_equal(nrm[gid[seen]].view(np.uint32), n[seen].view(np.uint32)), "pieces disagree on a normal"
-            nrm[gid] = n
-        ghost = ns.vtk_to_numpy(piece.GetCellData().GetArray("vtkGhostType")) & 1
-        rows.append(gid[triangles(piece)][ghost == 0])
-    assert not np.isnan(pts).any(), "a global id no piece holds"
+    pts, nrm, rows = welded_vtk_pieces(index, P, n_points, lambda piece, tris, owned: tris[owned], "Normals")
+    if nrm is None:
+        nrm = np.full((n_points, 3), np.nan, np.float32)
     return pts, nrm, sorted_rows(np.concatenate(rows))
 
 
@@ -100,7 +70,7 @@ def pieces_equal_one_process(src, args, ranks=(2, 3), min_attempts=1):
         ref = read_polydata(ref_path)
         ref_pts = ns.vtk_to_numpy(ref.GetPoints().GetData()).astype(np.float32)
         ref_nrm = normals(ref)
-        ref_rows = sorted_rows(triangles(ref))
+        ref_rows = sorted_rows(triangles_of(ref))
         assert len(ref_rows) > 100 and ref_report["triangles_before"] > len(ref_rows), ref_report
         for P in ranks:
             sub = os.path.join(D, f"p{P}_{tag}")
@@ -130,7 +100,7 @@ def pieces_equal_one_process(src, args, ranks=(2, 3), min_attempts=1):
             run("convert", index, "-o", conv, "-q")
             back = read_polydata(conv)
             assert np.array_equal(ns.vtk_to_numpy(back.GetPoints().GetData()).view(np.uint32), ref_pts.view(np.uint32))
-            assert np.array_equal(sorted_rows(triangles(back)), ref_rows), "keymesh's reader: triangles differ"
+            assert np.array_equal(sorted_rows(triangles_of(back)), ref_rows), "keymesh's reader: triangles differ"
         return d
     return fn
 

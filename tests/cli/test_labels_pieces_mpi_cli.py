@@ -21,11 +21,10 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from kmtest import (boxes_in_noise, check, finish, mpirun, read_polydata, report, require_mpi,  # noqa: E402
-                    require_vtk, run, tempdir, write_raw)
+                    require_vtk, run, tempdir, triangles_of, welded_vtk_pieces, write_raw)
 
 require_vtk()
 import numpy as np  # noqa: E402
-import vtk  # noqa: E402
 from vtk.util import numpy_support as ns  # noqa: E402
 
 D = tempdir()
@@ -48,36 +47,10 @@ def cell_rows(poly, tris, keep=None):
     return rows[np.lexsort(rows.T[::-1])]
 
 
-def triangles(poly):
-    if poly.GetPolys().GetNumberOfCells() == 0:
-        return np.zeros((0, 3), np.int64)
-    conn = ns.vtk_to_numpy(poly.GetPolys().GetConnectivityArray()).astype(np.int64)
-    offs = ns.vtk_to_numpy(poly.GetPolys().GetOffsetsArray())
-    assert (np.diff(offs) == 3).all(), "not all cells are triangles"
-    return conn.reshape(-1, 3)
-
-
 def welded_by_vtk(index, P, n_points):
-    """The pieces read by VTK's parallel reader, welded by GlobalPointIds:
+    """The pieces welded by GlobalPointIds (kmtest.welded_vtk_pieces):
     points (float32, by id) and the rows of the pieces' own triangles."""
-    reader = vtk.vtkXMLPPolyDataReader()
-    reader.SetFileName(index)
-    pts = np.full((n_points, 3), np.nan, np.float32)
-    rows = []
-    for q in range(P):
-        reader.UpdatePiece(q, P, 0)
-        piece = reader.GetOutput()
-        if piece.GetNumberOfPoints() == 0:
-            continue
-        gid = ns.vtk_to_numpy(piece.GetPointData().GetGlobalIds()).astype(np.int64)
-        p = ns.vtk_to_numpy(piece.GetPoints().GetData()).astype(np.float32)
-        assert gid.min() >= 0 and gid.max() < n_points, (gid.min(), gid.max(), n_points)
-        seen = ~np.isnan(pts[gid, 0])
-        assert np.array_equal(pts[gid[seen]].view(np.uint32), p[seen].view(np.uint32)), "pieces disagree on a point"
-        pts[gid] = p
-        ghost = ns.vtk_to_numpy(piece.GetCellData().GetArray("vtkGhostType")) & 1
-        rows.append(cell_rows(piece, gid[triangles(piece)], ghost == 0))
-    assert not np.isnan(pts).any(), "a global id no piece holds"
+    pts, _, rows = welded_vtk_pieces(index, P, n_points, cell_rows)
     merged = np.concatenate(rows)
     return pts, merged[np.lexsort(merged.T[::-1])]
 
@@ -89,7 +62,7 @@ def pieces_equal_one_process(args, ranks=(2, 3), extra=()):
         ref_pairs = report(ref_path + ".json")["pairs"]
         ref = read_polydata(ref_path)
         ref_pts = ns.vtk_to_numpy(ref.GetPoints().GetData()).astype(np.float32)
-        ref_rows = cell_rows(ref, triangles(ref))
+        ref_rows = cell_rows(ref, triangles_of(ref))
         for P in ranks:
             sub = os.path.join(D, f"p{P}_{abs(hash(tuple(args))) % 10**8}")
             os.makedirs(sub, exist_ok=True)
@@ -115,7 +88,7 @@ def pieces_equal_one_process(args, ranks=(2, 3), extra=()):
             run("convert", index, "-o", conv, "-q")
             back = read_polydata(conv)
             assert np.array_equal(ns.vtk_to_numpy(back.GetPoints().GetData()).view(np.uint32), ref_pts.view(np.uint32))
-            assert np.array_equal(cell_rows(back, triangles(back)), ref_rows), "keymesh's reader: triangles differ"
+            assert np.array_equal(cell_rows(back, triangles_of(back)), ref_rows), "keymesh's reader: triangles differ"
     return fn
 
 
@@ -153,7 +126,7 @@ def default_smoothing_on_a_tall_volume():
         a = read_polydata(ref)
         pts, rows = welded_by_vtk(index, 3, a.GetNumberOfPoints())
         assert np.array_equal(pts.view(np.uint32), ns.vtk_to_numpy(a.GetPoints().GetData()).view(np.uint32)), method
-        assert np.array_equal(rows, cell_rows(a, triangles(a))), method
+        assert np.array_equal(rows, cell_rows(a, triangles_of(a))), method
 
 
 check("default smoothing (16 steps) on a taller volume, both methods, -np 3: pieces equal one process",
@@ -174,7 +147,7 @@ def thin_volume_rank_without_rows():
     run("convert", os.path.join(sub, "t.pvtp"), "-o", conv, "-q")
     a, b = read_polydata(ref), read_polydata(conv)
     assert np.array_equal(ns.vtk_to_numpy(a.GetPoints().GetData()), ns.vtk_to_numpy(b.GetPoints().GetData()))
-    assert np.array_equal(cell_rows(a, triangles(a)), cell_rows(b, triangles(b)))
+    assert np.array_equal(cell_rows(a, triangles_of(a)), cell_rows(b, triangles_of(b)))
 
 
 check("a one-plane volume on 4 ranks (a rank without rows): its piece is empty, the whole equals one process",
