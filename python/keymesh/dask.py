@@ -24,6 +24,14 @@ slab's pieces of the surfaces with global keys, merged, smoothed and
 coarsened by one task: equal to ``keymesh.contour_labels`` on the whole
 array, bit for bit.
 
+labels_precomputed: Neuroglancer's multi-resolution meshes, one task per
+Neuroglancer lod-0 chunk (the grid ``chunk_shape`` sets, whatever the Dask
+chunks): each task reads its chunk's box plus the halo the meshing needs
+(``array[box]``: only the Dask chunks that overlap it) and keeps its pieces
+under ``path/chunks/`` as ``keymesh labels --chunk I J K`` does; one final
+task writes the output from them as ``--assemble`` does. The directory is
+byte-identical to the one-call run's.
+
 The merge task holds the whole output mesh (the result comes back to the
 caller anyway). Runs on any Dask scheduler: the threaded default, processes
 or a ``dask.distributed`` cluster (the client in force).
@@ -38,7 +46,7 @@ import numpy as np
 from . import _keymesh as _ext
 from . import Error, Mesh, _isovalues, _mesh, _threads
 
-__all__ = ["contour", "contour_labels"]
+__all__ = ["contour", "contour_labels", "labels_precomputed"]
 
 
 def _dask_array(array):
@@ -274,4 +282,79 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
     pieces = [delayed(_labels_pieces)(s, f0, whole, rows, options, distinct, counts, spacing, origin, threads)
               for s, f0, rows in slabs]
     result = delayed(_labels_merge)(np.dtype(array.dtype), whole, options, distinct, counts, pieces, spacing, origin)
+    return _compute(result, compute, scheduler)
+
+
+def _precomputed_chunk(box, whole, chunk, spacing, origin, path, options, threads):
+    return _ext.precomputed_chunk(np.asarray(box), whole, chunk, spacing, origin, path, options, threads)
+
+
+def _precomputed_assemble(whole, spacing, origin, path, options, names, counts):
+    _ext.precomputed_assemble(whole, spacing, origin, path, options, names)
+    segments = set()
+    report = {"segments": [], "pieces": 0, "chunks_written": 0, "triangles_per_lod": []}
+    for c in counts:
+        segments.update(c["segments"])
+        report["pieces"] += c["pieces"]
+        report["chunks_written"] += c["chunks_written"]
+        per_lod = report["triangles_per_lod"]
+        per_lod.extend([0] * (len(c["triangles_per_lod"]) - len(per_lod)))
+        for lod, n in enumerate(c["triangles_per_lod"]):
+            per_lod[lod] += n
+    report["segments"] = sorted(segments)
+    return report
+
+
+def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequence[int] = (32, 32, 32),
+                       sharded: bool = False, method: str = "surfacenets", labels: Optional[Sequence[int]] = None,
+                       background: int = 0, smooth: int = 16, relaxation: float = 0.5,
+                       spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
+                       origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0), label_names: Any = None,
+                       threads: int = 1, compute: bool = True, scheduler: Any = None):
+    """Neuroglancer multi-resolution meshes of a chunked 3-D Dask label map:
+    the directory ``keymesh.labels_precomputed`` (and ``keymesh labels IN -o
+    path --format precomputed``) writes, byte for byte, made chunk by chunk.
+
+    Tasks: one per Neuroglancer lod-0 chunk (``chunk_shape``; the Dask
+    chunking does not matter), each reading ``array[box]``, its chunk's box
+    grown by the meshing's halo (``--smooth`` samples, twice that for
+    discrete-mc, plus 4), meshing it and writing its pieces to
+    ``path/chunks/`` (``keymesh labels --chunk I J K``; chunk tasks may run
+    side by side, in threads or processes); then one task writes the output
+    from every chunk's pieces (``keymesh labels --assemble``).
+
+    Args:
+        array: a 3-D integer dask.array.Array (axis 0 is x; other arrays
+            are wrapped with da.from_array).
+        path, lods, chunk_shape, sharded, method, labels, background,
+        smooth, relaxation, spacing, origin, label_names: as
+            keymesh.labels_precomputed (a label table named by label_names
+            is read when the graph is made).
+        threads: worker threads of each chunk's task (default 1: the
+            scheduler runs tasks side by side).
+        compute, scheduler: as keymesh.dask.contour (compute=False returns
+            a dask Delayed whose result is the report).
+
+    Returns:
+        dict: ``segments``, ``pieces``, ``chunks_written``,
+        ``triangles_per_lod``, equal to keymesh.labels_precomputed's.
+    """
+    import dask
+    from . import _precomputed
+    array = _dask_array(array)
+    _check_dtype(array.dtype)
+    if np.dtype(array.dtype).kind == "f":
+        raise Error(f"labels: a {np.dtype(array.dtype).name} volume is not a label map "
+                    "(integer samples: uint8, int8, uint16, int16, int32)")
+    opts = _precomputed.options(lods, chunk_shape, sharded, method, labels, background, smooth, relaxation)
+    path = _precomputed.output_path(path)
+    threads = _threads(threads)
+    whole = tuple(int(n) for n in array.shape)
+    names = _precomputed.segment_names(label_names, opts[2])
+    plan = _ext.precomputed_plan(whole, opts, path)
+    task = dask.delayed(_precomputed_chunk, pure=True)
+    counts = [task(array[tuple(slice(a, a + n) for a, n in zip(lo, dims))], whole, tuple(chunk), spacing, origin,
+                   path, opts, threads)
+              for chunk, lo, dims in plan["boxes"]]
+    result = dask.delayed(_precomputed_assemble, pure=False)(whole, spacing, origin, path, opts, names, counts)
     return _compute(result, compute, scheduler)
