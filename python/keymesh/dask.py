@@ -45,6 +45,7 @@ import numpy as np
 
 from . import _keymesh as _ext
 from . import Error, Mesh, _isovalues, _mesh, _threads
+from ._arguments import int_arg
 
 __all__ = ["contour", "contour_labels", "labels_precomputed"]
 
@@ -285,23 +286,24 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
     return _compute(result, compute, scheduler)
 
 
-def _precomputed_chunk(box, whole, chunk, spacing, origin, path, options, threads):
-    return _ext.precomputed_chunk(np.asarray(box), whole, chunk, spacing, origin, path, options, threads)
+def _precomputed_chunk(box, whole, chunk, spacing, origin, path, options, threads, update):
+    return _ext.precomputed_chunk(np.asarray(box), whole, chunk, spacing, origin, path, options, threads, update)
 
 
-def _precomputed_assemble(whole, spacing, origin, path, options, names, counts):
-    _ext.precomputed_assemble(whole, spacing, origin, path, options, names)
+def _precomputed_assemble(whole, spacing, origin, path, options, names, update, counts):
     segments = set()
-    report = {"segments": [], "pieces": 0, "chunks_written": 0, "triangles_per_lod": []}
-    for c in counts:
+    for c in counts:  # --update: the segments the re-meshed chunks held before or hold now
         segments.update(c["segments"])
+        segments.update(c.get("kept_segments", []))
+    _ext.precomputed_assemble(whole, spacing, origin, path, options, names, sorted(segments) if update else None)
+    report = {"segments": sorted(segments), "pieces": 0, "chunks_written": 0, "triangles_per_lod": []}
+    for c in counts:
         report["pieces"] += c["pieces"]
         report["chunks_written"] += c["chunks_written"]
         per_lod = report["triangles_per_lod"]
         per_lod.extend([0] * (len(c["triangles_per_lod"]) - len(per_lod)))
         for lod, n in enumerate(c["triangles_per_lod"]):
             per_lod[lod] += n
-    report["segments"] = sorted(segments)
     return report
 
 
@@ -310,7 +312,8 @@ def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequen
                        background: int = 0, smooth: int = 16, relaxation: float = 0.5,
                        spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
                        origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0), label_names: Any = None,
-                       threads: int = 1, compute: bool = True, scheduler: Any = None):
+                       threads: int = 1, compute: bool = True, scheduler: Any = None,
+                       update: Optional[Sequence[Sequence[int]]] = None):
     """Neuroglancer multi-resolution meshes of a chunked 3-D Dask label map:
     the directory ``keymesh.labels_precomputed`` (and ``keymesh labels IN -o
     path --format precomputed``) writes, byte for byte, made chunk by chunk.
@@ -321,7 +324,9 @@ def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequen
     discrete-mc, plus 4), meshing it and writing its pieces to
     ``path/chunks/`` (``keymesh labels --chunk I J K``; chunk tasks may run
     side by side, in threads or processes); then one task writes the output
-    from every chunk's pieces (``keymesh labels --assemble``).
+    from every chunk's pieces (``keymesh labels --assemble``). On a
+    dask.distributed cluster, ``path`` must be one directory for every
+    worker (a shared file system).
 
     Args:
         array: a 3-D integer dask.array.Array (axis 0 is x; other arrays
@@ -334,6 +339,12 @@ def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequen
             scheduler runs tasks side by side).
         compute, scheduler: as keymesh.dask.contour (compute=False returns
             a dask Delayed whose result is the report).
+        update: re-mesh an edit (``keymesh labels --update CHUNKS``): the
+            chunks (i, j, k) inside which ``array`` differs from the volume
+            of the run that wrote ``path`` (its ``path/chunks/`` is needed).
+            Only the chunks within the halo's reach of them are re-meshed (a
+            task each) and only the segments they held or hold rewritten;
+            the directory then equals a full run on ``array``.
 
     Returns:
         dict: ``segments``, ``pieces``, ``chunks_written``,
@@ -351,10 +362,15 @@ def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequen
     threads = _threads(threads)
     whole = tuple(int(n) for n in array.shape)
     names = _precomputed.segment_names(label_names, opts[2])
-    plan = _ext.precomputed_plan(whole, opts, path)
-    task = dask.delayed(_precomputed_chunk, pure=True)
+    changed = None if update is None else [tuple(int_arg(v, "update") for v in np.asarray(c).reshape(-1))
+                                           for c in update]
+    if changed is not None and any(len(c) != 3 for c in changed):
+        raise ValueError(f"update must be chunks (i, j, k), got {update!r}")
+    plan = _ext.precomputed_plan(whole, opts, path, changed)
+    task = dask.delayed(_precomputed_chunk, pure=False)  # it writes a file: never merged with another graph's
     counts = [task(array[tuple(slice(a, a + n) for a, n in zip(lo, dims))], whole, tuple(chunk), spacing, origin,
-                   path, opts, threads)
+                   path, opts, threads, changed is not None)
               for chunk, lo, dims in plan["boxes"]]
-    result = dask.delayed(_precomputed_assemble, pure=False)(whole, spacing, origin, path, opts, names, counts)
+    result = dask.delayed(_precomputed_assemble, pure=False)(whole, spacing, origin, path, opts, names,
+                                                             changed is not None, counts)
     return _compute(result, compute, scheduler)

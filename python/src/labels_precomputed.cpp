@@ -5,6 +5,7 @@
 // (generate/labels/labels_multilod.hpp, io/neuroglancer_runs.hpp), so that
 // the directories are byte-identical.
 #include <filesystem>
+#include <optional>
 
 #include "common.hpp"
 #include "keymesh/generate/labels/labels_multilod.hpp"
@@ -121,19 +122,34 @@ py::dict write_whole(const py::object& volume, const py::object& spacing, const 
   return counts_dict(n);
 }
 
-// The chunk grid of a volume of `whole` samples and every chunk's box (the
-// samples its task reads): {"chunks", "halo", "boxes": [(chunk, lo, dims)]}.
-py::dict plan(const std::array<Id, 3>& whole, const py::tuple& options, const std::string& path) {
+// The chunks to mesh: every chunk of the grid, or (`update`: the chunks an
+// edit changed) those within the halo's reach of them, as --update picks them.
+std::vector<std::array<Id, 3>> chunks_to_mesh(const generate::MultilodGrid& g, const Precomputed& p,
+                                              const std::string& path, const py::object& update) {
+  if (!update.is_none()) {
+    if (!std::filesystem::is_directory(std::filesystem::path(path) / "chunks"))
+      throw InputError(path + ": no chunk store (" + path + "/chunks) of an earlier precomputed run to update");
+    return generate::multilod_affected_chunks(g, p.multilod, update.cast<std::vector<std::array<Id, 3>>>());
+  }
+  std::vector<std::array<Id, 3>> all;
+  for (Id z = 0; z < g.chunks[2]; ++z)
+    for (Id y = 0; y < g.chunks[1]; ++y)
+      for (Id x = 0; x < g.chunks[0]; ++x) all.push_back({x, y, z});
+  return all;
+}
+
+// The chunk grid of a volume of `whole` samples and the box (the samples its
+// task reads) of every chunk to mesh: {"chunks", "halo", "boxes": [(chunk, lo, dims)]}.
+py::dict plan(const std::array<Id, 3>& whole, const py::tuple& options, const std::string& path,
+              const py::object& update) {
   const Precomputed p = precomputed_of(options);
   output_dir(path);
   const generate::MultilodGrid g = generate::multilod_grid(whole, p.multilod);
   py::list boxes;
-  for (Id z = 0; z < g.chunks[2]; ++z)
-    for (Id y = 0; y < g.chunks[1]; ++y)
-      for (Id x = 0; x < g.chunks[0]; ++x) {
-        const generate::MultilodBox box = generate::multilod_chunk_box(whole, p.multilod, {x, y, z});
-        boxes.append(py::make_tuple(std::array<Id, 3>{x, y, z}, box.lo, box.dims));
-      }
+  for (const auto& c : chunks_to_mesh(g, p, path, update)) {
+    const generate::MultilodBox box = generate::multilod_chunk_box(whole, p.multilod, c);
+    boxes.append(py::make_tuple(c, box.lo, box.dims));
+  }
   py::dict d;
   d["chunks"] = g.chunks;
   d["chunk_shape"] = g.chunk_shape;
@@ -144,9 +160,11 @@ py::dict plan(const std::array<Id, 3>& whole, const py::tuple& options, const st
 
 // `--chunk I J K`: the chunk's pieces from its box's samples (`box`, shape
 // the box's dims, axis 0 = x) into path/chunks/.
+// With `update`, "kept_segments" are the segments of the chunk's earlier
+// pieces, read before they are replaced (--update rewrites those too).
 py::dict write_chunk(const py::object& box_samples, const std::array<Id, 3>& whole, const std::array<Id, 3>& chunk,
                      const py::object& spacing, const py::object& origin, const std::string& path,
-                     const py::tuple& options, int threads) {
+                     const py::tuple& options, int threads, bool update) {
   check_threads(threads);
   const Precomputed p = precomputed_of(options);
   const ImageGrid header = whole_header(whole, spacing, origin);
@@ -158,23 +176,31 @@ py::dict write_chunk(const py::object& box_samples, const std::array<Id, 3>& who
                           " " + std::to_string(chunk[2]) + " needs its box's " + std::to_string(box.dims[0]) + " x " +
                           std::to_string(box.dims[1]) + " x " + std::to_string(box.dims[2]) + " samples");
   ng::PieceCounts n;
+  std::vector<std::uint64_t> kept;
   run_released(threads, [&] {
     std::vector<ng::ChunkPiece> pieces =
         ng::to_chunk_pieces(generate::multilod_box_pieces(view.grid, whole, box, p.multilod, chunk));
     n.add(pieces);
     n.chunks = 1;
+    if (update) kept = ng::kept_segments(path, ng::chunk_index(chunk));
     ng::write_chunk_pieces(path, layout_of(header, p), ng::chunk_index(chunk), pieces);
   });
-  return counts_dict(n);
+  py::dict d = counts_dict(n);
+  if (update) d["kept_segments"] = kept;
+  return d;
 }
 
-// `--assemble`: the output from every chunk's kept pieces.
+// `--assemble`: the output from every chunk's kept pieces; with `segments`
+// (`--update`), only those segments rewritten (none: nothing to write).
 void assemble(const std::array<Id, 3>& whole, const py::object& spacing, const py::object& origin,
-              const std::string& path, const py::tuple& options, const py::object& names) {
+              const std::string& path, const py::tuple& options, const py::object& names,
+              const std::optional<std::vector<std::uint64_t>>& segments) {
   const Precomputed p = precomputed_of(options);
   const ImageGrid header = whole_header(whole, spacing, origin);
   const ng::SegmentNames segment_names_ = segment_names(names, p.multilod.labels.background);
-  run_released(0, [&] { ng::assemble_multilod(path, layout_of(header, p), {}, segment_names_); });
+  if (segments && segments->empty()) return;
+  const std::vector<std::uint64_t> only = segments.value_or(std::vector<std::uint64_t>{});  // empty: all
+  run_released(0, [&] { ng::assemble_multilod(path, layout_of(header, p), only, segment_names_); });
 }
 
 }  // namespace
@@ -187,13 +213,13 @@ void register_labels_precomputed(py::module_& m) {
     return segment_names(names, background);
   }, py::arg("label_names"), py::arg("background"),
         "label_names (None, a label table's path or a dict) as {id: name}. Use keymesh.dask.labels_precomputed.");
-  m.def("precomputed_plan", &plan, py::arg("whole"), py::arg("options"), py::arg("path"),
+  m.def("precomputed_plan", &plan, py::arg("whole"), py::arg("options"), py::arg("path"), py::arg("update") = py::none(),
         "The chunk grid and every chunk's box. Use keymesh.dask.labels_precomputed.");
   m.def("precomputed_chunk", &write_chunk, py::arg("box"), py::arg("whole"), py::arg("chunk"), py::arg("spacing"),
-        py::arg("origin"), py::arg("path"), py::arg("options"), py::arg("threads") = 1,
+        py::arg("origin"), py::arg("path"), py::arg("options"), py::arg("threads") = 1, py::arg("update") = false,
         "One chunk's pieces into path/chunks/. Use keymesh.dask.labels_precomputed.");
   m.def("precomputed_assemble", &assemble, py::arg("whole"), py::arg("spacing"), py::arg("origin"), py::arg("path"),
-        py::arg("options"), py::arg("label_names"),
+        py::arg("options"), py::arg("label_names"), py::arg("segments") = py::none(),
         "The output from every chunk's pieces. Use keymesh.dask.labels_precomputed.");
 }
 

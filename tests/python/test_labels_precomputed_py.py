@@ -218,3 +218,31 @@ def test_dask_bad_arguments(tmp_path):
         keymesh.dask.labels_precomputed(negative, tmp_path / "neg", lods=2, chunk_shape=(8, 8, 8),
                                         scheduler="synchronous")
     assert not os.path.exists(tmp_path / "neg" / "info")
+
+
+def test_dask_update_equals_a_full_run(cli_run, tmp_path):
+    """update=CHUNKS (keymesh labels --update): after an edit inside chunk (0, 0, 0), re-meshing only
+    the 8 chunks it can reach (the halo, 8 samples, is under a chunk) gives the directory a full CLI
+    run on the edited volume gives."""
+    da = pytest.importorskip("dask.array")
+    import keymesh.dask
+    volume, runs, _ = cli_run
+    before, _ = runs["plain"]
+    edited = volume.copy()
+    edited[2:10, 3:11, 2:9] = 5  # inside chunk (0, 0, 0): samples [-1, 15) along each axis
+    edited[4:7, 5:8, 4:7] = 0  # a hole: segment 5 gains an inner surface
+    want = str(tmp_path / "full")
+    nrrd = kmtest.write_label_nrrd(str(tmp_path / "edited.nrrd"), edited)
+    subprocess.run([EXE, "labels", nrrd, "-o", want, "--format", "precomputed", *CLI_OPTIONS, "-q"], check=True)
+    out = str(tmp_path / "updated")
+    shutil.copytree(before, out)
+    report = keymesh.dask.labels_precomputed(da.from_array(edited, chunks=(9, 10, 11)), out, **OPTIONS,
+                                             update=[(0, 0, 0)])
+    assert_same_tree(out, want)
+    assert report["chunks_written"] == 8 and 5 in report["segments"]
+    # refusals: no chunk store; a chunk outside the grid
+    with pytest.raises(keymesh.Error, match="no chunk store"):
+        keymesh.dask.labels_precomputed(da.from_array(edited), str(tmp_path / "empty"), **OPTIONS, update=[(0, 0, 0)])
+    with pytest.raises(keymesh.Error, match="outside"):
+        keymesh.dask.labels_precomputed(da.from_array(edited), out, **OPTIONS, update=[(9, 0, 0)])
+    assert_same_tree(out, want)
