@@ -27,18 +27,8 @@ CLI_OPTIONS = ["--lods", "3", "--chunk-shape", "16", "16", "16", "--smooth", "4"
 
 
 def atlas(shape=(40, 36, 30), seed=1):
-    """Balls of labels 1-6 touching one another and the border, and a noisy slab of labels 7/8
-    (tests/cli/test_labels_precomputed_cli.py's atlas)."""
-    rng = np.random.default_rng(seed)
-    x, y, z = np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")
-    v = np.zeros(shape, np.uint8)
-    for label in range(1, 7):
-        c = rng.uniform(0, 1, 3) * np.array(shape)
-        r = rng.uniform(5, 12)
-        v[(x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 <= r * r] = label
-    slab = (z >= 3) & (z < 9)
-    v[slab] = np.where(rng.random(v[slab].shape) < 0.5, 7, 8)
-    return v
+    """tests/cli/test_labels_precomputed_cli.py's atlas."""
+    return kmtest.balls_atlas(shape, seed)
 
 
 def tree(top):
