@@ -236,3 +236,19 @@ def test_dask_update_equals_a_full_run(cli_run, tmp_path):
     with pytest.raises(keymesh.Error, match="outside"):
         keymesh.dask.labels_precomputed(da.from_array(edited), out, **OPTIONS, update=[(9, 0, 0)])
     assert_same_tree(out, want)
+
+
+def test_dask_worker_processes(cli_run, tmp_path):
+    """dask.distributed workers in processes of their own (tasks pickled, chunk files written by two
+    processes side by side): the same directory."""
+    da = pytest.importorskip("dask.array")
+    distributed = pytest.importorskip("distributed")
+    import keymesh.dask
+    volume, runs, _ = cli_run
+    want, cli_report = runs["plain"]
+    out = str(tmp_path / "ng")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=2, processes=True,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster):
+        report = keymesh.dask.labels_precomputed(da.from_array(volume, chunks=(20, 18, 15)), out, **OPTIONS)
+    assert_same_tree(out, want)
+    assert_report(report, cli_report)
