@@ -110,6 +110,13 @@ def _check_dtype(dtype):
                         "and float64 (convert with .astype(numpy.float32) for example)")
 
 
+def _check_labels_dtype(dtype):
+    _check_dtype(dtype)
+    if np.dtype(dtype).kind == "f":
+        raise Error(f"labels: a {np.dtype(dtype).name} volume is not a label map "
+                    "(integer samples: uint8, int8, uint16, int16, int32)")
+
+
 def _order(order: str) -> str:
     if order not in ("C", "F"):
         raise ValueError(f"order must be 'C' or 'F', got {order!r}")
@@ -267,10 +274,7 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
     """
     import dask
     array = _dask_array(array)
-    _check_dtype(array.dtype)
-    if np.dtype(array.dtype).kind == "f":
-        raise Error(f"labels: a {np.dtype(array.dtype).name} volume is not a label map "
-                    "(integer samples: uint8, int8, uint16, int16, int32)")
+    _check_labels_dtype(array.dtype)
     threads = _threads(threads)
     wanted = [] if labels is None else [int(v) for v in np.asarray(labels).reshape(-1)]
     options = (str(method), wanted, int(background), bool(per_label),
@@ -353,10 +357,7 @@ def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequen
     import dask
     from . import _precomputed
     array = _dask_array(array)
-    _check_dtype(array.dtype)
-    if np.dtype(array.dtype).kind == "f":
-        raise Error(f"labels: a {np.dtype(array.dtype).name} volume is not a label map "
-                    "(integer samples: uint8, int8, uint16, int16, int32)")
+    _check_labels_dtype(array.dtype)
     opts = _precomputed.options(lods, chunk_shape, sharded, method, labels, background, smooth, relaxation)
     path = _precomputed.output_path(path)
     threads = _threads(threads)
