@@ -83,6 +83,22 @@ def write_label_nrrd(path, volume):
     return path
 
 
+def balls_atlas(shape, seed):
+    """A uint8 label volume [x, y, z]: balls of labels 1-6 that touch one another and the border, and
+    a noisy slab (labels 7/8) across z 3-8 (the Neuroglancer tests' atlas)."""
+    import numpy as np
+    rng = np.random.default_rng(seed)
+    x, y, z = np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")
+    v = np.zeros(shape, np.uint8)
+    for label in range(1, 7):
+        c = rng.uniform(0, 1, 3) * np.array(shape)
+        r = rng.uniform(5, 12)
+        v[(x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 <= r * r] = label
+    slab = (z >= 3) & (z < 9)
+    v[slab] = np.where(rng.random(v[slab].shape) < 0.5, 7, 8)
+    return v
+
+
 def box_filtered_noise(shape, seed):
     """Uniform noise in [0, 1) of `shape` (z, y, x), box-filtered along each
     axis (periodic): blobs a few voxels wide, which coarsening pinches."""

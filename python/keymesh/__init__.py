@@ -425,6 +425,8 @@ Volume.to_vtk = _volume_to_vtk
 
 from ._labels import LabelMesh, contour_labels  # noqa: E402  (label maps: python/keymesh/_labels.py)
 __all__ += ["contour_labels", "LabelMesh"]
+from ._precomputed import labels_precomputed  # noqa: E402  (Neuroglancer meshes: python/keymesh/_precomputed.py)
+__all__ += ["labels_precomputed"]
 
 
 def __getattr__(name: str):

@@ -1,4 +1,5 @@
 """Type stubs of keymesh's compiled core (use the `keymesh` package)."""
+import os
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -102,3 +103,17 @@ def dask_labels_pieces(slab: np.ndarray, first_plane: int, whole: Sequence[int],
 def dask_labels_merge(dtype: Any, whole: Sequence[int], options: Tuple[Any, ...], labels: List[List[int]],
                       counts: List[bytes], pieces: List[bytes], spacing: Optional[Sequence[float]],
                       origin: Optional[Sequence[float]], threads: int = ...) -> _MeshParts: ...
+
+# keymesh.labels_precomputed (python/keymesh/_precomputed.py) and keymesh.dask.labels_precomputed's tasks.
+# options: (method, labels, background, smooth, relaxation, lods, chunk_shape, sharded).
+_LabelNames = Union[None, str, os.PathLike, Dict[int, str]]
+def labels_precomputed(volume: Union[npt.ArrayLike, Volume], spacing: Optional[Sequence[float]],
+                       origin: Optional[Sequence[float]], path: str, options: Tuple[Any, ...],
+                       label_names: _LabelNames, threads: int = ...) -> Dict[str, Any]: ...
+def precomputed_segment_names(label_names: _LabelNames, background: int) -> Dict[int, str]: ...
+def precomputed_plan(whole: Sequence[int], options: Tuple[Any, ...], path: str) -> Dict[str, Any]: ...
+def precomputed_chunk(box: np.ndarray, whole: Sequence[int], chunk: Sequence[int], spacing: Optional[Sequence[float]],
+                      origin: Optional[Sequence[float]], path: str, options: Tuple[Any, ...],
+                      threads: int = ...) -> Dict[str, Any]: ...
+def precomputed_assemble(whole: Sequence[int], spacing: Optional[Sequence[float]], origin: Optional[Sequence[float]],
+                         path: str, options: Tuple[Any, ...], label_names: _LabelNames) -> None: ...

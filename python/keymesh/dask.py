@@ -24,6 +24,14 @@ slab's pieces of the surfaces with global keys, merged, smoothed and
 coarsened by one task: equal to ``keymesh.contour_labels`` on the whole
 array, bit for bit.
 
+labels_precomputed: Neuroglancer's multi-resolution meshes, one task per
+Neuroglancer lod-0 chunk (the grid ``chunk_shape`` sets, whatever the Dask
+chunks): each task reads its chunk's box plus the halo the meshing needs
+(``array[box]``: only the Dask chunks that overlap it) and keeps its pieces
+under ``path/chunks/`` as ``keymesh labels --chunk I J K`` does; one final
+task writes the output from them as ``--assemble`` does. The directory is
+byte-identical to the one-call run's.
+
 The merge task holds the whole output mesh (the result comes back to the
 caller anyway). Runs on any Dask scheduler: the threaded default, processes
 or a ``dask.distributed`` cluster (the client in force).
@@ -37,8 +45,9 @@ import numpy as np
 
 from . import _keymesh as _ext
 from . import Error, Mesh, _isovalues, _mesh, _threads
+from ._arguments import int_arg
 
-__all__ = ["contour", "contour_labels"]
+__all__ = ["contour", "contour_labels", "labels_precomputed"]
 
 
 def _dask_array(array):
@@ -99,6 +108,13 @@ def _check_dtype(dtype):
     if dtype.newbyteorder("=") not in _SCALAR_DTYPES:
         raise TypeError(f"volume has dtype {dtype}; keymesh supports uint8, int8, uint16, int16, int32, float32 "
                         "and float64 (convert with .astype(numpy.float32) for example)")
+
+
+def _check_labels_dtype(dtype):
+    _check_dtype(dtype)
+    if np.dtype(dtype).kind == "f":
+        raise Error(f"labels: a {np.dtype(dtype).name} volume is not a label map "
+                    "(integer samples: uint8, int8, uint16, int16, int32)")
 
 
 def _order(order: str) -> str:
@@ -258,10 +274,7 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
     """
     import dask
     array = _dask_array(array)
-    _check_dtype(array.dtype)
-    if np.dtype(array.dtype).kind == "f":
-        raise Error(f"labels: a {np.dtype(array.dtype).name} volume is not a label map "
-                    "(integer samples: uint8, int8, uint16, int16, int32)")
+    _check_labels_dtype(array.dtype)
     threads = _threads(threads)
     wanted = [] if labels is None else [int(v) for v in np.asarray(labels).reshape(-1)]
     options = (str(method), wanted, int(background), bool(per_label),
@@ -274,4 +287,91 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
     pieces = [delayed(_labels_pieces)(s, f0, whole, rows, options, distinct, counts, spacing, origin, threads)
               for s, f0, rows in slabs]
     result = delayed(_labels_merge)(np.dtype(array.dtype), whole, options, distinct, counts, pieces, spacing, origin)
+    return _compute(result, compute, scheduler)
+
+
+def _precomputed_chunk(box, whole, chunk, spacing, origin, path, options, threads, update):
+    return _ext.precomputed_chunk(np.asarray(box), whole, chunk, spacing, origin, path, options, threads, update)
+
+
+def _precomputed_assemble(whole, spacing, origin, path, options, names, update, counts):
+    segments = set()
+    for c in counts:  # --update: the segments the re-meshed chunks held before or hold now
+        segments.update(c["segments"])
+        segments.update(c.get("kept_segments", []))
+    _ext.precomputed_assemble(whole, spacing, origin, path, options, names, sorted(segments) if update else None)
+    report = {"segments": sorted(segments), "pieces": 0, "chunks_written": 0, "triangles_per_lod": []}
+    for c in counts:
+        report["pieces"] += c["pieces"]
+        report["chunks_written"] += c["chunks_written"]
+        per_lod = report["triangles_per_lod"]
+        per_lod.extend([0] * (len(c["triangles_per_lod"]) - len(per_lod)))
+        for lod, n in enumerate(c["triangles_per_lod"]):
+            per_lod[lod] += n
+    return report
+
+
+def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequence[int] = (32, 32, 32),
+                       sharded: bool = False, method: str = "surfacenets", labels: Optional[Sequence[int]] = None,
+                       background: int = 0, smooth: int = 16, relaxation: float = 0.5,
+                       spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
+                       origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0), label_names: Any = None,
+                       threads: int = 1, compute: bool = True, scheduler: Any = None,
+                       update: Optional[Sequence[Sequence[int]]] = None):
+    """Neuroglancer multi-resolution meshes of a chunked 3-D Dask label map:
+    the directory ``keymesh.labels_precomputed`` (and ``keymesh labels IN -o
+    path --format precomputed``) writes, byte for byte, made chunk by chunk.
+
+    Tasks: one per Neuroglancer lod-0 chunk (``chunk_shape``; the Dask
+    chunking does not matter), each reading ``array[box]``, its chunk's box
+    grown by the meshing's halo (``--smooth`` samples, twice that for
+    discrete-mc, plus 4), meshing it and writing its pieces to
+    ``path/chunks/`` (``keymesh labels --chunk I J K``; chunk tasks may run
+    side by side, in threads or processes); then one task writes the output
+    from every chunk's pieces (``keymesh labels --assemble``). On a
+    dask.distributed cluster, ``path`` must be one directory for every
+    worker (a shared file system).
+
+    Args:
+        array: a 3-D integer dask.array.Array (axis 0 is x; other arrays
+            are wrapped with da.from_array).
+        path, lods, chunk_shape, sharded, method, labels, background,
+        smooth, relaxation, spacing, origin, label_names: as
+            keymesh.labels_precomputed (a label table named by label_names
+            is read when the graph is made).
+        threads: worker threads of each chunk's task (default 1: the
+            scheduler runs tasks side by side).
+        compute, scheduler: as keymesh.dask.contour (compute=False returns
+            a dask Delayed whose result is the report).
+        update: re-mesh an edit (``keymesh labels --update CHUNKS``): the
+            chunks (i, j, k) inside which ``array`` differs from the volume
+            of the run that wrote ``path`` (its ``path/chunks/`` is needed).
+            Only the chunks within the halo's reach of them are re-meshed (a
+            task each) and only the segments they held or hold rewritten;
+            the directory then equals a full run on ``array``.
+
+    Returns:
+        dict: ``segments``, ``pieces``, ``chunks_written``,
+        ``triangles_per_lod``, equal to keymesh.labels_precomputed's.
+    """
+    import dask
+    from . import _precomputed
+    array = _dask_array(array)
+    _check_labels_dtype(array.dtype)
+    opts = _precomputed.options(lods, chunk_shape, sharded, method, labels, background, smooth, relaxation)
+    path = _precomputed.output_path(path)
+    threads = _threads(threads)
+    whole = tuple(int(n) for n in array.shape)
+    names = _precomputed.segment_names(label_names, opts[2])
+    changed = None if update is None else [tuple(int_arg(v, "update") for v in np.asarray(c).reshape(-1))
+                                           for c in update]
+    if changed is not None and any(len(c) != 3 for c in changed):
+        raise ValueError(f"update must be chunks (i, j, k), got {update!r}")
+    plan = _ext.precomputed_plan(whole, opts, path, changed)
+    task = dask.delayed(_precomputed_chunk, pure=False)  # it writes a file: never merged with another graph's
+    counts = [task(array[tuple(slice(a, a + n) for a, n in zip(lo, dims))], whole, tuple(chunk), spacing, origin,
+                   path, opts, threads, changed is not None)
+              for chunk, lo, dims in plan["boxes"]]
+    result = dask.delayed(_precomputed_assemble, pure=False)(whole, spacing, origin, path, opts, names,
+                                                             changed is not None, counts)
     return _compute(result, compute, scheduler)

@@ -87,6 +87,7 @@ void register_labels(py::module_& m);  // labels.cpp
 void register_dask_contour_block(py::module_& m);  // dask_contour_block.cpp
 void register_dask_contour_merge(py::module_& m);  // dask_contour_merge.cpp
 void register_dask_labels(py::module_& m);         // dask_labels.cpp
+void register_labels_precomputed(py::module_& m);  // labels_precomputed.cpp
 
 }  // namespace keymesh::python
 
@@ -97,7 +98,7 @@ PYBIND11_MODULE(_keymesh, m) {
   for (auto* add : {&kp::register_errors, &kp::register_volume, &kp::register_contour, &kp::register_key_reduce,
                     &kp::register_io, &kp::register_check, &kp::register_marching_cubes, &kp::register_operations,
                     &kp::register_labels, &kp::register_dask_contour_block, &kp::register_dask_contour_merge,
-                    &kp::register_dask_labels, &kp::register_contour_device})
+                    &kp::register_dask_labels, &kp::register_labels_precomputed, &kp::register_contour_device})
     add(m);
   m.def("thread_count", &keymesh::parallel::thread_count,
         "Worker threads the library uses when a call passes threads=0 (all cores).");

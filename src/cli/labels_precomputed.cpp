@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <set>
 
@@ -21,6 +20,7 @@
 #include "keymesh/generate/labels/labels_stream.hpp"
 #include "keymesh/io/label_table.hpp"
 #include "keymesh/io/neuroglancer.hpp"
+#include "keymesh/io/neuroglancer_runs.hpp"
 #include "keymesh/io/plane_source.hpp"
 #include "keymesh/io/volume_io.hpp"
 #include "labels_job.hpp"
@@ -39,94 +39,27 @@ generate::MultilodOptions multilod_options(const LabelsJob& job) {
   return o;
 }
 
-ng::MultilodLayout layout_of(const ImageGrid& grid, const generate::MultilodGrid& g, bool sharded) {
-  ng::MultilodLayout layout;
-  for (int a = 0; a < 3; ++a) {
-    layout.chunk_shape[a] = static_cast<std::uint32_t>(g.chunk_shape[a]);
-    layout.chunks[a] = static_cast<std::uint32_t>(g.chunks[a]);
-    layout.grid_origin[a] = static_cast<float>(g.grid_origin[a]);
-    // Stored model coordinates are sample indices: model = origin + spacing * index.
-    layout.transform[4 * a + a] = grid.spacing[a];
-    layout.transform[4 * a + 3] = grid.origin[a];
-  }
-  layout.lods = static_cast<std::uint32_t>(g.lods);
-  layout.sharded = sharded;
-  return layout;
-}
-
 // The segments' names: --label-names, else the label table beside the input
-// (none: no segment_properties). The background's entry is left out.
+// (none: no segment_properties).
 ng::SegmentNames segment_names(const LabelsJob& job) {
   const PrecomputedJob& pc = job.precomputed;
-  const std::string path = pc.label_names_given ? pc.label_names : io::label_table_beside(job.input);
-  if (path.empty()) return {};
-  ng::SegmentNames names = io::read_label_table(path);
-  if (job.options.background >= 0) names.erase(static_cast<std::uint64_t>(job.options.background));
-  return names;
+  return ng::table_segment_names(pc.label_names_given ? pc.label_names : io::label_table_beside(job.input),
+                                 job.options.background);
 }
 
-std::vector<ng::ChunkPiece> to_io(std::vector<generate::MultilodPiece>&& pieces) {
-  std::vector<ng::ChunkPiece> out(pieces.size());
-  for (std::size_t i = 0; i < pieces.size(); ++i) {
-    generate::MultilodPiece& p = pieces[i];
-    out[i].segment = p.segment;
-    out[i].lod = p.lod;
-    out[i].chunk = p.chunk;
-    out[i].point_keys = std::move(p.point_keys);
-    out[i].points = std::move(p.points);
-    out[i].triangles = std::move(p.triangles);
-  }
-  return out;
-}
-
-std::array<std::uint32_t, 3> to_u32(const std::array<Id, 3>& c) {
-  return {static_cast<std::uint32_t>(c[0]), static_cast<std::uint32_t>(c[1]), static_cast<std::uint32_t>(c[2])};
-}
-
-// The pieces grouped by chunk (they come sorted by segment first).
-std::map<std::array<std::uint32_t, 3>, std::vector<ng::ChunkPiece>> by_chunk(std::vector<ng::ChunkPiece>&& pieces) {
-  std::map<std::array<std::uint32_t, 3>, std::vector<ng::ChunkPiece>> out;
-  for (ng::ChunkPiece& p : pieces) out[p.chunk].push_back(std::move(p));
-  return out;
-}
-
-struct Counts {
-  std::size_t pieces = 0, chunks = 0;
-  std::set<std::uint64_t> segments;
-  std::vector<std::uint64_t> triangles_per_lod;  // of the pieces this run made (a triangle lies in one chunk)
-
-  void add(const std::vector<ng::ChunkPiece>& made) {
-    pieces += made.size();
-    for (const auto& p : made) {
-      segments.insert(p.segment);
-      if (triangles_per_lod.size() <= p.lod) triangles_per_lod.resize(p.lod + 1, 0);
-      triangles_per_lod[p.lod] += p.triangles.size() / 3;
-    }
-  }
-};
+using Counts = ng::PieceCounts;
 
 // One call: every chunk's pieces kept (for a later --update), then the output.
 Counts write_everything(const LabelsJob& job, const ImageGrid& grid, const ng::MultilodLayout& layout,
                         StageTimer& timer) {
   const auto o = multilod_options(job);
-  std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
+  std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(timer.run("labels", [&] {
     return naming_input(job, [&] { return generate::multilod_pieces(grid, o); });
   }));
   Counts n;
   n.add(pieces);
-  timer.run("write", [&] {
-    ng::write_multilod(job.output, layout, pieces, segment_names(job));
-    auto chunks = by_chunk(std::move(pieces));
-    const generate::MultilodGrid g = generate::multilod_grid(grid.dims, o);
-    for (Id z = 0; z < g.chunks[2]; ++z)  // every chunk, empty ones too: the store is complete
-      for (Id y = 0; y < g.chunks[1]; ++y)
-        for (Id x = 0; x < g.chunks[0]; ++x) {
-          const auto c = to_u32({x, y, z});
-          const auto at = chunks.find(c);
-          ng::write_chunk_pieces(job.output, layout, c, at == chunks.end() ? std::vector<ng::ChunkPiece>{} : at->second);
-          ++n.chunks;
-        }
-  });
+  n.chunks = static_cast<std::size_t>(layout.chunks[0]) * layout.chunks[1] * layout.chunks[2];
+  timer.run("write", [&] { ng::write_multilod_and_chunks(job.output, layout, std::move(pieces), segment_names(job)); });
   return n;
 }
 
@@ -177,7 +110,7 @@ Counts write_one_chunk(const LabelsJob& job, const ImageGrid& grid, PlaneSource*
     box_samples = timer.run("read", [&] { return read_box(*planes, box); });
     samples_read = static_cast<std::uint64_t>(grid.dims[0] * grid.dims[1] * box.dims[2]);
   }
-  std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
+  std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(timer.run("labels", [&] {
     return naming_input(job, [&] {
       return planes ? generate::multilod_box_pieces(box_samples, grid.dims, box, o, c)
                     : generate::multilod_chunk_pieces(grid, o, c);
@@ -186,7 +119,7 @@ Counts write_one_chunk(const LabelsJob& job, const ImageGrid& grid, PlaneSource*
   Counts n;
   n.add(pieces);
   n.chunks = 1;
-  timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, to_u32(c), pieces); });
+  timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, ng::chunk_index(c), pieces); });
   return n;
 }
 
@@ -202,12 +135,12 @@ Counts update_chunks(const LabelsJob& job, const ImageGrid& grid, const ng::Mult
   });
   Counts n;
   for (const auto& c : affected) {
-    for (std::uint64_t s : ng::kept_segments(job.output, to_u32(c))) n.segments.insert(s);
-    std::vector<ng::ChunkPiece> pieces = to_io(timer.run("labels", [&] {
+    for (std::uint64_t s : ng::kept_segments(job.output, ng::chunk_index(c))) n.segments.insert(s);
+    std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(timer.run("labels", [&] {
       return naming_input(job, [&] { return generate::multilod_chunk_pieces(grid, o, c); });
     }));
     n.add(pieces);
-    timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, to_u32(c), pieces); });
+    timer.run("write", [&] { ng::write_chunk_pieces(job.output, layout, ng::chunk_index(c), pieces); });
     ++n.chunks;
   }
   timer.run("assemble", [&] {
@@ -232,7 +165,7 @@ int run_labels_precomputed(const LabelsJob& job) {
   if (!planes) check_labels_memory(job, grid, {0, generate::LabelSlabs::total_rows(grid)});
   const auto o = multilod_options(job);
   const generate::MultilodGrid g = naming_input(job, [&] { return generate::multilod_grid(grid.dims, o); });
-  const ng::MultilodLayout layout = layout_of(grid, g, pc.sharded);
+  const ng::MultilodLayout layout = ng::multilod_layout(grid, g.chunk_shape, g.chunks, g.grid_origin, g.lods, pc.sharded);
   Counts n;
   const char* route = "one call";
   if (pc.chunk_given) {

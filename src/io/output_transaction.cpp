@@ -10,9 +10,10 @@
 namespace keymesh::io {
 
 namespace {
-// One command runs per process; the CLI opens the transaction on its main
-// thread before any worker starts, so a plain pointer is enough.
-OutputTransaction* g_current = nullptr;
+// Per thread: the CLI opens its transaction on the main thread, where every
+// file is committed (workers only encode); Python's threads (a Dask
+// scheduler's chunk tasks writing side by side) each stage into their own.
+thread_local OutputTransaction* g_current = nullptr;
 }  // namespace
 
 OutputTransaction::OutputTransaction() : enclosing_(g_current) { g_current = this; }

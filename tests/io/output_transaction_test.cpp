@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
@@ -73,6 +74,35 @@ TEST(OutputTransaction, OneFileTwiceThroughTwoSpellingsRefused) {
   std::string text;
   in >> text;
   EXPECT_EQ(text, "1") << "the refused second write left the first in place";
+}
+
+// Each thread has its own open transaction (Dask's threaded scheduler runs
+// chunk tasks side by side, each writing through its own): a thread's files
+// wait for its own commit, and another thread's transaction neither stages
+// nor removes them.
+TEST(OutputTransaction, OnePerThread) {
+  const fs::path dir = fresh_dir("threads");
+  io::OutputTransaction main_thread;
+  write(dir / "main", "m");
+  std::thread other([&] {
+    EXPECT_EQ(io::OutputTransaction::current(), nullptr) << "the main thread's transaction is not this thread's";
+    {
+      io::OutputTransaction failed;  // destroyed without commit
+      write(dir / "failed", "f");
+    }
+    io::OutputTransaction outputs;
+    EXPECT_EQ(io::OutputTransaction::current(), &outputs);
+    write(dir / "task", "t");
+    EXPECT_FALSE(fs::exists(dir / "task")) << "staged until this thread commits";
+    outputs.commit();
+  });
+  other.join();
+  EXPECT_EQ(io::OutputTransaction::current(), &main_thread);
+  EXPECT_TRUE(fs::exists(dir / "task"));
+  EXPECT_FALSE(fs::exists(dir / "failed"));
+  EXPECT_FALSE(fs::exists(dir / "main")) << "the main thread's file waits for its own commit";
+  main_thread.commit();
+  EXPECT_TRUE(fs::exists(dir / "main"));
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ namespace keymesh::io {
 
 class OutputTransaction {
  public:
-  // Becomes the open transaction of this process (they nest: the innermost
+  // Becomes the open transaction of this thread (they nest: the innermost
   // one stages, and its commit() hands its files to the enclosing one).
   OutputTransaction();
   OutputTransaction(const OutputTransaction&) = delete;
