@@ -82,6 +82,19 @@ def write_label_nrrd(path, volume):
     return path
 
 
+def junction_labels(shape, labels, seed):
+    """A label map of `shape` (x, y, z; uint8, labels 1..labels): each voxel
+    the label of its largest box-filtered noise field, blobs a few voxels
+    wide, three or more labels meeting all over (where smoothing's fold
+    guard acts)."""
+    import numpy as np
+    f = np.random.default_rng(seed).random((labels, *shape), dtype=np.float32)
+    for _ in range(2):
+        for axis in (1, 2, 3):
+            f = (np.roll(f, 1, axis) + f + np.roll(f, -1, axis)) / 3
+    return (np.argmax(f, axis=0) + 1).astype(np.uint8)
+
+
 def box_filtered_noise(shape, seed):
     """Uniform noise in [0, 1) of `shape` (z, y, x), box-filtered along each
     axis (periodic): blobs a few voxels wide, which coarsening pinches."""
