@@ -190,6 +190,48 @@ def read_polydata(path):
     return reader.GetOutput()
 
 
+def history_arrays(poly, path):
+    """points (float32), history_key (uint64), history_t (float32) of poly,
+    VTK's reading of path (named in the messages)."""
+    from vtk.util import numpy_support as ns
+    pd = poly.GetPointData()
+    key_array, t_array = pd.GetArray("history_key"), pd.GetArray("history_t")
+    assert key_array is not None and t_array is not None, f"{path}: no history arrays"
+    assert key_array.GetDataTypeAsString() in ("unsigned long long", "unsigned long"), \
+        key_array.GetDataTypeAsString()
+    points = ns.vtk_to_numpy(poly.GetPoints().GetData())
+    keys = ns.vtk_to_numpy(key_array).astype("uint64")
+    t = ns.vtk_to_numpy(t_array)
+    assert points.dtype == "float32" and t.dtype == "float32", (points.dtype, t.dtype)
+    return points, keys, t
+
+
+def assert_pieces_carry_history(ref_path, index, P):
+    """The P pieces of the .pvtp `index` (X.pvtp: X_0.vtp ... X_{P-1}.vtp),
+    ghost points too: every point carries the history_key, history_t and
+    position the single-process file ref_path gives its key (whose keys are
+    unique), every key of ref_path is in a piece, and VTK's parallel reader
+    gives history_key as uint64."""
+    import vtk
+    from vtk.util import numpy_support as ns
+    points, keys, t = history_arrays(read_polydata(ref_path), ref_path)
+    ref = {int(k): (float(tt), tuple(p)) for k, tt, p in zip(keys, t, points)}
+    assert len(ref) == len(keys), f"{ref_path}: {len(keys) - len(ref)} repeated keys"
+    seen = set()
+    for q in range(P):
+        piece = f"{index[:-len('.pvtp')]}_{q}.vtp"
+        pk_points, pk_keys, pk_t = history_arrays(read_polydata(piece), piece)
+        for k, tt, p in zip(pk_keys, pk_t, pk_points):
+            assert ref[int(k)] == (float(tt), tuple(p)), (P, q, int(k))
+            seen.add(int(k))
+    assert seen == set(ref), (P, len(seen), len(ref))
+    reader = vtk.vtkXMLPPolyDataReader()
+    reader.SetFileName(index)
+    reader.Update()
+    array = reader.GetOutput().GetPointData().GetArray("history_key")
+    assert array is not None and ns.vtk_to_numpy(array).dtype == "uint64"
+
+
 def vtk_contour(filter_class, data, value, array=None, **switches):
     """VTK's contour filter_class run on data at one value, normals off as in
     keymesh's default output; switches set the filter's other flags
@@ -340,6 +382,18 @@ def mpirun(P, *args, expect=0, program=None):
         raise AssertionError(f"mpirun -np {P} keymesh {' '.join(map(str, args))}: exit {p.returncode}, "
                              f"expected {expect}\nstdout: {p.stdout}\nstderr: {p.stderr}")
     return p
+
+
+def mpirun_runs(*probe):
+    """Whether `mpirun -np 2 keymesh probe...` runs here, said when not: for
+    a file whose MPI part is one check of many (require_mpi skips a file)."""
+    if not shutil.which("mpirun"):
+        print("  (no mpirun: skipped)")
+        return False
+    p = mpirun(2, *probe, expect=None)
+    if p.returncode != 0:
+        print(f"  (mpirun does not run keymesh here: {p.stderr.strip()[:200]})")
+    return p.returncode == 0
 
 
 def require_mpi(*probe):
