@@ -95,6 +95,41 @@ def junction_labels(shape, labels, seed):
     return (np.argmax(f, axis=0) + 1).astype(np.uint8)
 
 
+BRAINSMALL = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"
+PLATE_DIMS = (33, 29, 40)  # x, y, z
+
+
+def brainsmall_nrrd(folder):
+    """Debian libvolpack1-dev's brainsmall.den converted to folder/brain.nrrd
+    (a .den is read whole only; a .nrrd streams in planes); None, said, when
+    it is not installed."""
+    if not os.path.exists(BRAINSMALL):
+        print(f"(no {BRAINSMALL}: install libvolpack1-dev)")
+        return None
+    nrrd = os.path.join(folder, "brain.nrrd")
+    run("convert", BRAINSMALL, "-o", nrrd, "-q")
+    return nrrd
+
+
+def write_plate(path):
+    """A float32 volume of PLATE_DIMS, zero but for a plate one voxel thick
+    (x = 16, y 4..24) through every z layer, with values that put both
+    sides' crossings at isovalue 0.55 nearest the plate's own grid points:
+    coarsening merges the two sheets onto one, and the non-manifold split's
+    chains run the plate's length, so no halo short of it holds them (a
+    distributed coarsening grows its halo). Returns keymesh's source
+    arguments: path and --dims."""
+    import numpy as np
+    nx, ny, nz = PLATE_DIMS
+    v = np.zeros((nz, ny, nx), np.float32)
+    rng = np.random.default_rng(5)
+    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((nz, 21))
+    v[:, 4:25, 15] = 0.3 * rng.random((nz, 21))
+    v[:, 4:25, 17] = 0.3 * rng.random((nz, 21))
+    v.tofile(path)
+    return [path, "--dims", *PLATE_DIMS]
+
+
 def box_filtered_noise(shape, seed):
     """Uniform noise in [0, 1) of `shape` (z, y, x), box-filtered along each
     axis (periodic): blobs a few voxels wide, which coarsening pinches."""
