@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <limits>
-#include <random>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour/contour.hpp"
@@ -14,6 +13,7 @@
 #include "keymesh/parallel/threads.hpp"
 #include "dual_cases.hpp"
 #include "same_bits.hpp"
+#include "uniform_noise.hpp"
 
 using namespace keymesh;
 using keymesh::testing::dual_sphere;
@@ -80,12 +80,7 @@ TEST(DeviceDual, OpenAndNonManifoldSurfacesEqualTheCpuPath) {
 TEST(DeviceDual, OpenNoiseSurfaceEqualsTheCpuPath) {
   // A noise contour cut by the grid's faces: many boundary fans, a few
   // non-manifold points where the surface pinches.
-  ImageGrid g;
-  g.allocate({17, 15, 13}, ScalarType::Float32);
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
+  const ImageGrid g = keymesh::testing::uniform_noise({17, 15, 13}, 5);
   generate::ContourOptions o;
   o.isovalues = {0.2};
   o.normals = generate::ContourNormals::Gradient;
