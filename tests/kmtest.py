@@ -99,6 +99,54 @@ def balls_atlas(shape, seed):
     return v
 
 
+def junction_labels(shape, labels, seed):
+    """A label map of `shape` (x, y, z; uint8, labels 1..labels): each voxel
+    the label of its largest box-filtered noise field, blobs a few voxels
+    wide, three or more labels meeting all over (where smoothing's fold
+    guard acts)."""
+    import numpy as np
+    f = np.random.default_rng(seed).random((labels, *shape), dtype=np.float32)
+    for _ in range(2):
+        for axis in (1, 2, 3):
+            f = (np.roll(f, 1, axis) + f + np.roll(f, -1, axis)) / 3
+    return (np.argmax(f, axis=0) + 1).astype(np.uint8)
+
+
+BRAINSMALL = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"
+PLATE_DIMS = (33, 29, 40)  # x, y, z
+
+
+def brainsmall_nrrd(folder):
+    """Debian libvolpack1-dev's brainsmall.den converted to folder/brain.nrrd
+    (a .den is read whole only; a .nrrd streams in planes); None, said, when
+    it is not installed."""
+    if not os.path.exists(BRAINSMALL):
+        print(f"(no {BRAINSMALL}: install libvolpack1-dev)")
+        return None
+    nrrd = os.path.join(folder, "brain.nrrd")
+    run("convert", BRAINSMALL, "-o", nrrd, "-q")
+    return nrrd
+
+
+def write_plate(path):
+    """A float32 volume of PLATE_DIMS, zero but for a plate one voxel thick
+    (x = 16, y 4..24) through every z layer, with values that put both
+    sides' crossings at isovalue 0.55 nearest the plate's own grid points:
+    coarsening merges the two sheets onto one, and the non-manifold split's
+    chains run the plate's length, so no halo short of it holds them (a
+    distributed coarsening grows its halo). Returns keymesh's source
+    arguments: path and --dims."""
+    import numpy as np
+    nx, ny, nz = PLATE_DIMS
+    v = np.zeros((nz, ny, nx), np.float32)
+    rng = np.random.default_rng(5)
+    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((nz, 21))
+    v[:, 4:25, 15] = 0.3 * rng.random((nz, 21))
+    v[:, 4:25, 17] = 0.3 * rng.random((nz, 21))
+    v.tofile(path)
+    return [path, "--dims", *PLATE_DIMS]
+
+
 def box_filtered_noise(shape, seed):
     """Uniform noise in [0, 1) of `shape` (z, y, x), box-filtered along each
     axis (periodic): blobs a few voxels wide, which coarsening pinches."""
@@ -198,6 +246,48 @@ def read_polydata(path):
     reader.SetFileName(path)
     reader.Update()
     return reader.GetOutput()
+
+
+def history_arrays(poly, path):
+    """points (float32), history_key (uint64), history_t (float32) of poly,
+    VTK's reading of path (named in the messages)."""
+    from vtk.util import numpy_support as ns
+    pd = poly.GetPointData()
+    key_array, t_array = pd.GetArray("history_key"), pd.GetArray("history_t")
+    assert key_array is not None and t_array is not None, f"{path}: no history arrays"
+    assert key_array.GetDataTypeAsString() in ("unsigned long long", "unsigned long"), \
+        key_array.GetDataTypeAsString()
+    points = ns.vtk_to_numpy(poly.GetPoints().GetData())
+    keys = ns.vtk_to_numpy(key_array).astype("uint64")
+    t = ns.vtk_to_numpy(t_array)
+    assert points.dtype == "float32" and t.dtype == "float32", (points.dtype, t.dtype)
+    return points, keys, t
+
+
+def assert_pieces_carry_history(ref_path, index, P):
+    """The P pieces of the .pvtp `index` (X.pvtp: X_0.vtp ... X_{P-1}.vtp),
+    ghost points too: every point carries the history_key, history_t and
+    position the single-process file ref_path gives its key (whose keys are
+    unique), every key of ref_path is in a piece, and VTK's parallel reader
+    gives history_key as uint64."""
+    import vtk
+    from vtk.util import numpy_support as ns
+    points, keys, t = history_arrays(read_polydata(ref_path), ref_path)
+    ref = {int(k): (float(tt), tuple(p)) for k, tt, p in zip(keys, t, points)}
+    assert len(ref) == len(keys), f"{ref_path}: {len(keys) - len(ref)} repeated keys"
+    seen = set()
+    for q in range(P):
+        piece = f"{index[:-len('.pvtp')]}_{q}.vtp"
+        pk_points, pk_keys, pk_t = history_arrays(read_polydata(piece), piece)
+        for k, tt, p in zip(pk_keys, pk_t, pk_points):
+            assert ref[int(k)] == (float(tt), tuple(p)), (P, q, int(k))
+            seen.add(int(k))
+    assert seen == set(ref), (P, len(seen), len(ref))
+    reader = vtk.vtkXMLPPolyDataReader()
+    reader.SetFileName(index)
+    reader.Update()
+    array = reader.GetOutput().GetPointData().GetArray("history_key")
+    assert array is not None and ns.vtk_to_numpy(array).dtype == "uint64"
 
 
 def vtk_contour(filter_class, data, value, array=None, **switches):
@@ -350,6 +440,18 @@ def mpirun(P, *args, expect=0, program=None):
         raise AssertionError(f"mpirun -np {P} keymesh {' '.join(map(str, args))}: exit {p.returncode}, "
                              f"expected {expect}\nstdout: {p.stdout}\nstderr: {p.stderr}")
     return p
+
+
+def mpirun_runs(*probe):
+    """Whether `mpirun -np 2 keymesh probe...` runs here, said when not: for
+    a file whose MPI part is one check of many (require_mpi skips a file)."""
+    if not shutil.which("mpirun"):
+        print("  (no mpirun: skipped)")
+        return False
+    p = mpirun(2, *probe, expect=None)
+    if p.returncode != 0:
+        print(f"  (mpirun does not run keymesh here: {p.stderr.strip()[:200]})")
+    return p.returncode == 0
 
 
 def require_mpi(*probe):

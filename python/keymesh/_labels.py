@@ -14,7 +14,8 @@ from . import Mesh, _mesh, _threads
 from ._arguments import INT32, int_arg
 
 # Timings and counts of the last contour_labels() call (seconds: scan,
-# generate, weld, smooth); for benchmarks.
+# generate, weld, smooth; distinct_labels, surfaces, and guard_shortened: the
+# smoothing moves the fold guard shortened or refused); for benchmarks.
 last_labels_info: Dict[str, Any] = {}
 
 

@@ -47,6 +47,7 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   generate::visit_stage_seconds(stats, into(info));
   info["distinct_labels"] = stats.distinct_labels;
   info["surfaces"] = stats.surfaces;
+  info["guard_shortened"] = stats.guard_shortened;
   return py::make_tuple(with_history_key(mesh_to_python(std::move(mesh)), std::move(history_key), history), info);
 }
 

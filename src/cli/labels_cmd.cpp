@@ -248,7 +248,8 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
             {"background", opt.background}, {"smooth", opt.smooth_iterations}, {"relaxation", opt.relaxation},
             {"coarsen", opt.coarsen}, {"history", opt.history}, {"distinct_labels", stats.distinct_labels},
             {"labels_extracted", stats.surfaces}, {"points", mesh.num_points()}, {"cells", mesh.num_cells()},
-            {"soup_points", stats.soup_corners}, {"threads", job.threads}, {"backend", job.common.backend}});
+            {"soup_points", stats.soup_corners}, {"guard_shortened", stats.guard_shortened}, {"threads", job.threads},
+            {"backend", job.common.backend}});
   if (opt.coarsen) {
     r["triangles_before"] = stats.triangles_before_coarsening;
     r["triangles_after"] = mesh.num_cells();

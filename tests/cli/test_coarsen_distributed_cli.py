@@ -14,7 +14,7 @@ import shutil
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import box_filtered_noise, check, finish, mpirun, report, run, tempdir  # noqa: E402
+from kmtest import box_filtered_noise, brainsmall_nrrd, check, finish, mpirun, report, run, tempdir  # noqa: E402
 
 D = tempdir()
 NX, NY, NZ = 41, 37, 29
@@ -22,7 +22,6 @@ NOISE = os.path.join(D, "noise.raw")
 box_filtered_noise((NZ, NY, NX), 17).tofile(NOISE)
 DIMS = ["--dims", NX, NY, NZ]
 PLANE = NX * NY * 4
-BRAIN = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"
 
 
 def read_ply_counts(path):
@@ -88,11 +87,9 @@ def distributed_equals_single_process():
 
 
 def real_volume():
-    if not os.path.exists(BRAIN):
-        print(f"(no {BRAIN}: install libvolpack1-dev)")
+    nrrd = brainsmall_nrrd(D)
+    if nrrd is None:
         return
-    nrrd = os.path.join(D, "brain.nrrd")  # .den is read whole only
-    run("convert", BRAIN, "-o", nrrd, "-q")
     ref = contour(os.path.join(D, "brain.ply"), "--iso", 37.3, source=nrrd)
     got = contour(os.path.join(D, "brain_s.ply"), "--iso", 37.3, source=nrrd, extra=["--memory-limit", 8 * 128 * 128])
     assert got == ref, "brainsmall.den streamed coarsening differs"

@@ -25,8 +25,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import (box_filtered_noise, check, finish, mpirun, read_polydata, report, require_mpi,  # noqa: E402
-                    require_vtk, run, tempdir, triangles_of, welded_vtk_pieces)
+from kmtest import (box_filtered_noise, brainsmall_nrrd, check, finish, mpirun, read_polydata, report,  # noqa: E402
+                    require_mpi, require_vtk, run, tempdir, triangles_of, welded_vtk_pieces, write_plate)
 
 require_vtk()
 import numpy as np  # noqa: E402
@@ -37,7 +37,6 @@ NX, NY, NZ = 33, 29, 40  # 39 voxel layers: 13 a rank at -np 3, halos of 8 first
 NOISE = os.path.join(D, "noise.raw")
 box_filtered_noise((NZ, NY, NX), 23).tofile(NOISE)
 SRC = [NOISE, "--dims", NX, NY, NZ]
-BRAIN = "/usr/share/doc/libvolpack1-dev/examples/brainsmall.den"
 COUNTS = ("triangles_before", "triangles_after", "nonmanifold_edges", "nonmanifold_vertices", "boundary_edges")
 require_mpi("contour", *SRC, "--iso", 0.5, "-o", os.path.join(D, "probe.vtp"), "-q")
 
@@ -112,18 +111,10 @@ for args in (["--iso", 0.5], ["--iso", 0.52, "--normals", "average"],
 
 
 def plate_grows_the_halo():
-    """A plate one voxel thick (x = 16), spanning every slab, with values
-    that make both sides' crossings nearest the plate's own grid points:
-    the two sheets coarsen onto one, the split's chains run the plate's
-    length, and no halo short of it holds them."""
-    v = np.zeros((NZ, NY, NX), np.float32)
-    rng = np.random.default_rng(5)
-    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((NZ, 21))
-    v[:, 4:25, 15] = 0.3 * rng.random((NZ, 21))
-    v[:, 4:25, 17] = 0.3 * rng.random((NZ, 21))
-    path = os.path.join(D, "plate.raw")
-    v.tofile(path)
-    d = pieces_equal_one_process([path, "--dims", NX, NY, NZ], ["--iso", 0.55], (3,), min_attempts=2)()
+    """kmtest.write_plate: a plate one voxel thick, spanning every slab,
+    whose split chains no halo short of the plate's length holds."""
+    plate = write_plate(os.path.join(D, "plate.raw"))
+    d = pieces_equal_one_process(plate, ["--iso", 0.55], (3,), min_attempts=2)()
     print(f"plate: halo grown to {d['halo_layers']} layers in {d['attempts']} attempts")
 
 
@@ -131,11 +122,9 @@ check("a one-voxel plate spanning the slabs: the halo grows, the pieces still eq
 
 
 def real_volume():
-    if not os.path.exists(BRAIN):
-        print(f"(no {BRAIN}: install libvolpack1-dev)")
+    nrrd = brainsmall_nrrd(D)
+    if nrrd is None:
         return
-    nrrd = os.path.join(D, "brain.nrrd")  # .den is read whole only
-    run("convert", BRAIN, "-o", nrrd, "-q")
     d = pieces_equal_one_process([nrrd], ["--iso", 37.3, "--normals", "average"], (3,))()
     print(f"brainsmall: halo {d['halo_layers']} layers in {d['attempts']} attempts")
 

@@ -18,11 +18,11 @@ keymesh:
   - combinations that cannot hold a history are refused by name.
 """
 import os
-import shutil
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import box_filtered_noise, check, finish, mpirun, require_vtk, run, tempdir  # noqa: E402
+from kmtest import (assert_pieces_carry_history, box_filtered_noise, check, finish, history_arrays,  # noqa: E402
+                    mpirun, mpirun_runs, require_vtk, run, tempdir)
 
 require_vtk()
 import numpy as np  # noqa: E402
@@ -99,17 +99,7 @@ VOLUMES = [noise_volume(), centred_volume(), integer_volume()]
 
 def history(path):
     """points (float32), history_key (uint64), history_t (float32) as VTK reads them."""
-    poly = read_polydata(path)
-    pd = poly.GetPointData()
-    key_array, t_array = pd.GetArray("history_key"), pd.GetArray("history_t")
-    assert key_array is not None and t_array is not None, f"{path}: no history arrays"
-    assert key_array.GetDataTypeAsString() == "unsigned long long" or key_array.GetDataTypeAsString() == \
-        "unsigned long", key_array.GetDataTypeAsString()
-    points = ns.vtk_to_numpy(poly.GetPoints().GetData())
-    keys = ns.vtk_to_numpy(key_array).astype(np.uint64)
-    t = ns.vtk_to_numpy(t_array)
-    assert points.dtype == np.float32 and t.dtype == np.float32
-    return points, keys, t
+    return history_arrays(read_polydata(path), path)
 
 
 def contour(vol, name, *extra):
@@ -313,12 +303,7 @@ def keymesh_reads_it_back():
 
 
 def under_mpirun():
-    if not shutil.which("mpirun"):
-        print("  (no mpirun: skipped)")
-        return
-    probe = mpirun(2, "contour", *VOLUMES[0].args(), "-o", os.path.join(D, "probe.vtp"), "-q", expect=None)
-    if probe.returncode != 0:
-        print(f"  (mpirun does not run keymesh here: {probe.stderr.strip()[:200]})")
+    if not mpirun_runs("contour", *VOLUMES[0].args(), "-o", os.path.join(D, "probe.vtp"), "-q"):
         return
     for vol in VOLUMES:
         ref = open(contour(vol, vol.type + "_mref"), "rb").read()
@@ -328,25 +313,12 @@ def under_mpirun():
             assert open(out, "rb").read() == ref, f"-np {P}: gathered .vtp differs"
     # Pieces (.pvtp, ghost cells included): every point, owned or ghost,
     # carries the key, t and position the single-process file gives it.
-    import vtk
     vol = VOLUMES[0]
-    points, keys, t = history(contour(vol, "pieces_ref"))
-    ref = {int(k): (float(tt), tuple(p)) for k, tt, p in zip(keys, t, points)}
+    ref = contour(vol, "pieces_ref")
     for P in (2, 3):
         index = os.path.join(D, f"pieces{P}.pvtp")
         mpirun(P, "contour", *vol.args(), "--history", "-o", index, "-q")
-        seen = set()
-        for q in range(P):
-            pk_points, pk_keys, pk_t = history(os.path.join(D, f"pieces{P}_{q}.vtp"))
-            for k, tt, p in zip(pk_keys, pk_t, pk_points):
-                assert ref[int(k)] == (float(tt), tuple(p)), (P, q, int(k))
-                seen.add(int(k))
-        assert seen == set(ref), (P, len(seen), len(ref))
-        reader = vtk.vtkXMLPPolyDataReader()
-        reader.SetFileName(index)
-        reader.Update()
-        array = reader.GetOutput().GetPointData().GetArray("history_key")
-        assert array is not None and ns.vtk_to_numpy(array).dtype == np.uint64
+        assert_pieces_carry_history(ref, index, P)
 
 
 check("history_key names exactly the cut grid edges, once each", keys_are_the_cut_edges)

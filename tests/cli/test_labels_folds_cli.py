@@ -3,13 +3,15 @@ triangle (docs/decisions/labels-smoothing-folds.md), by `keymesh check
 --self-intersections` (exact predicates): the surface nets network of the
 AAL atlas (Debian mricron-data; 116 labels, 3,429 crossing pairs before the
 fold guard) and of a many-label noise volume. Every label's own surface, and
-discrete MC, are checked by the gtests LabelsFolds.*. Skipped (77) without
-the atlas and numpy."""
+discrete MC, are checked by the gtests LabelsFolds.*. The report's
+guard_shortened (moves the guard shortened or refused) on the noise volume:
+> 0, the same at --threads 1 and 2 and in slabs, 0 with --smooth 0.
+Skipped (77) without the atlas and numpy."""
 import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, report, run, tempdir, write_label_nrrd  # noqa: E402
+from kmtest import check, finish, junction_labels, report, run, tempdir, write_label_nrrd  # noqa: E402
 
 AAL = "/usr/share/mricron/templates/aal.nii.gz"
 D = tempdir()
@@ -26,6 +28,26 @@ def crosses_nowhere(volume, name, *args):
     return test
 
 
+def guard_shortened_reported(volume, dims):
+    """The report's guard_shortened: > 0 where the guard acts, the same
+    count at 1 and 2 threads and streamed in slabs, 0 unsmoothed."""
+    def test():
+        def shortened(name, *args):
+            out = os.path.join(D, f"{name}.vtp")
+            run("labels", volume, "-o", out, "-q", "--report", out + ".json", *args)
+            r = report(out + ".json")
+            assert "--memory-limit" not in args or r["stream"]["slabs"] > 1, r["stream"]
+            return r["guard_shortened"]
+        smoothed = shortened("guard_t1", "--threads", 1)
+        assert smoothed > 0, smoothed
+        assert shortened("guard_t2", "--threads", 2) == smoothed
+        # A padded row: uint8 samples and 16-bit label indices with a border of one.
+        row = dims[0] * dims[1] + 2 * (dims[0] + 2) * (dims[1] + 2)
+        assert shortened("guard_slabs", "--memory-limit", 4 * row) == smoothed
+        assert shortened("guard_off", "--smooth", 0) == 0
+    return test
+
+
 skipped = []
 try:
     import numpy as np
@@ -33,17 +55,14 @@ except ImportError:
     np = None
     skipped.append("numpy missing")
 if np is not None:
-    # 12 labels, each voxel the label of its largest box-filtered noise
-    # field: blobs a few voxels wide, three or more labels meeting all over.
-    f = np.random.default_rng(2).random((12, 32, 30, 28), dtype=np.float32)
-    for _ in range(2):
-        for axis in (1, 2, 3):
-            f = (np.roll(f, 1, axis) + f + np.roll(f, -1, axis)) / 3
-    noise = write_label_nrrd(os.path.join(D, "argmax12.nrrd"), np.argmax(f, axis=0) + 1)
+    NOISE_DIMS = (32, 30, 28)
+    noise = write_label_nrrd(os.path.join(D, "argmax12.nrrd"), junction_labels(NOISE_DIMS, 12, 2))
     check("12-label noise, surface nets network: no crossing pair, no zero-area triangle",
           crosses_nowhere(noise, "noise"))
     check("12-label noise, --smooth 40: no crossing pair, no zero-area triangle",
           crosses_nowhere(noise, "noise40", "--smooth", 40))
+    check("12-label noise: report guard_shortened > 0 smoothed, the same at --threads 1 and 2 and streamed; "
+          "0 with --smooth 0", guard_shortened_reported(noise, NOISE_DIMS))
 if os.path.exists(AAL):
     check("AAL atlas, surface nets network: no crossing pair, no zero-area triangle", crosses_nowhere(AAL, "aal"))
 else:

@@ -26,11 +26,11 @@ point (i, j, k), sample (i - 1, j - 1, k - 1)):
     --coarsen, --format precomputed, --backend cuda).
 """
 import os
-import shutil
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import boxes_in_noise, check, finish, mpirun, require_vtk, run, tempdir, write_raw  # noqa: E402
+from kmtest import (assert_pieces_carry_history, boxes_in_noise, check, finish, history_arrays, mpirun,  # noqa: E402
+                    mpirun_runs, require_vtk, run, tempdir, write_raw)
 
 require_vtk()
 import numpy as np  # noqa: E402
@@ -58,13 +58,7 @@ def labels(name, *extra):
 def history(path):
     """points (float32), history_key (uint64), history_t (float32), triangles, cell label (or None)."""
     poly = read_polydata(path)
-    pd = poly.GetPointData()
-    key_array, t_array = pd.GetArray("history_key"), pd.GetArray("history_t")
-    assert key_array is not None and t_array is not None, f"{path}: no history arrays"
-    assert key_array.GetDataTypeAsString() in ("unsigned long long", "unsigned long")
-    points = ns.vtk_to_numpy(poly.GetPoints().GetData())
-    keys = ns.vtk_to_numpy(key_array).astype(np.uint64)
-    t = ns.vtk_to_numpy(t_array)
+    points, keys, t = history_arrays(poly, path)
     tris = ns.vtk_to_numpy(poly.GetPolys().GetConnectivityArray()).astype(np.int64).reshape(-1, 3)
     label = poly.GetCellData().GetArray("label")
     return points, keys, t, tris, None if label is None else ns.vtk_to_numpy(label)
@@ -238,14 +232,8 @@ def refusals():
 
 
 def under_mpirun():
-    if not shutil.which("mpirun"):
-        print("  (no mpirun: skipped)")
+    if not mpirun_runs("labels", VOL, *RAW, "-o", os.path.join(D, "probe.vtp"), "-q"):
         return
-    probe = mpirun(2, "labels", VOL, *RAW, "-o", os.path.join(D, "probe.vtp"), "-q", expect=None)
-    if probe.returncode != 0:
-        print(f"  (mpirun does not run keymesh here: {probe.stderr.strip()[:200]})")
-        return
-    import vtk
     for method in ("surfacenets", "discrete-mc"):
         ref_path = labels(f"mpi_ref_{method}", "--method", method)
         if method == "surfacenets":
@@ -254,23 +242,9 @@ def under_mpirun():
             assert open(out, "rb").read() == open(ref_path, "rb").read(), f"{method}: gathered .vtp differs"
         # Pieces (ghost points too): every point carries the one process's
         # key, t and position (network keys are unique).
-        points, keys, t, _, _ = history(ref_path)
-        ref = {int(k): (float(tt), tuple(p)) for k, tt, p in zip(keys, t, points)}
-        assert len(ref) == len(keys)
         index = os.path.join(D, f"pieces_{method}.pvtp")
         mpirun(2, "labels", VOL, *RAW, "--method", method, "--history", "-o", index, "-q")
-        seen = set()
-        for q in range(2):
-            pk_points, pk_keys, pk_t, _, _ = history(os.path.join(D, f"pieces_{method}_{q}.vtp"))
-            for k, tt, p in zip(pk_keys, pk_t, pk_points):
-                assert ref[int(k)] == (float(tt), tuple(p)), (method, q, int(k))
-                seen.add(int(k))
-        assert seen == set(ref), (method, len(seen), len(ref))
-        reader = vtk.vtkXMLPPolyDataReader()
-        reader.SetFileName(index)
-        reader.Update()
-        array = reader.GetOutput().GetPointData().GetArray("history_key")
-        assert array is not None and ns.vtk_to_numpy(array).dtype == np.uint64
+        assert_pieces_carry_history(ref_path, index, 2)
 
 
 check("discrete MC (--smooth 0): key = the padded edge, t = 0.5 give every point back", discrete_mc_reproduced)

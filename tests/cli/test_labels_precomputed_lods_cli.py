@@ -12,20 +12,11 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, precomputed_level_crossings, precomputed_reader, run, tempdir, write_label_nrrd  # noqa: E402
+from kmtest import (check, finish, junction_labels, precomputed_level_crossings, precomputed_reader, run,  # noqa: E402
+                    tempdir, write_label_nrrd)
 
 np, ngp = precomputed_reader()
 D = tempdir()
-
-
-def junctions(shape, labels, seed):
-    """Each voxel the label of its largest box-filtered noise field: blobs a
-    few voxels wide, three or more labels meeting all over."""
-    f = np.random.default_rng(seed).random((labels, *shape), dtype=np.float32)
-    for _ in range(2):
-        for axis in (1, 2, 3):
-            f = (np.roll(f, 1, axis) + f + np.roll(f, -1, axis)) / 3
-    return (np.argmax(f, axis=0) + 1).astype(np.uint8)
 
 
 def noise(shape, seed):
@@ -46,7 +37,7 @@ def crosses_at_no_level(volume, name, chunk):
 
 
 check("six labels, triple lines and junctions, 3 levels: no crossing pair at any level",
-      crosses_at_no_level(junctions((36, 32, 30), 6, 1), "junctions", 16))
+      crosses_at_no_level(junction_labels((36, 32, 30), 6, 1), "junctions", 16))
 check("white noise of four labels, 3 levels: no crossing pair at any level",
       crosses_at_no_level(noise((24, 22, 20), 1), "noise", 8))
 finish()

@@ -27,6 +27,15 @@ def noise_field(shape=(24, 22, 20), seed=3):
     return np.random.default_rng(seed).standard_normal(shape)
 
 
+def history_positions(ijk, axis, t, origin, spacing):
+    """Points given back from their history (docs/HISTORY.md): float32(origin
+    + spacing * u), u the sample coordinates ijk (n, 3) plus t (n,) along
+    each point's edge axis (n,)."""
+    u = np.asarray(ijk).astype(np.float64)
+    u[np.arange(len(u)), axis] += np.asarray(t).astype(np.float64)
+    return (np.asarray(origin, np.float64) + np.asarray(spacing, np.float64) * u).astype(np.float32)
+
+
 def match_points(a, b, tol=1e-4):
     """The permutation p with a[i] ~ b[p[i]] (every point within tol of
     exactly one partner); asserts that the two point sets are equal."""

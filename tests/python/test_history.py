@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import keymesh
-from conftest import smooth_random_field
+from conftest import history_positions, smooth_random_field
 
 SPACING = (0.5, 0.75, 1.25)
 ORIGIN = (3.0, 1.5, 2.0)
@@ -55,10 +55,7 @@ def test_positions_reproduced_exactly():
     v = volume()
     m = contour(v)
     _, ijk, axis = decode(m.point_data["history_key"], v.shape)
-    u = ijk.astype(np.float64)
-    u[np.arange(len(u)), axis] += m.point_data["history_t"].astype(np.float64)
-    again = (np.array(ORIGIN) + np.array(SPACING) * u).astype(np.float32)
-    assert np.array_equal(again, m.points)
+    assert np.array_equal(history_positions(ijk, axis, m.point_data["history_t"], ORIGIN, SPACING), m.points)
 
 
 def test_every_memory_order_and_thread_count_gives_the_same_history():

@@ -14,6 +14,7 @@ import keymesh
 from conftest import smooth_random_field
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from kmtest import junction_labels  # noqa: E402
 from mesh_checks import assert_closed_manifold  # noqa: E402
 
 
@@ -113,6 +114,21 @@ def test_threads_and_smoothing():
     assert (a.points == b.points).all() and (a.cells == b.cells).all()
     raw = keymesh.contour_labels(vol, smoothing=False)
     assert (np.abs(a.points - raw.points) <= 0.5 + 1e-6).all() and np.abs(a.points - raw.points).max() > 0
+
+
+def test_guard_shortened_reported():
+    """last_labels_info["guard_shortened"]: the smoothing moves the fold
+    guard shortened or refused; > 0 where labels meet all over, the same at
+    1 and 2 threads, 0 unsmoothed."""
+    from keymesh._labels import last_labels_info
+    vol = junction_labels((20, 18, 16), 12, 2)
+    keymesh.contour_labels(vol, threads=1)
+    smoothed = last_labels_info["guard_shortened"]
+    assert smoothed > 0
+    keymesh.contour_labels(vol, threads=2)
+    assert last_labels_info["guard_shortened"] == smoothed
+    keymesh.contour_labels(vol, smoothing=False)
+    assert last_labels_info["guard_shortened"] == 0
 
 
 def test_refused():

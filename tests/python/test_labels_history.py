@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import keymesh
+from conftest import history_positions
 
 SPACING = (0.5, 0.75, 1.25)
 ORIGIN = (3.0, -1.5, 2.0)
@@ -48,9 +49,7 @@ def test_discrete_mc_points_from_key_and_t():
     far = ijk.copy()
     far[np.arange(len(far)), axis] += 1
     assert np.all(padded[tuple(ijk.T)] != padded[tuple(far.T)]), "an edge between equal labels"
-    u = (ijk - 1).astype(np.float64)
-    u[np.arange(len(u)), axis] += t.astype(np.float64)
-    assert np.array_equal(at(u), m.points)
+    assert np.array_equal(history_positions(ijk - 1, axis, t, ORIGIN, SPACING), m.points)
     assert len(np.unique(key)) == len(key)
 
 

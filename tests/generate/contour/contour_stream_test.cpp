@@ -9,6 +9,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
+#include "uniform_noise.hpp"
 
 using namespace keymesh;
 using generate::ContourOptions;
@@ -157,11 +158,7 @@ TEST(ContourStream, GhostPlanesGiveTheWholeVolumesDerivatives) {
 // bit (averaged normals too: computed from the coarse mesh either way), for
 // slabs of every size, several isovalues and every field option.
 TEST(ContourStream, CoarseningStreamedEqualsInMemory) {
-  ImageGrid g;
-  g.allocate({37, 29, 23}, ScalarType::Float32);
-  std::mt19937 rng(9);
-  auto* v = reinterpret_cast<float*>(g.data());
-  for (Id p = 0; p < g.num_points(); ++p) v[p] = std::uniform_real_distribution<float>(0, 1)(rng);
+  ImageGrid g = keymesh::testing::uniform_noise({37, 29, 23}, 9, 0, 1);
   g.spacing = {0.5, 1.25, 2.0};
   g.origin = {-3, 1, 7};
   const std::size_t plane = 37 * 29 * sizeof(float);

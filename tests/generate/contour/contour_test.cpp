@@ -14,6 +14,7 @@
 #include "keymesh/generate/contour/marching_cubes_table.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "uniform_noise.hpp"
 
 using namespace keymesh;
 using generate::ContourNormals;
@@ -309,11 +310,8 @@ TEST(Contour, NoiseVolumeGivesAManifoldSurface) {
   // included, appear many times. Neighbouring cubes must never draw the same
   // diagonal across their shared face (an edge with four triangles), and no
   // edge may be open except on the grid's border.
-  ImageGrid g;
-  g.allocate({40, 37, 33}, ScalarType::Float32);
-  std::mt19937 rng(3);
-  auto* v = static_cast<float*>(g.data());
-  for (Id p = 0; p < g.num_points(); ++p) v[p] = std::uniform_real_distribution<float>(0, 1)(rng);
+  const ImageGrid g = keymesh::testing::uniform_noise({40, 37, 33}, 3, 0, 1);
+  const float* v = static_cast<const float*>(g.data());
   std::set<unsigned> cases;
   for (Id k = 0; k + 1 < 33; ++k)
     for (Id j = 0; j + 1 < 37; ++j)
@@ -382,11 +380,7 @@ TEST(Contour, StructuredPlanOnSparseSpikesEqualsSortPlan) {
 // left unwritten shows), and the mesh returned holds none of them; options
 // the arrays do not cover are refused.
 TEST(Contour, OutputArraysGetTheBytesOfTheMeshsVectors) {
-  ImageGrid g;
-  g.allocate({37, 29, 23}, ScalarType::Float32);
-  auto* v = static_cast<float*>(g.data());
-  std::mt19937 rng(3);
-  for (Id p = 0; p < g.num_points(); ++p) v[p] = std::uniform_real_distribution<float>(0, 1)(rng);
+  ImageGrid g = keymesh::testing::uniform_noise({37, 29, 23}, 3, 0, 1);
   g.spacing = {0.5, 1.25, 2.0};
   g.origin = {-3, 1, 7};
   for (bool scalars : {true, false})
@@ -432,8 +426,7 @@ TEST(Contour, StructuredPlanEqualsSortPlanOnNoise) {
                                        {130, 9, 3}, {31, 33, 35}}) {
     ImageGrid g;
     g.allocate(dims, ScalarType::Float32);
-    auto* v = static_cast<float*>(g.data());
-    for (Id p = 0; p < g.num_points(); ++p) v[p] = std::uniform_real_distribution<float>(0, 1)(rng);
+    keymesh::testing::fill_uniform(g, rng, 0, 1);
     g.spacing = {0.5, 1.25, 2.0};
     g.origin = {-3, 1, 7};
     for (auto normals : {ContourNormals::None, ContourNormals::Gradient, ContourNormals::Average}) {

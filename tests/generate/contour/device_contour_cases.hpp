@@ -13,6 +13,7 @@
 
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/mesh/image_grid.hpp"
+#include "uniform_noise.hpp"
 
 namespace keymesh::testing {
 
@@ -48,14 +49,9 @@ inline std::vector<generate::ContourOptions> option_sets(const std::vector<doubl
 // Uniform float noise in [-1, 1) (many small components, every cube case),
 // with non-unit spacing and origin.
 inline ImageGrid noise(Id nx, Id ny, Id nz, unsigned seed) {
-  ImageGrid g;
-  g.allocate({nx, ny, nz}, ScalarType::Float32);
+  ImageGrid g = uniform_noise({nx, ny, nz}, seed);
   g.origin = {-1.5, 0.25, 3.0};
   g.spacing = {0.5, 1.25, 0.75};
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
   return g;
 }
 

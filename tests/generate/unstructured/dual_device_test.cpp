@@ -6,26 +6,19 @@
 #include <gtest/gtest.h>
 
 #include <limits>
-#include <random>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour/contour.hpp"
-#include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/generate/unstructured/dual.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "dual_cases.hpp"
 #include "same_bits.hpp"
+#include "uniform_noise.hpp"
 
 using namespace keymesh;
+using keymesh::testing::dual_sphere;
 
 namespace {
-
-SurfaceMesh sphere(Id n, double iso) {
-  generate::ContourOptions o;
-  o.isovalues = {iso};
-  o.normals = generate::ContourNormals::Average;
-  o.curvature = true;
-  return generate::contour(generate::spherical_distance(n), o);
-}
 
 void expect_same_stats(const generate::DualStats& a, const generate::DualStats& b, const std::string& what) {
   EXPECT_EQ(a.polygons, b.polygons) << what;
@@ -48,20 +41,11 @@ generate::DualStats expect_device_equals_cpu(const SurfaceMesh& m, const std::st
   return cpu_stats;
 }
 
-// A 3 x 3 grid of points as 8 triangles (open), plus a bowtie: two
-// triangles meeting only at point 9 (a non-manifold point), and a point no
-// cell uses; a NaN in a field.
-SurfaceMesh open_grid_and_bowtie() {
-  SurfaceMesh m;
-  for (int j = 0; j < 3; ++j)
-    for (int i = 0; i < 3; ++i) m.points.insert(m.points.end(), {float(i), float(j), 0.f});
-  for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 2; ++i) {
-      const PointIndex a = PointIndex(i + 3 * j), b = a + 1, c = a + 3, d = a + 4;
-      m.connectivity.insert(m.connectivity.end(), {a, b, d, a, d, c});
-    }
-  m.points.insert(m.points.end(), {5, 0, 0, 6, -1, 0, 6, 1, 0, 4, -1, 0, 4, 1, 0, 9, 9, 9});  // points 9..14
-  m.connectivity.insert(m.connectivity.end(), {9, 10, 11, 9, 12, 13});
+// testing::open_grid_and_bowtie() (an open grid, a non-manifold point 9)
+// and a point no cell uses (14); a NaN in a field.
+SurfaceMesh open_grid_bowtie_and_fields() {
+  SurfaceMesh m = keymesh::testing::open_grid_and_bowtie();
+  m.points.insert(m.points.end(), {9, 9, 9});  // point 14
   Field f{"value", 2, Array<float>(2 * 15)};
   for (std::size_t i = 0; i < f.values.size(); ++i) f.values[i] = 0.3f * float(i) - 1.0f;
   f.values[7] = std::numeric_limits<float>::quiet_NaN();
@@ -73,7 +57,7 @@ SurfaceMesh open_grid_and_bowtie() {
 
 TEST(DeviceDual, ClosedSphereWithFieldsEqualsTheCpuPath) {
   // Normals (renormalised), scalars and curvature carried.
-  const SurfaceMesh m = sphere(24, 9.5);
+  const SurfaceMesh m = dual_sphere(24, 9.5);
   ASSERT_GT(m.num_cells(), 1000);
   const auto st = expect_device_equals_cpu(m, "sphere");
   EXPECT_EQ(st.polygons, m.num_points());
@@ -81,13 +65,13 @@ TEST(DeviceDual, ClosedSphereWithFieldsEqualsTheCpuPath) {
 
 TEST(DeviceDual, DualOfTheDualEqualsTheCpuPath) {
   // Polygon input (offsets): the dual of a dual.
-  const SurfaceMesh d = generate::dual(sphere(16, 5.5));
+  const SurfaceMesh d = generate::dual(dual_sphere(16, 5.5));
   ASSERT_FALSE(d.all_triangles());
   expect_device_equals_cpu(d, "dual of the dual");
 }
 
 TEST(DeviceDual, OpenAndNonManifoldSurfacesEqualTheCpuPath) {
-  const auto st = expect_device_equals_cpu(open_grid_and_bowtie(), "open grid and bowtie");
+  const auto st = expect_device_equals_cpu(open_grid_bowtie_and_fields(), "open grid and bowtie");
   EXPECT_GT(st.boundary_fans, 0);
   EXPECT_GE(st.nonmanifold_points, 1);
   EXPECT_GT(st.skipped_fans, 0);
@@ -96,12 +80,7 @@ TEST(DeviceDual, OpenAndNonManifoldSurfacesEqualTheCpuPath) {
 TEST(DeviceDual, OpenNoiseSurfaceEqualsTheCpuPath) {
   // A noise contour cut by the grid's faces: many boundary fans, a few
   // non-manifold points where the surface pinches.
-  ImageGrid g;
-  g.allocate({17, 15, 13}, ScalarType::Float32);
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
+  const ImageGrid g = keymesh::testing::uniform_noise({17, 15, 13}, 5);
   generate::ContourOptions o;
   o.isovalues = {0.2};
   o.normals = generate::ContourNormals::Gradient;

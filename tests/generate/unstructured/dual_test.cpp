@@ -6,24 +6,17 @@
 
 #include "keymesh/analyze/incidence.hpp"
 #include "keymesh/analyze/topology.hpp"
-#include "keymesh/generate/contour/contour.hpp"
-#include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "dual_cases.hpp"
 
 using namespace keymesh;
+using keymesh::testing::dual_sphere;
+using keymesh::testing::open_grid_and_bowtie;
 
 namespace {
 
-SurfaceMesh sphere(Id n, double iso) {
-  generate::ContourOptions o;
-  o.isovalues = {iso};
-  o.normals = generate::ContourNormals::Average;
-  o.curvature = true;
-  return generate::contour(generate::spherical_distance(n), o);
-}
-
 TEST(Dual, ClosedSphereSwapsCountsAndKeepsTopology) {
-  const SurfaceMesh m = sphere(32, 13.5);
+  const SurfaceMesh m = dual_sphere(32, 13.5);
   const auto tm = analyze::check_topology(m);
   generate::DualStats st;
   const SurfaceMesh d = generate::dual(m, &st);
@@ -62,7 +55,7 @@ TEST(Dual, ClosedSphereSwapsCountsAndKeepsTopology) {
 }
 
 TEST(Dual, SameAtAnyThreadCount) {
-  const SurfaceMesh m = sphere(24, 9.5);
+  const SurfaceMesh m = dual_sphere(24, 9.5);
   parallel::set_thread_count(1);
   const SurfaceMesh a = generate::dual(m);
   parallel::set_thread_count(4);
@@ -74,18 +67,7 @@ TEST(Dual, SameAtAnyThreadCount) {
 }
 
 TEST(Dual, BoundaryAndNonManifoldPointsGiveNoDegeneratePolygon) {
-  // A 3 x 3 grid of points as 8 triangles (open), plus a bowtie: two
-  // triangles meeting only at point 9 (a non-manifold point).
-  SurfaceMesh m;
-  for (int j = 0; j < 3; ++j)
-    for (int i = 0; i < 3; ++i) m.points.insert(m.points.end(), {float(i), float(j), 0.f});
-  for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 2; ++i) {
-      const PointIndex a = PointIndex(i + 3 * j), b = a + 1, c = a + 3, d = a + 4;
-      m.connectivity.insert(m.connectivity.end(), {a, b, d, a, d, c});
-    }
-  m.points.insert(m.points.end(), {5, 0, 0, 6, -1, 0, 6, 1, 0, 4, -1, 0, 4, 1, 0});  // points 9..13
-  m.connectivity.insert(m.connectivity.end(), {9, 10, 11, 9, 12, 13});
+  const SurfaceMesh m = open_grid_and_bowtie();
   generate::DualStats st;
   const SurfaceMesh d = generate::dual(m, &st);
   EXPECT_GE(st.nonmanifold_points, 1);
@@ -100,7 +82,7 @@ TEST(Dual, BoundaryAndNonManifoldPointsGiveNoDegeneratePolygon) {
 }
 
 TEST(Incidence, NeighboursAcrossEdges) {
-  const SurfaceMesh m = sphere(16, 5.5);
+  const SurfaceMesh m = dual_sphere(16, 5.5);
   const auto across = analyze::cell_neighbours(m);
   for (Id t = 0; t < m.num_cells(); ++t)
     for (int k = 0; k < 3; ++k) {

@@ -6,13 +6,13 @@
 
 #include <cmath>
 #include <limits>
-#include <random>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
 #include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "same_bits.hpp"
+#include "uniform_noise.hpp"
 
 using namespace keymesh;
 using generate::SubdivideOptions;
@@ -52,12 +52,7 @@ TEST(DeviceSubdivide, SphereWithFieldsEqualsTheCpuPath) {
 }
 
 TEST(DeviceSubdivide, NoiseSurfaceWithCellFieldsEqualsTheCpuPath) {
-  ImageGrid g;
-  g.allocate({19, 17, 15}, ScalarType::Float32);
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
+  const ImageGrid g = keymesh::testing::uniform_noise({19, 17, 15}, 3);
   SurfaceMesh m = contour_of(g, 0.1, generate::ContourNormals::Gradient);
   Field cells{"cell_id", 2, Array<float>(static_cast<std::size_t>(2 * m.num_cells()))};
   for (std::size_t i = 0; i < cells.values.size(); ++i) cells.values[i] = 0.5f * float(i);

@@ -1,12 +1,12 @@
 #pragma once
 // Inputs shared by marching tetrahedra's device-path and GPU tests
 // (contour_tets_device_test.cpp, tests/cuda/unstructured_cuda_test.cpp).
-#include <random>
 #include <utility>
 
 #include "keymesh/generate/unstructured/tetrahedralize.hpp"
 #include "keymesh/mesh/image_grid.hpp"
 #include "keymesh/mesh/unstructured_grid.hpp"
+#include "uniform_noise.hpp"
 
 namespace keymesh::testing {
 
@@ -24,14 +24,6 @@ inline UnstructuredGrid tets_of(const ImageGrid& grid) {
 }
 
 // Uniform float noise in [-1, 1) on an n x (n - 1) x (n + 2) grid.
-inline ImageGrid tet_noise(Id n, unsigned seed) {
-  ImageGrid g;
-  g.allocate({n, n - 1, n + 2}, ScalarType::Float32);
-  float* v = static_cast<float*>(g.data());
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.f, 1.f);
-  for (Id i = 0; i < g.num_points(); ++i) v[i] = u(rng);
-  return g;
-}
+inline ImageGrid tet_noise(Id n, unsigned seed) { return uniform_noise({n, n - 1, n + 2}, seed); }
 
 }  // namespace keymesh::testing
