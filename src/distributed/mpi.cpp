@@ -113,8 +113,12 @@ std::string first_error(const std::string& mine) {
   return {};
 }
 
-std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine) {
-  if (!initialized()) return {mine};
+void gather_bytes_each(const std::vector<std::byte>& mine,
+                       const std::function<void(int, const std::vector<std::byte>&)>& take) {
+  if (!initialized()) {
+    take(0, mine);
+    return;
+  }
   const int me = rank(), ranks = size();
   constexpr std::uint64_t kPiece = 1u << 30;  // MPI counts are int
   if (me != 0) {
@@ -122,19 +126,24 @@ std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& m
     mpi().Send(&n, 1, mpi().uint64, 0, 0, mpi().comm_world);
     for (std::uint64_t at = 0; at < n; at += kPiece)
       mpi().Send(mine.data() + at, static_cast<int>(std::min(kPiece, n - at)), mpi().byte, 0, 1, mpi().comm_world);
-    return {};
+    return;
   }
-  std::vector<std::vector<std::byte>> out(static_cast<std::size_t>(ranks));
-  out[0] = mine;
+  take(0, mine);
+  std::vector<std::byte> bytes;
   for (int q = 1; q < ranks; ++q) {
     std::uint64_t n = 0;
     mpi().Recv(&n, 1, mpi().uint64, q, 0, mpi().comm_world, MPI_STATUS_IGNORE);
-    auto& bytes = out[static_cast<std::size_t>(q)];
     bytes.resize(static_cast<std::size_t>(n));
     for (std::uint64_t at = 0; at < n; at += kPiece)
       mpi().Recv(bytes.data() + at, static_cast<int>(std::min(kPiece, n - at)), mpi().byte, q, 1, mpi().comm_world,
                  MPI_STATUS_IGNORE);
+    take(q, bytes);
   }
+}
+
+std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine) {
+  std::vector<std::vector<std::byte>> out;
+  gather_bytes_each(mine, [&](int, const std::vector<std::byte>& bytes) { out.push_back(bytes); });
   return out;
 }
 

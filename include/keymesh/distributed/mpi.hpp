@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <exception>
+#include <functional>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -81,5 +82,10 @@ bool all_ok(bool ok);
 // rank returns {mine}.
 std::vector<std::vector<std::byte>> all_gather_bytes(const std::vector<std::byte>& mine);
 std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine);
+// Collective: gather_bytes one rank at a time. Rank 0 calls take(q, bytes)
+// for q = 0, 1, ... P - 1 as rank q's bytes arrive (its own passed as they
+// are), so it holds one rank's bytes at a time; the others only send.
+void gather_bytes_each(const std::vector<std::byte>& mine,
+                       const std::function<void(int rank, const std::vector<std::byte>& bytes)>& take);
 
 }  // namespace keymesh::distributed
