@@ -1,5 +1,5 @@
 // Pieces put together on rank 0 (keymesh/distributed/gather_pieces.hpp).
-// Built on gather_bytes and gather_bytes_each, so it compiles without MPI
+// Built on gather_bytes and gather_chunks, so it compiles without MPI
 // too (a world of one rank: its own piece is the whole).
 #include "keymesh/distributed/gather_pieces.hpp"
 
@@ -39,26 +39,38 @@ std::size_t point_record(const SurfaceMesh& m, bool history) {
   return 8 + 1 + (history ? 8 : 0) + 4 * values;
 }
 
+constexpr std::size_t kChunk = std::size_t{1} << 16;  // points or cells a chunk
+
 // The points rank q sends: those it owns and those of its own triangles
 // (a point no owner's triangle uses still comes from the rank whose own
 // triangle does: together they are every point of the mesh).
-std::vector<std::byte> points_bytes(const OwnPiece& w, bool history) {
+std::vector<std::uint8_t> sent_points(const OwnPiece& w) {
   const SurfaceMesh& m = w.mesh;
   std::vector<std::uint8_t> sent(static_cast<std::size_t>(m.num_points()), 0);
   for (Id c = 0; c < w.own_triangles; ++c)
     for (std::uint64_t k = m.cell_begin(c); k < m.cell_end(c); ++k) sent[m.connectivity[k]] = 1;
-  std::vector<std::byte> out;
-  for (std::size_t p = 0; p < sent.size(); ++p) {
-    const bool owned = w.point_ghosts[p] == 0;
-    if (!sent[p] && !owned) continue;
+  for (std::size_t p = 0; p < sent.size(); ++p) sent[p] = sent[p] || w.point_ghosts[p] == 0;
+  return sent;
+}
+
+// The next chunk of the points sent, from point `at` on; false when none is left.
+bool points_chunk(const OwnPiece& w, const std::vector<std::uint8_t>& sent, bool history, std::size_t& at,
+                  std::vector<std::byte>& out) {
+  const SurfaceMesh& m = w.mesh;
+  if (at >= sent.size()) return false;
+  out.clear();
+  const std::size_t end = std::min(sent.size(), at + kChunk);
+  for (std::size_t p = at; p < end; ++p) {
+    if (!sent[p]) continue;
     put(out, w.ids[p]);
-    put(out, static_cast<std::uint8_t>(owned ? 1 : 0));
+    put(out, static_cast<std::uint8_t>(w.point_ghosts[p] == 0 ? 1 : 0));
     if (history) put(out, w.history_key[p]);
     for (int k = 0; k < 3; ++k) put(out, m.points[3 * p + static_cast<std::size_t>(k)]);
     for (const Field& f : m.point_fields)
       for (int k = 0; k < f.components; ++k) put(out, f.values[static_cast<std::size_t>(f.components) * p + k]);
   }
-  return out;
+  at = end;
+  return true;
 }
 
 // Per group: this rank's own cells and their corners; then 1 when its mesh has polygons.
@@ -77,19 +89,25 @@ std::vector<std::byte> counts_bytes(const OwnPiece& w, std::span<const std::uint
   return out;
 }
 
-// A cell as sent: group, corners, their global ids, cell field values.
-std::vector<std::byte> cells_bytes(const OwnPiece& w, std::span<const std::uint32_t> own_group) {
+// The next chunk of own cells, from cell `at` on; false when none is left.
+// A cell as sent: group, corners, their global ids (32 bits: the whole
+// mesh's point ids, checked by prepare), cell field values.
+bool cells_chunk(const OwnPiece& w, std::span<const std::uint32_t> own_group, Id& at, std::vector<std::byte>& out) {
   const SurfaceMesh& m = w.mesh;
-  std::vector<std::byte> out;
-  for (Id c = 0; c < w.own_triangles; ++c) {
+  if (at >= w.own_triangles) return false;
+  out.clear();
+  const Id end = std::min<Id>(w.own_triangles, at + static_cast<Id>(kChunk));
+  for (Id c = at; c < end; ++c) {
     put(out, own_group[static_cast<std::size_t>(c)]);
     put(out, static_cast<std::uint32_t>(m.cell_end(c) - m.cell_begin(c)));
-    for (std::uint64_t k = m.cell_begin(c); k < m.cell_end(c); ++k) put(out, w.ids[m.connectivity[k]]);
+    for (std::uint64_t k = m.cell_begin(c); k < m.cell_end(c); ++k)
+      put(out, static_cast<PointIndex>(w.ids[m.connectivity[k]]));
     for (const Field& f : m.cell_fields)
       for (int k = 0; k < f.components; ++k)
         put(out, f.values[static_cast<std::size_t>(f.components) * static_cast<std::size_t>(c) + k]);
   }
-  return out;
+  at = end;
+  return true;
 }
 
 // Rank 0's whole mesh as the ranks' shares arrive. Errors are kept, not
@@ -153,7 +171,7 @@ void place_cells(Assembly& a, int q, const std::vector<std::byte>& bytes, std::u
     a.corner_at[slot] += corners;
     if (a.polygons) a.corners[cell] = corners;
     for (std::uint32_t k = 0; k < corners; ++k) {
-      const auto id = take<std::uint64_t>(at);
+      const auto id = take<PointIndex>(at);
       if (id >= n) a.error = "gathered pieces: a triangle on global id " + std::to_string(id) + " (internal error)";
       m.connectivity[corner++] = static_cast<PointIndex>(id);
     }
@@ -234,10 +252,13 @@ SurfaceMesh gather_pieces(const OwnPiece& piece, std::span<const std::uint32_t> 
     }
   }
   const std::size_t record = point_record(piece.mesh, history);
-  gather_bytes_each(points_bytes(piece, history),
-                    [&](int, const std::vector<std::byte>& bytes) { place_points(a, bytes, record); });
-  gather_bytes_each(cells_bytes(piece, own_group),
-                    [&](int q, const std::vector<std::byte>& bytes) { place_cells(a, q, bytes, groups); });
+  const std::vector<std::uint8_t> sent = sent_points(piece);
+  std::size_t point = 0;
+  gather_chunks([&](std::vector<std::byte>& chunk) { return points_chunk(piece, sent, history, point, chunk); },
+                [&](int, const std::vector<std::byte>& chunk) { place_points(a, chunk, record); });
+  Id cell = 0;
+  gather_chunks([&](std::vector<std::byte>& chunk) { return cells_chunk(piece, own_group, cell, chunk); },
+                [&](int q, const std::vector<std::byte>& chunk) { place_cells(a, q, chunk, groups); });
   if (!root) return {};
   finish(a);
   return std::move(a.mesh);

@@ -26,8 +26,9 @@ namespace keymesh::distributed {
 // group by group, rank by rank within a group, each rank's own triangles in
 // its order, with their cell fields), on the others an empty mesh.
 // `own_group[t]` is own triangle t's group, below `groups`. Each rank's
-// points, then its cells, reach rank 0 one rank at a time
-// (gather_bytes_each), so rank 0 holds the whole mesh and one rank's share.
+// points, then its cells, reach rank 0 one rank after another in chunks of
+// 2^16 (gather_chunks): besides its piece a rank holds one chunk, and rank 0
+// the whole mesh.
 // `history_key` (given on every rank or none): rank 0 receives every
 // point's history key (OwnPiece::history_key, which every rank then holds).
 // Throws (on rank 0, after every rank's share arrived) InputError when a
