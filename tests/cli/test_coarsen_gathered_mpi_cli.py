@@ -12,13 +12,20 @@ thick that makes the halo grow; the report's counts (triangles before and
 after, non-manifold edges and vertices, boundary edges) are one process's,
 it says "output": "gathered" with a "gather" stage, and every rank's entry
 has fine_points_held: rank 0's is well below the whole fine mesh's points
-(the plain contour's), and the ranks' together cover it. Skipped (77)
-without mpirun or MPI."""
+(the plain contour's), and the ranks' together cover it.
+
+`keymesh labels` into one file takes the same road (every rank makes,
+smooths and coarsens its rows plus halo rows as for .pvtp pieces; only the
+finished shares are gathered): with --coarsen (surface nets and discrete MC,
+per label or the network, smoothed) and with --history the file is
+byte-identical to one process at -np 2 and 3, and no rank's share holds
+the whole mesh's points. Skipped (77) without mpirun or MPI."""
 import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import box_filtered_noise, check, finish, mpirun, report, require_mpi, run, tempdir  # noqa: E402
+from kmtest import (box_filtered_noise, boxes_in_noise, check, finish, mpirun, report, require_mpi, run,  # noqa: E402
+                    tempdir, write_raw)
 
 D = tempdir()
 NX, NY, NZ = 33, 29, 40  # 39 voxel layers: 13 a rank at -np 3, halos of 8 first
@@ -28,6 +35,7 @@ SRC = [NOISE, "--dims", NX, NY, NZ]
 PLANE = NX * NY * 4
 COUNTS = ("triangles_before", "triangles_after", "nonmanifold_edges", "nonmanifold_vertices", "boundary_edges")
 require_mpi("contour", *SRC, "--iso", 0.5, "-o", os.path.join(D, "probe.vtp"), "-q")
+import numpy as np  # noqa: E402  (box_filtered_noise above has required it)
 
 
 def read(path):
@@ -89,7 +97,6 @@ check("--balance, two isovalues: -np 3 gathered byte-identical to one process",
 def plate():
     """A plate one voxel thick spanning every slab (test_coarsen_pieces_mpi_cli.py's):
     the halo grows to the whole volume, and the file is still one process's."""
-    import numpy as np
     v = np.zeros((NZ, NY, NX), np.float32)
     rng = np.random.default_rng(5)
     v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((NZ, 21))
@@ -116,4 +123,36 @@ def unwritable_output_fails_once():
 
 
 check("an output rank 0 cannot write: one message, exit 1, no hang", unwritable_output_fails_once)
+
+LSHAPE = (21, 19, 26)  # x, y, z: 28 padded rows
+LABELS = write_raw(os.path.join(D, "labels.raw"), boxes_in_noise(
+    LSHAPE, 11, [(5, np.s_[2:14, 3:15, 2:18]), (9, np.s_[8:19, 2:12, 9:24]), (7, np.s_[4:9, 10:17, 14:25])], 0.15))
+LRAW = ["--dims", *LSHAPE, "--type", "int16"]
+
+
+def labels_gathered(args):
+    def fn():
+        one = os.path.join(D, "labels_one.vtp")
+        run("labels", LABELS, *LRAW, *args, "-o", one, "-q", "--report", one + ".json")
+        ref = report(one + ".json")
+        assert ref["cells"] > 500, ref
+        for P in (2, 3):
+            out = os.path.join(D, f"labels_{P}.vtp")
+            mpirun(P, "labels", LABELS, *LRAW, *args, "-o", out, "-q", "--report", out + ".json")
+            assert read(out) == read(one), f"labels {args} -np {P}: gathered file differs from one process"
+            r = report(out + ".json")
+            d = r["distributed"]
+            assert d["output"] == "gathered" and len(d["per_rank"]) == P, d
+            assert r["points"] == ref["points"] and r["cells"] == ref["cells"] and r["pairs"] == ref["pairs"]
+            assert "soup_points" not in r and "triangles_before" not in r, r  # never whole on one rank
+            shares = [q["points"] for q in d["per_rank"]]
+            assert max(shares) < ref["points"] and sum(q["triangles"] for q in d["per_rank"]) == ref["cells"], shares
+    return fn
+
+
+for args in (["--coarsen"], ["--coarsen", "--per-label", "--smooth", "3"],
+             ["--method", "discrete-mc", "--coarsen"], ["--method", "discrete-mc", "--per-label", "--coarsen"],
+             ["--history"]):
+    check(f"labels {' '.join(args)}: -np 2, 3 gathered byte-identical to one process, shared by the ranks",
+          labels_gathered(args))
 finish()
