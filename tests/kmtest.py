@@ -92,6 +92,23 @@ def box_filtered_noise(shape, seed):
     return v.astype(np.float32)
 
 
+def one_voxel_plate(path, nx, ny, nz):
+    """A float32 volume [z, y, x] holding a plate one voxel thick at x = 16
+    (y 4..24, every z), with values that put both sides' crossings nearest
+    the plate's own grid points: its two sheets coarsen onto one and the
+    non-manifold split's chains run the plate's length, spanning every
+    slab (a halo short of the whole volume fails the check). Written raw to
+    path; returns path."""
+    import numpy as np
+    v = np.zeros((nz, ny, nx), np.float32)
+    rng = np.random.default_rng(5)
+    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((nz, 21))
+    v[:, 4:25, 15] = 0.3 * rng.random((nz, 21))
+    v[:, 4:25, 17] = 0.3 * rng.random((nz, 21))
+    v.tofile(path)
+    return path
+
+
 def parse_glb(path):
     """The glTF 2.0 binary container by its specification: 12-byte header,
     a JSON chunk and a BIN chunk, each 4-byte aligned."""

@@ -90,13 +90,15 @@ void write_labels_gathered(const LabelsJob& job, generate::LabelSlabs& slabs, co
         {piece.mesh, piece.ghost_face, piece.order_key, piece.row, piece.segments, piece.history_key}, rows);
   });
   piece = generate::LabelPiece{};
-  const auto entries = distributed::gather_bytes(rank_entry(rows, slabs, w));
   std::vector<std::uint64_t> history_key;
-  // Rank 0 puts the pieces together and writes; its failure is every rank's.
-  distributed::agreed([&] {
-    const SurfaceMesh mesh = timer.run("gather", [&] {
+  SurfaceMesh mesh;
+  distributed::agreed([&] {  // rank 0's failure (after the collective) is every rank's
+    mesh = timer.run("gather", [&] {
       return distributed::gather_pieces(w, group, groups, job.options.history ? &history_key : nullptr);
     });
+  });
+  const auto entries = distributed::gather_bytes(rank_entry(rows, slabs, w));
+  distributed::agreed([&] {
     if (distributed::rank() != 0) return;
     nlohmann::json per_rank = nlohmann::json::array();
     for (const auto& e : entries)

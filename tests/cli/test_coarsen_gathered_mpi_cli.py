@@ -24,8 +24,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import (box_filtered_noise, boxes_in_noise, check, finish, mpirun, report, require_mpi, run,  # noqa: E402
-                    tempdir, write_raw)
+from kmtest import (box_filtered_noise, boxes_in_noise, check, finish, mpirun, one_voxel_plate, report,  # noqa: E402
+                    require_mpi, run, tempdir, write_raw)
 
 D = tempdir()
 NX, NY, NZ = 33, 29, 40  # 39 voxel layers: 13 a rank at -np 3, halos of 8 first
@@ -97,14 +97,7 @@ check("--balance, two isovalues: -np 3 gathered byte-identical to one process",
 def plate():
     """A plate one voxel thick spanning every slab (test_coarsen_pieces_mpi_cli.py's):
     the halo grows to the whole volume, and the file is still one process's."""
-    v = np.zeros((NZ, NY, NX), np.float32)
-    rng = np.random.default_rng(5)
-    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((NZ, 21))
-    v[:, 4:25, 15] = 0.3 * rng.random((NZ, 21))
-    v[:, 4:25, 17] = 0.3 * rng.random((NZ, 21))
-    path = os.path.join(D, "plate.raw")
-    v.tofile(path)
-    src = [path, "--dims", NX, NY, NZ]
+    src = [one_voxel_plate(os.path.join(D, "plate.raw"), NX, NY, NZ), "--dims", NX, NY, NZ]
     one = os.path.join(D, "plate_one.vtp")
     run("contour", *src, "--iso", 0.55, "--coarsen", "-o", one, "-q")
     out = os.path.join(D, "plate_3.vtp")

@@ -25,8 +25,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import (box_filtered_noise, check, finish, mpirun, read_polydata, report, require_mpi,  # noqa: E402
-                    require_vtk, run, tempdir, triangles_of, welded_vtk_pieces)
+from kmtest import (box_filtered_noise, check, finish, mpirun, one_voxel_plate, read_polydata, report,  # noqa: E402
+                    require_mpi, require_vtk, run, tempdir, triangles_of, welded_vtk_pieces)
 
 require_vtk()
 import numpy as np  # noqa: E402
@@ -116,13 +116,7 @@ def plate_grows_the_halo():
     that make both sides' crossings nearest the plate's own grid points:
     the two sheets coarsen onto one, the split's chains run the plate's
     length, and no halo short of it holds them."""
-    v = np.zeros((NZ, NY, NX), np.float32)
-    rng = np.random.default_rng(5)
-    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((NZ, 21))
-    v[:, 4:25, 15] = 0.3 * rng.random((NZ, 21))
-    v[:, 4:25, 17] = 0.3 * rng.random((NZ, 21))
-    path = os.path.join(D, "plate.raw")
-    v.tofile(path)
+    path = one_voxel_plate(os.path.join(D, "plate.raw"), NX, NY, NZ)
     d = pieces_equal_one_process([path, "--dims", NX, NY, NZ], ["--iso", 0.55], (3,), min_attempts=2)()
     print(f"plate: halo grown to {d['halo_layers']} layers in {d['attempts']} attempts")
 

@@ -17,7 +17,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, mpirun, report, require_mpi, run, tempdir  # noqa: E402
+from kmtest import check, finish, mpirun, one_voxel_plate, report, require_mpi, run, tempdir  # noqa: E402
 
 D = tempdir()
 N = 40
@@ -95,15 +95,8 @@ def coarse_pieces_equal():
 
 
 def plate_halo_grows_streamed():
-    import numpy as np
     nx, ny, nz = 33, 29, 40
-    v = np.zeros((nz, ny, nx), np.float32)
-    rng = np.random.default_rng(5)
-    v[:, 4:25, 16] = 0.75 + 0.25 * rng.random((nz, 21))
-    v[:, 4:25, 15] = 0.3 * rng.random((nz, 21))
-    v[:, 4:25, 17] = 0.3 * rng.random((nz, 21))
-    path = os.path.join(D, "plate.raw")
-    v.tofile(path)
+    path = one_voxel_plate(os.path.join(D, "plate.raw"), nx, ny, nz)
     d = coarse_pieces([path, "--dims", nx, ny, nz], ["--iso", 0.55], 3, (4 * nx * ny * 4,), "plate")[0]
     assert d["attempts"] >= 2, d  # the halo grew: its planes were read again, streamed
 
