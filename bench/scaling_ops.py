@@ -13,7 +13,9 @@ measured by `make scaling` (bench/scaling.py) beside the contour:
 Every gathered file is checked byte-identical to the single-process run and
 every set of pieces is checked to hold the single-process point and triangle
 counts. Per-rank figures come from keymesh's --report: the peak memory of
-every rank (pieces) or of rank 0 (gathered: the others hold only their slab).
+every rank where each reports one (pieces, gathered labels and the gathered
+coarsened contour, whose ranks make their own shares) or of rank 0 (the
+gathered plain contour: the others hold only their slab).
 """
 import json
 import os
@@ -156,12 +158,13 @@ def ops_doc(rows):
          "surfaces of its rows plus `halo rows` on each side (smoothing steps + 4, or + 8 with --coarsen; twice the "
          "steps for discrete-mc), smooths and coarsens them with the one-process code, and keeps what its rows "
          "made, so its share is bit-identical to one process (docs/decisions/labels-pieces-halo.md); the distributed "
-         "KEY-REDUCE numbers the points. Any other output file is gathered on rank 0, byte-identical to one process. "
+         "KEY-REDUCE numbers the points. Any other output file gathers those shares on rank 0, byte-identical to one "
+         "process. "
          "`contour --coarsen` with `-o X.pvtp` writes pieces too (halo layers, grown while a chain of the "
          "non-manifold split reaches past them: docs/decisions/contour-coarsen-pieces.md; 'halo rows' is its halo "
-         "layers). 'peak MiB, busiest rank' is the "
-         "largest peak over the ranks with pieces, rank 0's when gathered (the other ranks then hold only their "
-         "slab).\n"]
+         "layers); gathered, it coarsens the same pieces and gathers only them. 'peak MiB, busiest rank' is the "
+         "largest peak over the ranks where every rank reports one (pieces, gathered labels and the gathered "
+         "coarsened contour, whose ranks make their shares), rank 0's otherwise.\n"]
     for name, title in (("labels-strong", "Labels, strong: AAL atlas 181 x 217 x 181, 116 labels, "
                                           "surface nets, 16 smoothing steps"),
                         ("labels-weak", "Labels, weak: banded label map 160 x 160 x (64P + 1), 7 labels, 16 smoothing steps"),

@@ -5,7 +5,7 @@
 //   run_tets      a tetrahedral grid (.vtu .vtk), marching tetrahedra;
 //   run_streamed  --memory-limit: the volume in slabs of z-planes;
 //   run_distributed_contour  under mpirun: each rank reads and contours its slab;
-//   run_coarse_pieces  (contour_coarse_pieces.cpp) its --coarsen into .pvtp pieces.
+//   run_coarse_pieces  (contour_coarse_pieces.cpp) its --coarsen: coarse pieces, written or gathered.
 #include <string>
 #include <vector>
 
@@ -63,10 +63,13 @@ void write_contour(const ContourCli& o, const SurfaceMesh& mesh, const std::vect
 // Returns the exit code (every rank returns the same).
 int run_distributed_contour(const ContourCli& o, const generate::ContourOptions& options, int threads);
 
-// --coarsen into OUT.pvtp under mpirun: every rank its piece of the coarse
-// surface, made from its layers and a halo (distributed/coarse_pieces.hpp),
-// nothing gathered; welded by their global ids, the one process's output.
-// memory_limit (--memory-limit, 0: none) streams the rank's planes in slabs.
+// --coarsen under mpirun: every rank its piece of the coarse surface, made
+// from its layers and a halo (distributed/coarse_pieces.hpp); welded by their
+// global ids, the one process's output. Into OUT.pvtp every rank writes its
+// piece, nothing gathered; into any other file the coarse pieces (never the
+// fine mesh) are gathered on rank 0, which writes the one process's file
+// byte for byte. memory_limit (--memory-limit, 0: none) streams the rank's
+// planes in slabs.
 int run_coarse_pieces(const ContourCli& o, const generate::ContourOptions& options, PlaneSource& source,
                       int threads, std::size_t memory_limit);
 

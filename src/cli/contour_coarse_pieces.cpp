@@ -1,8 +1,10 @@
-// `mpirun -np P keymesh contour VOLUME --coarsen -o OUT.pvtp`: every rank
-// writes its own piece of the coarsened surface, nothing is gathered
-// (issue 36; distributed/coarse_pieces.hpp: halo layers, the split's rounds
-// agreed, the halo grown while a decision reaches past it). Rank 0 writes
-// the index and the report from every rank's entry.
+// `mpirun -np P keymesh contour VOLUME --coarsen -o OUT`: every rank
+// coarsens its own layers with a halo (issue 36; distributed/coarse_pieces.hpp:
+// halo layers, the split's rounds agreed, the halo grown while a decision
+// reaches past it). Into OUT.pvtp every rank writes its own piece, nothing
+// is gathered; into any other file only the coarse pieces are gathered
+// (distributed/gather_pieces.hpp) and rank 0 writes the one process's file.
+// Rank 0 writes the index and the report from every rank's entry.
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
@@ -14,6 +16,7 @@
 #include "piece_files.hpp"
 #include "keymesh/distributed/coarse_pieces.hpp"
 #include "keymesh/distributed/contour_distributed.hpp"
+#include "keymesh/distributed/gather_pieces.hpp"
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/io/mesh_io.hpp"
 #include "keymesh/io/plane_source.hpp"
@@ -27,6 +30,7 @@ std::vector<std::byte> rank_entry(const distributed::CoarsePiece& c, const Stage
   const distributed::OwnPiece& w = c.piece;
   const nlohmann::json e = {{"first_layer", c.first_layer}, {"layers", c.layers},
                             {"halo_layers", c.halo_layers}, {"attempts", c.attempts}, {"slabs", c.slabs},
+                            {"fine_points_held", c.fine_points_held},
                             {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
                             {"triangles", w.own_triangles},
                             {"ghost_triangles", w.mesh.num_cells() - w.own_triangles},
@@ -64,9 +68,10 @@ void report_coarse_pieces(const ContourCli& o, const ImageGrid& header, long lon
     bytes += q["bytes_sent"].get<double>();
   }
   const int ranks = static_cast<int>(entries.size());
+  const bool pieces = o.output.ends_with(".pvtp");
   if (!o.common.quiet) {
-    std::fprintf(stderr, "keymesh: %lld points, %lld triangles in %d pieces -> %s\n", points, triangles, ranks,
-                 o.output.c_str());
+    std::fprintf(stderr, "keymesh: %lld points, %lld triangles %s %d %s -> %s\n", points, triangles,
+                 pieces ? "in" : "on", ranks, pieces ? "pieces" : "ranks", o.output.c_str());
     if (edges || vertices)
       std::fprintf(stderr, "keymesh: coarsening left %lld non-manifold edges and %lld non-manifold vertices\n", edges,
                    vertices);
@@ -83,7 +88,8 @@ void report_coarse_pieces(const ContourCli& o, const ImageGrid& header, long lon
   r["nonmanifold_edges"] = edges;
   r["nonmanifold_vertices"] = vertices;
   r["boundary_edges"] = boundary;
-  r["distributed"] = {{"ranks", ranks}, {"output", "pieces"}, {"halo_layers", halo}, {"attempts", attempts},
+  r["distributed"] = {{"ranks", ranks}, {"output", pieces ? "pieces" : "gathered"}, {"halo_layers", halo},
+                      {"attempts", attempts},
                       {"bytes_exchanged", bytes}, {"per_rank", per_rank}};
   r["peak_rss_mib"] = peak_rss_mib();
   write_report(o.common.report_path, r);
@@ -96,10 +102,21 @@ int run_coarse_pieces(const ContourCli& o, const generate::ContourOptions& optio
   StageTimer timer;
   distributed::CoarsePiece c =
       timer.run("contour", [&] { return distributed::coarse_piece(source, options, o.balance, memory_limit); });
-  timer.run("write", [&] {
-    distributed::OwnPiece& w = c.piece;
-    write_piece_files(w.mesh, w.ids, io::PieceGhosts{std::move(w.point_ghosts), std::move(w.cell_ghosts)}, o.output);
-  });
+  if (o.output.ends_with(".pvtp")) {
+    timer.run("write", [&] {
+      distributed::OwnPiece& w = c.piece;
+      write_piece_files(w.mesh, w.ids, io::PieceGhosts{std::move(w.point_ghosts), std::move(w.cell_ghosts)},
+                        o.output);
+    });
+  } else {
+    // Only the coarse pieces travel; rank 0's failure is every rank's (SharedError).
+    distributed::agreed([&] {
+      const SurfaceMesh whole = timer.run("gather", [&] {
+        return distributed::gather_pieces(c.piece, c.own_isovalue, static_cast<std::uint32_t>(o.isovalues.size()));
+      });
+      if (distributed::rank() == 0) timer.run("write", [&] { write_contour(o, whole, {}); });
+    });
+  }
   const auto entries = distributed::gather_bytes(rank_entry(c, timer));
   if (distributed::rank() == 0) report_coarse_pieces(o, source.header(), c.piece.total_points, entries, threads, timer);
   return 0;

@@ -29,6 +29,7 @@ nlohmann::json rank_json(const distributed::RankStats& s) {
   return {{"first_plane", s.first_plane},       {"planes", s.planes},
           {"slabs", s.slabs},
           {"points", s.points},                 {"points_owned", s.points_owned},
+          {"fine_points_held", s.fine_points_held},
           {"triangles", s.triangles},           {"keys_requested", s.keys_requested},
           {"bytes_sent", s.bytes_sent},         {"read", s.read},
           {"balance", s.balance},               {"contour", s.contour},
@@ -65,17 +66,15 @@ void write_pieces(distributed::ContourPiece& piece, const std::string& output, b
   piece.stats.output = seconds_since(t0);
 }
 
-// The whole mesh gathered on rank 0 (coarsened there with --coarsen), which
-// writes it; its failure is every rank's (SharedError). `coarsening`
-// receives rank 0's coarsening report keys.
-void write_gathered(const ContourCli& o, distributed::ContourPiece& piece, StageTimer& timer,
-                    nlohmann::json& coarsening) {
+// The whole mesh gathered on rank 0, which writes it; its failure is every
+// rank's (SharedError). Rank 0 then holds the whole fine mesh.
+void write_gathered(const ContourCli& o, distributed::ContourPiece& piece, StageTimer& timer) {
   std::vector<std::uint64_t> history_key;
   const SurfaceMesh whole =
       timer.run("gather", [&] { return distributed::gather(piece, o.history ? &history_key : nullptr); });
   distributed::agreed([&] {
     if (distributed::rank() != 0) return;
-    if (o.coarsen) coarsening = coarsening_report(o, whole, piece.triangles_before_coarsening, timer);
+    piece.stats.fine_points_held = std::max(piece.stats.fine_points_held, static_cast<double>(whole.num_points()));
     const auto t0 = std::chrono::steady_clock::now();
     timer.run("write", [&] { write_contour(o, whole, history_key); });
     piece.stats.output += seconds_since(t0);
@@ -83,22 +82,14 @@ void write_gathered(const ContourCli& o, distributed::ContourPiece& piece, Stage
 }
 
 // Rank 0's summary line and report, from every rank's statistics.
-// With --coarsen, `coarsening` holds its keys and the counts written are
-// the coarse mesh's.
 void report_distributed(const ContourCli& o, const PlaneSource& source, double total_points,
-                        const std::vector<distributed::RankStats>& all, int threads, const StageTimer& timer,
-                        const nlohmann::json& coarsening, double coarse_points) {
+                        const std::vector<distributed::RankStats>& all, int threads, const StageTimer& timer) {
   const int ranks = distributed::size();
   double triangles = 0, bytes = 0, max_tris = 0;
   for (const auto& s : all) {
     triangles += s.triangles;
     bytes += s.bytes_sent;
     max_tris = std::max(max_tris, s.triangles);
-  }
-  const double rank_triangles = triangles;
-  if (o.coarsen) {
-    total_points = coarse_points;
-    triangles = coarsening["triangles_after"].get<double>();
   }
   if (!o.common.quiet)
     std::fprintf(stderr, "keymesh: %lld points, %lld triangles on %d ranks -> %s\n",
@@ -115,12 +106,8 @@ void report_distributed(const ContourCli& o, const PlaneSource& source, double t
   r["distributed"] = {{"ranks", ranks},
                       {"output", ends_with(o.output, ".pvtp") ? "pieces" : "gathered"},
                       {"bytes_exchanged", bytes},
-                      {"triangle_imbalance", rank_triangles > 0 ? max_tris * ranks / rank_triangles : 1.0},
+                      {"triangle_imbalance", triangles > 0 ? max_tris * ranks / triangles : 1.0},
                       {"per_rank", per_rank}};
-  if (o.coarsen) {
-    r.update(coarsening);
-    r["coarsen"] = true;
-  }
   r["peak_rss_mib"] = peak_rss_mib();
   write_report(o.common.report_path, r);
 }
@@ -144,19 +131,17 @@ int run_distributed_contour(const ContourCli& o, const generate::ContourOptions&
   }
   StageTimer timer;
   const std::unique_ptr<PlaneSource> source = open_slab_source(o, options);
-  if (pieces && o.coarsen) return run_coarse_pieces(o, options, *source, threads, memory_limit(o));
+  if (o.coarsen) return run_coarse_pieces(o, options, *source, threads, memory_limit(o));
   distributed::ContourPiece piece =
       timer.run("contour", [&] { return distributed::contour_piece(*source, options, o.balance, memory_limit(o)); });
   const double total_points = static_cast<double>(piece.numbering.total);
-  nlohmann::json coarsening;
   if (pieces)
     timer.run("write", [&] { write_pieces(piece, o.output, o.history); });
   else
-    write_gathered(o, piece, timer, coarsening);
+    write_gathered(o, piece, timer);
   const std::vector<distributed::RankStats> all = distributed::gather_stats(piece.stats);
   if (distributed::rank() != 0) return 0;
-  report_distributed(o, *source, total_points, all, threads, timer, coarsening,
-                     static_cast<double>(piece.coarse_points));
+  report_distributed(o, *source, total_points, all, threads, timer);
   return 0;
 }
 

@@ -248,10 +248,13 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
             {"background", opt.background}, {"smooth", opt.smooth_iterations}, {"relaxation", opt.relaxation},
             {"coarsen", opt.coarsen}, {"history", opt.history}, {"distinct_labels", stats.distinct_labels},
             {"labels_extracted", stats.surfaces}, {"points", mesh.num_points()}, {"cells", mesh.num_cells()},
-            {"soup_points", stats.soup_corners}, {"guard_shortened", stats.guard_shortened}, {"threads", job.threads},
-            {"backend", job.common.backend}});
+            {"threads", job.threads}, {"backend", job.common.backend}});
+  // -1: not known (a gathered run under mpirun: no rank held the whole soup,
+  // and each rank's guard also smoothed its halo rows).
+  if (stats.soup_corners >= 0) r["soup_points"] = stats.soup_corners;
+  if (stats.guard_shortened >= 0) r["guard_shortened"] = stats.guard_shortened;
   if (opt.coarsen) {
-    r["triangles_before"] = stats.triangles_before_coarsening;
+    if (stats.triangles_before_coarsening >= 0) r["triangles_before"] = stats.triangles_before_coarsening;
     r["triangles_after"] = mesh.num_cells();
   }
   nlohmann::json pairs = nlohmann::json::array();

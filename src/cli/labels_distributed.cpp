@@ -1,10 +1,11 @@
 // `mpirun -np P keymesh labels VOLUME -o OUT`: every rank reads and
 // contours its rows of the padded volume (generate/labels_stream.hpp's passes,
 // streamed in slabs too with --memory-limit); the ranks share their distinct
-// labels and counts. Then either every rank writes its own piece of
-// OUT.pvtp (labels_pieces.cpp: nothing gathered), or, for any other file,
-// rank 0 gathers the pieces, merges them by key, smooths and writes one
-// file, byte-identical to the single-process run.
+// labels and counts. Then every rank makes its share with halo rows and
+// either writes its own piece of OUT.pvtp (labels_pieces.cpp: nothing
+// gathered) or, for any other file, sends its finished share to rank 0,
+// which puts the shares together and writes one file, byte-identical to the
+// single-process run (labels_gathered.cpp).
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -34,28 +35,6 @@ std::vector<std::int64_t> labels_of(const std::vector<std::byte>& b) {
 // Rows [first, end) of rank q among `ranks`: equal shares of the padded planes.
 std::pair<Id, Id> rows_of(Id rows, int q, int ranks) {
   return {rows * q / ranks, rows * (q + 1) / ranks};
-}
-
-// Rank 0: every rank's pieces merged by key, smoothed and written.
-void write_merged(const LabelsJob& job, generate::LabelSlabs& slabs, const ImageGrid& header,
-                  const std::vector<std::vector<std::byte>>& pieces, StageTimer& timer) {
-  const int ranks = static_cast<int>(pieces.size());
-  const Id total_rows = generate::LabelSlabs::total_rows(header);
-  for (int q = 1; q < ranks; ++q) slabs.add_pieces(pieces[static_cast<std::size_t>(q)]);
-  std::vector<std::uint64_t> history_key;
-  const SurfaceMesh mesh = slabs.finish(&history_key);
-  nlohmann::json r;
-  r["dims"] = header.dims;
-  r["scalar_type"] = scalar_type_name(header.type);
-  if (job.memory_limit) r["memory_limit"] = job.memory_limit;
-  nlohmann::json per_rank = nlohmann::json::array();
-  for (int q = 0; q < ranks; ++q) {
-    const auto [b, e] = rows_of(total_rows, q, ranks);
-    per_rank.push_back({{"first_row", b}, {"rows", e - b}, {"piece_bytes", pieces[static_cast<std::size_t>(q)].size()}});
-  }
-  r["ranks"] = ranks;
-  r["distributed"] = {{"ranks", ranks}, {"output", "gathered"}, {"per_rank", per_rank}};
-  write_labels_outputs(job, mesh, slabs.stats(), std::move(r), timer, history_key);
 }
 
 }  // namespace
@@ -91,20 +70,10 @@ int run_distributed_labels(const LabelsJob& job) {
   step("scan", [&] { counts = slabs->count_labels(); });
   const std::vector<std::vector<std::byte>> all_counts = distributed::all_gather_bytes(counts);
   step("scan", [&] { slabs->set_counts(all_counts); });
-  if (into_pieces) {
+  if (into_pieces)
     write_labels_pieces(job, *slabs, source->header(), rows_of(total_rows, rank, ranks), timer);
-    return 0;
-  }
-  std::vector<std::byte> my_pieces;
-  step("labels", [&] {
-    slabs->generate();
-    my_pieces = slabs->pieces_bytes();
-  });
-  const std::vector<std::vector<std::byte>> pieces = distributed::gather_bytes(my_pieces);
-  // Rank 0 merges, smooths and writes; the others wait for its vote.
-  step("merge", [&] {
-    if (rank == 0) write_merged(job, *slabs, source->header(), pieces, timer);
-  });
+  else
+    write_labels_gathered(job, *slabs, source->header(), rows_of(total_rows, rank, ranks), timer);
   return 0;
 }
 

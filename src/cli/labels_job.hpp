@@ -65,6 +65,8 @@ void check_labels_memory(const LabelsJob& job, const ImageGrid& header, std::pai
 // Writes the mesh, the summary line and the report (`r` holds what the run
 // adds: dims, scalar_type, stream, distributed); with --history (.vtp,
 // checked) the history_key array beside the mesh's history_t field.
+// stats.soup_corners and triangles_before_coarsening below 0 (not known)
+// leave soup_points and triangles_before out.
 void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const generate::LabelStats& stats,
                           nlohmann::json r, StageTimer& timer, const std::vector<std::uint64_t>& history_key = {});
 
@@ -81,5 +83,12 @@ int run_distributed_labels(const LabelsJob& job);
 // index, the summary line and the report; nothing is gathered.
 void write_labels_pieces(const LabelsJob& job, generate::LabelSlabs& slabs, const ImageGrid& header,
                          std::pair<Id, Id> rows, StageTimer& timer);
+
+// Collective, as write_labels_pieces, for one output file
+// (labels_gathered.cpp): every rank makes its share with halo rows as for
+// pieces, and only the shares are gathered; rank 0 puts them together by
+// global id and writes the one process's file byte for byte.
+void write_labels_gathered(const LabelsJob& job, generate::LabelSlabs& slabs, const ImageGrid& header,
+                           std::pair<Id, Id> rows, StageTimer& timer);
 
 }  // namespace keymesh::cli

@@ -303,6 +303,7 @@ struct Finished {
   std::vector<std::uint64_t> order_key;
   std::vector<Id> row;
   std::vector<std::uint8_t> ghost_face;
+  std::vector<std::uint32_t> own_isovalue;  // per own triangle, in order
 };
 
 Finished finish(CoarseLayers& c, const Written& w, const Grid& g, Id isovalues, bool average) {
@@ -315,6 +316,9 @@ Finished finish(CoarseLayers& c, const Written& w, const Grid& g, Id isovalues, 
       f.order_key.push_back(keys[p]);
       f.row.push_back(g.plane(c.key[c.original[p]]));
     }
+  const PointIndex* C = c.mesh.connectivity.data();
+  for (std::size_t t = 0; t < w.face.size(); ++t)
+    if (w.face[t] == 1) f.own_isovalue.push_back(static_cast<std::uint32_t>(c.key[c.original[C[3 * t]]] / g.nxyz));
   remove_points(c.mesh, c.split.unused);
   for (std::uint8_t face : w.face) f.ghost_face.push_back(face == 1 ? 0 : 1);
   if (average) average_normals(c.mesh);
@@ -356,6 +360,7 @@ CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& op
     FineLayers fine;
     agreed([&] { fine = contour_layers(source, options, first, end, memory_limit); });
     out.slabs += fine.slabs;
+    out.fine_points_held = std::max(out.fine_points_held, fine.mesh.num_points());
     out.read += fine.read;
     out.contour += fine.contour;
     auto t0 = Clock::now();
@@ -377,6 +382,7 @@ CoarsePiece coarse_piece(PlaneSource& source, const generate::ContourOptions& op
       count_owned(out, c.mesh, f.row, own);
     });
     out.piece = own_piece({c.mesh, f.ghost_face, f.order_key, f.row, static_cast<int>(kChains * isovalues)}, own);
+    out.own_isovalue = std::move(f.own_isovalue);
     out.number = seconds_since(t0);
     return out;
   }

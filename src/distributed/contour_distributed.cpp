@@ -17,7 +17,6 @@
 #include "keymesh/core/free_storage.hpp"
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/generate/contour/contour_stream.hpp"
-#include "keymesh/generate/coarsen/coarsen.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/mesh/normals.hpp"
 
@@ -199,15 +198,7 @@ void contour_slab(PlaneSource& source, HeldSlab held, const generate::ContourOpt
   opt.total_planes = nz;
   opt.ghost_below = below;
   opt.ghost_above = above;
-  // Coarsening averages a grid point's crossings, which two ranks may share:
-  // the fine pieces are gathered with their nearest grid points and rank 0
-  // coarsens the whole (gather()); averaged normals then come from the
-  // coarse mesh there.
-  piece.coarsen = options.coarsen;
-  piece.average_after_coarsening = options.coarsen && options.normals == generate::ContourNormals::Average;
-  piece.coarse_range = static_cast<std::uint64_t>(nxy * nz) * options.isovalues.size();
-  opt.coarsen = false;
-  piece.average = options.normals == generate::ContourNormals::Average && !options.coarsen;
+  piece.average = options.normals == generate::ContourNormals::Average;
   piece.layer_grid = generate::LayerGrid{static_cast<std::uint64_t>(nxy), nz - 1, static_cast<Id>(options.isovalues.size())};
   if (options.normals == generate::ContourNormals::Average) opt.normals = generate::ContourNormals::None;
   if (memory_limit) {
@@ -215,7 +206,7 @@ void contour_slab(PlaneSource& source, HeldSlab held, const generate::ContourOpt
     // mesh and keys as one contour of them.
     generate::StreamStats ss;
     piece.mesh = generate::contour_planes_streamed(source, opt, memory_limit, first + below, last - above, piece.keys,
-                                                   options.coarsen ? &piece.nearest : nullptr, &ss);
+                                                   nullptr, &ss);
     st.read += ss.read;
     st.slabs = static_cast<double>(ss.slabs);
   } else {
@@ -223,7 +214,7 @@ void contour_slab(PlaneSource& source, HeldSlab held, const generate::ContourOpt
     ImageGrid slab = read_slab(source, std::move(held), first, last);
     st.read += seconds_since(t0);
     t0 = Clock::now();
-    piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys, options.coarsen ? &piece.nearest : nullptr);
+    piece.mesh = generate::contour(slab, opt, nullptr, &piece.keys);
     free_storage(slab.bytes);
   }
   if (piece.average) normal_sums = point_normal_sums(piece.mesh);
@@ -257,6 +248,7 @@ void number_piece(ContourPiece& piece, const generate::ContourOptions& options, 
     throw LimitError("distributed contour: " + std::to_string(g.total) + " points exceed 32-bit point ids");
   RankStats& st = piece.stats;
   st.points = static_cast<double>(piece.mesh.num_points());
+  st.fine_points_held = st.points;
   for (std::uint8_t o : g.owned) st.points_owned += o;
   st.triangles = static_cast<double>(piece.mesh.num_cells());
   st.keys_requested = static_cast<double>(g.keys_requested);
@@ -272,6 +264,7 @@ ContourPiece contour_piece(PlaneSource& source, const generate::ContourOptions& 
   mpi().Comm_rank(mpi().comm_world, &r);
   const ImageGrid& head = source.header();
   require_distributable(head, options, P);
+  if (options.coarsen) throw InputError("distributed contour: --coarsen is coarse_piece's (internal error)");
   const Id nz = head.dims[2], nxy = head.dims[0] * head.dims[1];
   ContourPiece piece;
   RankStats& st = piece.stats;
@@ -360,13 +353,12 @@ SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys) 
   // Owned points (positions and fields) in local order: key order, segment after segment.
   const Id n = m.num_points();
   std::vector<float> xyz;
-  std::vector<std::uint64_t> nearest, keys;
+  std::vector<std::uint64_t> keys;
   std::vector<std::vector<float>> fields(m.point_fields.size());
   xyz.reserve(static_cast<std::size_t>(3 * piece.stats.points_owned));
   for (Id p = 0; p < n; ++p)
     if (g.owned[p]) {
       xyz.insert(xyz.end(), m.points.begin() + 3 * p, m.points.begin() + 3 * p + 3);
-      if (piece.coarsen) nearest.push_back(piece.nearest[static_cast<std::size_t>(p)]);
       if (piece.average || point_keys) keys.push_back(piece.keys[static_cast<std::size_t>(p)]);
       for (std::size_t f = 0; f < fields.size(); ++f) {
         const Field& fd = m.point_fields[f];
@@ -405,18 +397,6 @@ SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys) 
         if (f.name == "Normals")
           f = generate::blocked_average_normals(out, generate::layer_blocks(out, all_keys, piece.layer_grid));
     if (point_keys) *point_keys = std::move(all_keys);
-  }
-  if (piece.coarsen) {
-    // The fine mesh of one process, and its points' coarse keys: coarsened
-    // as one process coarsens it.
-    std::vector<std::uint64_t> all_nearest;
-    gather_segments(nearest, 1, mpi().uint64, g.counts, S, all_nearest);
-    if (r == 0) {
-      piece.triangles_before_coarsening = out.num_cells();
-      out = generate::coarsen(out, all_nearest, piece.coarse_range);
-      if (piece.average_after_coarsening) average_normals(out);
-      piece.coarse_points = out.num_points();
-    }
   }
   piece.stats.output += seconds_since(t0);
   return out;

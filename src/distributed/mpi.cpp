@@ -113,6 +113,38 @@ std::string first_error(const std::string& mine) {
   return {};
 }
 
+void gather_chunks(const std::function<bool(std::vector<std::byte>&)>& next,
+                   const std::function<void(int, const std::vector<std::byte>&)>& take) {
+  std::vector<std::byte> chunk;
+  if (!initialized() || rank() == 0) {
+    while (next(chunk)) take(0, chunk);
+    if (!initialized()) return;
+  }
+  constexpr std::uint64_t kPiece = 1u << 30;  // MPI counts are int
+  constexpr std::uint64_t kDone = ~std::uint64_t{0};
+  if (rank() != 0) {
+    auto send = [&](std::uint64_t n) {
+      mpi().Send(&n, 1, mpi().uint64, 0, 0, mpi().comm_world);
+      for (std::uint64_t at = 0; n != kDone && at < n; at += kPiece)
+        mpi().Send(chunk.data() + at, static_cast<int>(std::min(kPiece, n - at)), mpi().byte, 0, 1, mpi().comm_world);
+    };
+    while (next(chunk)) send(chunk.size());
+    send(kDone);
+    return;
+  }
+  for (int q = 1; q < size(); ++q)
+    for (;;) {
+      std::uint64_t n = 0;
+      mpi().Recv(&n, 1, mpi().uint64, q, 0, mpi().comm_world, MPI_STATUS_IGNORE);
+      if (n == kDone) break;
+      chunk.resize(static_cast<std::size_t>(n));
+      for (std::uint64_t at = 0; at < n; at += kPiece)
+        mpi().Recv(chunk.data() + at, static_cast<int>(std::min(kPiece, n - at)), mpi().byte, q, 1, mpi().comm_world,
+                   MPI_STATUS_IGNORE);
+      take(q, chunk);
+    }
+}
+
 std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine) {
   if (!initialized()) return {mine};
   const int me = rank(), ranks = size();

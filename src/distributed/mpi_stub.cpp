@@ -27,6 +27,11 @@ bool all_ok(bool ok) { return ok; }
 std::string first_error(const std::string& mine) { return mine; }
 std::vector<std::vector<std::byte>> all_gather_bytes(const std::vector<std::byte>& mine) { return {mine}; }
 std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine) { return {mine}; }
+void gather_chunks(const std::function<bool(std::vector<std::byte>&)>& next,
+                   const std::function<void(int, const std::vector<std::byte>&)>& take) {
+  std::vector<std::byte> chunk;
+  while (next(chunk)) take(0, chunk);
+}
 
 GlobalNumbering number_keys(std::span<const std::uint64_t>, int, const std::function<std::uint64_t(int, int)>&,
                             const ValueMerge*) {

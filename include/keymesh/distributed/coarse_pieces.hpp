@@ -19,6 +19,7 @@
 // (averaged normals included), its triangles.
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "keymesh/distributed/halo_piece.hpp"
 #include "keymesh/generate/contour/contour_stream.hpp"
@@ -27,10 +28,12 @@ namespace keymesh::distributed {
 
 struct CoarsePiece {
   OwnPiece piece;               // own triangles, then the ghost cells
+  std::vector<std::uint32_t> own_isovalue;  // per own triangle: its isovalue's index (gather_pieces' group)
   Id first_layer = 0, layers = 0;
   Id halo_layers = 0;           // the halo that passed the check
   int attempts = 0;             // halos tried (1: the first passed)
   Id slabs = 0;                 // reads of planes, all attempts (one each without --memory-limit)
+  Id fine_points_held = 0;      // the most fine points held at once: its layers and halo, largest attempt
   Id triangles_before = 0;      // fine triangles of its own layers
   // check_fans' counts at the points it owns (their share of the whole's).
   Id nonmanifold_edges = 0, nonmanifold_vertices = 0, boundary_edges = 0;

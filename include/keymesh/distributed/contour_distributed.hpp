@@ -23,6 +23,9 @@ struct RankStats {
   double first_plane = 0, planes = 0;        // its slab
   double slabs = 0;                          // the parts it was read in (more than 1 under --memory-limit)
   double points = 0, points_owned = 0, triangles = 0;
+  // Points of the largest fine mesh it held: its slab's, or on rank 0 of a
+  // gathered output the whole mesh (set by the command after gather()).
+  double fine_points_held = 0;
   double keys_requested = 0, bytes_sent = 0; // in the key exchange
   // Seconds: reading the slab, balancing (counting its layers' triangles and
   // agreeing on new boundaries, with balance), contouring it, waiting for the slowest rank
@@ -35,14 +38,6 @@ struct ContourPiece {
   GlobalNumbering numbering;    // global id of each local point
   std::vector<std::uint64_t> keys;
   RankStats stats;
-  // Coarsening: the pieces are fine; each local point's nearest grid point
-  // (its coarse key) goes with it to rank 0, which coarsens the whole.
-  bool coarsen = false;
-  bool average_after_coarsening = false;  // averaged normals, from the coarse mesh
-  std::uint64_t coarse_range = 0;         // isovalues x grid points
-  std::vector<std::uint64_t> nearest;
-  Id triangles_before_coarsening = 0;     // rank 0, after gather()
-  Id coarse_points = 0;                   // rank 0, after gather()
   // Averaged normals of a gathered mesh: rank 0 sums them again over the
   // whole in one process's blocks of layers (generate/layer_blocks.hpp), so
   // the file is that process's bit for bit; a piece keeps its owners' merge.
@@ -58,8 +53,9 @@ void require_distributable(const ImageGrid& header, const generate::ContourOptio
 // Collective: every rank calls it with its own source of the same volume.
 // Supports scalars, several isovalues, --weld keyreduce, --normals gradient
 // and --curvature (ghost planes), --normals average (partial sums merged at
-// the owner; gather() sums the whole again in one process's order) and coarsening (done by gather() on rank 0: a piece per rank is
-// refused by the command); VERTEX-WELD and the GPU are refused by name.
+// the owner; gather() sums the whole again in one process's order);
+// VERTEX-WELD and the GPU are refused by name. Not coarsening: that is
+// coarse_piece's (coarse_pieces.hpp), whose pieces gather_pieces gathers.
 // With `balance`, the slab boundaries move so that every rank gets about the
 // same work (triangles per layer counted on the equal split first, then
 // shared); without, every rank gets the same number of voxel layers. The
@@ -90,9 +86,8 @@ FineLayers contour_layers(PlaneSource& source, const generate::ContourOptions& o
                           std::size_t memory_limit = 0);
 
 // Collective: rank 0 returns the whole mesh (points in global id order,
-// triangles isovalue by isovalue in rank order: the single-process file;
-// with piece.coarsen, that mesh coarsened as one process coarsens it), the
-// others an empty one. Adds the gather's time to piece.stats.output.
+// triangles isovalue by isovalue in rank order: the single-process file),
+// the others an empty one. Adds the gather's time to piece.stats.output.
 // point_keys (given on every rank or none): rank 0 receives the whole
 // mesh's points' edge keys (history_key), in its point order.
 SurfaceMesh gather(ContourPiece& piece, std::vector<std::uint64_t>* point_keys = nullptr);

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <exception>
+#include <functional>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -81,5 +82,12 @@ bool all_ok(bool ok);
 // rank returns {mine}.
 std::vector<std::vector<std::byte>> all_gather_bytes(const std::vector<std::byte>& mine);
 std::vector<std::vector<std::byte>> gather_bytes(const std::vector<std::byte>& mine);
+// Collective: every rank's bytes to rank 0 in chunks, one rank after
+// another, so that no rank holds more than one chunk besides its own data.
+// Each rank calls next(chunk) until it returns false: it fills `chunk` (any
+// size, empty too) and returns true while it made one. Rank 0 calls
+// take(q, chunk) for each of rank q's chunks in order, q = 0, 1, ... P - 1.
+void gather_chunks(const std::function<bool(std::vector<std::byte>& chunk)>& next,
+                   const std::function<void(int rank, const std::vector<std::byte>& chunk)>& take);
 
 }  // namespace keymesh::distributed
