@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <set>
@@ -103,7 +104,7 @@ Id crossing_pairs(const std::vector<MultilodPiece>& pieces, const MultilodGrid& 
 
 TEST(LabelsMultilodFaces, FacePointsCoarsenAndStillAgree) {
   generate::MultilodOptions o;
-  o.chunk_shape = {12, 12, 12};
+  o.chunk_shape = {16, 16, 16};
   o.lods = 3;
   const ImageGrid g = balls();
   const auto pieces = generate::multilod_pieces(g, o);
@@ -120,8 +121,9 @@ TEST(LabelsMultilodFaces, FacePointsCoarsenAndStillAgree) {
       EXPECT_EQ(crossing_pairs(pieces, grid, segment, lod), 0) << "segment " << segment << " lod " << lod;
   }
   EXPECT_GT(count[0], 500u);  // the surfaces cross many chunk faces
-  // Spacing 2 and 4 on the faces: the cut keeps about 1/2 and 1/4 of its
-  // points where it is smooth (before face clusters: all of them).
-  EXPECT_LT(count[1], count[0] * 7 / 10) << count[0] << " " << count[1];
-  EXPECT_LT(count[2], count[1] * 7 / 10) << count[1] << " " << count[2];
+  // Spacing 2 and 4 on the faces, half a step from the faces' borders kept:
+  // before face clusters every level kept all of them.
+  std::printf("face points per level: %zu %zu %zu\n", count[0], count[1], count[2]);
+  EXPECT_LT(count[1], count[0] * 7 / 10);
+  EXPECT_LT(count[2], count[1] * 9 / 10);
 }
