@@ -5,6 +5,7 @@ argv[1], asserts, prints one line per check and a closing
 "N passed, N failed" line, and exits 0 only when everything passed
 (77 = skipped, e.g. when VTK is not importable).
 """
+import atexit
 import json
 import os
 import shutil
@@ -122,7 +123,13 @@ def accessor(doc, binary, index):
 
 
 def tempdir():
-    return tempfile.mkdtemp(prefix="keymesh-test-")
+    """A fresh directory, removed when the test program exits (a failing run
+    included) unless KEYMESH_KEEP_TEST_DIRS is set: CLI tests write hundreds of
+    MiB each, which filled a developer's disk when they were kept."""
+    path = tempfile.mkdtemp(prefix="keymesh-test-")
+    if not os.environ.get("KEYMESH_KEEP_TEST_DIRS"):
+        atexit.register(shutil.rmtree, path, True)
+    return path
 
 
 def require_numpy():

@@ -11,7 +11,6 @@ import os
 import struct
 import subprocess
 import sys
-import tempfile
 from collections import Counter, defaultdict
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
@@ -22,7 +21,7 @@ import numpy as np  # noqa: E402
 import neuroglancer_precomputed as ngp  # noqa: E402
 
 FIXTURE = os.path.join(os.path.dirname(os.path.abspath(kmtest.KEYMESH)), "keymesh_neuroglancer_fixture")
-TMP = tempfile.mkdtemp(prefix="keymesh_ng_")
+TMP = kmtest.tempdir()
 
 
 def write(name, *args):
