@@ -2,15 +2,19 @@
 // every inner point keyed by the nearest point of the grid of spacing 2^lod
 // and one KEY-REDUCE merges them (coarsen_label_surface: positions averaged
 // in key order, collapsed faces dropped, opposite faces on the same points
-// cancelled); the points on the chunk's box keep their keys and positions
-// (but for the level's margin, and box points closer than a quantization
-// step joined: join_box_points), so neighbouring chunks keep the same points
-// on their common face, its border lines included, at every level. Then the
-// fold guard
+// cancelled); the points on one face of the chunk's box merge by the
+// nearest grid point on the face where the face's cut stays simple, decided
+// from the cut alone (label_face_clusters.cpp); points on the box's edge
+// lines keep their keys and positions (but for the level's margin, and box
+// points closer than a quantization step joined: join_box_points), so
+// neighbouring chunks keep the same points on their common face, its border
+// lines included, at every level. Then the fold guard
 // (label_lod_fold_guard.cpp) splits back the inner clusters of triangles
-// that cross, until none is left to split.
+// that cross, until none is left to split, and lifts the inner corners of
+// those still crossing off the chunk planes.
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <string>
 
@@ -138,11 +142,19 @@ MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid
     const float* p = finer.points.data() + 3 * i;
     keys[i] = on_box(p, grid, finer.chunk).axes ? finer.point_keys[i] : coarse_key(p, grid, finer.chunk, step);
   }
+  cluster_face_points(finer, grid, keys);
   // Each round splits at least one cluster for good (a split point is never
-  // split again), so this ends.
+  // split again) or lifts at least one more point, so this ends.
+  std::vector<std::uint64_t> lifted;
   for (;;) {
     MultilodPiece out = coarsened_piece(finer, grid, keys);
-    if (!split_clusters(keys, clusters_to_split(out, grid))) return out;
+    lift_off_planes(out, grid, lifted);
+    if (split_clusters(keys, clusters_to_split(out, grid))) continue;
+    const std::vector<std::uint64_t> more = points_to_lift(out, grid);
+    std::vector<std::uint64_t> all;
+    std::set_union(lifted.begin(), lifted.end(), more.begin(), more.end(), std::back_inserter(all));
+    if (all.size() == lifted.size()) return out;
+    lifted = std::move(all);
   }
 }
 

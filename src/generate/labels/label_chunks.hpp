@@ -45,10 +45,19 @@ MultilodPiece clip_to_chunk(const SegmentSurface& surface, const MultilodGrid& g
                          const std::uint32_t* triangles, Id count);
 
 // The piece one level coarser (lod + 1), from `finer`: its inner points
-// coarsened, its points on the chunk's box kept (label_chunk_lods.cpp), and
-// the inner clusters of crossing triangles split back until none is left to
-// split (label_lod_fold_guard.cpp).
+// coarsened, its face points merged where their face's cut allows
+// (label_face_clusters.cpp), its edge-line points kept
+// (label_chunk_lods.cpp), and the inner clusters of crossing triangles split
+// back until none is left to split, then the inner corners of those still
+// crossing lifted off the chunk planes (label_lod_fold_guard.cpp).
 MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid);
+
+// The coarse keys of the finer piece's face points (on one plane of the
+// chunk's box) into `keys` (one per finer point, the finer keys there):
+// merged by the nearest grid point of spacing 2^(finer.lod + 1) on the face
+// where the face's cut stays simple, decided from the face's cut alone
+// (label_face_clusters.cpp); edge-line points keep theirs.
+void cluster_face_points(const MultilodPiece& finer, const MultilodGrid& grid, std::vector<std::uint64_t>& keys);
 
 // The coarsening's fold guard (label_lod_fold_guard.cpp). The keys of the
 // inner coarse points (class 0, not yet split) at a corner of a triangle of
@@ -63,6 +72,21 @@ std::vector<std::uint64_t> clusters_to_split(const MultilodPiece& coarse, const 
 // fit, past 2^18 / 2 samples along an axis, stays whole). False when no
 // point changed.
 bool split_clusters(std::vector<std::uint64_t>& coarse_keys, const std::vector<std::uint64_t>& clusters);
+
+// The guard's second remedy, once no cluster is left to split: the inner
+// points (off the chunk's box) at a corner of a triangle of `coarse` that
+// still crosses another or is a line (as clusters_to_split judges them),
+// increasing keys. Where a merged face point moved along its face, the
+// finest inner points near the face (a patch of the surface lying within a
+// margin of the plane, which surface nets clamps onto sample planes) can
+// fold over it, and its neighbour, which holds the same face point, sees
+// nothing of it.
+std::vector<std::uint64_t> points_to_lift(const MultilodPiece& coarse, const MultilodGrid& grid);
+// The points of `coarse` whose keys are in `lifted` (increasing) keep
+// min(2^lod / 8, chunk_shape / 4) samples from every plane of the chunk's
+// box (moved inside along each axis where closer): the piece's own inner
+// points, which no neighbour sees, so faces still agree.
+void lift_off_planes(MultilodPiece& coarse, const MultilodGrid& grid, const std::vector<std::uint64_t>& lifted);
 
 // Which chunk planes of the piece's chunk a point lies on: bit a of `axes`
 // set when on one along axis a, bit a of `upper` when that is the chunk's

@@ -2,9 +2,12 @@
 // the inner clusters (coarse points of class 0) at a corner of a coarse
 // triangle that crosses another of the piece, or is a line, are split back
 // into their finer points, each with a key of its own, until no such
-// cluster is left. Only inner points are split: a chunk decides them from
-// its own triangles, which no neighbour sees, and its points on the box are
-// never coarsened, so neighbouring chunks still agree on their common face.
+// cluster is left; then the inner corners of triangles still crossing are
+// lifted off the chunk planes (points_to_lift), until none is left to lift.
+// Only inner points are split or moved: a chunk decides them from its own
+// triangles, which no neighbour sees, and its points on the box are
+// coarsened from their face's cut alone (label_face_clusters.cpp), so
+// neighbouring chunks still agree on their common face.
 // Why within the piece is enough: the pieces of two chunks meet only on
 // their common face, where both hold the same boundary edges, and inner
 // points keep a margin from every chunk plane. Judged at the positions the
@@ -29,6 +32,7 @@ constexpr int kRankShift = 54;       // then its rank in the cluster (6 bits)
 constexpr std::uint64_t kMaxRank = 63;
 constexpr int kFieldBits = 19;       // a coarse key's grid fields (label_chunk_lods.cpp),
 constexpr int kSplitFieldBits = 18;  // kept in 18 bits each
+constexpr double kLiftDivisor = 8;   // a lifted point keeps 2^lod / 8 samples from the chunk planes
 
 bool splittable(std::uint64_t key) { return key >> kClassShift == 0 && !(key >> kSplitBit & 1); }
 
@@ -70,6 +74,33 @@ std::vector<char> bad_triangles(const MultilodPiece& piece, const MultilodGrid& 
 }
 
 }  // namespace
+
+std::vector<std::uint64_t> points_to_lift(const MultilodPiece& coarse, const MultilodGrid& grid) {
+  const std::vector<char> bad = bad_triangles(coarse, grid);
+  std::vector<std::uint64_t> out;
+  for (std::size_t t = 0; t < bad.size(); ++t)
+    for (int m = 0; bad[t] && m < 3; ++m) {
+      const std::uint32_t v = coarse.triangles[3 * t + m];
+      if (!on_box(coarse.points.data() + 3 * v, grid, coarse.chunk).axes) out.push_back(coarse.point_keys[v]);
+    }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+void lift_off_planes(MultilodPiece& coarse, const MultilodGrid& grid, const std::vector<std::uint64_t>& lifted) {
+  const double lift = std::ldexp(1.0, static_cast<int>(coarse.lod)) / kLiftDivisor;
+  for (std::size_t i = 0; i < coarse.point_keys.size(); ++i) {
+    if (!std::binary_search(lifted.begin(), lifted.end(), coarse.point_keys[i])) continue;
+    float* p = coarse.points.data() + 3 * i;
+    for (int a = 0; a < 3; ++a) {
+      const double lo = grid.plane(a, coarse.chunk[a]), hi = grid.plane(a, coarse.chunk[a] + 1);
+      const double d = std::min(lift, static_cast<double>(grid.chunk_shape[a]) / 4);
+      if (p[a] - lo < d) p[a] = static_cast<float>(lo + d);
+      else if (hi - p[a] < d) p[a] = static_cast<float>(hi - d);
+    }
+  }
+}
 
 std::vector<std::uint64_t> clusters_to_split(const MultilodPiece& coarse, const MultilodGrid& grid) {
   const std::vector<char> bad = bad_triangles(coarse, grid);

@@ -25,18 +25,24 @@
 // the chunk's box) merged by one KEY-REDUCE (label_coarsen.cpp: positions
 // averaged in key order, collapsed faces dropped, opposite faces on the same
 // points cancelled) over keys = the nearest point of the grid of spacing 2^k
-// (relative to the chunk's corner); its points on the chunk's box (faces and
-// edge lines) keep their level-0 keys and positions at every level (a
-// coordinate off the planes only kept at the level's margin; box points on
+// (relative to the chunk's corner). Its points on one face of the box merge
+// in the same KEY-REDUCE by the nearest grid point on the face, where the
+// face's cut (its points and the boundary edges in the face plane, which
+// both chunks of the face hold alike) stays simple at the writer's quantized
+// positions, each such cluster one run of one strand; others, those within
+// half a grid step of the face's border, and the points on the box's edge
+// lines keep their keys and positions (label_face_clusters.cpp). A
+// coordinate off the planes is kept at the level's margin; box points on
 // the same planes that quantize within one step of each other at the level
 // take the position of the least key among them, for the writer to merge,
-// decided from their positions alone). So two
-// neighbouring chunks have the same points on their common face, its border
-// lines included, at every level, with no data from each other. A fold
-// guard (label_lod_fold_guard.cpp) then splits back into their finer points
-// the inner clusters at a corner of a triangle that crosses another (at the
-// positions the writer quantizes to), until none is left to split: no level
-// has a crossing pair (docs/decisions/labels-lod-fold-guard.md).
+// decided from their positions alone. So two neighbouring chunks have the
+// same points on their common face, its border lines included, at every
+// level, with no data from each other. A fold guard
+// (label_lod_fold_guard.cpp) then splits back into their finer points the
+// inner clusters at a corner of a triangle that crosses another (at the
+// positions the writer quantizes to), until none is left to split, and
+// lifts the inner corners of triangles still crossing off the chunk planes
+// (docs/decisions/labels-lod-fold-guard.md).
 //
 // Point keys (unique within a segment and level, equal in every chunk that
 // has the point; bits 61-63 a class):
@@ -49,7 +55,8 @@
 //     (cz << 43 | cy << 25 | cx << 7) | rank: the unit cell of the padded
 //     grid holding the point (floor), and its rank among that cell's points
 //     of the class, by the points they are made from.
-//   level k >= 1: points on the chunk's box keep their level-0 keys; an
+//   level k >= 1: a merged face cluster takes the key of its least point,
+//     other points on the chunk's box keep theirs; an
 //     inner point has class 0 and three 19-bit fields (z << 38 | y << 19 | x):
 //     chunk * (R + 1) + round((coordinate - chunk corner) / 2^k) with
 //     R = ceil(chunk_shape / 2^k); one the fold guard split out of its
