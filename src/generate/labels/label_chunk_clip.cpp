@@ -244,20 +244,26 @@ MultilodPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, c
   double lo[3], hi[3];
   for (int d = 0; d < 3; ++d) lo[d] = grid.plane(d, chunk[d]), hi[d] = grid.plane(d, chunk[d] + 1);
   std::vector<ClipPoint> corners;
+  corners.reserve(3 * static_cast<std::size_t>(count));  // most triangles lie inside: 3 corners each
   std::vector<ClipPoint> poly, clipped;
   std::vector<Side> sides, clipped_sides;
   for (Id j = 0; j < count; ++j) {
     const std::uint32_t* t = s.triangles.data() + 3 * static_cast<std::size_t>(triangles[j]);
     Clipper clipper{s, grid, {t[0], t[1], t[2]}, lo, hi};
+    bool inside = true;
+    for (int m = 0; m < 3; ++m)
+      for (int d = 0; d < 3; ++d) inside = inside && clipper.at(t[m])[d] > lo[d] && clipper.at(t[m])[d] < hi[d];
+    if (inside) {  // its own corners, as the fan of the unclipped polygon below would give them
+      for (int m = 0; m < 3; ++m) corners.push_back(clipper.surface_point(t[m]));
+      continue;
+    }
     std::sort(clipper.tri, clipper.tri + 3, [&](std::uint32_t a, std::uint32_t b) { return s.keys[a] < s.keys[b]; });
     poly.clear(), sides.clear();
-    bool inside = true;
     for (int m = 0; m < 3; ++m) {
       poly.push_back(clipper.surface_point(t[m]));
       sides.push_back(Side{false, 0, 0, t[m], t[(m + 1) % 3]});
-      for (int d = 0; d < 3; ++d) inside = inside && poly.back().p[d] > lo[d] && poly.back().p[d] < hi[d];
     }
-    for (int d = 0; d < 3 && !inside; ++d) {
+    for (int d = 0; d < 3; ++d) {
       clipper.clip(poly, sides, clipped, clipped_sides, d, lo[d], false);
       clipper.clip(poly, sides, clipped, clipped_sides, d, hi[d], true);
     }

@@ -120,25 +120,28 @@ std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const
   std::size_t bytes = 0;  // the payload's size: grown once, not by doubling
   for (const ChunkPiece& p : pieces)
     bytes += 8 + 4 + 8 + 8 + 8 * p.point_keys.size() + 4 * p.points.size() + 4 * p.triangles.size();
-  std::string payload;
-  payload.reserve(bytes);
-  for (const ChunkPiece& p : pieces) {
-    put(payload, p.segment);
-    put(payload, p.lod);
-    put<std::uint64_t>(payload, p.point_keys.size());
-    put<std::uint64_t>(payload, p.triangles.size() / 3);
-    put(payload, p.point_keys.data(), p.point_keys.size());
-    put(payload, p.points.data(), p.points.size());
-    put(payload, p.triangles.data(), p.triangles.size());
-  }
+  // The header, its last two fields (payload size, checksum) filled in once
+  // the payload follows it in the same string (no second copy of the payload).
   std::string out(kMagic, sizeof kMagic);
-  out.reserve(kHeaderBytes + payload.size());
+  out.reserve(kHeaderBytes + bytes);
   put(out, kVersion);
   put(out, chunk.data(), 3);
   put<std::uint64_t>(out, pieces.size());
-  put<std::uint64_t>(out, payload.size());
-  put(out, crc(payload.data(), payload.size()));
-  out += payload;
+  put<std::uint64_t>(out, 0);
+  put<std::uint32_t>(out, 0);
+  for (const ChunkPiece& p : pieces) {
+    put(out, p.segment);
+    put(out, p.lod);
+    put<std::uint64_t>(out, p.point_keys.size());
+    put<std::uint64_t>(out, p.triangles.size() / 3);
+    put(out, p.point_keys.data(), p.point_keys.size());
+    put(out, p.points.data(), p.points.size());
+    put(out, p.triangles.data(), p.triangles.size());
+  }
+  const std::uint64_t payload = out.size() - kHeaderBytes;
+  const std::uint32_t checksum = crc(out.data() + kHeaderBytes, payload);
+  std::memcpy(out.data() + kHeaderBytes - sizeof checksum - sizeof payload, &payload, sizeof payload);
+  std::memcpy(out.data() + kHeaderBytes - sizeof checksum, &checksum, sizeof checksum);
   return out;
 }
 

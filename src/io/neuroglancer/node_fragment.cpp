@@ -21,7 +21,10 @@ struct Weld {
 };
 
 Weld weld_keys(const std::vector<const ChunkPiece*>& pieces) {
+  std::size_t n_keys = 0;
+  for (const ChunkPiece* piece : pieces) n_keys += piece->point_keys.size();
   std::vector<std::uint64_t> keys;
+  keys.reserve(n_keys);
   for (const ChunkPiece* piece : pieces) keys.insert(keys.end(), piece->point_keys.begin(), piece->point_keys.end());
   const Id n = static_cast<Id>(keys.size());
   Weld weld;
@@ -79,6 +82,9 @@ QuantizedMesh node_fragment(const std::vector<const ChunkPiece*>& pieces, const 
     for (int a = 0; a < 3; ++a) mesh.positions[3 * g + a] = quantize(p[a], box.origin[a], box.size[a], max_value, inside);
     if (!inside) outside_box(piece, p, box);
   }
+  std::size_t corners = 0;
+  for (const ChunkPiece* piece : pieces) corners += piece->triangles.size();
+  mesh.triangles.reserve(corners);
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     const ChunkPiece& piece = *pieces[k];
     for (std::size_t t = 0; t < piece.triangles.size(); t += 3) {
