@@ -10,6 +10,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "keymesh/mesh/label_scalars.hpp"
 #include "volume_formats.hpp"
 #include "vtk_xml.hpp"
 #include "vtk_xml_writer.hpp"
@@ -34,11 +35,13 @@ std::vector<double> numbers(const std::string& path, const std::string& what, co
   return v;
 }
 
-// Grid arrays hold the grid types only (is_grid_scalar).
+// Grid arrays hold the grid types and the wide label types (UInt32, Int64,
+// UInt64: label maps), every type VTK's DataArray names but the 64-bit ones
+// keymesh has no ScalarType for.
 ScalarType grid_type(const std::string& path, ScalarType s, const std::string& declared) {
-  if (is_grid_scalar(s)) return s;
+  if (is_grid_scalar(s) || is_label_scalar(s)) return s;
   throw InputError(path + ": point array type " + declared +
-                   " is not supported (Int8, UInt8, Int16, UInt16, Int32, Float32, Float64)");
+                   " is not supported (Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64)");
 }
 
 // The XML part of a file whose arrays are appended: everything up to the
@@ -147,16 +150,19 @@ void store_decoded(const std::string& path, const Array& a, ScalarType declared_
     if (a.big) detail::swap_samples(grid);
     return;
   }
-  visit_scalars(grid, [&](const auto* samples) {
+  visit_any_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
     T* out = const_cast<T*>(samples);
+    // 64-bit ids past 2^53 would not survive the ascii values' doubles.
+    constexpr double kExact = sizeof(T) == 8 ? 9007199254740992.0 : 1e300;
     for (Id i = 0; i < grid.num_points(); ++i) {
       const double v = a.as_double(static_cast<std::size_t>(i));
       if constexpr (std::is_integral_v<T>) {
         if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
-              v <= static_cast<double>(std::numeric_limits<T>::max())))
+              v <= static_cast<double>(std::numeric_limits<T>::max()) && v > -kExact && v < kExact))
           throw InputError(path + ": point array value " + std::to_string(v) + " at index " + std::to_string(i) +
-                           " does not fit its type " + declared);
+                           " does not fit its type " + declared +
+                           (sizeof(T) == 8 ? " exactly (ascii 64-bit values within 2^53; write binary)" : ""));
       }
       out[i] = static_cast<T>(v);
     }
