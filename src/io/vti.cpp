@@ -35,15 +35,6 @@ std::vector<double> numbers(const std::string& path, const std::string& what, co
   return v;
 }
 
-// Grid arrays hold the grid types and the wide label types (UInt32, Int64,
-// UInt64: label maps), every type VTK's DataArray names but the 64-bit ones
-// keymesh has no ScalarType for.
-ScalarType grid_type(const std::string& path, ScalarType s, const std::string& declared) {
-  if (is_grid_scalar(s) || is_label_scalar(s)) return s;
-  throw InputError(path + ": point array type " + declared +
-                   " is not supported (Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64)");
-}
-
 // The XML part of a file whose arrays are appended: everything up to the
 // AppendedData marker '_' (inclusive), or empty when the file has no
 // appended section within its first MiB (then the arrays are inline).
@@ -187,7 +178,9 @@ std::optional<ImageGrid> parse_vti(const std::string& path, std::string_view dat
   const std::string* declared = array.attr("type");
   const auto declared_scalar = declared ? vtk_scalar(*declared) : std::nullopt;
   if (!declared_scalar) throw InputError(path + ": point array has no supported type");
-  const ScalarType type = grid_type(path, *declared_scalar, *declared);
+  // Every type VTK names but the 64-bit ones keymesh has none for: UInt32,
+  // Int64 and UInt64 are label maps (mesh/label_scalars.hpp).
+  const ScalarType type = *declared_scalar;
   // Checks dims (and the product's overflow) before anything is allocated;
   // the samples are allocated only once the file is known to hold them.
   const std::uint64_t need = detail::checked_byte_count(geometry.dims, type, path);
