@@ -17,6 +17,7 @@ from kmtest import check, finish, run, tempdir, precomputed_reader, write_label_
 
 np, ngp = precomputed_reader()
 D = tempdir()
+SKIPPED = []
 
 # Labels 1-8 of the uint8 volume become these ids (increasing, background 0 stays 0).
 IDS = {
@@ -227,6 +228,38 @@ def test_mesh_formats_exact_ids():
     assert not os.path.exists(os.path.join(D, "big.vtp"))
 
 
+def test_mpirun_uint64():
+    """Under mpirun the ranks read their slabs of a uint64 volume: the
+    gathered .vtp is the one process's, byte for byte."""
+    import shutil
+    import kmtest
+    if not shutil.which("mpirun"):
+        SKIPPED.append("mpirun not found")
+        return
+    ids = [2, 30, 400, 5000, 60000, 700000, 8_000_000, 16_000_000]
+    src = write_nrrd(os.path.join(D, "u64_mpi.nrrd"), relabelled("uint64", ids), "uint64")
+    one, two = os.path.join(D, "mpi1.vtp"), os.path.join(D, "mpi2.vtp")
+    run("labels", src, "-o", one, "--per-label", "-q")
+    kmtest.mpirun(2, "labels", src, "-o", two, "--per-label", "-q")
+    assert filecmp.cmp(one, two, shallow=False), "mpirun -np 2 differs from one process"
+
+
+def test_distinct_label_limit_per_chunk_box():
+    """67,032 distinct uint32 ids (every voxel its own segment): one call is
+    refused by the 65,536-label limit; a --chunk task scans only its box
+    (chunk + halo, 13^3 here), so chunk tasks are the workaround."""
+    shape = (42, 42, 38)
+    ids = (np.arange(np.prod(shape), dtype=np.uint64) * 58_000 + 5).astype(np.uint32).reshape(shape, order="F")
+    assert len(np.unique(ids)) == ids.size
+    src = write_nrrd(os.path.join(D, "many.nrrd"), ids, "uint32")
+    grid = ["--format", "precomputed", "--lods", "2", "--chunk-shape", "8", "8", "8", "--smooth", "0"]
+    p = run("labels", src, "-o", os.path.join(D, "many_one"), *grid, expect=1)
+    assert "67033 distinct labels (background included), more than the supported 65536" in p.stderr, p.stderr
+    tasks = os.path.join(D, "many_tasks")
+    run("labels", src, "-o", tasks, *grid, "--chunk", 0, 0, 0)
+    assert os.listdir(os.path.join(tasks, "chunks")), "the chunk task kept no pieces"
+
+
 def test_contour_refuses_wide_samples():
     p = run("contour", wide_nrrd("uint64"), "-o", os.path.join(D, "c.vtp"), "--iso", "0.5", expect=1)
     assert "uint64 samples are label ids, which keymesh labels" in p.stderr, p.stderr
@@ -241,5 +274,7 @@ check("Zarr <u8 and .vti UInt64 to precomputed", test_zarr_and_vti_uint64)
 check("uint64 chunk tasks + --assemble equal one call; --update equals a full run", test_chunk_tasks_and_update_uint64)
 check("uint64 id past 2^63 - 1: one-line refusal naming it, no output", test_uint64_past_int64_refused)
 check(".vtp of a uint32 volume: boundary_labels exact, streamed too; past 2^24 refused", test_mesh_formats_exact_ids)
+check("mpirun -np 2 on a uint64 volume: byte-identical to one process", test_mpirun_uint64)
+check("67,032 distinct uint32 ids: one call refused, a chunk task runs", test_distinct_label_limit_per_chunk_box)
 check("contour of a uint64 volume: refused, naming labels", test_contour_refuses_wide_samples)
-finish()
+finish(skipped="; ".join(SKIPPED) or None)
