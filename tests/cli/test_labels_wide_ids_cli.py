@@ -137,6 +137,21 @@ def test_nrrd_precomputed(dtype):
     assert_same_segments(SMALL_OUT, out, IDS[dtype])
 
 
+def test_wide_selection_and_background():
+    """--labels and --background by 64-bit id: exactly those segments, each
+    as the uint8 volume's run with the small ids."""
+    ids = IDS["uint64"]
+    picked, small = os.path.join(D, "u64_picked"), os.path.join(D, "u8_picked")
+    precomputed(wide_nrrd("uint64"), picked, "--labels", f"{ids[2]},{ids[7]}")
+    precomputed(SMALL_IN, small, "--labels", "3,8")
+    assert ngp.segment_ids(picked) == [ids[2], ids[7]]
+    for k in (2, 7):
+        assert ngp.read_segment_bytes(picked, ids[k]) == ngp.read_segment_bytes(small, k + 1), ids[k]
+    moved = os.path.join(D, "u64_background")
+    precomputed(wide_nrrd("uint64"), moved, "--background", ids[4])
+    assert ngp.segment_ids(moved) == sorted([0] + ids[:4] + ids[5:])
+
+
 def test_nifti_uint32():
     for name in ("u32.nii", "u32.nii.gz"):
         nii = write_nifti(os.path.join(D, name), relabelled("uint32", IDS["uint32"]))
@@ -268,6 +283,7 @@ def test_contour_refuses_wide_samples():
 
 for t in ("uint32", "uint64", "int64"):
     check(f"NRRD {t} to precomputed: exact ids, fragments as the uint8 volume's", lambda t=t: test_nrrd_precomputed(t))
+check("--labels and --background by 64-bit id", test_wide_selection_and_background)
 check("NIfTI uint32 (.nii, .nii.gz) to precomputed", test_nifti_uint32)
 check("raw --type uint64 to precomputed", test_raw_uint64)
 check("Zarr <u8 and .vti UInt64 to precomputed", test_zarr_and_vti_uint64)
