@@ -37,10 +37,13 @@ def contour_labels(volume, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
 
     Args:
         volume: a 3-D integer numpy array (uint8, int8, uint16, int16,
-            int32) or a keymesh.Volume; axis 0 is x (``volume[i, j, k]``
-            sits at ``origin + (i, j, k) * spacing``). Float arrays are
-            refused (keymesh.Error); so are more than 65536 distinct values
-            and labels beyond +-2^24.
+            int32, and the uint32, int64, uint64 of connectomics
+            segmentations) or a keymesh.Volume; axis 0 is x
+            (``volume[i, j, k]`` sits at ``origin + (i, j, k) * spacing``).
+            Float arrays are refused (keymesh.Error); so are more than 65536
+            distinct values and labels beyond +-2^24, which the float32
+            boundary_labels cannot hold exactly (``keymesh labels --format
+            precomputed`` keeps 64-bit segment ids exact).
         method: "surface_nets" (default: a point per cell of mixed labels,
             a quad per grid edge between two labels, every interface once,
             points shared by all labels meeting there) or

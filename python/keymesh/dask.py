@@ -101,20 +101,26 @@ def _check_shape(array):
 
 
 _SCALAR_DTYPES = tuple(np.dtype(t) for t in ("u1", "i1", "u2", "i2", "i4", "f4", "f8"))
+# Label maps may also be the wide integers of connectomics segmentations.
+_WIDE_LABEL_DTYPES = tuple(np.dtype(t) for t in ("u4", "i8", "u8"))
 
 
-def _check_dtype(dtype):
+def _check_dtype(dtype, label_map: bool = False):
     dtype = np.dtype(dtype)
-    if dtype.newbyteorder("=") not in _SCALAR_DTYPES:
-        raise TypeError(f"volume has dtype {dtype}; keymesh supports uint8, int8, uint16, int16, int32, float32 "
-                        "and float64 (convert with .astype(numpy.float32) for example)")
+    native = dtype.newbyteorder("=")
+    if native in _SCALAR_DTYPES or (label_map and native in _WIDE_LABEL_DTYPES):
+        return
+    hint = ("label maps of this type: contour_labels; convert with .astype(numpy.float64) for a contour"
+            if native in _WIDE_LABEL_DTYPES else "convert with .astype(numpy.float32) for example")
+    raise TypeError(f"volume has dtype {dtype}; keymesh supports uint8, int8, uint16, int16, int32, float32 "
+                    f"and float64 ({hint})")
 
 
 def _check_labels_dtype(dtype):
-    _check_dtype(dtype)
+    _check_dtype(dtype, label_map=True)
     if np.dtype(dtype).kind == "f":
         raise Error(f"labels: a {np.dtype(dtype).name} volume is not a label map "
-                    "(integer samples: uint8, int8, uint16, int16, int32)")
+                    "(integer samples: uint8, int8, uint16, int16, int32, uint32, int64, uint64)")
 
 
 def _order(order: str) -> str:
@@ -259,7 +265,9 @@ def contour_labels(array: Any, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1
 
     Args:
         array: a 3-D integer dask.array.Array (uint8, int8, uint16, int16,
-            int32); other arrays are wrapped with da.from_array.
+            int32, uint32, int64, uint64; labels past 2^24 are refused, see
+            keymesh.contour_labels); other arrays are wrapped with
+            da.from_array.
         spacing, origin, method, labels, background, per_label, smoothing,
         smoothing_iterations, relaxation, coarsen, history: as keymesh.contour_labels
             (smoothing and coarsening run in the merge task, on the welded

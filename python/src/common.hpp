@@ -163,6 +163,9 @@ void refuse_nul_path(const std::string& path, const char* what);
 // The library's scalar type of a numpy dtype; TypeError naming the dtype
 // (and what is accepted) otherwise. `what` names the argument.
 ScalarType scalar_type_of(const py::dtype& dtype, const char* what);
+// The same, with the wide label types too (uint32, int64, uint64: label
+// maps, which contour_labels and reads take).
+ScalarType label_scalar_type_of(const py::dtype& dtype, const char* what);
 py::dtype dtype_of(ScalarType type);
 // "float32", ">f4", ...
 inline std::string dtype_name(const py::dtype& dtype) { return py::str(static_cast<py::handle>(dtype)); }
@@ -195,6 +198,7 @@ struct VolumeUse {
   const char* command;
   Id min_samples;
   const char* not_an_array;
+  bool label_map = false;  // the wide label types too (label_scalar_type_of)
 };
 // TypeError `not_an_array` when `volume` is no array, ValueError unless 3-D,
 // TypeError for a dtype the library has no scalar type for, keymesh.Error

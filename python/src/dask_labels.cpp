@@ -34,7 +34,7 @@ class SlabSource final : public PlaneSource {
     if (!slab.is_none()) {
       held_ = true;
       view_ = view_array_volume(slab, spacing, origin, VolumeOrder::Fortran,
-                                {"dask_labels", 1, "dask_labels: the slab must be a 3-D numpy array"});
+                                {"dask_labels", 1, "dask_labels: the slab must be a 3-D numpy array", true});
       header_ = view_.grid;
       header_.external = nullptr;
     }
@@ -122,7 +122,7 @@ py::tuple merge(const py::dtype& dtype, const std::array<Id, 3>& whole, const py
                 const py::object& spacing, const py::object& origin, int threads) {
   check_threads(threads);
   SlabSource source(py::none(), 0, whole, spacing, origin);
-  source.set_type(scalar_type_of(dtype, "volume"));
+  source.set_type(label_scalar_type_of(dtype, "volume"));
   const generate::LabelOptions opt = options_of(options);
   generate::LabelSlabs slabs(source, opt, kNoLimit, {0, 0});
   slabs.set_labels(labels);

@@ -49,7 +49,7 @@ py::tuple read(const std::string& path, const py::object& dims, const py::object
     const auto d = integer_sequence(dims, "dims");
     if (d.size() != 3) throw py::value_error("dims must have 3 entries (nx, ny, nz)");
     raw.dims = {d[0], d[1], d[2]};
-    raw.type = scalar_type_of(py::dtype::from_args(dtype), "dtype");
+    raw.type = label_scalar_type_of(py::dtype::from_args(dtype), "dtype");
     if (!spacing.is_none()) raw.spacing = triple(spacing, "spacing");
     if (!origin.is_none()) raw.origin = triple(origin, "origin");
     if (endian != "little" && endian != "big") throw py::value_error("endian must be 'little' or 'big'");

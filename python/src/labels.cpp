@@ -35,7 +35,7 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
     check_volume_geometry(*grid, "contour_labels");
   } else {
     view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
-                             {"contour_labels", 1, "volume must be a 3-D numpy array or a keymesh.Volume"});
+                             {"contour_labels", 1, "volume must be a 3-D numpy array or a keymesh.Volume", true});
     grid = &view.grid;
   }
   generate::LabelStats stats;

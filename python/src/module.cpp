@@ -39,9 +39,21 @@ ScalarType scalar_type_of(const py::dtype& dtype, const char* what) {
   if (kind == 'i' && size == 4) return ScalarType::Int32;
   if (kind == 'f' && size == 4) return ScalarType::Float32;
   if (kind == 'f' && size == 8) return ScalarType::Float64;
+  const bool wide = (kind == 'u' && size == 4) || ((kind == 'i' || kind == 'u') && size == 8);
   throw py::type_error(std::string(what) + " has dtype " + dtype_name(dtype) +
-                       "; keymesh supports uint8, int8, uint16, int16, int32, float32 and float64 "
-                       "(convert with .astype(numpy.float32) for example)");
+                       "; keymesh supports uint8, int8, uint16, int16, int32, float32 and float64 " +
+                       (wide ? "(label maps of this type: contour_labels; convert with .astype(numpy.float64) "
+                               "for a contour)"
+                             : "(convert with .astype(numpy.float32) for example)"));
+}
+
+ScalarType label_scalar_type_of(const py::dtype& dtype, const char* what) {
+  const char kind = dtype.kind();
+  const auto size = dtype.itemsize();
+  if (kind == 'u' && size == 4) return ScalarType::UInt32;
+  if (kind == 'i' && size == 8) return ScalarType::Int64;
+  if (kind == 'u' && size == 8) return ScalarType::UInt64;
+  return scalar_type_of(dtype, what);
 }
 
 py::dtype dtype_of(ScalarType type) { return py::dtype(scalar_type_name(type)); }

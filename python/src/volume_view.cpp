@@ -27,7 +27,7 @@ ArrayVolume view_array_volume(const py::object& volume, const py::object& spacin
   if (!v.array) throw py::type_error(use.not_an_array);
   if (v.array.ndim() != 3)
     throw py::value_error("volume must be 3-D (axis 0 = x), got ndim=" + std::to_string(v.array.ndim()));
-  v.grid.type = scalar_type_of(v.array.dtype(), "volume");
+  v.grid.type = use.label_map ? label_scalar_type_of(v.array.dtype(), "volume") : scalar_type_of(v.array.dtype(), "volume");
   check_volume_shape({v.array.shape(0), v.array.shape(1), v.array.shape(2)}, use);
   const std::array<double, 3> s = spacing.is_none() ? std::array<double, 3>{1, 1, 1} : triple(spacing, "spacing");
   const std::array<double, 3> o = origin.is_none() ? std::array<double, 3>{0, 0, 0} : triple(origin, "origin");

@@ -311,7 +311,7 @@ void add_precomputed_options(CLI::App& cmd, LabelsCli& o) {
 void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   cmd.description("surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys");
   cmd.add_option("input", o.input,
-                 "integer volume (uint8 int8 uint16 int16 int32): " + io::accepted_volumes(false))
+                 "integer volume (uint8 int8 uint16 int16 int32 uint32 int64 uint64): " + io::accepted_volumes(false))
       ->required();
   cmd.add_option("-o,--output", o.output,
                  "output mesh (" + io::extensions_of(io::DataKind::Surface, true) +
@@ -348,7 +348,7 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
                "slot its loop or face point) and history_t (Float32: 0.5, the edge's midpoint or the cell's centre); "
                "the unsmoothed point's, whatever --smooth; .vtp output (.pvtp pieces under mpirun), not with "
                "--coarsen or --format precomputed");
-  o.raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32");
+  o.raw_input.add_options(cmd, "uint8 int8 uint16 int16 int32 uint32 int64 uint64");
   cmd.add_option("--memory-limit", o.memory_limit,
                  "stream the input volume in slabs of z-planes holding at most SIZE bytes of samples and 16-bit "
                  "label indices (e.g. 256M); the surfaces are merged by key, then smoothed and written whole "

@@ -6,6 +6,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/cuda/device_contour.hpp"
+#include "keymesh/mesh/label_scalars.hpp"
 
 namespace keymesh::cuda {
 
@@ -42,7 +43,7 @@ void check_device_volume(const DeviceVolume& volume, const generate::ContourOpti
       throw InputError("contour: grid has " + std::to_string(g.dims[a]) + " point(s) along axis " + "xyz"[a] +
                        std::string(" (need at least 2)"));
   if (!is_grid_scalar(g.type))
-    throw InputError(std::string("contour: a grid of ") + scalar_type_name(g.type) + " samples is not supported");
+    throw InputError("contour: " + wide_samples_refusal(g.type));
   if (!volume.samples) throw InputError("--backend cuda: the volume's device pointer is null");
   gpu_voxels(g.dims[0], g.dims[1], g.dims[2]);
 }

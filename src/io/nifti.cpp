@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "keymesh/io/input_file.hpp"
+#include "keymesh/mesh/label_scalars.hpp"
 #include "volume_formats.hpp"
 #include "whole_inflate.hpp"
 
@@ -108,9 +109,12 @@ VolumeLayout header_layout(const unsigned char* h, const std::string& path, std:
     case 64: type = ScalarType::Float64; break;
     case 256: type = ScalarType::Int8; break;
     case 512: type = ScalarType::UInt16; break;
+    case 768: type = ScalarType::UInt32; break;
+    case 1024: type = ScalarType::Int64; break;
+    case 1280: type = ScalarType::UInt64; break;
     default:
       throw InputError(path + ": NIfTI datatype " + std::to_string(datatype) +
-                       " is not supported (uint8, int8, int16, uint16, int32, float32, float64)");
+                       " is not supported (uint8, int8, int16, uint16, int32, uint32, int64, uint64, float32, float64)");
   }
   const float vox_offset = get<float>(h, 108, swap);
   if (!(vox_offset >= 348) || vox_offset > 1.0e9f || vox_offset != std::floor(vox_offset))
@@ -254,7 +258,7 @@ void scale_samples(ScalarType stored_type, const std::byte* stored, std::byte* o
   in.external = stored;
   to.type = scaled_type(stored_type);
   to.external = out;
-  visit_scalars(in, [&](const auto* s) {
+  visit_any_scalars(in, [&](const auto* s) {
     visit_scalars(to, [&](const auto* d_const) {
       using D = std::remove_cv_t<std::remove_pointer_t<decltype(d_const)>>;
       D* d = const_cast<D*>(d_const);

@@ -42,10 +42,17 @@ ScalarType nrrd_type(const std::string& path, const std::string& raw) {
   if (t == "ushort" || t == "unsigned short" || t == "unsigned short int" || t == "uint16" || t == "uint16_t")
     return ScalarType::UInt16;
   if (t == "int" || t == "signed int" || t == "int32" || t == "int32_t") return ScalarType::Int32;
+  if (t == "uint" || t == "unsigned int" || t == "uint32" || t == "uint32_t") return ScalarType::UInt32;
+  if (t == "longlong" || t == "long long" || t == "long long int" || t == "signed long long" ||
+      t == "signed long long int" || t == "int64" || t == "int64_t")
+    return ScalarType::Int64;
+  if (t == "ulonglong" || t == "unsigned long long" || t == "unsigned long long int" || t == "uint64" ||
+      t == "uint64_t")
+    return ScalarType::UInt64;
   if (t == "float") return ScalarType::Float32;
   if (t == "double") return ScalarType::Float64;
   throw InputError(path + ": NRRD type '" + raw +
-                   "' is not supported (int8, uint8, int16, uint16, int32, float, double)");
+                   "' is not supported (int8, uint8, int16, uint16, int32, uint32, int64, uint64, float, double)");
 }
 
 std::vector<std::string> words(const std::string& s) {

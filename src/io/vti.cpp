@@ -10,6 +10,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "keymesh/mesh/label_scalars.hpp"
 #include "volume_formats.hpp"
 #include "vtk_xml.hpp"
 #include "vtk_xml_writer.hpp"
@@ -32,13 +33,6 @@ std::vector<double> numbers(const std::string& path, const std::string& what, co
   }
   if (v.size() != n) throw InputError(path + ": " + what + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
   return v;
-}
-
-// Grid arrays hold the grid types only (is_grid_scalar).
-ScalarType grid_type(const std::string& path, ScalarType s, const std::string& declared) {
-  if (is_grid_scalar(s)) return s;
-  throw InputError(path + ": point array type " + declared +
-                   " is not supported (Int8, UInt8, Int16, UInt16, Int32, Float32, Float64)");
 }
 
 // The XML part of a file whose arrays are appended: everything up to the
@@ -147,16 +141,19 @@ void store_decoded(const std::string& path, const Array& a, ScalarType declared_
     if (a.big) detail::swap_samples(grid);
     return;
   }
-  visit_scalars(grid, [&](const auto* samples) {
+  visit_any_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
     T* out = const_cast<T*>(samples);
+    // 64-bit ids past 2^53 would not survive the ascii values' doubles.
+    constexpr double kExact = sizeof(T) == 8 ? 9007199254740992.0 : 1e300;
     for (Id i = 0; i < grid.num_points(); ++i) {
       const double v = a.as_double(static_cast<std::size_t>(i));
       if constexpr (std::is_integral_v<T>) {
         if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
-              v <= static_cast<double>(std::numeric_limits<T>::max())))
+              v <= static_cast<double>(std::numeric_limits<T>::max()) && v > -kExact && v < kExact))
           throw InputError(path + ": point array value " + std::to_string(v) + " at index " + std::to_string(i) +
-                           " does not fit its type " + declared);
+                           " does not fit its type " + declared +
+                           (sizeof(T) == 8 ? " exactly (ascii 64-bit values within 2^53; write binary)" : ""));
       }
       out[i] = static_cast<T>(v);
     }
@@ -181,7 +178,9 @@ std::optional<ImageGrid> parse_vti(const std::string& path, std::string_view dat
   const std::string* declared = array.attr("type");
   const auto declared_scalar = declared ? vtk_scalar(*declared) : std::nullopt;
   if (!declared_scalar) throw InputError(path + ": point array has no supported type");
-  const ScalarType type = grid_type(path, *declared_scalar, *declared);
+  // Every type VTK names but the 64-bit ones keymesh has none for: UInt32,
+  // Int64 and UInt64 are label maps (mesh/label_scalars.hpp).
+  const ScalarType type = *declared_scalar;
   // Checks dims (and the product's overflow) before anything is allocated;
   // the samples are allocated only once the file is known to hold them.
   const std::uint64_t need = detail::checked_byte_count(geometry.dims, type, path);

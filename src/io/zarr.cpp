@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/mesh/label_scalars.hpp"
 #include "mesh_bytes.hpp"
 #include "volume_formats.hpp"
 #include "whole_inflate.hpp"
@@ -261,12 +262,13 @@ class ZarrPlanes : public PlaneSource {
     static constexpr TypeName kDtypes[] = {
         {"u1", ScalarType::UInt8},  {"i1", ScalarType::Int8},    {"u2", ScalarType::UInt16},
         {"i2", ScalarType::Int16},  {"i4", ScalarType::Int32},   {"f4", ScalarType::Float32},
-        {"f8", ScalarType::Float64},
+        {"f8", ScalarType::Float64}, {"u4", ScalarType::UInt32},  {"i8", ScalarType::Int64},
+        {"u8", ScalarType::UInt64},
     };
     if (!z.contains("dtype") || !z["dtype"].is_string()) fail("dtype is not a simple type string");
     dtype_ = z["dtype"].get<std::string>();
     const auto type = type_named(dtype_.size() == 3 ? std::string_view(dtype_).substr(1) : "", kDtypes);
-    if (!type) fail("dtype '" + dtype_ + "' is not supported (u1 i1 u2 i2 i4 f4 f8)");
+    if (!type) fail("dtype '" + dtype_ + "' is not supported (u1 i1 u2 i2 i4 u4 i8 u8 f4 f8)");
     const char order = dtype_.empty() ? '?' : dtype_[0];
     if (order != '<' && order != '>' && order != '|') fail("dtype '" + dtype_ + "' has no byte order");
     swap_ = scalar_size(*type) > 1 && (order == '>') != (std::endian::native == std::endian::big);
@@ -313,14 +315,27 @@ class ZarrPlanes : public PlaneSource {
     one.dims = {1, 1, 1};
     one.type = type;
     one.external = fill_.data();
-    visit_scalars(one, [&](const auto* p) {
+    visit_any_scalars(one, [&](const auto* p) {
       using T = std::remove_cv_t<std::remove_pointer_t<decltype(p)>>;
+      T t{};
       if constexpr (std::is_integral_v<T>) {
-        if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
-              v <= static_cast<double>(std::numeric_limits<T>::max()) && v == std::floor(v)))
-          fail("fill_value " + f.dump() + " does not fit dtype '" + dtype_ + "'");
+        // An integer fill value as the integer itself (a 64-bit id is not a double).
+        const bool fits = f.is_number_unsigned() ? f.get<std::uint64_t>() <= std::numeric_limits<T>::max()
+                          : f.is_number_integer()
+                              ? f.get<std::int64_t>() >= static_cast<std::int64_t>(std::numeric_limits<T>::min()) &&
+                                    (f.get<std::int64_t>() < 0 ||
+                                     static_cast<std::uint64_t>(f.get<std::int64_t>()) <= std::numeric_limits<T>::max())
+                              : v >= static_cast<double>(std::numeric_limits<T>::min()) &&
+                                    v <= static_cast<double>(std::numeric_limits<T>::max()) &&
+                                    (sizeof(T) < 8 || v < static_cast<double>(std::numeric_limits<T>::max())) &&
+                                    v == std::floor(v);
+        if (!fits) fail("fill_value " + f.dump() + " does not fit dtype '" + dtype_ + "'");
+        t = f.is_number_unsigned() ? static_cast<T>(f.get<std::uint64_t>())
+            : f.is_number_integer() ? static_cast<T>(f.get<std::int64_t>())
+                                    : static_cast<T>(v);
+      } else {
+        t = static_cast<T>(v);
       }
-      const T t = static_cast<T>(v);
       std::memcpy(fill_.data(), &t, sizeof t);
       return 0;
     });

@@ -8,9 +8,17 @@
 #include <type_traits>
 #include <vector>
 
+#include "keymesh/mesh/label_scalars.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh {
+
+std::string wide_samples_refusal(ScalarType type) {
+  return std::string(scalar_type_name(type)) +
+         " samples are label ids, which keymesh labels (Python: contour_labels) reads; isosurfaces and the other "
+         "volume operations take uint8, int8, uint16, int16, int32, float32 or float64 (convert the volume to "
+         "float64 for a contour)";
+}
 
 void check_float32_geometry(const std::array<Id, 3>& dims, const std::array<double, 3>& origin,
                             const std::array<double, 3>& spacing, const std::string& what) {
@@ -67,7 +75,7 @@ void ImageGrid::allocate(std::array<Id, 3> new_dims, ScalarType new_type) {
 // conversion and finiteness test cost more than the rest of the read);
 // floating samples skip NaN and infinities.
 std::array<double, 2> scalar_range(const ImageGrid& grid) {
-  return visit_scalars(grid, [&](const auto* s) {
+  return visit_any_scalars(grid, [&](const auto* s) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(s)>>;
     constexpr double kInf = std::numeric_limits<double>::infinity();
     const Id n = grid.num_points();

@@ -29,6 +29,8 @@ bool is_grid_scalar(ScalarType type) {
   return type != ScalarType::UInt32 && type != ScalarType::Int64 && type != ScalarType::UInt64;
 }
 
+bool is_label_scalar(ScalarType type) { return !scalar_is_float(type); }
+
 ScalarType parse_scalar_type(const std::string& raw) {
   std::string t = raw;
   std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -37,10 +39,13 @@ ScalarType parse_scalar_type(const std::string& raw) {
   if (t == "uint16" || t == "ushort" || t == "unsigned short" || t == "u16") return ScalarType::UInt16;
   if (t == "int16" || t == "short" || t == "i16") return ScalarType::Int16;
   if (t == "int32" || t == "int" || t == "i32") return ScalarType::Int32;
+  if (t == "uint32" || t == "uint" || t == "unsigned int" || t == "u32") return ScalarType::UInt32;
+  if (t == "int64" || t == "i64") return ScalarType::Int64;
+  if (t == "uint64" || t == "u64") return ScalarType::UInt64;
   if (t == "float32" || t == "float" || t == "f32") return ScalarType::Float32;
   if (t == "float64" || t == "double" || t == "f64") return ScalarType::Float64;
   throw InputError("unknown scalar type '" + raw +
-                   "' (expected uint8, int8, uint16, int16, int32, float32 or float64)");
+                   "' (expected uint8, int8, uint16, int16, int32, uint32, int64, uint64, float32 or float64)");
 }
 
 }  // namespace keymesh

@@ -8,6 +8,7 @@
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/mesh/image_grid.hpp"
+#include "keymesh/mesh/label_scalars.hpp"
 #include "keymesh/mesh/scalar_type.hpp"
 
 namespace keymesh {
@@ -26,22 +27,24 @@ TEST(ScalarType, SizesAreThoseOfTheCppTypes) {
   EXPECT_EQ(scalar_size(ScalarType::Float64), sizeof(double));
 }
 
-TEST(ScalarType, GridTypesParseBackFromTheirNamesOthersAreRefused) {
+TEST(ScalarType, EveryTypeParsesBackWideLabelTypesOnlyThroughVisitAny) {
   for (int i = 0; i <= static_cast<int>(ScalarType::UInt64); ++i) {
     const auto type = static_cast<ScalarType>(i);
+    EXPECT_EQ(parse_scalar_type(scalar_type_name(type)), type) << scalar_type_name(type);
+    ImageGrid grid;
+    grid.allocate({1, 1, 1}, type);
+    // visit_any_scalars hands out a pointer of the type's size, every type.
+    EXPECT_EQ(visit_any_scalars(grid, [](const auto* p) { return sizeof(*p); }), scalar_size(type));
+    EXPECT_EQ(is_label_scalar(type), !scalar_is_float(type));
     if (is_grid_scalar(type)) {
-      EXPECT_EQ(parse_scalar_type(scalar_type_name(type)), type) << scalar_type_name(type);
-      // visit_scalars hands out a pointer of the type's size.
-      ImageGrid grid;
-      grid.allocate({1, 1, 1}, type);
       EXPECT_EQ(visit_scalars(grid, [](const auto* p) { return sizeof(*p); }), scalar_size(type));
-    } else {
-      EXPECT_THROW(parse_scalar_type(scalar_type_name(type)), InputError) << scalar_type_name(type);
-      ImageGrid grid;
-      grid.type = type;
+    } else {  // the wide label types: the algorithms' visitor refuses them
+      EXPECT_TRUE(is_label_scalar(type));
       EXPECT_THROW(visit_scalars(grid, [](const auto* p) { return sizeof(*p); }), InputError);
+      EXPECT_NE(wide_samples_refusal(type).find("keymesh labels"), std::string::npos);
     }
   }
+  EXPECT_THROW(parse_scalar_type("float16"), InputError);
   EXPECT_TRUE(scalar_is_float(ScalarType::Float32));
   EXPECT_TRUE(scalar_is_float(ScalarType::Float64));
   EXPECT_FALSE(scalar_is_float(ScalarType::UInt64));

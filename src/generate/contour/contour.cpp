@@ -19,6 +19,7 @@
 #include "keymesh/generate/contour/marching_cubes_table.hpp"
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/keyreduce/reduce.hpp"
+#include "keymesh/mesh/label_scalars.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/fresh_memory.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
@@ -896,6 +897,7 @@ SurfaceMesh contour(const ImageGrid& grid, const ContourOptions& options, Contou
   ContourStats& st = stats ? *stats : local;
   st = ContourStats{};
   const std::uint64_t key_range = 3ull * static_cast<std::uint64_t>(grid.num_points()) * options.isovalues.size();
+  if (!is_grid_scalar(grid.type)) throw InputError("contour: " + wide_samples_refusal(grid.type));
   return visit_scalars(grid, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
     if (options.weld == ContourWeld::KeyReduce) return contour_rows<T>(grid, samples, options, st, point_keys, nearest_keys);

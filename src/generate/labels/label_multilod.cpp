@@ -86,7 +86,8 @@ std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelO
                                              const std::array<Id, 3>& offset) {
   LabelOptions opt = options;
   opt.per_label = true;
-  LabelVolume vol = detail::scan_labels(view, opt);
+  // Segment ids come from the label table, never a float32 field: exact.
+  LabelVolume vol = detail::scan_labels(view, opt, detail::LabelRange::Int64Table);
   vol.per_label = true;
   vol.keep_keys = true;
   for (detail::LabelIndex l : vol.selected)

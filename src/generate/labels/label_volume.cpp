@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "keymesh/core/error.hpp"
+#include "keymesh/mesh/label_scalars.hpp"
 #include "keymesh/parallel/for_each.hpp"
 
 namespace keymesh::generate::detail {
@@ -36,7 +37,7 @@ std::vector<std::int64_t> distinct_values(const T* samples, Id n) {
     }
   } else {
     const int chunks = parallel::chunk_count(n, 1 << 16);
-    std::vector<std::vector<std::int64_t>> runs(static_cast<std::size_t>(chunks));
+    std::vector<std::vector<T>> runs(static_cast<std::size_t>(chunks));
     parallel::for_each_chunk(n, chunks, [&](Id b, Id e, int c) {
       auto& r = runs[static_cast<std::size_t>(c)];
       for (Id i = b; i < e; ++i)
@@ -44,9 +45,17 @@ std::vector<std::int64_t> distinct_values(const T* samples, Id n) {
       std::sort(r.begin(), r.end());
       r.erase(std::unique(r.begin(), r.end()), r.end());
     });
-    for (const auto& r : runs) out.insert(out.end(), r.begin(), r.end());
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
+    std::vector<T> all;
+    for (const auto& r : runs) all.insert(all.end(), r.begin(), r.end());
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    // Labels are held as int64: a uint64 id past 2^63 - 1 is refused by
+    // name (docs/decisions/wide-label-types.md).
+    if constexpr (std::is_same_v<T, std::uint64_t>)
+      if (!all.empty() && all.back() > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
+        throw InputError("labels: label " + std::to_string(all.back()) +
+                         " is past 2^63 - 1 (9223372036854775807), the largest label keymesh holds");
+    out.assign(all.begin(), all.end());
   }
   return out;
 }
@@ -78,8 +87,10 @@ void map_typed(LabelVolume& vol, const T* samples, const std::array<Id, 3>& dims
   constexpr Id lowest = static_cast<Id>(std::numeric_limits<T>::lowest());
   std::vector<LabelIndex> table;
   if constexpr (small) table = small_table<T>(vol);
-  // int32: a binary search once per run of equal samples.
-  auto map_of = [&](std::int64_t v) { return vol.stored[static_cast<std::size_t>(index_of(vol.values, v))]; };
+  // Wider types: a binary search once per run of equal samples.
+  auto map_of = [&](T v) {
+    return vol.stored[static_cast<std::size_t>(index_of(vol.values, static_cast<std::int64_t>(v)))];
+  };
   const Id nl = static_cast<Id>(vol.values.size());
   const int chunks = parallel::chunk_count(nz, 8);
   std::vector<LabelCounts> part(static_cast<std::size_t>(chunks));
@@ -95,7 +106,7 @@ void map_typed(LabelVolume& vol, const T* samples, const std::array<Id, 3>& dims
           LabelIndex l;
           if constexpr (small) {
             l = table[static_cast<std::size_t>(static_cast<Id>(in[i]) - lowest)];
-          } else {
+          } else {  // int32 and the wide label types
             l = (i > 0 && in[i] == in[i - 1]) ? last : map_of(in[i]);
           }
           last = l;
@@ -134,20 +145,21 @@ void LabelCounts::merge(const LabelCounts& other) {
   }
 }
 
-void check_label_grid(const ImageGrid& header, const LabelOptions& options) {
+void check_label_grid(const ImageGrid& header, const LabelOptions& options, LabelRange range) {
   for (int a = 0; a < 3; ++a)
     if (header.dims[a] < 1)
       throw InputError("labels: grid has " + std::to_string(header.dims[a]) + " points along axis " + "xyz"[a]);
   if (header.type == ScalarType::Float32 || header.type == ScalarType::Float64)
     throw InputError(std::string("labels: a ") + scalar_type_name(header.type) +
-                     " volume is not a label map (integer samples: uint8, int8, uint16, int16, int32)");
-  if (options.background > kMaxLabelMagnitude || options.background < -kMaxLabelMagnitude)
+                     " volume is not a label map (integer samples: uint8, int8, uint16, int16, int32, uint32, int64, uint64)");
+  if (range == LabelRange::Float32Fields &&
+      (options.background > kMaxLabelMagnitude || options.background < -kMaxLabelMagnitude))
     throw InputError("labels: background " + std::to_string(options.background) +
                      " is past the supported magnitude 2^24");
 }
 
 std::vector<std::int64_t> distinct_labels(const ImageGrid& samples) {
-  return visit_scalars(samples, [&](const auto* s) -> std::vector<std::int64_t> {
+  return visit_any_scalars(samples, [&](const auto* s) -> std::vector<std::int64_t> {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(s)>>;
     if constexpr (std::is_floating_point_v<T>) {
       throw InputError("labels: float volume");
@@ -166,7 +178,8 @@ void merge_distinct(std::vector<std::int64_t>& into, const std::vector<std::int6
   if (static_cast<Id>(into.size()) > kMaxDistinctLabels + 1) into.resize(static_cast<std::size_t>(kMaxDistinctLabels + 1));
 }
 
-LabelVolume label_table(const ImageGrid& header, std::vector<std::int64_t> values, const LabelOptions& opt) {
+LabelVolume label_table(const ImageGrid& header, std::vector<std::int64_t> values, const LabelOptions& opt,
+                        LabelRange range) {
   LabelVolume vol;
   const Id nx = header.dims[0], ny = header.dims[1], nz = header.dims[2];
   vol.dims = {nx + 2, ny + 2, nz + 2};
@@ -177,9 +190,9 @@ LabelVolume label_table(const ImageGrid& header, std::vector<std::int64_t> value
   vol.values = std::move(values);
   vol.distinct_in_grid = static_cast<Id>(vol.values.size());
   for (std::int64_t v : {vol.values.front(), vol.values.back()})
-    if (v > kMaxLabelMagnitude || v < -kMaxLabelMagnitude)
-      throw InputError("labels: label " + std::to_string(v) + " is past the supported magnitude 2^24 (16777216): " +
-                       "boundary_labels is a float32 field");
+    if (range == LabelRange::Float32Fields && (v > kMaxLabelMagnitude || v < -kMaxLabelMagnitude))
+      throw InputError("labels: label " + std::to_string(v) + " is past 2^24 (16777216), which the float32 cell " +
+                       "field boundary_labels cannot hold exactly; --format precomputed keeps 64-bit ids exact");
   // The background joins the values (it pads the grid) if absent.
   if (!std::binary_search(vol.values.begin(), vol.values.end(), opt.background))
     vol.values.insert(vol.values.begin() + index_of(vol.values, opt.background), opt.background);
@@ -216,7 +229,7 @@ void allocate_window(LabelVolume& vol, Id first_plane, Id planes) {
 }
 
 void map_planes(LabelVolume& vol, const ImageGrid& planes, Id first, LabelCounts* counts) {
-  visit_scalars(planes, [&](const auto* samples) {
+  visit_any_scalars(planes, [&](const auto* samples) {
     using T = std::remove_cv_t<std::remove_pointer_t<decltype(samples)>>;
     if constexpr (std::is_floating_point_v<T>) {
       throw InputError("labels: float volume");
@@ -235,12 +248,12 @@ void set_boxes(LabelVolume& vol, const LabelCounts& counts) {
   }
 }
 
-LabelVolume scan_labels(const ImageGrid& grid, const LabelOptions& options) {
-  check_label_grid(grid, options);
+LabelVolume scan_labels(const ImageGrid& grid, const LabelOptions& options, LabelRange range) {
+  check_label_grid(grid, options, range);
   if (static_cast<Id>(grid.byte_count()) != grid.num_points() * static_cast<Id>(scalar_size(grid.type)))
     throw InputError("labels: grid holds " + std::to_string(grid.byte_count()) + " bytes, dims need " +
                      std::to_string(grid.num_points() * static_cast<Id>(scalar_size(grid.type))));
-  LabelVolume vol = label_table(grid, distinct_labels(grid), options);
+  LabelVolume vol = label_table(grid, distinct_labels(grid), options, range);
   allocate_window(vol, 0, vol.dims[2]);
   LabelCounts counts;
   map_planes(vol, grid, 0, &counts);

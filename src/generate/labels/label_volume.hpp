@@ -78,11 +78,19 @@ struct LabelCounts {
   void merge(const LabelCounts& other);
 };
 
+// Where the labels go, which bounds them: the float32 cell fields
+// boundary_labels and label of a mesh (|label| <= kMaxLabelMagnitude, which
+// float32 holds exactly; coarsening and history read labels back from
+// them), or the label table only (Neuroglancer segment ids: any int64, so
+// uint32 and int64 volumes whole and uint64 up to 2^63 - 1).
+enum class LabelRange { Float32Fields, Int64Table };
+
 // Throws InputError naming grid.name-less context ("labels: ...") for float
-// samples, labels past kMaxLabelMagnitude, too many distinct labels, a
-// selected label the volume does not hold or a selected background.
-// The whole volume in memory: the steps below in one go.
-LabelVolume scan_labels(const ImageGrid& grid, const LabelOptions& options);
+// samples, labels past the range (and uint64 labels past 2^63 - 1), too
+// many distinct labels, a selected label the volume does not hold or a
+// selected background. The whole volume in memory: the steps below in one go.
+LabelVolume scan_labels(const ImageGrid& grid, const LabelOptions& options,
+                        LabelRange range = LabelRange::Float32Fields);
 
 // The steps of scan_labels, for volumes streamed in slabs (labels_stream.cpp):
 // the header's checks; the sorted distinct values of some planes (merged
@@ -91,10 +99,12 @@ LabelVolume scan_labels(const ImageGrid& grid, const LabelOptions& options);
 // [first, first + planes.dims[2]) mapped into the window (which must hold
 // padded planes first + 1 ...), counted when `counts` is given; and the
 // selected labels' counts and boxes once every plane was counted.
-void check_label_grid(const ImageGrid& header, const LabelOptions& options);
+void check_label_grid(const ImageGrid& header, const LabelOptions& options,
+                      LabelRange range = LabelRange::Float32Fields);
 std::vector<std::int64_t> distinct_labels(const ImageGrid& samples);
 void merge_distinct(std::vector<std::int64_t>& into, const std::vector<std::int64_t>& more);
-LabelVolume label_table(const ImageGrid& header, std::vector<std::int64_t> values, const LabelOptions& options);
+LabelVolume label_table(const ImageGrid& header, std::vector<std::int64_t> values, const LabelOptions& options,
+                        LabelRange range = LabelRange::Float32Fields);
 void allocate_window(LabelVolume& vol, Id first_plane, Id planes);
 void map_planes(LabelVolume& vol, const ImageGrid& planes, Id first, LabelCounts* counts);
 void set_boxes(LabelVolume& vol, const LabelCounts& counts);
