@@ -19,7 +19,7 @@ struct CheckCli {
   CommonOptions common;
 };
 
-void add_check_options(CLI::App& cmd, CheckCli& o) {
+void add_check_options(Subcommand& cmd, CheckCli& o) {
   cmd.description("topology of a surface mesh: boundary and non-manifold edges, duplicates, Euler characteristic");
   cmd.add_option("mesh", o.input, "surface mesh (" + io::extensions_of(io::DataKind::Surface, false) + ")")->required();
   cmd.add_flag("--expect-closed", o.expect_closed,

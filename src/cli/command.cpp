@@ -20,11 +20,11 @@
 
 namespace keymesh::cli {
 
-void add_common_options(CLI::App& cmd, CommonOptions& common) {
+void add_common_options(Subcommand& cmd, CommonOptions& common) {
   cmd.add_option("--threads", common.threads,
                  "worker threads, 0 (all cores) to " + std::to_string(parallel::max_thread_count()) +
                      " (4 x the hardware threads, at least 64)")
-      ->check(CLI::Range(0, parallel::max_thread_count()));
+      ->check(in_range(0, parallel::max_thread_count()));
   cmd.add_option("--report", common.report_path, "write a JSON report of counts and per-stage seconds");
   cmd.add_flag("--quiet,-q", common.quiet, "no progress messages on stderr");
   cmd.add_option("--max-memory", common.max_memory,
@@ -68,8 +68,8 @@ bool parse_size(const std::string& text, std::size_t& out) {
   return out > 0;
 }
 
-CLI::Validator size_validator() {
-  return CLI::Validator(
+Check size_validator() {
+  return text_check(
       [](std::string& text) -> std::string {
         std::size_t bytes = 0;
         return parse_size(text, bytes) ? std::string()
@@ -151,18 +151,18 @@ bool is_device(const std::string& path) {
 }  // namespace
 
 // The (option, path) pairs a command was given: its inputs first.
-std::vector<std::pair<std::string, std::string>> given_paths(const CLI::App& cmd, bool outputs) {
+std::vector<std::pair<std::string, std::string>> given_paths(const Subcommand& cmd, bool outputs) {
   std::vector<std::pair<std::string, std::string>> paths;
   for (const char* name : {"input", "mesh", "file", "--output", "--report"}) {
     if (!outputs && name[0] == '-') break;
-    if (const CLI::Option* opt = cmd.get_option_no_throw(name))
+    if (const Option* opt = cmd.get_option_no_throw(name))
       for (const std::string& value : opt->results())
         if (!value.empty()) paths.emplace_back(opt->get_name(), value);
   }
   return paths;
 }
 
-std::string error_line(const CLI::App* cmd, const std::string& message) {
+std::string error_line(const Subcommand* cmd, const std::string& message) {
   // One line, whatever bytes the file names in it hold.
   if (!cmd) return printable(message);
   const auto paths = given_paths(*cmd, true);
@@ -189,12 +189,12 @@ std::string unwritable_because(const std::string& path) {
 }
 }  // namespace
 
-Refusal refuse_unwritable_outputs(const CLI::App& cmd) {
+Refusal refuse_unwritable_outputs(const Subcommand& cmd) {
   // `labels --format precomputed` writes a directory: its command checks -o.
-  const CLI::Option* format = cmd.get_option_no_throw("--format");
+  const Option* format = cmd.get_option_no_throw("--format");
   const bool directory = format && format->count() > 0 && format->results().front() == "precomputed";
   for (const char* name : {"--output", "--report"})
-    if (const CLI::Option* opt = cmd.get_option_no_throw(name); opt && !(directory && name[2] == 'o'))
+    if (const Option* opt = cmd.get_option_no_throw(name); opt && !(directory && name[2] == 'o'))
       for (const std::string& path : opt->results()) {
         if (is_device(path)) continue;
         if (const std::string why = unwritable_because(path); !why.empty())
@@ -203,7 +203,7 @@ Refusal refuse_unwritable_outputs(const CLI::App& cmd) {
   return {};
 }
 
-Refusal refuse_shared_paths(const CLI::App& cmd) {
+Refusal refuse_shared_paths(const Subcommand& cmd) {
   std::vector<std::pair<std::string, std::string>> paths;  // (option, path)
   for (auto& [option, path] : given_paths(cmd, true))
     if (!is_device(path)) paths.emplace_back(option, path);

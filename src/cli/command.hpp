@@ -1,8 +1,6 @@
 #pragma once
 // Shared plumbing of the `keymesh` subcommands: the registry each subcommand
 // file adds itself to, stage timing, progress on stderr and --report JSON.
-#include <CLI/CLI.hpp>
-
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -18,6 +16,7 @@
 #include "keymesh/mesh/surface_mesh.hpp"
 #include "keymesh/mesh/unstructured_grid.hpp"
 #include "report.hpp"
+#include "subcommand.hpp"
 
 namespace keymesh::cli {
 
@@ -34,8 +33,8 @@ struct CommonOptions {
 // bytes; false for anything else, zero and values past 2^64 - 1 included.
 bool parse_size(const std::string& text, std::size_t& out);
 
-// A CLI11 check for options that take a size: refused with exit 2 otherwise.
-CLI::Validator size_validator();
+// A check for options that take a size: refused with exit 2 otherwise.
+Check size_validator();
 
 // Float values per point of a mesh's fields (for work estimates).
 std::uint64_t field_components(const std::vector<Field>& fields);
@@ -56,13 +55,13 @@ void check_memory(const CommonOptions& common, std::uint64_t bytes, const std::s
 // prints why and returns 1 (refused by name, as the backend contract says).
 int require_cpu_backend(const CommonOptions& common, const char* what);
 
-void add_common_options(CLI::App& cmd, CommonOptions& common);
+void add_common_options(Subcommand& cmd, CommonOptions& common);
 
-// A CLI11 check that accepts the names of the library's option enum E
+// A check that accepts the names of the library's option enum E
 // (generate/option_names.hpp), so help lists what the library parses.
 template <class E>
-CLI::IsMember one_of() {
-  return CLI::IsMember(generate::option_names<E>());
+Check one_of() {
+  return member_of(generate::option_names<E>());
 }
 
 // 0 when every --iso is finite; otherwise "keymesh <command>: --iso V is not
@@ -115,36 +114,36 @@ struct Refusal {
 // outputs that do not exist yet by resolved directory and name. Looks for
 // the options by name (positional "input", "mesh" or "file"; "--output",
 // "--report"), so a new subcommand that uses these names is covered.
-Refusal refuse_shared_paths(const CLI::App& cmd);
+Refusal refuse_shared_paths(const Subcommand& cmd);
 
 // Refuses (exit 1, one line "<path>: cannot write: <errno text>") a command
 // whose -o/--report lies in a directory that does not exist or cannot be
 // written, before any work: a report that cannot be written would otherwise
 // fail only after the whole run (and after its summary line).
-Refusal refuse_unwritable_outputs(const CLI::App& cmd);
+Refusal refuse_unwritable_outputs(const Subcommand& cmd);
 
 // The error line for a failure of `cmd`: the message as it is when it names
 // one of the command's paths, otherwise prefixed with the input path
 // ("quality: cell 0 is not a triangle" -> "<file>: quality: cell 0 ..."), so
 // every line says which file it concerns.
-std::string error_line(const CLI::App* cmd, const std::string& message);
+std::string error_line(const Subcommand* cmd, const std::string& message);
 
 // A subcommand: set up its options on `app`, and the function run when chosen.
 struct Command {
   std::string name;
   std::string description;
-  std::function<std::function<int()>(CLI::App&)> setup;
+  std::function<std::function<int()>(Subcommand&)> setup;
 };
 
 std::vector<Command>& registry();
 
 // A subcommand made of its options struct and two functions: `add_options`
-// declares the options on the CLI11 app, `run` gets them once parsed and
+// declares the options on the subcommand, `run` gets them once parsed and
 // returns the exit code.
 template <class Options>
-Command make_command(std::string name, std::string description, void (*add_options)(CLI::App&, Options&),
+Command make_command(std::string name, std::string description, void (*add_options)(Subcommand&, Options&),
                      int (*run)(const Options&)) {
-  return Command{std::move(name), std::move(description), [add_options, run](CLI::App& cmd) -> std::function<int()> {
+  return Command{std::move(name), std::move(description), [add_options, run](Subcommand& cmd) -> std::function<int()> {
                    auto options = std::make_shared<Options>();
                    add_options(cmd, *options);
                    return [options, run] { return run(*options); };
@@ -180,9 +179,9 @@ class CommandRun {
 // cmd.description() and the options): when chosen, `run` gets the parsed
 // options and a CommandRun. Its --backend is `run`'s to honour.
 template <class Options>
-Command make_run_command(std::string name, void (*add_options)(CLI::App&, Options&),
+Command make_run_command(std::string name, void (*add_options)(Subcommand&, Options&),
                          int (*run)(const Options&, CommandRun&)) {
-  return Command{std::move(name), "", [add_options, run](CLI::App& cmd) -> std::function<int()> {
+  return Command{std::move(name), "", [add_options, run](Subcommand& cmd) -> std::function<int()> {
                    auto options = std::make_shared<Options>();
                    add_options(cmd, *options);
                    return [options, run] {
@@ -195,9 +194,9 @@ Command make_run_command(std::string name, void (*add_options)(CLI::App&, Option
 // A subcommand with no GPU path, as make_run_command, but --backend other
 // than cpu is refused naming `what` (require_cpu_backend) before `run`.
 template <class Options>
-Command make_cpu_command(std::string name, const char* what, void (*add_options)(CLI::App&, Options&),
+Command make_cpu_command(std::string name, const char* what, void (*add_options)(Subcommand&, Options&),
                          int (*run)(const Options&, CommandRun&)) {
-  return Command{std::move(name), "", [what, add_options, run](CLI::App& cmd) -> std::function<int()> {
+  return Command{std::move(name), "", [what, add_options, run](Subcommand& cmd) -> std::function<int()> {
                    auto options = std::make_shared<Options>();
                    add_options(cmd, *options);
                    return [options, what, run] {

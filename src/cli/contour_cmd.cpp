@@ -281,7 +281,7 @@ int run_contour(const ContourCli& o) {
   return finish_contour(o, opt, result, threads, timer, progress);
 }
 
-void add_contour_options(CLI::App& cmd, ContourCli& o) {
+void add_contour_options(Subcommand& cmd, ContourCli& o) {
   cmd.add_option("input", o.input,
                  "volume: " + io::accepted_volumes(false) + "; or a tetrahedral grid: " +
                      io::extensions_of(io::DataKind::Grid, false, ", ") + " (UNSTRUCTURED_GRID)")

@@ -48,7 +48,7 @@ struct ConvertCli {
   CommonOptions common;
 };
 
-void add_convert_options(CLI::App& cmd, ConvertCli& o) {
+void add_convert_options(Subcommand& cmd, ConvertCli& o) {
   using io::DataKind;
   cmd.add_option("input", o.input,
                  "unstructured grid (" + io::extensions_of(DataKind::Grid, false) + "), surface mesh (" +

@@ -18,7 +18,7 @@ struct DualCli {
   CommonOptions common;
 };
 
-void add_dual_options(CLI::App& cmd, DualCli& o) {
+void add_dual_options(Subcommand& cmd, DualCli& o) {
   cmd.description("the dual of a polygon surface: a polygon per point through the centroids of its cells");
   cmd.add_option("input", o.input, "polygon surface (" + io::extensions_of(io::DataKind::Surface, false) + ")")
       ->required();

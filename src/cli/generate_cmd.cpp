@@ -15,10 +15,10 @@ struct GenerateOptions {
   CommonOptions common;
 };
 
-void add_generate_options(CLI::App& cmd, GenerateOptions& o) {
+void add_generate_options(Subcommand& cmd, GenerateOptions& o) {
   cmd.description("write a built-in dataset: `sphere` (Spherical Distance field, float32, size^3)");
-  cmd.add_option("dataset", o.dataset, "dataset name")->required()->check(CLI::IsMember({"sphere"}));
-  cmd.add_option("--size,-n", o.size, "points along each axis")->check(CLI::Range(2LL, 1LL << 20));
+  cmd.add_option("dataset", o.dataset, "dataset name")->required()->check(member_of({"sphere"}));
+  cmd.add_option("--size,-n", o.size, "points along each axis")->check(in_range(2LL, 1LL << 20));
   cmd.add_option("-o,--output", o.output, "output volume (" + io::accepted_volumes(true) + ")")->required();
   add_common_options(cmd, o.common);
 }

@@ -19,7 +19,7 @@ struct InfoCli {
   std::string report_path;
 };
 
-void add_info_options(CLI::App& cmd, InfoCli& o) {
+void add_info_options(Subcommand& cmd, InfoCli& o) {
   cmd.add_option("file", o.input,
                  "volume (" + volume_inputs() + "), surface mesh (" +
                      io::extensions_of(io::DataKind::Surface, false) + ") or unstructured grid (" +

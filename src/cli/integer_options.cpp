@@ -31,15 +31,15 @@ std::string integer_text_error(std::string& text, bool is_unsigned) {
   return {};  // not a number at all: CLI11 says so
 }
 
-void refuse_out_of_range_integers(CLI::App& cmd) {
-  for (CLI::Option* opt : cmd.get_options()) {
-    const std::string type = opt->get_type_name();
+void refuse_out_of_range_integers(Subcommand& cmd) {
+  for (Option& opt : cmd.options()) {
+    const std::string type = opt.get_type_name();
     const std::string base = type.substr(0, type.find(':'));
     if (base != "INT" && base != "UINT") continue;
     const bool is_unsigned = base == "UINT";
     // A transform (checks may not rewrite the text), run before the
     // option's own checks; no description: its help keeps its type as it was.
-    opt->transform(CLI::Validator([is_unsigned](std::string& text) { return integer_text_error(text, is_unsigned); }, ""));
+    opt.transform(text_check([is_unsigned](std::string& text) { return integer_text_error(text, is_unsigned); }, ""));
   }
 }
 

@@ -4,9 +4,9 @@
 // one (`--labels 99999999999999999999` ran as 9223372036854775807), a
 // negative value of an unsigned option wrapped around, and a leading zero
 // read as octal (`--smooth 010` ran 8 iterations).
-#include <CLI/CLI.hpp>
-
 #include <string>
+
+#include "subcommand.hpp"
 
 namespace keymesh::cli {
 
@@ -14,7 +14,7 @@ namespace keymesh::cli {
 // outside the 64-bit range, or negative for an unsigned option, is a usage
 // error naming the value as typed; leading zeros are dropped (decimal).
 // Narrower types keep CLI11's own range check.
-void refuse_out_of_range_integers(CLI::App& cmd);
+void refuse_out_of_range_integers(Subcommand& cmd);
 
 // The check itself: "" when `text` may go on to CLI11 (rewritten without
 // leading zeros), otherwise the reason.

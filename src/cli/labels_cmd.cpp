@@ -46,7 +46,7 @@ struct LabelsCli {
   bool assemble = false;
   std::string update;
   std::string label_names;
-  std::vector<CLI::Option*> precomputed_only;  // refused without --format precomputed
+  std::vector<Option*> precomputed_only;  // refused without --format precomputed
 };
 
 LabelsJob job_of(const LabelsCli& o) {
@@ -114,7 +114,7 @@ int check_precomputed(const LabelsCli& o, LabelsJob& job) {
     return 2;
   };
   if (o.format.empty()) {
-    for (const CLI::Option* opt : o.precomputed_only)
+    for (const Option* opt : o.precomputed_only)
       if (opt->count() > 0) return refuse(opt->get_name() + " needs --format precomputed");
     return 0;
   }
@@ -270,31 +270,31 @@ void write_labels_outputs(const LabelsJob& job, const SurfaceMesh& mesh, const g
 
 namespace {
 
-void add_precomputed_options(CLI::App& cmd, LabelsCli& o) {
+void add_precomputed_options(Subcommand& cmd, LabelsCli& o) {
   cmd.add_option("--format", o.format,
                  "output format: omitted, a mesh file named by -o's extension; precomputed: -o is a directory of "
                  "Neuroglancer multi-resolution meshes (neuroglancer_multilod_draco), one segment per label (its "
                  "closed surface, as --per-label), cut into chunks with --lods levels of detail; DIR/chunks keeps "
                  "every chunk's pieces for --chunk tasks, --assemble and --update")
-      ->check(CLI::IsMember({"precomputed"}));
+      ->check(member_of({"precomputed"}));
   o.precomputed_only = {
       cmd.add_option("--lods", o.lods,
                      "levels of detail (default 3): level k merges each chunk's inner points to the grid of spacing "
                      "2^k (points on its faces kept as they are, so neighbouring chunks agree on them), splitting "
                      "back merges whose triangles would cross")
-          ->check(CLI::Range(1, 20)),
+          ->check(in_range(1, 20)),
       cmd.add_option("--chunk-shape", o.chunk_shape,
                      "samples per lod-0 chunk along x y z (default 32 32 32, at least 2); chunk (i, j, k) covers "
                      "sample coordinates -1 + (i, j, k) * shape to -1 + (i + 1, j + 1, k + 1) * shape")
           ->expected(3)
-          ->check(CLI::Range(2LL, 1LL << 20)),
+          ->check(in_range(2LL, 1LL << 20)),
       cmd.add_flag("--sharded", o.sharded,
                    "the sharded layout (neuroglancer_uint64_sharded_v1): a few files for many segments"),
       cmd.add_option("--chunk", o.chunk,
                      "a chunk task: mesh chunk I J K only (from its box and a halo of samples around it) into "
                      "DIR/chunks; run --assemble once every chunk is done (the output equals one call's)")
           ->expected(3)
-          ->check(CLI::NonNegativeNumber),
+          ->check(non_negative()),
       cmd.add_flag("--assemble", o.assemble,
                    "the final step after the --chunk tasks: write DIR's meshes from every chunk's pieces in DIR/chunks"),
       cmd.add_option("--update", o.update,
@@ -308,7 +308,7 @@ void add_precomputed_options(CLI::App& cmd, LabelsCli& o) {
                      "MRIcron's atlases ship)")};
 }
 
-void add_labels_options(CLI::App& cmd, LabelsCli& o) {
+void add_labels_options(Subcommand& cmd, LabelsCli& o) {
   cmd.description("surfaces of a label map (segmentation): surface nets or discrete marching cubes, welded by keys");
   cmd.add_option("input", o.input,
                  "integer volume (uint8 int8 uint16 int16 int32 uint32 int64 uint64): " + io::accepted_volumes(false))
@@ -334,9 +334,9 @@ void add_labels_options(CLI::App& cmd, LabelsCli& o) {
   cmd.add_option("--smooth", o.smooth,
                  "smoothing iterations (default 16; 0 = off): constrained to each point's cell for surface nets, "
                  "Taubin for discrete-mc")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   cmd.add_option("--relaxation", o.relaxation, "smoothing relaxation factor in (0, 1] (default 0.5)")
-      ->check(CLI::Range(1e-9, 1.0));
+      ->check(in_range(1e-9, 1.0));
   cmd.add_flag("--coarsen", o.coarsen,
                "after smoothing, merge the points of each 2x2x2 block of cells (surfacenets) or nearest grid "
                "point (discrete-mc), averaging positions; faces that collapse are dropped, label pairs kept; "

@@ -4,6 +4,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <deque>
 #include <exception>
 #include <new>
 #include <iostream>
@@ -21,6 +22,7 @@ KEYMESH_REEXEC_WITH_HUGE_PAGES_AT_START();
 namespace {
 
 namespace dist = keymesh::distributed;
+using keymesh::cli::Subcommand;
 
 // Under mpirun every rank parses and checks the same command line alike:
 // what they would all say (usage errors, help) is said by rank 0 alone.
@@ -29,7 +31,7 @@ bool speaks() { return dist::launched_rank() == 0; }
 // An error this rank met alone inside a collective step (no agreement
 // possible: the other ranks may wait for it in MPI forever): said once, by
 // this rank, then every rank ends (MPI_Abort, exit 1).
-int fail_alone(const CLI::App* cmd, const char* message) {
+int fail_alone(const Subcommand* cmd, const char* message) {
   std::fprintf(stderr, "keymesh: %s\n", keymesh::cli::error_line(cmd, message).c_str());
   if (dist::size() > 1) dist::abort_all(1);
   return 1;
@@ -37,7 +39,7 @@ int fail_alone(const CLI::App* cmd, const char* message) {
 
 // The refusals made before any work, agreed by the ranks: the lowest
 // refusing rank's line, said by rank 0, and its exit code on every rank.
-int refuse_before_work(const CLI::App& cmd) {
+int refuse_before_work(const Subcommand& cmd) {
   keymesh::cli::Refusal refusal = keymesh::cli::refuse_shared_paths(cmd);
   if (refusal.code == 0) refusal = keymesh::cli::refuse_unwritable_outputs(cmd);
   // The code (1 or 2) travels as the message's first character.
@@ -50,7 +52,7 @@ int refuse_before_work(const CLI::App& cmd) {
 // Runs the chosen command: its outputs appear only if it succeeds. One way
 // out for errors: one every rank holds (SharedError) is said by rank 0 and
 // every rank exits 1; any other ends the run from the rank that met it.
-int run_command(const CLI::App* cmd, const std::function<int()>& run) {
+int run_command(const Subcommand* cmd, const std::function<int()>& run) {
   try {
     // Only the voxel contour and labels are distributed; the other
     // operations would each run whole on every rank and race on the output.
@@ -96,11 +98,12 @@ int main(int argc, char** argv) {
                "by keying every generated element on the input element that produced it."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "keymesh 0.1.0");
-  std::vector<std::pair<CLI::App*, std::function<int()>>> runners;
+  std::deque<Subcommand> subs;  // each subcommand's options, declared by its file
+  std::vector<std::pair<Subcommand*, std::function<int()>>> runners;
   for (auto& command : keymesh::cli::registry()) {
-    CLI::App* sub = app.add_subcommand(command.name, command.description);
-    runners.emplace_back(sub, command.setup(*sub));
-    keymesh::cli::refuse_out_of_range_integers(*sub);
+    Subcommand& sub = subs.emplace_back(*app.add_subcommand(command.name, command.description));
+    runners.emplace_back(&sub, command.setup(sub));
+    keymesh::cli::refuse_out_of_range_integers(sub);
   }
   std::ostream silent(nullptr);  // the other ranks' copy of rank 0's usage lines
   std::ostream& out = speaks() ? std::cout : silent;

@@ -109,7 +109,7 @@ int run_pipeline(const PipelineCli& o) {
   return 0;
 }
 
-void add_pipeline_options(CLI::App& cmd, PipelineCli& o) {
+void add_pipeline_options(Subcommand& cmd, PipelineCli& o) {
   cmd.add_option("input", o.input,
                  "volume (" + volume_inputs() + ") or tet grid (" +
                      io::extensions_of(io::DataKind::Grid, false) + ")")
@@ -121,7 +121,7 @@ void add_pipeline_options(CLI::App& cmd, PipelineCli& o) {
   cmd.add_option("--iso", o.isovalues, "isovalue (repeat for several)")->required()->expected(1, -1);
   cmd.add_flag("--coarsen", o.coarsen, "merge points by nearest grid point during the contour");
   cmd.add_flag("--curvature", o.curvature, "mean curvature from the volume (voxel grids), carried along");
-  cmd.add_option("--subdivide", o.subdivide, "levels of 1->4 subdivision")->check(CLI::Range(0, 6));
+  cmd.add_option("--subdivide", o.subdivide, "levels of 1->4 subdivision")->check(in_range(0, 6));
   cmd.add_option("--scheme", o.scheme, "subdivision positions: linear or bezier")
       ->check(one_of<generate::SubdivideScheme>());
   cmd.add_option("--normals", o.normals, "none, gradient or average (bezier needs normals)")

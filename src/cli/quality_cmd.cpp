@@ -16,7 +16,7 @@ struct QualityCli {
   CommonOptions common;
 };
 
-void add_quality_options(CLI::App& cmd, QualityCli& o) {
+void add_quality_options(Subcommand& cmd, QualityCli& o) {
   cmd.description("triangle quality Q = 4 sqrt(3) area / sum of squared edge lengths: min, median, mean, histogram");
   cmd.add_option("mesh", o.input, "triangle mesh (" + io::extensions_of(io::DataKind::Surface, false) + ")")->required();
   add_common_options(cmd, o.common);

@@ -4,10 +4,10 @@
 
 namespace keymesh::cli {
 
-void RawInputCli::add_options(CLI::App& cmd, const char* types) {
+void RawInputCli::add_options(Subcommand& cmd, const char* types) {
   auto* d = cmd.add_option("--dims", dims, "raw input: points along x y z")->expected(3);
   cmd.add_option("--type", type, std::string("raw input: ") + types)
-      ->check(CLI::Validator(
+      ->check(text_check(
           [](std::string& text) -> std::string {
             try {
               parse_scalar_type(text);
@@ -20,8 +20,8 @@ void RawInputCli::add_options(CLI::App& cmd, const char* types) {
       ->needs(d);
   cmd.add_option("--spacing", spacing, "raw input: voxel spacing x y z")->expected(3)->needs(d);
   cmd.add_option("--origin", origin, "raw input: origin x y z")->expected(3)->needs(d);
-  cmd.add_option("--endian", endian, "raw input: little or big")->check(CLI::IsMember({"little", "big"}))->needs(d);
-  cmd.add_option("--header-bytes", header_bytes, "raw input: bytes to skip")->needs(d)->check(CLI::NonNegativeNumber);
+  cmd.add_option("--endian", endian, "raw input: little or big")->check(member_of({"little", "big"}))->needs(d);
+  cmd.add_option("--header-bytes", header_bytes, "raw input: bytes to skip")->needs(d)->check(non_negative());
 }
 
 io::RawOptions RawInputCli::options() const {

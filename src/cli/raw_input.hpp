@@ -2,12 +2,11 @@
 // The options that describe a headerless .raw volume (--dims, --type,
 // --spacing, --origin, --endian, --header-bytes), shared by the subcommands
 // that read volumes.
-#include <CLI/CLI.hpp>
-
 #include <string>
 #include <vector>
 
 #include "keymesh/io/volume_io.hpp"
+#include "subcommand.hpp"
 
 namespace keymesh::cli {
 
@@ -20,7 +19,7 @@ struct RawInputCli {
 
   // Adds the six options to `cmd`; every one but --dims needs --dims.
   // `types` lists the accepted sample types in --type's help.
-  void add_options(CLI::App& cmd, const char* types = "uint8 int8 uint16 int16 int32 float32 float64");
+  void add_options(Subcommand& cmd, const char* types = "uint8 int8 uint16 int16 int32 float32 float64");
   // True when --dims was given: the input is raw.
   bool given() const { return !dims.empty(); }
   // The reader's description of the raw file (call only when given()).

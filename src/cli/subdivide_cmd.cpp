@@ -25,14 +25,14 @@ struct SubdivideCli {
   CommonOptions common;
 };
 
-void add_subdivide_options(CLI::App& cmd, SubdivideCli& o) {
+void add_subdivide_options(Subcommand& cmd, SubdivideCli& o) {
   cmd.description("split triangles 1->4 or tetrahedra 1->8, new points keyed by the parent edge");
   cmd.add_option("input", o.input,
                  "triangle surface (" + io::extensions_of(io::DataKind::Surface, false) + ") or tet grid (" +
                      io::extensions_of(io::DataKind::Grid, false) + ")")
       ->required();
   cmd.add_option("-o,--output", o.output, "output of the same kind")->required();
-  cmd.add_option("--levels,-k", o.levels, "subdivision levels")->check(CLI::Range(0, 8));
+  cmd.add_option("--levels,-k", o.levels, "subdivision levels")->check(in_range(0, 8));
   cmd.add_option("--scheme", o.scheme,
                  "linear (edge midpoints) or bezier (PN triangles from the point normals; surfaces only)")
       ->check(one_of<generate::SubdivideScheme>());

@@ -20,7 +20,7 @@ struct TetrahedralizeCli {
   CommonOptions common;
 };
 
-void add_tetrahedralize_options(CLI::App& cmd, TetrahedralizeCli& o) {
+void add_tetrahedralize_options(Subcommand& cmd, TetrahedralizeCli& o) {
   cmd.description("split the voxels of a volume (or the hexahedra of a " +
                   io::extensions_of(io::DataKind::Grid, false, "/") + ") into tetrahedra");
   cmd.add_option("input", o.input,
@@ -32,7 +32,7 @@ void add_tetrahedralize_options(CLI::App& cmd, TetrahedralizeCli& o) {
   cmd.add_option("--scheme", o.scheme,
                  "5: five tets per hexahedron, alternating so neighbouring faces match (the minimal split); "
                  "24: face-centred, 24 tets per hexahedron from its centre and its face centres")
-      ->check(CLI::IsMember({5, 24}));
+      ->check(member_of({5, 24}));
   cmd.add_option("--weld", o.weld,
                  "scheme 24: face centres shared by KEY-REDUCE on face keys (keyreduce) or by coordinates "
                  "(vertexweld, the baseline)")
