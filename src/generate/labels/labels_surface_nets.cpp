@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -139,12 +140,21 @@ class EdgePolygons {
 
   // Visits the edges of row r whose polygons are written:
   // f(i, j, k, axis, lo_end_label, hi_end_label), in box coordinates.
+  // Runs of kRun points that start no such edge are stepped over at once
+  // (quiet_run); the others visited one by one, in the same order.
   template <class F>
   void visit_row(Id r, F&& f) const {
     const Id j = r % box_.dims[1], k = krange_.first + r / box_.dims[1];
     const Id row_first = vol_.at(box_.lo[0], box_.lo[1] + j, box_.lo[2] + k);
     const bool y_ok = j + 1 < box_.dims[1], z_ok = k + 1 < box_.dims[2];
+    const LabelIndex* row = vol_.row(row_first);
+    const LabelIndex* y_row = y_ok ? row + pstride_[1] : row;  // no edge along y or z: the row itself
+    const LabelIndex* z_row = z_ok ? row + pstride_[2] : row;
     for (Id i = 0; i < box_.dims[0]; ++i) {
+      if (i % kRun == 0 && i + kRun < box_.dims[0] && quiet_run(row + i, y_row + i, z_row + i)) {
+        i += kRun - 1;
+        continue;
+      }
       const Id p = row_first + i;
       const LabelIndex a = label(p);
       const LabelIndex ends[3] = {i + 1 < box_.dims[0] ? label(p + 1) : a, y_ok ? label(p + pstride_[1]) : a,
@@ -217,6 +227,28 @@ class EdgePolygons {
   };
 
   LabelIndex label(Id p) const { return vol_.label(p); }
+
+  // Whether none of the kRun points from `row` on starts an edge visit_row
+  // visits (the row needs kRun + 1 points): with `only`, none of them nor
+  // their ends along x, y, z has that label; else each equals its three
+  // ends. Eight labels a comparison (GCC vector extensions: SSE2 lanes on
+  // x86-64, plain code elsewhere).
+  static constexpr Id kRun = 8;
+  bool quiet_run(const LabelIndex* row, const LabelIndex* y_row, const LabelIndex* z_row) const {
+    using Lanes = LabelIndex __attribute__((vector_size(kRun * sizeof(LabelIndex))));
+    Lanes a, x, y, z;
+    std::memcpy(&a, row, sizeof a);
+    std::memcpy(&x, row + 1, sizeof x);
+    std::memcpy(&y, y_row, sizeof y);
+    std::memcpy(&z, z_row, sizeof z);
+    const Lanes l = Lanes{} + static_cast<LabelIndex>(only_);
+    const auto hit = only_ >= 0 ? (a == l) | (x == l) | (y == l) | (z == l) : (a != x) | (a != y) | (a != z);
+    std::uint64_t words[sizeof hit / sizeof(std::uint64_t)];
+    std::memcpy(words, &hit, sizeof hit);
+    std::uint64_t any = 0;
+    for (std::uint64_t w : words) any |= w;
+    return any == 0;
+  }
 
   // The polygon of an edge of label `only`'s surface: the loop keys of the
   // four cells around it, with a face point after cell m where the face to
