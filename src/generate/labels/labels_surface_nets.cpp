@@ -259,11 +259,21 @@ class EdgePolygons {
     const Id lp[3] = {i, j, k};  // p in box coordinates
     const Id p = vol_.at(box_.lo[0] + i, box_.lo[1] + j, box_.lo[2] + k);
     const auto l = static_cast<LabelIndex>(only_);
-    unsigned cube[4];
+    // The faces between the cells that may pinch; the cells' cases only
+    // where read (the corners written, or a face to check further).
+    Face faces[4];
+    bool ambiguous_face[4], any_ambiguous = false;
     for (int m = 0; m < 4; ++m) {
-      const Id first = p - kAround[m][0] * pstride_[u] - kAround[m][1] * pstride_[v];
-      cube[m] = corners_.case_of(first, l);
+      faces[m] = face_between(lp, axis, m);
+      ambiguous_face[m] = ambiguous(faces[m], axis);
+      any_ambiguous = any_ambiguous || ambiguous_face[m];
     }
+    unsigned cube[4] = {0, 0, 0, 0};
+    if (out || any_ambiguous)
+      for (int m = 0; m < 4; ++m) {
+        const Id first = p - kAround[m][0] * pstride_[u] - kAround[m][1] * pstride_[v];
+        cube[m] = corners_.case_of(first, l);
+      }
     int n = 0;
     for (int m = 0; m < 4; ++m) {
       const int corner0 = (kAround[m][0] << u) | (kAround[m][1] << v);
@@ -271,7 +281,8 @@ class EdgePolygons {
         out[n] = static_cast<K>(4 * (cell - kAround[m][0] * cstride_[u] - kAround[m][1] * cstride_[v]) +
                                 loops_.loop_of[cube[m]][loops_.edge_at[corner0][axis]]);
       ++n;
-      const Id face_key = face_point(lp, axis, a == l ? 0 : 1, m, cube);
+      if (!ambiguous_face[m]) continue;
+      const Id face_key = face_point(lp, faces[m], axis, a == l ? 0 : 1, m, cube);
       if (face_key < 0) continue;
       if (out) out[n] = static_cast<K>(face_key);
       ++n;
@@ -306,10 +317,9 @@ class EdgePolygons {
   }
 
   // The key of the face point after cell m of the edge at lp (`up`: which
-  // end carries the label), or -1 where the face does not pinch.
-  Id face_point(const Id lp[3], int axis, int up, int m, const unsigned cube[4]) const {
-    const Face face = face_between(lp, axis, m);
-    if (!ambiguous(face, axis)) return -1;
+  // end carries the label) on `face`, an ambiguous one, or -1 where the
+  // face does not pinch.
+  Id face_point(const Id lp[3], const Face& face, int axis, int up, int m, const unsigned cube[4]) const {
     // The label's corner of this edge on the face, and the other one.
     const int ow_here = static_cast<int>(lp[face.w] - face.f[face.w]);
     if (!arcs_join(lp, face, axis, ow_here, m, cube)) return -1;
