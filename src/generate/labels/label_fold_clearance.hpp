@@ -38,9 +38,11 @@ class FoldClearance {
 };
 
 // The bound for one triangle (exposed for its test): its corners' present
-// positions a, b, c, their moves' lengths ra, rb, rc, its normal and least,
-// and `size`, a bound on every coordinate's magnitude, present or candidate.
-bool triangle_clear(const double* a, const double* b, const double* c, double ra, double rb, double rc,
-                    const double* normal, double least, double size);
+// and candidate positions, their moves' lengths |to - from|, its normal and
+// least orientation, and the rounding slack for coordinates of magnitude at
+// most `size` (clearance_slack).
+bool triangle_clear(const double* const from[3], const double* const to[3], const double reach[3], const double* normal,
+                    double least, double slack);
+double clearance_slack(double size);
 
 }  // namespace keymesh::generate::detail

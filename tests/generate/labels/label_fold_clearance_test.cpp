@@ -17,6 +17,7 @@
 
 using namespace keymesh;
 using generate::detail::FoldClearance;
+using generate::detail::clearance_slack;
 using generate::detail::triangle_clear;
 using generate::label_kernels::orientation;
 
@@ -92,7 +93,9 @@ TEST(LabelFoldClearance, ClearedTrianglesPassEveryFirstTryOrientation) {
     // anywhere below twice the area (loose).
     const double off = std::pow(10.0, -17.0 + 4.5 * (unit(rng) + 1.0)) * (1.0 + size);
     const double least = tight ? truth + (unit(rng) < 0 ? -off : off) : twice_area * (unit(rng) + 1.0) / 2.0;
-    if (triangle_clear(pos[0], pos[1], pos[2], reach[0], reach[1], reach[2], n, least, size)) {
+    const double* from[3] = {pos[0], pos[1], pos[2]};
+    const double* to[3] = {cand[0], cand[1], cand[2]};
+    if (triangle_clear(from, to, reach, n, least, clearance_slack(size))) {
       ++cleared;
       ASSERT_GE(truth, least) << "case " << i;
     } else {
