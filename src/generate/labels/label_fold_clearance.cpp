@@ -39,6 +39,7 @@
 #include "label_fold_clearance.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "keymesh/parallel/for_each.hpp"
@@ -81,6 +82,7 @@ bool triangle_clear(const double* const from[3], const double* const to[3], cons
 void FoldClearance::update(const ClearanceInput& in) {
   reach_.resize(static_cast<std::size_t>(in.points));
   clear_.resize(static_cast<std::size_t>(in.triangles));
+  clear_point_.assign(static_cast<std::size_t>(in.points), 1);
   // Each point's move length, and the largest coordinate magnitude (per
   // chunk, then over the chunks: the same for any thread count).
   const int chunks = parallel::chunk_count(in.points, 4096);
@@ -104,7 +106,11 @@ void FoldClearance::update(const ClearanceInput& in) {
     const double* to[3] = {in.candidate + 3 * static_cast<Id>(c[0]), in.candidate + 3 * static_cast<Id>(c[1]),
                            in.candidate + 3 * static_cast<Id>(c[2])};
     const double reach[3] = {reach_[c[0]], reach_[c[1]], reach_[c[2]]};
-    clear_[static_cast<std::size_t>(t)] = clear_bound(from, to, reach, in.normal + 3 * t, in.least[t], slack);
+    const bool clear = clear_bound(from, to, reach, in.normal + 3 * t, in.least[t], slack);
+    clear_[static_cast<std::size_t>(t)] = clear;
+    // A corner may be another chunk's too: every write is the same 0.
+    if (!clear)
+      for (int k = 0; k < 3; ++k) std::atomic_ref<std::uint8_t>(clear_point_[c[k]]).store(0, std::memory_order_relaxed);
   }, 1024);
 }
 

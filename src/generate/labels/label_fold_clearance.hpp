@@ -31,10 +31,13 @@ class FoldClearance {
   // proven (GuardStep then tests it). Sound for any finite input.
   void update(const ClearanceInput& in);
   const std::uint8_t* clear() const { return clear_.data(); }
+  // Per point: 1 where clear() holds for every triangle of the point.
+  const std::uint8_t* clear_point() const { return clear_point_.data(); }
 
  private:
-  std::vector<double> reach_;        // per point: |candidate - x|
-  std::vector<std::uint8_t> clear_;  // per triangle
+  std::vector<double> reach_;              // per point: |candidate - x|
+  std::vector<std::uint8_t> clear_;        // per triangle
+  std::vector<std::uint8_t> clear_point_;  // per point
 };
 
 // The bound for one triangle (exposed for its test): its corners' present

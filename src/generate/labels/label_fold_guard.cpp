@@ -66,7 +66,7 @@ void FoldGuard::limit(const std::vector<double>& x, const std::vector<double>& c
                      static_cast<Id>(least_.size())});
   const label_kernels::GuardStep step{corners_.data(), offsets_.data(), point_corners_.data(), normal_.data(),
                                       least_.data(), x.data(), candidate.data(), out.data(), shortened_.data(),
-                                      clearance_.clear()};
+                                      clearance_.clear(), clearance_.clear_point()};
   parallel::for_each(points, [&](Id p) { step(p); }, 1024);
 }
 

@@ -108,7 +108,8 @@ TEST(LabelFoldClearance, ClearedTrianglesPassEveryFirstTryOrientation) {
 
 // A jittered sheet of 2 x 40 x 40 triangles; GuardStep with and without the
 // clearance, over moves from a thousandth to most of a side, several steps
-// each: the same positions bit for bit and the same shortened counts.
+// each: the same positions bit for bit and the same shortened counts; a
+// point is clear where all its triangles are.
 TEST(LabelFoldClearance, GuardStepMovesEveryPointAsWithout) {
   constexpr int kSide = 41;
   const Id points = kSide * kSide, triangles = 2 * (kSide - 1) * (kSide - 1);
@@ -141,7 +142,7 @@ TEST(LabelFoldClearance, GuardStepMovesEveryPointAsWithout) {
   std::vector<std::uint32_t> point_corners(corners.size());
   std::vector<Id> fill(offsets.begin(), offsets.end() - 1);
   for (std::uint32_t c = 0; c < corners.size(); ++c) point_corners[fill[corners[c]]++] = c;
-  int cleared = 0, tested = 0, shortened = 0;
+  int cleared = 0, tested = 0, shortened = 0, points_clear = 0;
   for (double scale : {1e-3, 1e-2, 0.1, 0.3, 0.7}) {
     std::vector<double> x(start.begin(), start.end()), candidate(x.size()), plain(x.size()), fast(x.size());
     for (int step = 0; step < 4; ++step) {
@@ -153,11 +154,18 @@ TEST(LabelFoldClearance, GuardStepMovesEveryPointAsWithout) {
       for (Id p = 0; p < points; ++p) guard(p);
       FoldClearance clearance;
       clearance.update({corners.data(), normal.data(), least.data(), x.data(), candidate.data(), points, triangles});
-      guard.clear = clearance.clear(), guard.out = fast.data(), guard.shortened = count_fast.data();
+      guard.clear = clearance.clear(), guard.clear_point = clearance.clear_point();
+      guard.out = fast.data(), guard.shortened = count_fast.data();
       for (Id p = 0; p < points; ++p) guard(p);
       ASSERT_EQ(0, std::memcmp(plain.data(), fast.data(), plain.size() * sizeof(double))) << scale << " " << step;
       ASSERT_EQ(count_plain, count_fast) << scale << " " << step;
       for (Id t = 0; t < triangles; ++t) (clearance.clear()[t] ? cleared : tested) += 1;
+      for (Id p = 0; p < points; ++p) {
+        bool all = true;
+        for (Id j = offsets[p]; j < offsets[p + 1]; ++j) all = all && clearance.clear()[point_corners[j] / 3];
+        ASSERT_EQ(all, clearance.clear_point()[p] == 1) << "point " << p;
+        points_clear += all;
+      }
       for (std::uint32_t c : count_plain) shortened += static_cast<int>(c);
       x.swap(plain);
     }
@@ -165,4 +173,5 @@ TEST(LabelFoldClearance, GuardStepMovesEveryPointAsWithout) {
   EXPECT_GT(cleared, 1000);
   EXPECT_GT(tested, 1000);
   EXPECT_GT(shortened, 100);
+  EXPECT_GT(points_clear, 1000);
 }

@@ -151,9 +151,11 @@ struct GuardFrame {
 // least at its `least` with each other corner at either end of that
 // corner's own move (D is linear in each corner, so the four combinations
 // bound it whatever fraction the neighbours take), else 0 (p stays). A move
-// shortened or refused counts in shortened[p]. `clear` (optional, the host's
-// FoldClearance, label_fold_clearance.hpp): per triangle, 1 where the first
-// try's test is proven to pass, so it is skipped there; the same decisions.
+// shortened or refused counts in shortened[p]. `clear` and `clear_point`
+// (optional, the host's FoldClearance, label_fold_clearance.hpp): per
+// triangle, 1 where the first try's test is proven to pass, so it is skipped
+// there, and per point, 1 where that holds for all its triangles; the same
+// decisions.
 struct GuardStep {
   const std::uint32_t* corners;        // 3 per triangle
   const Id* offsets;                   // per point + 1, into point_corners
@@ -165,7 +167,9 @@ struct GuardStep {
   double* out;
   std::uint32_t* shortened;
   const std::uint8_t* clear = nullptr;
+  const std::uint8_t* clear_point = nullptr;
   KEYMESH_HD bool keeps(Id p, const double at[3], bool first_try) const {
+    if (first_try && clear_point && clear_point[p]) return true;
     for (Id j = offsets[p]; j < offsets[p + 1]; ++j) {
       const Id t = point_corners[j] / 3, k = point_corners[j] % 3;
       if (first_try && clear && clear[t]) continue;
