@@ -65,7 +65,8 @@ inline bool clear_bound(const double* const from[3], const double* const to[3], 
   for (int k = 0; k < 3; ++k)
     for (int x = 0; x < 3; ++x) d[k][x] = to[k][x] - from[k][x];
   const double ga = triple(d[0], cb, n), gb = triple(d[1], ac, n), gc = triple(ab, d[2], n);
-  const double bound = triple(ab, ac, n) + std::fmin(ga, 0.0) + std::fmin(gb, 0.0) + std::fmin(gc, 0.0) -
+  // Ternaries, not std::fmin: a library call here would spill every register.
+  const double bound = triple(ab, ac, n) + (ga < 0 ? ga : 0.0) + (gb < 0 ? gb : 0.0) + (gc < 0 ? gc : 0.0) -
                        (reach[0] * reach[1] + reach[1] * reach[2] + reach[2] * reach[0]);
   return bound >= least + slack;
 }
@@ -94,7 +95,7 @@ void FoldClearance::update(const ClearanceInput& in) {
       const double* to = in.candidate + 3 * p;
       const double d[3] = {to[0] - from[0], to[1] - from[1], to[2] - from[2]};
       reach_[static_cast<std::size_t>(p)] = length(d);
-      for (int a = 0; a < 3; ++a) m = std::fmax(m, std::fmax(std::fabs(from[a]), std::fabs(to[a])));
+      for (int a = 0; a < 3; ++a) m = std::max({m, std::fabs(from[a]), std::fabs(to[a])});
     }
     largest[static_cast<std::size_t>(chunk)] = m;
   });
