@@ -7,6 +7,7 @@
 
 #include "keymesh/core/array.hpp"
 
+#include "label_fold_clearance.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {
@@ -32,6 +33,7 @@ class FoldGuard {
   std::vector<double> normal_;                // per triangle: its unsmoothed unit normal
   std::vector<double> least_;                 // per triangle: the least orientation allowed
   std::vector<std::uint32_t> shortened_;      // per point: its moves shortened or refused
+  FoldClearance clearance_;                   // per iteration: the triangles proven to keep
 };
 
 }  // namespace keymesh::generate::detail

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -139,12 +140,21 @@ class EdgePolygons {
 
   // Visits the edges of row r whose polygons are written:
   // f(i, j, k, axis, lo_end_label, hi_end_label), in box coordinates.
+  // Runs of kRun points that start no such edge are stepped over at once
+  // (quiet_run); the others visited one by one, in the same order.
   template <class F>
   void visit_row(Id r, F&& f) const {
     const Id j = r % box_.dims[1], k = krange_.first + r / box_.dims[1];
     const Id row_first = vol_.at(box_.lo[0], box_.lo[1] + j, box_.lo[2] + k);
     const bool y_ok = j + 1 < box_.dims[1], z_ok = k + 1 < box_.dims[2];
+    const LabelIndex* row = vol_.row(row_first);
+    const LabelIndex* y_row = y_ok ? row + pstride_[1] : row;  // no edge along y or z: the row itself
+    const LabelIndex* z_row = z_ok ? row + pstride_[2] : row;
     for (Id i = 0; i < box_.dims[0]; ++i) {
+      if (i % kRun == 0 && i + kRun < box_.dims[0] && quiet_run(row + i, y_row + i, z_row + i)) {
+        i += kRun - 1;
+        continue;
+      }
       const Id p = row_first + i;
       const LabelIndex a = label(p);
       const LabelIndex ends[3] = {i + 1 < box_.dims[0] ? label(p + 1) : a, y_ok ? label(p + pstride_[1]) : a,
@@ -218,6 +228,28 @@ class EdgePolygons {
 
   LabelIndex label(Id p) const { return vol_.label(p); }
 
+  // Whether none of the kRun points from `row` on starts an edge visit_row
+  // visits (the row needs kRun + 1 points): with `only`, none of them nor
+  // their ends along x, y, z has that label; else each equals its three
+  // ends. Eight labels a comparison (GCC vector extensions: SSE2 lanes on
+  // x86-64, plain code elsewhere).
+  static constexpr Id kRun = 8;
+  bool quiet_run(const LabelIndex* row, const LabelIndex* y_row, const LabelIndex* z_row) const {
+    using Lanes = LabelIndex __attribute__((vector_size(kRun * sizeof(LabelIndex))));
+    Lanes a, x, y, z;
+    std::memcpy(&a, row, sizeof a);
+    std::memcpy(&x, row + 1, sizeof x);
+    std::memcpy(&y, y_row, sizeof y);
+    std::memcpy(&z, z_row, sizeof z);
+    const Lanes l = Lanes{} + static_cast<LabelIndex>(only_);
+    const auto hit = only_ >= 0 ? (a == l) | (x == l) | (y == l) | (z == l) : (a != x) | (a != y) | (a != z);
+    std::uint64_t words[sizeof hit / sizeof(std::uint64_t)];
+    std::memcpy(words, &hit, sizeof hit);
+    std::uint64_t any = 0;
+    for (std::uint64_t w : words) any |= w;
+    return any == 0;
+  }
+
   // The polygon of an edge of label `only`'s surface: the loop keys of the
   // four cells around it, with a face point after cell m where the face to
   // cell m + 1 would pinch.
@@ -227,11 +259,21 @@ class EdgePolygons {
     const Id lp[3] = {i, j, k};  // p in box coordinates
     const Id p = vol_.at(box_.lo[0] + i, box_.lo[1] + j, box_.lo[2] + k);
     const auto l = static_cast<LabelIndex>(only_);
-    unsigned cube[4];
+    // The faces between the cells that may pinch; the cells' cases only
+    // where read (the corners written, or a face to check further).
+    Face faces[4];
+    bool ambiguous_face[4], any_ambiguous = false;
     for (int m = 0; m < 4; ++m) {
-      const Id first = p - kAround[m][0] * pstride_[u] - kAround[m][1] * pstride_[v];
-      cube[m] = corners_.case_of(first, l);
+      faces[m] = face_between(lp, axis, m);
+      ambiguous_face[m] = ambiguous(faces[m], axis);
+      any_ambiguous = any_ambiguous || ambiguous_face[m];
     }
+    unsigned cube[4] = {0, 0, 0, 0};
+    if (out || any_ambiguous)
+      for (int m = 0; m < 4; ++m) {
+        const Id first = p - kAround[m][0] * pstride_[u] - kAround[m][1] * pstride_[v];
+        cube[m] = corners_.case_of(first, l);
+      }
     int n = 0;
     for (int m = 0; m < 4; ++m) {
       const int corner0 = (kAround[m][0] << u) | (kAround[m][1] << v);
@@ -239,7 +281,8 @@ class EdgePolygons {
         out[n] = static_cast<K>(4 * (cell - kAround[m][0] * cstride_[u] - kAround[m][1] * cstride_[v]) +
                                 loops_.loop_of[cube[m]][loops_.edge_at[corner0][axis]]);
       ++n;
-      const Id face_key = face_point(lp, axis, a == l ? 0 : 1, m, cube);
+      if (!ambiguous_face[m]) continue;
+      const Id face_key = face_point(lp, faces[m], axis, a == l ? 0 : 1, m, cube);
       if (face_key < 0) continue;
       if (out) out[n] = static_cast<K>(face_key);
       ++n;
@@ -274,10 +317,9 @@ class EdgePolygons {
   }
 
   // The key of the face point after cell m of the edge at lp (`up`: which
-  // end carries the label), or -1 where the face does not pinch.
-  Id face_point(const Id lp[3], int axis, int up, int m, const unsigned cube[4]) const {
-    const Face face = face_between(lp, axis, m);
-    if (!ambiguous(face, axis)) return -1;
+  // end carries the label) on `face`, an ambiguous one, or -1 where the
+  // face does not pinch.
+  Id face_point(const Id lp[3], const Face& face, int axis, int up, int m, const unsigned cube[4]) const {
     // The label's corner of this edge on the face, and the other one.
     const int ow_here = static_cast<int>(lp[face.w] - face.f[face.w]);
     if (!arcs_join(lp, face, axis, ow_here, m, cube)) return -1;

@@ -151,7 +151,11 @@ struct GuardFrame {
 // least at its `least` with each other corner at either end of that
 // corner's own move (D is linear in each corner, so the four combinations
 // bound it whatever fraction the neighbours take), else 0 (p stays). A move
-// shortened or refused counts in shortened[p].
+// shortened or refused counts in shortened[p]. `clear` and `clear_point`
+// (optional, the host's FoldClearance, label_fold_clearance.hpp): per
+// triangle, 1 where the first try's test is proven to pass, so it is skipped
+// there, and per point, 1 where that holds for all its triangles; the same
+// decisions.
 struct GuardStep {
   const std::uint32_t* corners;        // 3 per triangle
   const Id* offsets;                   // per point + 1, into point_corners
@@ -162,9 +166,13 @@ struct GuardStep {
   const double* candidate;
   double* out;
   std::uint32_t* shortened;
-  KEYMESH_HD bool keeps(Id p, const double at[3]) const {
+  const std::uint8_t* clear = nullptr;
+  const std::uint8_t* clear_point = nullptr;
+  KEYMESH_HD bool keeps(Id p, const double at[3], bool first_try) const {
+    if (first_try && clear_point && clear_point[p]) return true;
     for (Id j = offsets[p]; j < offsets[p + 1]; ++j) {
       const Id t = point_corners[j] / 3, k = point_corners[j] % 3;
+      if (first_try && clear && clear[t]) continue;
       const Id q = corners[3 * t + (k + 1) % 3], r = corners[3 * t + (k + 2) % 3];
       const double* qs[2] = {x + 3 * q, candidate + 3 * q};
       const double* rs[2] = {x + 3 * r, candidate + 3 * r};
@@ -183,7 +191,7 @@ struct GuardStep {
       int tries = 0;
       for (double f = 1.0; tries < 4 && !kept; f *= 0.5, ++tries) {  // 1, 1/2, 1/4, 1/8: exact
         for (int a = 0; a < 3; ++a) at[a] = from[a] + f * (to[a] - from[a]);
-        kept = keeps(p, at);
+        kept = keeps(p, at, tries == 0);
         if (!kept)
           for (int a = 0; a < 3; ++a) at[a] = from[a];
       }
