@@ -108,7 +108,7 @@ py::dict write_whole(const py::object& volume, const py::object& spacing, const 
     check_volume_geometry(*grid, "labels_precomputed");
   } else {
     view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
-                             {"labels_precomputed", 1, "volume must be a 3-D numpy array or a keymesh.Volume"});
+                             {"labels_precomputed", 1, "volume must be a 3-D numpy array or a keymesh.Volume", true});
     grid = &view.grid;
   }
   ng::PieceCounts n;
@@ -170,7 +170,7 @@ py::dict write_chunk(const py::object& box_samples, const std::array<Id, 3>& who
   const ImageGrid header = whole_header(whole, spacing, origin);
   const generate::MultilodBox box = generate::multilod_chunk_box(whole, p.multilod, chunk);
   ArrayVolume view = view_array_volume(box_samples, py::none(), py::none(), VolumeOrder::Fortran,
-                                       {"labels_precomputed", 1, "a chunk's samples must be a 3-D numpy array"});
+                                       {"labels_precomputed", 1, "a chunk's samples must be a 3-D numpy array", true});
   if (view.grid.dims != box.dims)
     throw py::value_error("labels_precomputed: chunk " + std::to_string(chunk[0]) + " " + std::to_string(chunk[1]) +
                           " " + std::to_string(chunk[2]) + " needs its box's " + std::to_string(box.dims[0]) + " x " +
