@@ -89,6 +89,13 @@ bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b) {
     const int other = !b_shared[0] ? 0 : !b_shared[1] ? 1 : 2;
     if (orient3d(a[0], a[1], a[2], b[other]) != 0) return false;
   }
+  // When the corners one triangle does not share all lie strictly on one
+  // side of the other's plane, it meets that plane only in the shared
+  // corners (or their edge): no crossing. With one shared corner (a mesh's
+  // broad phase gives many such fan neighbours) this ends the test after two
+  // predicates.
+  const int b_free = static_cast<int>(std::count(b_shared.begin(), b_shared.end(), false));
+  const int a_free = static_cast<int>(std::count(a_shared.begin(), a_shared.end(), false));
   std::array<int, 3> side_b{}, side_a{};
   int b_above = 0, b_below = 0, a_above = 0, a_below = 0;
   for (int j = 0; j < 3; ++j) {
@@ -98,13 +105,13 @@ bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b) {
     b_above += side_b[j] > 0;
     b_below += side_b[j] < 0;
   }
-  if (b_above == 3 || b_below == 3) return false;
+  if (b_above == b_free || b_below == b_free) return false;
   for (int i = 0; i < 3; ++i) {
     side_a[i] = a_shared[i] ? 0 : orient3d(b[0], b[1], b[2], a[i]);
     a_above += side_a[i] > 0;
     a_below += side_a[i] < 0;
   }
-  if (a_above == 3 || a_below == 3) return false;
+  if (a_above == a_free || a_below == a_free) return false;
   if (b_above == 0 && b_below == 0) {  // one plane: overlap in 2D
     for (int i = 0; i < 3; ++i)
       if (!a_shared[i] && in_closed_triangle(a[i], b, drop_a)) return true;
@@ -288,6 +295,11 @@ SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::siz
   });
   const Broad grid = make_broad(boxes);
   const CellRuns runs = cell_runs(grid, boxes);
+  // Each box's low grid cell: cell_of is monotone along every axis, so the
+  // cell of two boxes' overlap's low corner is the larger of theirs, axis by
+  // axis (no floor or division per pair).
+  std::vector<std::array<std::int64_t, 3>> low_cell(boxes.size());
+  parallel::for_each(static_cast<Id>(boxes.size()), [&](Id i) { low_cell[i] = grid.cell_of(boxes[i].lo); });
 
   // Each pair of boxes is tested once, in the grid cell holding the low
   // corner of their overlap.
@@ -303,9 +315,9 @@ SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::siz
         const std::uint32_t u = runs.members[i], v = runs.members[j];
         const Id cu = fan.cell[live[u]], cv = fan.cell[live[v]];
         if (cu == cv || !boxes_overlap(boxes[u], boxes[v])) continue;
-        std::array<float, 3> low{};
-        for (int k = 0; k < 3; ++k) low[k] = std::max(boxes[u].lo[k], boxes[v].lo[k]);
-        if (grid.key(grid.cell_of(low)) != runs.keys[b]) continue;  // tested in another grid cell
+        std::array<std::int64_t, 3> low{};
+        for (int k = 0; k < 3; ++k) low[k] = std::max(low_cell[u][k], low_cell[v][k]);
+        if (grid.key(low) != runs.keys[b]) continue;  // tested in another grid cell
         if (cross_projected(fan.corners(live[u]), fan.corners(live[v]), axis[live[u]], axis[live[v]]))
           mine.push_back({std::min(cu, cv), std::max(cu, cv)});
       }

@@ -86,6 +86,26 @@ TEST(TrianglesCross, EveryKindOfContact) {
   EXPECT_TRUE(cross({P{0, 0, 0}, P{1, 0, 0}, P{1, 1, 0}}, {P{0, 0, 0}, P{1, 0, 0}, P{0, 1, 0}}));
 }
 
+// One common corner (fan neighbours): when one triangle's other two corners
+// lie strictly on one side of the other's plane the test ends there, and
+// must still tell a real crossing from a touch at the corner.
+TEST(TrianglesCross, OneCommonCornerDecidedBySides) {
+  const std::array<P, 3> base{P{0, 0, 0}, P{4, 0, 0}, P{0, 4, 0}};
+  // Above the base, right over its interior: only the corner in common.
+  EXPECT_FALSE(cross(base, {P{0, 0, 0}, P{1, 1, 1}, P{2, 1, 1}}));
+  // The far edge pierces the base's interior: a crossing.
+  EXPECT_TRUE(cross(base, {P{0, 0, 0}, P{1, 1, -1}, P{1, 1, 1}}));
+  // The far edge pierces the base's interior farther out: a crossing too.
+  EXPECT_TRUE(cross(base, {P{0, 0, 0}, P{3, 3, -1}, P{3, 3, 1}}));
+  // Each straddles the other's plane, but they meet that line on opposite
+  // sides of the common corner: apart.
+  EXPECT_FALSE(cross(base, {P{0, 0, 0}, P{-1, -1, -1}, P{-1, -1, 1}}));
+  // It straddles the base's plane, but the base's other corners lie on one
+  // side of its plane (x + y = 0): apart, decided from the base's side.
+  EXPECT_FALSE(cross(base, {P{0, 0, 0}, P{-1, 1, 1}, P{-2, 2, -1}}));
+  EXPECT_FALSE(cross({P{0, 0, 0}, P{-1, 1, 1}, P{-2, 2, -1}}, base));
+}
+
 TEST(SelfIntersections, ClosedSphereHasNoneAndAPlantedTriangleIsFound) {
   const ImageGrid g = generate::spherical_distance(24);
   generate::ContourOptions opt;

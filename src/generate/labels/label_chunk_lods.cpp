@@ -149,8 +149,9 @@ MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid
   for (;;) {
     MultilodPiece out = coarsened_piece(finer, grid, keys);
     lift_off_planes(out, grid, lifted);
-    if (split_clusters(keys, clusters_to_split(out, grid))) continue;
-    const std::vector<std::uint64_t> more = points_to_lift(out, grid);
+    const std::vector<char> crossing = crossing_triangles(out, grid);
+    if (split_clusters(keys, clusters_to_split(out, crossing))) continue;
+    const std::vector<std::uint64_t> more = points_to_lift(out, grid, crossing);
     std::vector<std::uint64_t> all;
     std::set_union(lifted.begin(), lifted.end(), more.begin(), more.end(), std::back_inserter(all));
     if (all.size() == lifted.size()) return out;

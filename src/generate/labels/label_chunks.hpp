@@ -59,12 +59,16 @@ MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid
 // (label_face_clusters.cpp); edge-line points keep theirs.
 void cluster_face_points(const MultilodPiece& finer, const MultilodGrid& grid, std::vector<std::uint64_t>& keys);
 
-// The coarsening's fold guard (label_lod_fold_guard.cpp). The keys of the
-// inner coarse points (class 0, not yet split) at a corner of a triangle of
-// `coarse` that, at the positions the writer quantizes its points to,
-// crosses another triangle of it or is a line (three distinct collinear
-// points); increasing.
-std::vector<std::uint64_t> clusters_to_split(const MultilodPiece& coarse, const MultilodGrid& grid);
+// The coarsening's fold guard (label_lod_fold_guard.cpp). Per triangle of
+// `coarse`, 1 where, at the positions the writer quantizes its points to, it
+// crosses another triangle of the piece or is a line (three distinct
+// collinear points). Computed once per round and handed to both remedies
+// below, which judge the same piece.
+std::vector<char> crossing_triangles(const MultilodPiece& coarse, const MultilodGrid& grid);
+// The keys of the inner coarse points (class 0, not yet split) at a corner
+// of a crossing triangle (`crossing`: crossing_triangles(coarse, ...));
+// increasing.
+std::vector<std::uint64_t> clusters_to_split(const MultilodPiece& coarse, const std::vector<char>& crossing);
 // The finer points whose coarse key is one of `clusters` (increasing) get
 // keys of their own: class 0, bit 60 set, their rank in the cluster (in
 // index order, at most 63: the 64th on stay together) in bits 54-59 and the
@@ -75,13 +79,14 @@ bool split_clusters(std::vector<std::uint64_t>& coarse_keys, const std::vector<s
 
 // The guard's second remedy, once no cluster is left to split: the inner
 // points (off the chunk's box) at a corner of a triangle of `coarse` that
-// still crosses another or is a line (as clusters_to_split judges them),
-// increasing keys. Where a merged face point moved along its face, the
+// still crosses another or is a line (`crossing`: crossing_triangles(coarse,
+// grid)), increasing keys. Where a merged face point moved along its face, the
 // finest inner points near the face (a patch of the surface lying within a
 // margin of the plane, which surface nets clamps onto sample planes) can
 // fold over it, and its neighbour, which holds the same face point, sees
 // nothing of it.
-std::vector<std::uint64_t> points_to_lift(const MultilodPiece& coarse, const MultilodGrid& grid);
+std::vector<std::uint64_t> points_to_lift(const MultilodPiece& coarse, const MultilodGrid& grid,
+                                          const std::vector<char>& crossing);
 // The points of `coarse` whose keys are in `lifted` (increasing) keep
 // min(2^lod / 8, chunk_shape / 4) samples from every plane of the chunk's
 // box (moved inside along each axis where closer): the piece's own inner

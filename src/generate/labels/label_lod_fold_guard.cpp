@@ -52,9 +52,9 @@ Array<float> quantized_points(const MultilodPiece& piece, const MultilodGrid& gr
 
 bool same_point(const float* a, const float* b) { return a[0] == b[0] && a[1] == b[1] && a[2] == b[2]; }
 
-// Triangles of the piece that cross another or are lines, at the quantized
-// positions.
-std::vector<char> bad_triangles(const MultilodPiece& piece, const MultilodGrid& grid) {
+}  // namespace
+
+std::vector<char> crossing_triangles(const MultilodPiece& piece, const MultilodGrid& grid) {
   const std::size_t n = piece.triangles.size() / 3;
   std::vector<char> bad(n, 0);
   SurfaceMesh mesh;
@@ -73,10 +73,8 @@ std::vector<char> bad_triangles(const MultilodPiece& piece, const MultilodGrid& 
   return bad;
 }
 
-}  // namespace
-
-std::vector<std::uint64_t> points_to_lift(const MultilodPiece& coarse, const MultilodGrid& grid) {
-  const std::vector<char> bad = bad_triangles(coarse, grid);
+std::vector<std::uint64_t> points_to_lift(const MultilodPiece& coarse, const MultilodGrid& grid,
+                                          const std::vector<char>& bad) {
   std::vector<std::uint64_t> out;
   for (std::size_t t = 0; t < bad.size(); ++t)
     for (int m = 0; bad[t] && m < 3; ++m) {
@@ -102,8 +100,7 @@ void lift_off_planes(MultilodPiece& coarse, const MultilodGrid& grid, const std:
   }
 }
 
-std::vector<std::uint64_t> clusters_to_split(const MultilodPiece& coarse, const MultilodGrid& grid) {
-  const std::vector<char> bad = bad_triangles(coarse, grid);
+std::vector<std::uint64_t> clusters_to_split(const MultilodPiece& coarse, const std::vector<char>& bad) {
   std::vector<std::uint64_t> out;
   for (std::size_t t = 0; t < bad.size(); ++t) {
     if (!bad[t]) continue;
