@@ -155,8 +155,8 @@ def ops_doc(rows):
         return []
     L = ["# Labels and coarsening under mpirun\n",
          "`keymesh labels` with `-o X.pvtp` writes one piece per rank and gathers nothing: each rank builds the "
-         "surfaces of its rows plus `halo rows` on each side (smoothing steps + 4, or + 8 with --coarsen; twice the "
-         "steps for discrete-mc), smooths and coarsens them with the one-process code, and keeps what its rows "
+         "surfaces of its rows plus `halo rows` on each side (the smoothing's reach, 2 rows an iteration and 3 for discrete-mc's "
+         "Taubin steps with the fold guard, + 4, or + 8 with --coarsen), smooths and coarsens them with the one-process code, and keeps what its rows "
          "made, so its share is bit-identical to one process (docs/decisions/labels-pieces-halo.md); the distributed "
          "KEY-REDUCE numbers the points. Any other output file gathers those shares on rank 0, byte-identical to one "
          "process. "
