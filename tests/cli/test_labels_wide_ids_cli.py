@@ -13,7 +13,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from kmtest import check, finish, run, tempdir, precomputed_reader, write_label_nrrd  # noqa: E402
+from kmtest import balls_atlas, check, finish, run, tempdir, precomputed_reader, write_label_nrrd  # noqa: E402
 
 np, ngp = precomputed_reader()
 D = tempdir()
@@ -29,21 +29,7 @@ NRRD_TYPE = {"uint8": "uint8", "uint32": "uint32", "uint64": "unsigned long long
 GRID = ["--lods", "3", "--chunk-shape", "16", "16", "16", "--smooth", "4"]
 
 
-def atlas(shape, seed):
-    """Balls of labels 1-6 touching one another and the border, a noisy slab of 7/8."""
-    rng = np.random.default_rng(seed)
-    x, y, z = np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")
-    v = np.zeros(shape, np.uint8)
-    for label in range(1, 7):
-        c = rng.uniform(0, 1, 3) * np.array(shape)
-        r = rng.uniform(5, 12)
-        v[(x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 <= r * r] = label
-    slab = (z >= 3) & (z < 9)
-    v[slab] = np.where(rng.random(v[slab].shape) < 0.5, 7, 8)
-    return v
-
-
-SMALL = atlas((40, 36, 30), 1)
+SMALL = balls_atlas((40, 36, 30), 1)
 
 
 def relabelled(dtype, ids, volume=SMALL):
