@@ -13,10 +13,12 @@
 // that cross, until none is left to split, and lifts the inner corners of
 // those still crossing off the chunk planes.
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <iterator>
-#include <map>
 #include <string>
+#include <tuple>
 
 #include "keymesh/core/error.hpp"
 #include "label_chunks.hpp"
@@ -38,7 +40,7 @@ std::uint64_t coarse_key(const float* p, const MultilodGrid& grid, const std::ar
   for (int d = 0; d < 3; ++d) {
     const Id c = chunk[d];
     const Id per_chunk = static_cast<Id>(std::ceil(static_cast<double>(grid.chunk_shape[d]) / step)) + 1;
-    const Id field = c * per_chunk + std::llround((static_cast<double>(p[d]) - grid.plane(d, c)) / step);
+    const Id field = c * per_chunk + round_half_away((static_cast<double>(p[d]) - grid.plane(d, c)) / step);
     if (field >= (Id{1} << kFieldBits))
       throw LimitError("labels: " + std::to_string(grid.chunks[d]) + " chunks of " +
                        std::to_string(grid.chunk_shape[d]) + " samples along an axis are past what a multilod "
@@ -59,23 +61,15 @@ MultilodPiece coarsened_piece(const MultilodPiece& finer, const MultilodGrid& gr
   out.segment = finer.segment;
   out.lod = finer.lod + 1;
   out.chunk = finer.chunk;
-  LabelSurface s;
-  s.mesh.points.assign(finer.points.begin(), finer.points.end());
-  s.mesh.connectivity.assign(finer.triangles.begin(), finer.triangles.end());
-  s.pair.assign(finer.triangles.size() / 3, 0);
-  s.keys = finer.point_keys;  // so that coarsening leaves the coarse keys of the points it keeps
-  s.coarse = keys;
-  LabelStats stats;
-  coarsen_label_surface(s, stats);
-  out.point_keys = std::move(s.keys);
-  out.points.assign(s.mesh.points.begin(), s.mesh.points.end());
-  out.triangles.assign(s.mesh.connectivity.begin(), s.mesh.connectivity.end());
+  merge_piece_points(finer, keys, out);
   const int lod = static_cast<int>(out.lod);
+  const ChunkBox box(grid, out.chunk);
+  const double margin[3] = {grid.margin(0, lod), grid.margin(1, lod), grid.margin(2, lod)};
   for (std::size_t i = 0; i < out.point_keys.size(); ++i) {
     float* p = out.points.data() + 3 * i;
-    const OnBox b = on_box(p, grid, out.chunk);
+    const OnBox b = box.at(p);
     for (int a = 0; a < 3; ++a)
-      if (!(b.axes >> a & 1)) p[a] = off_chunk_planes(grid, a, p[a], grid.margin(a, lod));
+      if (!(b.axes >> a & 1)) p[a] = off_chunk_planes(grid, a, p[a], margin[a]);
   }
   join_box_points(out, grid);
   return out;
@@ -89,51 +83,59 @@ MultilodPiece coarsened_piece(const MultilodPiece& finer, const MultilodGrid& gr
 // they would fold the triangles between them once quantized. Decided from
 // the points' kinds and positions alone, which every chunk that holds them
 // has alike.
+//
+// The sets are the connected components of "same kind, within one step":
+// sorted by kind and quantized position (an axis the kind's planes leave
+// free first), each point meets the few after it within one step along that
+// axis. A set's least index (its least key: points run in key order) is
+// where union-find's roots end.
 void join_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
   const int lod = static_cast<int>(piece.lod);
   const double top = std::ldexp(1.0, grid.vertex_quantization_bits) - 1;
-  using Cell = std::array<std::int64_t, 5>;  // kind (axes, upper), quantized x, y, z
-  std::map<Cell, std::uint32_t> at;
+  double size[3], origin[3];
+  for (int a = 0; a < 3; ++a) {
+    size[a] = std::ldexp(static_cast<double>(grid.chunk_shape[a]), lod);
+    origin[a] = grid.grid_origin[a] + static_cast<double>(piece.chunk[a] >> lod) * size[a];
+  }
+  struct Cell {
+    int kind;                       // axes << 3 | upper
+    std::array<std::int64_t, 3> q;  // quantized position, the sweep axis first
+    std::uint32_t point;
+    bool operator<(const Cell& o) const { return std::tie(kind, q, point) < std::tie(o.kind, o.q, o.point); }
+  };
+  const ChunkBox box(grid, piece.chunk);
   const std::size_t n = piece.point_keys.size();
+  std::vector<Cell> cells;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const float* p = piece.points.data() + 3 * i;
+    const OnBox b = box.at(p);
+    if (!b.axes) continue;
+    const int sweep = std::countr_one(static_cast<unsigned>(b.axes)) % 3;  // a free axis (any for a corner)
+    Cell c{b.axes << 3 | b.upper, {}, i};
+    for (int j = 0; j < 3; ++j) {
+      const int a = (sweep + j) % 3;
+      c.q[static_cast<std::size_t>(j)] = round_half_away((p[a] - origin[a]) / size[a] * top);
+    }
+    cells.push_back(c);
+  }
+  std::sort(cells.begin(), cells.end());
   std::vector<std::uint32_t> root(n);
   for (std::uint32_t i = 0; i < n; ++i) root[i] = i;
   auto find = [&](std::uint32_t i) { while (root[i] != i) i = root[i] = root[root[i]]; return i; };
-  for (std::uint32_t i = 0; i < n; ++i) {  // in key order: a root is its set's least key
-    const float* p = piece.points.data() + 3 * i;
-    const OnBox b = on_box(p, grid, piece.chunk);
-    if (!b.axes) continue;
-    Cell c{b.axes, b.upper, 0, 0, 0};
-    for (int a = 0; a < 3; ++a) {
-      const double size = std::ldexp(static_cast<double>(grid.chunk_shape[a]), lod);
-      const double origin = grid.grid_origin[a] + static_cast<double>(piece.chunk[a] >> lod) * size;
-      c[2 + a] = static_cast<std::int64_t>(std::llround((p[a] - origin) / size * top));
-    }
-    for (int d = 0; d < 27; ++d) {
-      const Cell nb{c[0], c[1], c[2] + d % 3 - 1, c[3] + d / 3 % 3 - 1, c[4] + d / 9 - 1};
-      const auto f = at.find(nb);
-      if (f == at.end()) continue;
-      const std::uint32_t u = find(f->second), v = find(i);
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    for (std::size_t j = i + 1; j < cells.size() && cells[j].kind == cells[i].kind && cells[j].q[0] <= cells[i].q[0] + 1;
+         ++j) {
+      if (std::abs(cells[j].q[1] - cells[i].q[1]) > 1 || std::abs(cells[j].q[2] - cells[i].q[2]) > 1) continue;
+      const std::uint32_t u = find(cells[i].point), v = find(cells[j].point);
       root[std::max(u, v)] = std::min(u, v);
     }
-    at.emplace(c, i);
-  }
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const std::uint32_t r = find(i);
-    if (r != i) std::copy_n(piece.points.begin() + 3 * r, 3, piece.points.begin() + 3 * i);
+  for (const Cell& c : cells) {
+    const std::uint32_t r = find(c.point);
+    if (r != c.point) std::copy_n(piece.points.begin() + 3 * r, 3, piece.points.begin() + 3 * c.point);
   }
 }
 
 }  // namespace
-
-OnBox on_box(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk) {
-  OnBox b;
-  for (int a = 0; a < 3; ++a) {
-    const bool low = p[a] == grid.plane(a, chunk[a]), high = p[a] == grid.plane(a, chunk[a] + 1);
-    b.axes |= (low || high) ? 1 << a : 0;
-    b.upper |= high ? 1 << a : 0;
-  }
-  return b;
-}
 
 MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid) {
   const double step = std::ldexp(1.0, static_cast<int>(finer.lod + 1));

@@ -52,6 +52,14 @@ MultilodPiece clip_to_chunk(const SegmentSurface& surface, const MultilodGrid& g
 // crossing lifted off the chunk planes (label_lod_fold_guard.cpp).
 MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid);
 
+// The finer piece's points merged by `coarse` (a key per point) as
+// coarsen_label_surface merges a surface's (label_coarsen.cpp): the points of
+// one key averaged in increasing index, collapsed triangles dropped,
+// opposite triangles on the same points cancelled, unused points dropped.
+// Writes out's points, point_keys (the coarse keys kept, increasing) and
+// triangles.
+void merge_piece_points(const MultilodPiece& finer, const std::vector<std::uint64_t>& coarse, MultilodPiece& out);
+
 // The coarse keys of the finer piece's face points (on one plane of the
 // chunk's box) into `keys` (one per finer point, the finer keys there):
 // merged by the nearest grid point of spacing 2^(finer.lod + 1) on the face
@@ -100,6 +108,32 @@ struct OnBox {
   int axes = 0, upper = 0;
   int count() const { return (axes & 1) + (axes >> 1 & 1) + (axes >> 2 & 1); }
 };
-OnBox on_box(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk);
+// std::llround(v) for |v| < 2^52 (every quantity rounded here), inline where
+// GCC calls libm for llround and round: v - trunc(v) is exact.
+inline std::int64_t round_half_away(double v) {
+  const auto t = static_cast<std::int64_t>(v);
+  const double fraction = v - static_cast<double>(t);
+  return t + (fraction >= 0.5 ? 1 : 0) - (fraction <= -0.5 ? 1 : 0);
+}
+
+// The planes of a chunk's box, computed once for the many points of a piece.
+struct ChunkBox {
+  std::array<double, 3> lo{}, hi{};
+  ChunkBox(const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk) {
+    for (int a = 0; a < 3; ++a) lo[a] = grid.plane(a, chunk[a]), hi[a] = grid.plane(a, chunk[a] + 1);
+  }
+  OnBox at(const float* p) const {
+    OnBox b;
+    for (int a = 0; a < 3; ++a) {
+      const bool low = p[a] == lo[a], high = p[a] == hi[a];
+      b.axes |= (low || high) ? 1 << a : 0;
+      b.upper |= high ? 1 << a : 0;
+    }
+    return b;
+  }
+};
+inline OnBox on_box(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk) {
+  return ChunkBox(grid, chunk).at(p);
+}
 
 }  // namespace keymesh::generate::detail

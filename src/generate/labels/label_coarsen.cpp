@@ -11,64 +11,138 @@
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
+#include "label_chunks.hpp"
 #include "label_volume.hpp"
 
 namespace keymesh::generate::detail {
 
 namespace {
 
+// Inputs below this many points (or faces) group with one serial comparison
+// or counting sort: a multilod chunk piece (hundreds of points, coarsened
+// every level and fold-guard round) would spend more on the parallel plans'
+// set-up (radix digits, bitmaps, per-chunk counts) than on its points. Both
+// ways give the same groups, so the output does not depend on the way.
+constexpr Id kSerialBelow = Id{1} << 15;
+
 // A face on three distinct points: the smallest first (a rotation keeps the
 // orientation), the other two sorted, and the orientation that took.
 struct Face {
   std::uint32_t lo, mid, hi;
-  int sign;
+  int sign;           // 0: collapsed (fewer than three distinct points)
   std::uint64_t tag;  // label pair and label: faces cancel only within one tag
 };
 
-// Per face: 1 to keep, 0 to drop. Faces are grouped by their smallest point
-// (a dense KEY-REDUCE); in each group, faces with equal points and tag have
-// net orientation n = sum of signs, and the first |n| of the winning side
-// (in face order) stay.
+// What coarsening reads: a surface's points, faces and their tags, and a
+// coarse key per point.
+struct CoarsenInput {
+  const float* points = nullptr;
+  const PointIndex* connectivity = nullptr;
+  Id faces = 0;
+  const std::uint64_t* coarse = nullptr;
+  Id coarse_count = 0;
+  const std::uint32_t* pair = nullptr;  // per face, or none: all 0
+  const Field* label = nullptr;         // per face, or none
+};
+
+// The points grouped by coarse key (keyreduce::Groups with Order::Build).
+keyreduce::Groups<std::uint64_t> group_points(const std::uint64_t* coarse, Id n) {
+  if (n >= kSerialBelow) {
+    const std::uint64_t top = *std::max_element(coarse, coarse + n);
+    return keyreduce::partition_sort(coarse, n, parallel::bits_needed<std::uint64_t>(top), keyreduce::Order::Build);
+  }
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(static_cast<std::size_t>(n));
+  for (Id i = 0; i < n; ++i) sorted[static_cast<std::size_t>(i)] = {coarse[i], static_cast<std::uint32_t>(i)};
+  std::sort(sorted.begin(), sorted.end());  // by key, then index: the stable order
+  keyreduce::Groups<std::uint64_t> g;
+  g.index_map.resize(static_cast<std::size_t>(n));
+  g.order.resize(static_cast<std::size_t>(n));
+  for (Id k = 0; k < n; ++k) {
+    const auto [key, i] = sorted[static_cast<std::size_t>(k)];
+    if (k == 0 || key != sorted[static_cast<std::size_t>(k - 1)].first) {
+      g.unique_keys.push_back(key);
+      g.offsets.push_back(k);
+    }
+    g.order[static_cast<std::size_t>(k)] = i;
+    g.index_map[i] = static_cast<std::uint32_t>(g.unique_keys.size() - 1);
+  }
+  g.offsets.push_back(n);
+  return g;
+}
+
+// The faces of one least point (order[b, e), in face order): faces with
+// equal points and tag have net orientation n = sum of signs, and the first
+// |n| of the winning side (in face order) stay; the others get keep 0.
+void cancel_in_group(const std::vector<Face>& faces, const std::uint32_t* order, Id b, Id e, std::vector<Id>& keep) {
+  auto same = [&](const Face& x, const Face& y) { return x.mid == y.mid && x.hi == y.hi && x.tag == y.tag; };
+  for (Id i = b; i < e; ++i) {
+    const Face& fi = faces[order[i]];
+    bool first = true;
+    for (Id j = b; j < i && first; ++j) first = !same(faces[order[j]], fi);
+    if (!first) continue;  // decided with the first of its set
+    int net = 0;
+    for (Id j = i; j < e; ++j)
+      if (same(faces[order[j]], fi)) net += faces[order[j]].sign;
+    int left = std::abs(net);
+    for (Id j = i; j < e; ++j) {
+      const Face& fj = faces[order[j]];
+      if (!same(fj, fi)) continue;
+      const bool stays = left > 0 && (fj.sign > 0) == (net > 0);
+      keep[order[j]] = stays ? 1 : 0;
+      left -= stays ? 1 : 0;
+    }
+  }
+}
+
+// Per face: 1 to keep, 0 to drop (then a 0 past the end, for the scan).
+// Collapsed faces are dropped; the others are grouped by their smallest
+// point and cancelled within each group (cancel_in_group). A collapsed face
+// never has the points of one that is not (lo < mid < hi there), so leaving
+// them out of the groups changes no set.
 std::vector<Id> cancel_opposite_faces(const std::vector<Face>& faces, Id points) {
   const Id n = static_cast<Id>(faces.size());
   std::vector<Id> keep(static_cast<std::size_t>(n + 1), 1);
   keep[static_cast<std::size_t>(n)] = 0;
-  std::vector<std::uint32_t> lo(static_cast<std::size_t>(n));
-  parallel::for_each(n, [&](Id f) { lo[static_cast<std::size_t>(f)] = faces[static_cast<std::size_t>(f)].lo; });
-  const auto g = keyreduce::partition_dense(lo.data(), n, static_cast<std::uint32_t>(points), keyreduce::Order::Build);
-  parallel::for_each(g.num_groups(), [&](Id grp) {
-    const Id b = g.offsets[grp], e = g.offsets[grp + 1];
-    auto same = [&](const Face& x, const Face& y) { return x.mid == y.mid && x.hi == y.hi && x.tag == y.tag; };
-    for (Id i = b; i < e; ++i) {
-      const Face& fi = faces[g.order[i]];
-      bool first = true;
-      for (Id j = b; j < i && first; ++j) first = !same(faces[g.order[j]], fi);
-      if (!first) continue;  // decided with the first of its set
-      int net = 0;
-      for (Id j = i; j < e; ++j)
-        if (same(faces[g.order[j]], fi)) net += faces[g.order[j]].sign;
-      int left = std::abs(net);
-      for (Id j = i; j < e; ++j) {  // order[] runs in face order within a group
-        const Face& fj = faces[g.order[j]];
-        if (!same(fj, fi)) continue;
-        const bool stays = left > 0 && (fj.sign > 0) == (net > 0);
-        keep[g.order[j]] = stays ? 1 : 0;
-        left -= stays ? 1 : 0;
-      }
+  if (n < kSerialBelow) {  // a counting sort by least point
+    std::vector<std::uint32_t> start(static_cast<std::size_t>(points + 2), 0);
+    for (Id f = 0; f < n; ++f) {
+      const Face& x = faces[static_cast<std::size_t>(f)];
+      if (x.sign == 0) keep[static_cast<std::size_t>(f)] = 0;
+      else ++start[x.lo + 2];
     }
+    for (Id p = 2; p < points + 2; ++p) start[static_cast<std::size_t>(p)] += start[static_cast<std::size_t>(p - 1)];
+    std::vector<std::uint32_t> order(start[static_cast<std::size_t>(points + 1)]);
+    for (Id f = 0; f < n; ++f)
+      if (faces[static_cast<std::size_t>(f)].sign != 0) order[start[faces[static_cast<std::size_t>(f)].lo + 1]++] = static_cast<std::uint32_t>(f);
+    for (Id p = 0; p < points; ++p)
+      cancel_in_group(faces, order.data(), start[static_cast<std::size_t>(p)], start[static_cast<std::size_t>(p + 1)], keep);
+    return keep;
+  }
+  // Parallel: a dense KEY-REDUCE, collapsed faces in one group of their own
+  // (key `points`) that is never looked at.
+  std::vector<std::uint32_t> lo(static_cast<std::size_t>(n));
+  parallel::for_each(n, [&](Id f) {
+    const Face& x = faces[static_cast<std::size_t>(f)];
+    lo[static_cast<std::size_t>(f)] = x.sign == 0 ? static_cast<std::uint32_t>(points) : x.lo;
+    if (x.sign == 0) keep[static_cast<std::size_t>(f)] = 0;
+  });
+  const auto g = keyreduce::partition_dense(lo.data(), n, static_cast<std::uint32_t>(points + 1), keyreduce::Order::Build);
+  parallel::for_each(g.num_groups(), [&](Id grp) {
+    if (g.unique_keys[static_cast<std::size_t>(grp)] != static_cast<std::uint32_t>(points))
+      cancel_in_group(faces, g.order.data(), g.offsets[grp], g.offsets[grp + 1], keep);
   }, 256);
   return keep;
 }
 
 // Per coarse point (group of g), the mean of its points' positions, summed
 // in increasing index so any thread count gives the same bits.
-std::vector<float> merged_positions(const LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g) {
+std::vector<float> merged_positions(const float* points, const keyreduce::Groups<std::uint64_t>& g) {
   const Id m = g.num_groups();
   std::vector<float> merged(static_cast<std::size_t>(3 * m));
   parallel::for_each(m, [&](Id p) {
     for (int a = 0; a < 3; ++a) {
       double sum = 0;
-      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) sum += s.mesh.points[3 * static_cast<std::size_t>(g.order[j]) + a];
+      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) sum += points[3 * static_cast<std::size_t>(g.order[j]) + a];
       merged[static_cast<std::size_t>(3 * p + a)] = static_cast<float>(sum / static_cast<double>(g.count(p)));
     }
   }, 1024);
@@ -77,29 +151,43 @@ std::vector<float> merged_positions(const LabelSurface& s, const keyreduce::Grou
 
 // The faces through the index map; collapsed ones (fewer than three
 // distinct points) get sign 0, to be dropped.
-std::vector<Face> mapped_faces(const LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g) {
-  const Id faces_in = static_cast<Id>(s.pair.size());
-  const Field* label = s.mesh.find_cell_field("label");
-  std::vector<Face> faces(static_cast<std::size_t>(faces_in));
-  const PointIndex* C = s.mesh.connectivity.data();
-  parallel::for_each(faces_in, [&](Id t) {
+std::vector<Face> mapped_faces(const CoarsenInput& in, const keyreduce::Groups<std::uint64_t>& g) {
+  std::vector<Face> faces(static_cast<std::size_t>(in.faces));
+  const PointIndex* C = in.connectivity;
+  parallel::for_each(in.faces, [&](Id t) {
+    const std::size_t f = static_cast<std::size_t>(t);
     const std::uint32_t v[3] = {g.index_map[C[3 * t]], g.index_map[C[3 * t + 1]], g.index_map[C[3 * t + 2]]};
     const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
     const std::uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
     const bool collapsed = a == b || b == c || a == c;
     const std::uint64_t tag =
-        std::uint64_t{s.pair[static_cast<std::size_t>(t)]} << 32 |
-        (label ? static_cast<std::uint32_t>(static_cast<std::int64_t>(label->values[static_cast<std::size_t>(t)]) +
-                                            kMaxLabelMagnitude)
-               : 0u);
-    faces[static_cast<std::size_t>(t)] = Face{a, std::min(b, c), std::max(b, c), collapsed ? 0 : (b < c ? 1 : -1), tag};
+        (in.pair ? std::uint64_t{in.pair[f]} << 32 : 0) |
+        (in.label ? static_cast<std::uint32_t>(static_cast<std::int64_t>(in.label->values[f]) + kMaxLabelMagnitude) : 0u);
+    faces[f] = Face{a, std::min(b, c), std::max(b, c), collapsed ? 0 : (b < c ? 1 : -1), tag};
   }, 4096);
   return faces;
 }
 
-// Keeps the faces `keep` marks (its exclusive scan: face t stays, at
-// keep[t], where keep[t + 1] differs) with their pair, ghost flag and cell
-// fields; their corners become coarse point indices.
+// Groups, merged positions and kept faces (keep: the exclusive scan of the
+// keep flags: face t stays, at keep[t], where keep[t + 1] differs).
+struct Merge {
+  keyreduce::Groups<std::uint64_t> groups;
+  std::vector<float> merged;
+  std::vector<Id> keep;
+};
+
+Merge merge_points(const CoarsenInput& in) {
+  Merge out;
+  out.groups = group_points(in.coarse, in.coarse_count);
+  out.merged = merged_positions(in.points, out.groups);
+  const std::vector<Face> faces = mapped_faces(in, out.groups);
+  out.keep = cancel_opposite_faces(faces, out.groups.num_groups());
+  parallel::exclusive_scan(out.keep.data(), out.keep.data(), in.faces + 1);
+  return out;
+}
+
+// Keeps the faces `keep` marks with their pair, ghost flag and cell fields;
+// their corners become coarse point indices.
 void keep_faces(LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g, const std::vector<Id>& keep) {
   const Id faces_in = static_cast<Id>(s.pair.size());
   const Id faces_out = keep[static_cast<std::size_t>(faces_in)];
@@ -129,27 +217,28 @@ void keep_faces(LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g, cons
 
 // Points no kept face uses (every face through them collapsed or
 // cancelled) are dropped, the others renumbered in coarse-key order and
-// placed at their merged positions. Returns the number of points left.
-Id keep_used_points(LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g, const std::vector<float>& merged) {
+// placed at their merged positions into `points` (and their coarse keys
+// into `keys`, where given). Returns the number of points left.
+template <class Connectivity, class Points>
+Id keep_used_points(Connectivity& conn, const Merge& merge, Points& points, std::vector<std::uint64_t>* keys) {
+  const keyreduce::Groups<std::uint64_t>& g = merge.groups;
   const Id m = g.num_groups();
-  Array<PointIndex>& conn = s.mesh.connectivity;
   const Id corners = static_cast<Id>(conn.size());
   std::vector<Id> used(static_cast<std::size_t>(m + 1), 0);
   parallel::for_each(corners, [&](Id k) { used[conn[static_cast<std::size_t>(k)]] = 1; });
   const Id m_used = parallel::exclusive_scan(used.data(), used.data(), m + 1);
-  Array<float> compact(static_cast<std::size_t>(3 * m_used));
-  // A streamed surface's points keep their keys: now the coarse ones.
-  std::vector<std::uint64_t> keys(s.keys.empty() ? 0 : static_cast<std::size_t>(m_used));
+  Points compact(static_cast<std::size_t>(3 * m_used));
+  if (keys) keys->resize(static_cast<std::size_t>(m_used));
   parallel::for_each(m, [&](Id p) {
-    if (used[static_cast<std::size_t>(p + 1)] == used[static_cast<std::size_t>(p)]) return;
-    std::copy_n(merged.begin() + 3 * p, 3, compact.begin() + 3 * used[static_cast<std::size_t>(p)]);
-    if (!keys.empty()) keys[static_cast<std::size_t>(used[static_cast<std::size_t>(p)])] = g.unique_keys[static_cast<std::size_t>(p)];
+    const Id at = used[static_cast<std::size_t>(p)];
+    if (used[static_cast<std::size_t>(p + 1)] == at) return;
+    std::copy_n(merge.merged.begin() + 3 * p, 3, compact.begin() + 3 * at);
+    if (keys) (*keys)[static_cast<std::size_t>(at)] = g.unique_keys[static_cast<std::size_t>(p)];
   });
   parallel::for_each(corners, [&](Id k) {
     conn[static_cast<std::size_t>(k)] = static_cast<PointIndex>(used[conn[static_cast<std::size_t>(k)]]);
   });
-  s.mesh.points = std::move(compact);
-  s.keys = std::move(keys);
+  points = std::move(compact);
   return m_used;
 }
 
@@ -157,27 +246,44 @@ Id keep_used_points(LabelSurface& s, const keyreduce::Groups<std::uint64_t>& g, 
 
 void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
   const auto t0 = std::chrono::steady_clock::now();
-  const Id points = static_cast<Id>(s.coarse.size());
-  const Id faces_in = static_cast<Id>(s.pair.size());
-  st.triangles_before_coarsening = faces_in;
-  const std::uint64_t top = s.coarse.empty() ? 0 : *std::max_element(s.coarse.begin(), s.coarse.end());
-  const auto g = keyreduce::partition_sort(s.coarse.data(), points, parallel::bits_needed<std::uint64_t>(top),
-                                           keyreduce::Order::Build);
-  const std::vector<float> merged = merged_positions(s, g);
-  const std::vector<Face> faces = mapped_faces(s, g);
-  std::vector<Id> keep = cancel_opposite_faces(faces, g.num_groups());
-  parallel::for_each(faces_in, [&](Id t) {
-    if (faces[static_cast<std::size_t>(t)].sign == 0) keep[static_cast<std::size_t>(t)] = 0;
-  });
-  parallel::exclusive_scan(keep.data(), keep.data(), faces_in + 1);
-  keep_faces(s, g, keep);
-  const Id m_used = keep_used_points(s, g, merged);
+  CoarsenInput in;
+  in.points = s.mesh.points.data();
+  in.connectivity = s.mesh.connectivity.data();
+  in.faces = static_cast<Id>(s.pair.size());
+  in.coarse = s.coarse.data();
+  in.coarse_count = static_cast<Id>(s.coarse.size());
+  in.pair = s.pair.data();
+  in.label = s.mesh.find_cell_field("label");
+  st.triangles_before_coarsening = in.faces;
+  const Merge merge = merge_points(in);
+  keep_faces(s, merge.groups, merge.keep);
+  // A streamed surface's points keep their keys: now the coarse ones.
+  const Id m_used = keep_used_points(s.mesh.connectivity, merge, s.mesh.points, s.keys.empty() ? nullptr : &s.keys);
   s.quads = false;
   s.junction.assign(static_cast<std::size_t>(m_used), 0);
   s.border_axes.assign(static_cast<std::size_t>(m_used), 0);
   s.cell_centre.clear();
   s.coarse.clear();
   st.coarsen = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void merge_piece_points(const MultilodPiece& finer, const std::vector<std::uint64_t>& coarse, MultilodPiece& out) {
+  CoarsenInput in;
+  in.points = finer.points.data();
+  in.connectivity = finer.triangles.data();
+  in.faces = static_cast<Id>(finer.triangles.size() / 3);
+  in.coarse = coarse.data();
+  in.coarse_count = static_cast<Id>(coarse.size());
+  const Merge merge = merge_points(in);
+  const Id faces_out = merge.keep[static_cast<std::size_t>(in.faces)];
+  out.triangles.resize(static_cast<std::size_t>(3 * faces_out));
+  for (Id t = 0; t < in.faces; ++t) {
+    const Id at = merge.keep[static_cast<std::size_t>(t)];
+    if (merge.keep[static_cast<std::size_t>(t + 1)] == at) continue;
+    for (int k = 0; k < 3; ++k)
+      out.triangles[static_cast<std::size_t>(3 * at + k)] = merge.groups.index_map[in.connectivity[3 * t + k]];
+  }
+  keep_used_points(out.triangles, merge, out.points, &out.point_keys);
 }
 
 }  // namespace keymesh::generate::detail

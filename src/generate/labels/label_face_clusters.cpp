@@ -51,11 +51,16 @@ struct FaceCut {
 std::array<std::vector<std::array<std::uint32_t, 2>>, 6> face_edges(const MultilodPiece& finer,
                                                                   const std::vector<OnBox>& box) {
   std::vector<std::tuple<std::uint32_t, std::uint32_t, int>> e;
-  for (std::size_t t = 0; t < finer.triangles.size(); t += 3)
+  for (std::size_t t = 0; t < finer.triangles.size(); t += 3) {
+    const std::uint32_t c[3] = {finer.triangles[t], finer.triangles[t + 1], finer.triangles[t + 2]};
+    const int axes[3] = {box[c[0]].axes, box[c[1]].axes, box[c[2]].axes};
+    if (!((axes[0] & axes[1]) | (axes[1] & axes[2]) | (axes[2] & axes[0]))) continue;  // most: no edge on a plane
     for (int m = 0; m < 3; ++m) {
-      const std::uint32_t u = finer.triangles[t + m], v = finer.triangles[t + (m + 1) % 3];
-      if (box[u].axes & box[v].axes) e.emplace_back(std::min(u, v), std::max(u, v), u < v ? 1 : -1);
+      const int n = m == 2 ? 0 : m + 1;
+      const std::uint32_t u = c[m], v = c[n];
+      if (axes[m] & axes[n]) e.emplace_back(std::min(u, v), std::max(u, v), u < v ? 1 : -1);
     }
+  }
   std::sort(e.begin(), e.end());
   std::array<std::vector<std::array<std::uint32_t, 2>>, 6> out;
   for (std::size_t b = 0, x = 0; b < e.size(); b = x) {
@@ -72,20 +77,30 @@ std::array<std::vector<std::array<std::uint32_t, 2>>, 6> face_edges(const Multil
   return out;
 }
 
-// The cut of face f (2 * axis + upper).
-FaceCut face_cut(const std::vector<OnBox>& box, const std::vector<std::array<std::uint32_t, 2>>& edges, int f) {
-  FaceCut cut;
-  cut.axis = f / 2;
-  const int upper = f % 2;
-  std::vector<std::uint32_t> at(box.size(), UINT32_MAX);
+// The cuts of the six faces (2 * axis + upper), their points in increasing
+// index. `at`: scratch, one per point.
+std::array<FaceCut, 6> face_cuts(const std::vector<OnBox>& box,
+                                 const std::array<std::vector<std::array<std::uint32_t, 2>>, 6>& edges,
+                                 std::vector<std::uint32_t>& at) {
+  std::array<FaceCut, 6> cuts;
   for (std::uint32_t i = 0; i < box.size(); ++i) {
-    if (!(box[i].axes >> cut.axis & 1) || (box[i].upper >> cut.axis & 1) != upper) continue;
-    at[i] = static_cast<std::uint32_t>(cut.points.size());
-    cut.points.push_back(i);
-    cut.movable.push_back(box[i].count() == 1 ? 1 : 0);
+    if (!box[i].axes) continue;
+    const char movable = box[i].count() == 1 ? 1 : 0;
+    for (int a = 0; a < 3; ++a) {
+      if (!(box[i].axes >> a & 1)) continue;
+      FaceCut& cut = cuts[static_cast<std::size_t>(2 * a + (box[i].upper >> a & 1))];
+      cut.points.push_back(i);
+      cut.movable.push_back(movable);
+    }
   }
-  for (const auto& [u, v] : edges) cut.edges.push_back({at[u], at[v]});
-  return cut;
+  for (int f = 0; f < 6; ++f) {
+    FaceCut& cut = cuts[static_cast<std::size_t>(f)];
+    cut.axis = f / 2;
+    for (std::uint32_t k = 0; k < cut.points.size(); ++k) at[cut.points[k]] = k;
+    cut.edges.reserve(edges[static_cast<std::size_t>(f)].size());
+    for (const auto& [u, v] : edges[static_cast<std::size_t>(f)]) cut.edges.push_back({at[u], at[v]});
+  }
+  return cuts;
 }
 
 // A clustering of a face's cut: per cut point its cluster's first point
@@ -102,27 +117,30 @@ Clusters cluster(const FaceCut& cut, const std::vector<std::uint64_t>& grid_key,
   const std::size_t n = cut.points.size();
   Clusters c;
   c.root.resize(n), c.size.assign(n, 0), c.at.resize(n);
-  std::vector<std::uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) { return grid_key[x] < grid_key[y]; });
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(n);  // by key, then index (a stable order)
+  for (std::uint32_t k = 0; k < n; ++k) sorted[k] = {grid_key[k], k};
+  std::sort(sorted.begin(), sorted.end());
   for (std::size_t k = 0; k < n; ++k)
-    c.root[order[k]] = k > 0 && grid_key[order[k]] == grid_key[order[k - 1]] ? c.root[order[k - 1]] : order[k];
+    c.root[sorted[k].second] = k > 0 && sorted[k].first == sorted[k - 1].first ? c.root[sorted[k - 1].second] : sorted[k].second;
   const int lod = static_cast<int>(finer.lod + 1);
   const double top = std::ldexp(1.0, grid.vertex_quantization_bits) - 1;
+  const auto top_step = static_cast<std::int64_t>(top);
+  std::vector<double> sum(n);
   for (int j = 1; j < 3; ++j) {
     const int a = (cut.axis + j) % 3;
-    std::vector<double> sum(n, 0);
+    std::fill(sum.begin(), sum.end(), 0.0);
     for (std::size_t k = 0; k < n; ++k) {  // increasing index, as the KEY-REDUCE sums
       sum[c.root[k]] += finer.points[3 * static_cast<std::size_t>(cut.points[k]) + static_cast<std::size_t>(a)];
       c.size[c.root[k]] += j == 1 ? 1 : 0;
     }
     const double size = std::ldexp(static_cast<double>(grid.chunk_shape[a]), lod);
     const double origin = grid.grid_origin[a] + static_cast<double>(finer.chunk[a] >> lod) * size;
+    const double margin = grid.margin(a, lod);
     for (std::size_t r = 0; r < n; ++r) {
       if (c.root[r] != r) continue;
       const float mean = static_cast<float>(sum[r] / static_cast<double>(c.size[r]));
-      const double v = off_chunk_planes(grid, a, mean, grid.margin(a, lod));
-      c.at[r][static_cast<std::size_t>(j - 1)] = static_cast<std::int64_t>(std::clamp(std::round((v - origin) / size * top), 0.0, top));
+      const double v = off_chunk_planes(grid, a, mean, margin);
+      c.at[r][static_cast<std::size_t>(j - 1)] = std::clamp<std::int64_t>(round_half_away((v - origin) / size * top), 0, top_step);
     }
   }
   return c;
@@ -230,8 +248,8 @@ std::uint64_t face_grid_key(const float* p, const MultilodGrid& grid, const std:
   std::uint64_t key = 0;
   for (int j = 1; j < 3; ++j) {
     const int a = (axis + j) % 3;
-    const double local = std::round((static_cast<double>(p[a]) - grid.plane(a, chunk[a])) / step);
-    key = key << 32 | static_cast<std::uint32_t>(static_cast<std::int64_t>(local));
+    const std::int64_t local = round_half_away((static_cast<double>(p[a]) - grid.plane(a, chunk[a])) / step);
+    key = key << 32 | static_cast<std::uint32_t>(local);
   }
   return key;
 }
@@ -282,13 +300,12 @@ void cluster_face(const FaceCut& cut, const MultilodPiece& finer, const Multilod
 }  // namespace
 
 void cluster_face_points(const MultilodPiece& finer, const MultilodGrid& grid, std::vector<std::uint64_t>& keys) {
+  const ChunkBox chunk_box(grid, finer.chunk);
   std::vector<OnBox> box(finer.point_keys.size());
-  for (std::size_t i = 0; i < box.size(); ++i) box[i] = on_box(finer.points.data() + 3 * i, grid, finer.chunk);
-  const auto edges = face_edges(finer, box);
-  for (int f = 0; f < 6; ++f) {
-    const FaceCut cut = face_cut(box, edges[static_cast<std::size_t>(f)], f);
+  for (std::size_t i = 0; i < box.size(); ++i) box[i] = chunk_box.at(finer.points.data() + 3 * i);
+  std::vector<std::uint32_t> at(box.size());
+  for (const FaceCut& cut : face_cuts(box, face_edges(finer, box), at))
     if (!cut.points.empty()) cluster_face(cut, finer, grid, keys);
-  }
 }
 
 }  // namespace keymesh::generate::detail
