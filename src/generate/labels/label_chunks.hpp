@@ -58,7 +58,16 @@ MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid
 // opposite triangles on the same points cancelled, unused points dropped.
 // Writes out's points, point_keys (the coarse keys kept, increasing) and
 // triangles.
-void merge_piece_points(const MultilodPiece& finer, const std::vector<std::uint64_t>& coarse, MultilodPiece& out);
+//
+// Inputs with fewer than `serial_below` points (or faces) group by one
+// serial comparison or counting sort: a chunk piece (hundreds of points,
+// coarsened every level and fold-guard round) would spend more on the
+// parallel KEY-REDUCE plans' set-up (radix digits, bitmaps, per-chunk
+// counts) than on its points; larger ones use those plans. Both give the
+// same groups, so the same output (coarsen_label_surface uses the default).
+constexpr Id kCoarsenSerialBelow = Id{1} << 15;
+void merge_piece_points(const MultilodPiece& finer, const std::vector<std::uint64_t>& coarse, MultilodPiece& out,
+                        Id serial_below = kCoarsenSerialBelow);
 
 // The coarse keys of the finer piece's face points (on one plane of the
 // chunk's box) into `keys` (one per finer point, the finer keys there):

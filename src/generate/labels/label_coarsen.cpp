@@ -18,13 +18,6 @@ namespace keymesh::generate::detail {
 
 namespace {
 
-// Inputs below this many points (or faces) group with one serial comparison
-// or counting sort: a multilod chunk piece (hundreds of points, coarsened
-// every level and fold-guard round) would spend more on the parallel plans'
-// set-up (radix digits, bitmaps, per-chunk counts) than on its points. Both
-// ways give the same groups, so the output does not depend on the way.
-constexpr Id kSerialBelow = Id{1} << 15;
-
 // A face on three distinct points: the smallest first (a rotation keeps the
 // orientation), the other two sorted, and the orientation that took.
 struct Face {
@@ -43,12 +36,13 @@ struct CoarsenInput {
   Id coarse_count = 0;
   const std::uint32_t* pair = nullptr;  // per face, or none: all 0
   const Field* label = nullptr;         // per face, or none
+  Id serial_below = kCoarsenSerialBelow;
 };
 
 // The points grouped by coarse key (keyreduce::Groups with Order::Build).
-keyreduce::Groups<std::uint64_t> group_points(const std::uint64_t* coarse, Id n) {
-  if (n >= kSerialBelow) {
-    const std::uint64_t top = *std::max_element(coarse, coarse + n);
+keyreduce::Groups<std::uint64_t> group_points(const std::uint64_t* coarse, Id n, Id serial_below) {
+  if (n >= serial_below) {
+    const std::uint64_t top = n == 0 ? 0 : *std::max_element(coarse, coarse + n);
     return keyreduce::partition_sort(coarse, n, parallel::bits_needed<std::uint64_t>(top), keyreduce::Order::Build);
   }
   std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(static_cast<std::size_t>(n));
@@ -99,11 +93,11 @@ void cancel_in_group(const std::vector<Face>& faces, const std::uint32_t* order,
 // point and cancelled within each group (cancel_in_group). A collapsed face
 // never has the points of one that is not (lo < mid < hi there), so leaving
 // them out of the groups changes no set.
-std::vector<Id> cancel_opposite_faces(const std::vector<Face>& faces, Id points) {
+std::vector<Id> cancel_opposite_faces(const std::vector<Face>& faces, Id points, Id serial_below) {
   const Id n = static_cast<Id>(faces.size());
   std::vector<Id> keep(static_cast<std::size_t>(n + 1), 1);
   keep[static_cast<std::size_t>(n)] = 0;
-  if (n < kSerialBelow) {  // a counting sort by least point
+  if (n < serial_below) {  // a counting sort by least point
     std::vector<std::uint32_t> start(static_cast<std::size_t>(points + 2), 0);
     for (Id f = 0; f < n; ++f) {
       const Face& x = faces[static_cast<std::size_t>(f)];
@@ -140,11 +134,13 @@ std::vector<float> merged_positions(const float* points, const keyreduce::Groups
   const Id m = g.num_groups();
   std::vector<float> merged(static_cast<std::size_t>(3 * m));
   parallel::for_each(m, [&](Id p) {
-    for (int a = 0; a < 3; ++a) {
-      double sum = 0;
-      for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) sum += points[3 * static_cast<std::size_t>(g.order[j]) + a];
-      merged[static_cast<std::size_t>(3 * p + a)] = static_cast<float>(sum / static_cast<double>(g.count(p)));
+    double sum[3] = {0, 0, 0};
+    for (Id j = g.offsets[p]; j < g.offsets[p + 1]; ++j) {
+      const float* q = points + 3 * static_cast<std::size_t>(g.order[j]);
+      for (int a = 0; a < 3; ++a) sum[a] += q[a];
     }
+    for (int a = 0; a < 3; ++a)
+      merged[static_cast<std::size_t>(3 * p + a)] = static_cast<float>(sum[a] / static_cast<double>(g.count(p)));
   }, 1024);
   return merged;
 }
@@ -178,10 +174,10 @@ struct Merge {
 
 Merge merge_points(const CoarsenInput& in) {
   Merge out;
-  out.groups = group_points(in.coarse, in.coarse_count);
+  out.groups = group_points(in.coarse, in.coarse_count, in.serial_below);
   out.merged = merged_positions(in.points, out.groups);
   const std::vector<Face> faces = mapped_faces(in, out.groups);
-  out.keep = cancel_opposite_faces(faces, out.groups.num_groups());
+  out.keep = cancel_opposite_faces(faces, out.groups.num_groups(), in.serial_below);
   parallel::exclusive_scan(out.keep.data(), out.keep.data(), in.faces + 1);
   return out;
 }
@@ -267,8 +263,10 @@ void coarsen_label_surface(LabelSurface& s, LabelStats& st) {
   st.coarsen = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void merge_piece_points(const MultilodPiece& finer, const std::vector<std::uint64_t>& coarse, MultilodPiece& out) {
+void merge_piece_points(const MultilodPiece& finer, const std::vector<std::uint64_t>& coarse, MultilodPiece& out,
+                        Id serial_below) {
   CoarsenInput in;
+  in.serial_below = serial_below;
   in.points = finer.points.data();
   in.connectivity = finer.triangles.data();
   in.faces = static_cast<Id>(finer.triangles.size() / 3);
