@@ -1,10 +1,11 @@
 // A chunk piece one level coarser (see keymesh/generate/labels/labels_multilod.hpp):
 // every inner point keyed by the nearest point of the grid of spacing 2^lod
-// and one KEY-REDUCE merges them (coarsen_label_surface: positions averaged
-// in key order, collapsed faces dropped, opposite faces on the same points
-// cancelled); the points on one face of the chunk's box merge by the
-// nearest grid point on the face where the face's cut stays simple, decided
-// from the cut alone (label_face_clusters.cpp); points on the box's edge
+// and one KEY-REDUCE merges them (merge_piece_points, label_coarsen.cpp, the
+// coarsening of labels --coarsen: positions averaged in key order, collapsed
+// faces dropped, opposite faces on the same points cancelled); the points on
+// one face of the chunk's box merge by the nearest grid point on the face
+// where the face's cut stays simple, decided from the cut alone
+// (label_face_clusters.cpp); points on the box's edge
 // lines keep their keys and positions (but for the level's margin, and box
 // points closer than a quantization step joined: join_box_points), so
 // neighbouring chunks keep the same points on their common face, its border
@@ -122,13 +123,14 @@ void join_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
   std::vector<std::uint32_t> root(n);
   for (std::uint32_t i = 0; i < n; ++i) root[i] = i;
   auto find = [&](std::uint32_t i) { while (root[i] != i) i = root[i] = root[root[i]]; return i; };
-  for (std::size_t i = 0; i < cells.size(); ++i)
-    for (std::size_t j = i + 1; j < cells.size() && cells[j].kind == cells[i].kind && cells[j].q[0] <= cells[i].q[0] + 1;
-         ++j) {
-      if (std::abs(cells[j].q[1] - cells[i].q[1]) > 1 || std::abs(cells[j].q[2] - cells[i].q[2]) > 1) continue;
-      const std::uint32_t u = find(cells[i].point), v = find(cells[j].point);
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const Cell& c = cells[i];
+    for (std::size_t j = i + 1; j < cells.size() && cells[j].kind == c.kind && cells[j].q[0] <= c.q[0] + 1; ++j) {
+      if (std::abs(cells[j].q[1] - c.q[1]) > 1 || std::abs(cells[j].q[2] - c.q[2]) > 1) continue;
+      const std::uint32_t u = find(c.point), v = find(cells[j].point);
       root[std::max(u, v)] = std::min(u, v);
     }
+  }
   for (const Cell& c : cells) {
     const std::uint32_t r = find(c.point);
     if (r != c.point) std::copy_n(piece.points.begin() + 3 * r, 3, piece.points.begin() + 3 * c.point);

@@ -3,7 +3,10 @@
 // averaged in increasing index, so any thread count gives the same bits),
 // the index map rewrites the faces, collapsed faces are dropped, and faces
 // of one label pair (and label) on the same three points cancel by
-// orientation, keeping every label's faces a closed 2-cycle.
+// orientation, keeping every label's faces a closed 2-cycle. The same steps
+// coarsen a multilod chunk piece (merge_piece_points), read in place; small
+// inputs group by serial sorts, large ones by the parallel plans, with the
+// same result (label_chunks.hpp, kCoarsenSerialBelow).
 #include <algorithm>
 #include <chrono>
 
@@ -98,18 +101,17 @@ std::vector<Id> cancel_opposite_faces(const std::vector<Face>& faces, Id points,
   std::vector<Id> keep(static_cast<std::size_t>(n + 1), 1);
   keep[static_cast<std::size_t>(n)] = 0;
   if (n < serial_below) {  // a counting sort by least point
-    std::vector<std::uint32_t> start(static_cast<std::size_t>(points + 2), 0);
-    for (Id f = 0; f < n; ++f) {
-      const Face& x = faces[static_cast<std::size_t>(f)];
-      if (x.sign == 0) keep[static_cast<std::size_t>(f)] = 0;
-      else ++start[x.lo + 2];
+    const std::size_t m = static_cast<std::size_t>(points);
+    std::vector<std::uint32_t> start(m + 2, 0);
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      if (faces[f].sign == 0) keep[f] = 0;
+      else ++start[faces[f].lo + 2];
     }
-    for (Id p = 2; p < points + 2; ++p) start[static_cast<std::size_t>(p)] += start[static_cast<std::size_t>(p - 1)];
-    std::vector<std::uint32_t> order(start[static_cast<std::size_t>(points + 1)]);
-    for (Id f = 0; f < n; ++f)
-      if (faces[static_cast<std::size_t>(f)].sign != 0) order[start[faces[static_cast<std::size_t>(f)].lo + 1]++] = static_cast<std::uint32_t>(f);
-    for (Id p = 0; p < points; ++p)
-      cancel_in_group(faces, order.data(), start[static_cast<std::size_t>(p)], start[static_cast<std::size_t>(p + 1)], keep);
+    for (std::size_t p = 2; p < m + 2; ++p) start[p] += start[p - 1];
+    std::vector<std::uint32_t> order(start[m + 1]);
+    for (std::size_t f = 0; f < faces.size(); ++f)
+      if (faces[f].sign != 0) order[start[faces[f].lo + 1]++] = static_cast<std::uint32_t>(f);
+    for (std::size_t p = 0; p < m; ++p) cancel_in_group(faces, order.data(), start[p], start[p + 1], keep);
     return keep;
   }
   // Parallel: a dense KEY-REDUCE, collapsed faces in one group of their own
@@ -120,7 +122,8 @@ std::vector<Id> cancel_opposite_faces(const std::vector<Face>& faces, Id points,
     lo[static_cast<std::size_t>(f)] = x.sign == 0 ? static_cast<std::uint32_t>(points) : x.lo;
     if (x.sign == 0) keep[static_cast<std::size_t>(f)] = 0;
   });
-  const auto g = keyreduce::partition_dense(lo.data(), n, static_cast<std::uint32_t>(points + 1), keyreduce::Order::Build);
+  const auto g =
+      keyreduce::partition_dense(lo.data(), n, static_cast<std::uint32_t>(points + 1), keyreduce::Order::Build);
   parallel::for_each(g.num_groups(), [&](Id grp) {
     if (g.unique_keys[static_cast<std::size_t>(grp)] != static_cast<std::uint32_t>(points))
       cancel_in_group(faces, g.order.data(), g.offsets[grp], g.offsets[grp + 1], keep);
@@ -156,9 +159,10 @@ std::vector<Face> mapped_faces(const CoarsenInput& in, const keyreduce::Groups<s
     const int r = v[0] < v[1] ? (v[0] < v[2] ? 0 : 2) : (v[1] < v[2] ? 1 : 2);
     const std::uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
     const bool collapsed = a == b || b == c || a == c;
-    const std::uint64_t tag =
-        (in.pair ? std::uint64_t{in.pair[f]} << 32 : 0) |
-        (in.label ? static_cast<std::uint32_t>(static_cast<std::int64_t>(in.label->values[f]) + kMaxLabelMagnitude) : 0u);
+    const std::uint64_t pair = in.pair ? std::uint64_t{in.pair[f]} << 32 : 0;
+    const std::uint32_t label =
+        in.label ? static_cast<std::uint32_t>(static_cast<std::int64_t>(in.label->values[f]) + kMaxLabelMagnitude) : 0u;
+    const std::uint64_t tag = pair | label;
     faces[f] = Face{a, std::min(b, c), std::max(b, c), collapsed ? 0 : (b < c ? 1 : -1), tag};
   }, 4096);
   return faces;

@@ -120,8 +120,10 @@ Clusters cluster(const FaceCut& cut, const std::vector<std::uint64_t>& grid_key,
   std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(n);  // by key, then index (a stable order)
   for (std::uint32_t k = 0; k < n; ++k) sorted[k] = {grid_key[k], k};
   std::sort(sorted.begin(), sorted.end());
-  for (std::size_t k = 0; k < n; ++k)
-    c.root[sorted[k].second] = k > 0 && sorted[k].first == sorted[k - 1].first ? c.root[sorted[k - 1].second] : sorted[k].second;
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool joins = k > 0 && sorted[k].first == sorted[k - 1].first;
+    c.root[sorted[k].second] = joins ? c.root[sorted[k - 1].second] : sorted[k].second;
+  }
   const int lod = static_cast<int>(finer.lod + 1);
   const double top = std::ldexp(1.0, grid.vertex_quantization_bits) - 1;
   const auto top_step = static_cast<std::int64_t>(top);
@@ -140,7 +142,8 @@ Clusters cluster(const FaceCut& cut, const std::vector<std::uint64_t>& grid_key,
       if (c.root[r] != r) continue;
       const float mean = static_cast<float>(sum[r] / static_cast<double>(c.size[r]));
       const double v = off_chunk_planes(grid, a, mean, margin);
-      c.at[r][static_cast<std::size_t>(j - 1)] = std::clamp<std::int64_t>(round_half_away((v - origin) / size * top), 0, top_step);
+      const std::int64_t q = round_half_away((v - origin) / size * top);
+      c.at[r][static_cast<std::size_t>(j - 1)] = std::clamp<std::int64_t>(q, 0, top_step);
     }
   }
   return c;
