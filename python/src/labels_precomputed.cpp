@@ -101,20 +101,12 @@ py::dict write_whole(const py::object& volume, const py::object& spacing, const 
   const Precomputed p = precomputed_of(options);
   const std::string dir = output_dir(path);
   const ng::SegmentNames segment_names_ = segment_names(names, p.multilod.labels.background);
-  const ImageGrid* grid = nullptr;
   ArrayVolume view;
-  if (py::isinstance<Volume>(volume)) {
-    grid = &volume.cast<Volume&>().grid;
-    check_volume_geometry(*grid, "labels_precomputed");
-  } else {
-    view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
-                             {"labels_precomputed", 1, "volume must be a 3-D numpy array or a keymesh.Volume", true});
-    grid = &view.grid;
-  }
+  const ImageGrid& grid = label_grid(volume, spacing, origin, view, "labels_precomputed");
   ng::PieceCounts n;
   run_released(threads, [&] {
-    const ng::MultilodLayout layout = layout_of(*grid, p);
-    std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(generate::multilod_pieces(*grid, p.multilod));
+    const ng::MultilodLayout layout = layout_of(grid, p);
+    std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(generate::multilod_pieces(grid, p.multilod));
     n.add(pieces);
     n.chunks = static_cast<std::size_t>(layout.chunks[0]) * layout.chunks[1] * layout.chunks[2];
     ng::write_multilod_and_chunks(dir, layout, std::move(pieces), segment_names_);
