@@ -95,7 +95,9 @@ void report_pieces(const LabelsJob& job, const ImageGrid& header, const generate
   write_report(job.common.report_path, r);
 }
 
-// This rank's entry of the report.
+// This rank's entry of the report. guard_shortened is the rank's own count,
+// its halo rows' moves included: the report has no total, since the ranks'
+// halos overlap (the one process's count is at most their sum).
 nlohmann::json rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& slabs, const distributed::OwnPiece& w,
                           nlohmann::json pairs, const StageTimer& timer) {
   return {{"pairs", std::move(pairs)}, {"first_row", rows.first}, {"rows", rows.second - rows.first},
@@ -104,6 +106,7 @@ nlohmann::json rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& sl
           {"triangles", w.own_triangles},
           {"ghost_triangles", w.mesh.num_cells() - w.own_triangles},
           {"keys_requested", w.keys_requested}, {"bytes_sent", w.bytes_sent},
+          {"guard_shortened", slabs.stats().guard_shortened},
           {"seconds", timer.seconds()}, {"peak_rss_mib", peak_rss_mib()}};
 }
 
