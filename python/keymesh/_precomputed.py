@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numbers
 import os
-from typing import Any, Dict, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -55,6 +55,17 @@ def output_path(path: Union[str, os.PathLike]) -> str:
     return os.fspath(path)
 
 
+def changed_chunks(update: Any) -> Optional[List[Tuple[int, int, int]]]:
+    """update (None, or the chunks (i, j, k) an edit changed) as the list the
+    compiled module takes; ValueError unless each is three integers."""
+    if update is None:
+        return None
+    changed = [tuple(int_arg(v, "update") for v in np.asarray(c).reshape(-1)) for c in update]
+    if any(len(c) != 3 for c in changed):
+        raise ValueError(f"update must be chunks (i, j, k), got {update!r}")
+    return changed
+
+
 def segment_names(label_names: Any, background: int) -> Dict[int, str]:
     """label_names (None, a label table's path or a dict) as {id: name},
     read now (the Dask graph carries the names, not the file)."""
@@ -67,7 +78,7 @@ def labels_precomputed(volume: Any, path: Union[str, os.PathLike], lods: int = 3
                        relaxation: float = 0.5, spacing: Optional[Sequence[float]] = (1.0, 1.0, 1.0),
                        origin: Optional[Sequence[float]] = (0.0, 0.0, 0.0),
                        label_names: Union[None, str, os.PathLike, Mapping[int, str]] = None,
-                       threads: int = 0) -> Dict[str, Any]:
+                       threads: int = 0, update: Optional[Sequence[Sequence[int]]] = None) -> Dict[str, Any]:
     """Neuroglancer multi-resolution meshes of a label volume: the directory
     ``keymesh labels IN -o path --format precomputed`` writes, byte for byte
     (one call; docs/cli/labels.md).
@@ -105,11 +116,17 @@ def labels_precomputed(volume: Any, path: Union[str, os.PathLike], lods: int = 3
             {id: name}; None (default) writes none. The background's entry is
             left out.
         threads: worker threads, 0 = all cores; the bytes do not depend on it.
+        update: re-mesh an edit (``keymesh labels --update CHUNKS``): the
+            chunks (i, j, k) inside which ``volume`` differs from the volume
+            of the run that wrote ``path`` (its ``path/chunks/`` is needed).
+            Only the chunks within the halo's reach of them are re-meshed
+            and only the segments they held or hold rewritten; the directory
+            then equals a full run on ``volume``.
 
     Returns:
-        dict: ``segments`` (the segment ids with a mesh), ``pieces``,
-        ``chunks_written``, ``triangles_per_lod`` (as the CLI's report
-        counts them).
+        dict: ``segments`` (the segment ids with a mesh; with ``update``,
+        those rewritten), ``pieces``, ``chunks_written``,
+        ``triangles_per_lod`` (as the CLI's report counts them).
 
     Raises:
         keymesh.Error (a ValueError) for what the CLI refuses (negative
@@ -118,4 +135,5 @@ def labels_precomputed(volume: Any, path: Union[str, os.PathLike], lods: int = 3
     if isinstance(volume, _ext.Volume):
         spacing = origin = None
     opts = options(lods, chunk_shape, sharded, method, labels, background, smooth, relaxation)
-    return _ext.labels_precomputed(volume, spacing, origin, output_path(path), opts, label_names, _threads(threads))
+    return _ext.labels_precomputed(volume, spacing, origin, output_path(path), opts, label_names, _threads(threads),
+                                   changed_chunks(update))

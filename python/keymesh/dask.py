@@ -45,7 +45,6 @@ import numpy as np
 
 from . import _keymesh as _ext
 from . import Error, Mesh, _isovalues, _mesh, _threads
-from ._arguments import int_arg
 
 __all__ = ["contour", "contour_labels", "labels_precomputed"]
 
@@ -371,10 +370,7 @@ def labels_precomputed(array: Any, path: Any, lods: int = 3, chunk_shape: Sequen
     threads = _threads(threads)
     whole = tuple(int(n) for n in array.shape)
     names = _precomputed.segment_names(label_names, opts[2])
-    changed = None if update is None else [tuple(int_arg(v, "update") for v in np.asarray(c).reshape(-1))
-                                           for c in update]
-    if changed is not None and any(len(c) != 3 for c in changed):
-        raise ValueError(f"update must be chunks (i, j, k), got {update!r}")
+    changed = _precomputed.changed_chunks(update)
     plan = _ext.precomputed_plan(whole, opts, path, changed)
     task = dask.delayed(_precomputed_chunk, pure=False)  # it writes a file: never merged with another graph's
     counts = [task(array[tuple(slice(a, a + n) for a, n in zip(lo, dims))], whole, tuple(chunk), spacing, origin,

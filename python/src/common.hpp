@@ -221,6 +221,12 @@ void check_volume_geometry(const ImageGrid& grid, const char* command);
 py::dict fields_to_python(std::vector<Field>& fields, py::ssize_t rows);
 std::vector<Field> fields_from_python(const py::object& data, py::ssize_t rows, const char* what);
 
+// The label map a labels function reads (labels.cpp): a Volume's own grid
+// (its geometry checked; spacing and origin are its own), or a view of a
+// numpy array's samples in Fortran order, the wide label types too, kept in
+// `view`. Errors as view_array_volume's, naming `command`.
+const ImageGrid& label_grid(const py::object& volume, const py::object& spacing, const py::object& origin,
+                            ArrayVolume& view, const char* command);
 // contour_labels' arguments as the library's options (labels.cpp);
 // ValueError for an unknown method.
 generate::LabelOptions label_options(const std::string& method, const std::vector<std::int64_t>& labels,

@@ -28,20 +28,12 @@ py::tuple contour_labels(const py::object& volume, const py::object& spacing, co
   generate::LabelOptions opt =
       label_options(method, labels, background, per_label, smoothing_iterations, relaxation, coarsen);
   opt.history = history;
-  const ImageGrid* grid = nullptr;
   ArrayVolume view;
-  if (py::isinstance<Volume>(volume)) {
-    grid = &volume.cast<Volume&>().grid;
-    check_volume_geometry(*grid, "contour_labels");
-  } else {
-    view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
-                             {"contour_labels", 1, "volume must be a 3-D numpy array or a keymesh.Volume", true});
-    grid = &view.grid;
-  }
+  const ImageGrid& grid = label_grid(volume, spacing, origin, view, "contour_labels");
   generate::LabelStats stats;
   std::vector<std::uint64_t> history_key;
   SurfaceMesh mesh = run_released(threads, [&] {
-    return generate::contour_labels(*grid, opt, &stats, history ? &history_key : nullptr);
+    return generate::contour_labels(grid, opt, &stats, history ? &history_key : nullptr);
   });
   py::dict info;
   generate::visit_stage_seconds(stats, into(info));
@@ -60,6 +52,18 @@ py::tuple with_history_key(py::tuple parts, std::vector<std::uint64_t>&& history
   const auto n = static_cast<py::ssize_t>(history_key.size());
   parts[3].cast<py::dict>()["history_key"] = adopt(std::move(history_key), {n});
   return parts;
+}
+
+const ImageGrid& label_grid(const py::object& volume, const py::object& spacing, const py::object& origin,
+                            ArrayVolume& view, const char* command) {
+  if (!py::isinstance<Volume>(volume)) {
+    view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
+                             {command, 1, "volume must be a 3-D numpy array or a keymesh.Volume", true});
+    return view.grid;
+  }
+  const ImageGrid& grid = volume.cast<Volume&>().grid;
+  check_volume_geometry(grid, command);
+  return grid;
 }
 
 generate::LabelOptions label_options(const std::string& method, const std::vector<std::int64_t>& labels,

@@ -94,48 +94,76 @@ py::dict counts_dict(const ng::PieceCounts& n) {
   return d;
 }
 
-// The one call: every chunk meshed from the volume in memory.
-py::dict write_whole(const py::object& volume, const py::object& spacing, const py::object& origin,
-                     const std::string& path, const py::tuple& options, const py::object& names, int threads) {
-  check_threads(threads);
-  const Precomputed p = precomputed_of(options);
-  const std::string dir = output_dir(path);
-  const ng::SegmentNames segment_names_ = segment_names(names, p.multilod.labels.background);
-  const ImageGrid* grid = nullptr;
-  ArrayVolume view;
-  if (py::isinstance<Volume>(volume)) {
-    grid = &volume.cast<Volume&>().grid;
-    check_volume_geometry(*grid, "labels_precomputed");
-  } else {
-    view = view_array_volume(volume, spacing, origin, VolumeOrder::Fortran,
-                             {"labels_precomputed", 1, "volume must be a 3-D numpy array or a keymesh.Volume", true});
-    grid = &view.grid;
-  }
-  ng::PieceCounts n;
-  run_released(threads, [&] {
-    const ng::MultilodLayout layout = layout_of(*grid, p);
-    std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(generate::multilod_pieces(*grid, p.multilod));
-    n.add(pieces);
-    n.chunks = static_cast<std::size_t>(layout.chunks[0]) * layout.chunks[1] * layout.chunks[2];
-    ng::write_multilod_and_chunks(dir, layout, std::move(pieces), segment_names_);
-  });
-  return counts_dict(n);
-}
-
 // The chunks to mesh: every chunk of the grid, or (`update`: the chunks an
 // edit changed) those within the halo's reach of them, as --update picks them.
+using Chunks = std::vector<std::array<Id, 3>>;
+
+// update (None, or chunks (i, j, k)) read while the GIL is held.
+std::optional<Chunks> changed_chunks(const py::object& update) {
+  if (update.is_none()) return std::nullopt;
+  return update.cast<Chunks>();
+}
+
 std::vector<std::array<Id, 3>> chunks_to_mesh(const generate::MultilodGrid& g, const Precomputed& p,
-                                              const std::string& path, const py::object& update) {
-  if (!update.is_none()) {
+                                              const std::string& path, const std::optional<Chunks>& changed) {
+  if (changed) {
     if (!std::filesystem::is_directory(std::filesystem::path(path) / "chunks"))
       throw InputError(path + ": no chunk store (" + path + "/chunks) of an earlier precomputed run to update");
-    return generate::multilod_affected_chunks(g, p.multilod, update.cast<std::vector<std::array<Id, 3>>>());
+    return generate::multilod_affected_chunks(g, p.multilod, *changed);
   }
   std::vector<std::array<Id, 3>> all;
   for (Id z = 0; z < g.chunks[2]; ++z)
     for (Id y = 0; y < g.chunks[1]; ++y)
       for (Id x = 0; x < g.chunks[0]; ++x) all.push_back({x, y, z});
   return all;
+}
+
+// `--update CHUNKS` in memory: the chunks within the halo's reach of the
+// changed ones meshed again from the whole volume, and only the segments
+// they held before or hold now rewritten (none: nothing to write), as the
+// CLI's update_chunks does. The counts' segments are those rewritten.
+ng::PieceCounts update_whole(const ImageGrid& grid, const Precomputed& p, const std::string& dir,
+                             const Chunks& changed, const ng::SegmentNames& names) {
+  const ng::MultilodLayout layout = layout_of(grid, p);
+  const auto affected = chunks_to_mesh(generate::multilod_grid(grid.dims, p.multilod), p, dir, changed);
+  ng::PieceCounts n;
+  for (const auto& c : affected) {
+    for (std::uint64_t s : ng::kept_segments(dir, ng::chunk_index(c))) n.segments.insert(s);
+    std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(generate::multilod_chunk_pieces(grid, p.multilod, c));
+    n.add(pieces);
+    ng::write_chunk_pieces(dir, layout, ng::chunk_index(c), pieces);
+    ++n.chunks;
+  }
+  if (!n.segments.empty())
+    ng::assemble_multilod(dir, layout, std::vector<std::uint64_t>(n.segments.begin(), n.segments.end()), names);
+  return n;
+}
+
+// The one call: every chunk meshed from the volume in memory, or with
+// `update` (the chunks an edit changed) only those it can reach.
+py::dict write_whole(const py::object& volume, const py::object& spacing, const py::object& origin,
+                     const std::string& path, const py::tuple& options, const py::object& names, int threads,
+                     const py::object& update) {
+  check_threads(threads);
+  const Precomputed p = precomputed_of(options);
+  const std::string dir = output_dir(path);
+  const ng::SegmentNames segment_names_ = segment_names(names, p.multilod.labels.background);
+  const std::optional<Chunks> changed = changed_chunks(update);
+  ArrayVolume view;
+  const ImageGrid& grid = label_grid(volume, spacing, origin, view, "labels_precomputed");
+  ng::PieceCounts n;
+  run_released(threads, [&] {
+    if (changed) {
+      n = update_whole(grid, p, dir, *changed, segment_names_);
+      return;
+    }
+    const ng::MultilodLayout layout = layout_of(grid, p);
+    std::vector<ng::ChunkPiece> pieces = ng::to_chunk_pieces(generate::multilod_pieces(grid, p.multilod));
+    n.add(pieces);
+    n.chunks = static_cast<std::size_t>(layout.chunks[0]) * layout.chunks[1] * layout.chunks[2];
+    ng::write_multilod_and_chunks(dir, layout, std::move(pieces), segment_names_);
+  });
+  return counts_dict(n);
 }
 
 // The chunk grid of a volume of `whole` samples and the box (the samples its
@@ -146,7 +174,7 @@ py::dict plan(const std::array<Id, 3>& whole, const py::tuple& options, const st
   output_dir(path);
   const generate::MultilodGrid g = generate::multilod_grid(whole, p.multilod);
   py::list boxes;
-  for (const auto& c : chunks_to_mesh(g, p, path, update)) {
+  for (const auto& c : chunks_to_mesh(g, p, path, changed_chunks(update))) {
     const generate::MultilodBox box = generate::multilod_chunk_box(whole, p.multilod, c);
     boxes.append(py::make_tuple(c, box.lo, box.dims));
   }
@@ -207,7 +235,7 @@ void assemble(const std::array<Id, 3>& whole, const py::object& spacing, const p
 
 void register_labels_precomputed(py::module_& m) {
   m.def("labels_precomputed", &write_whole, py::arg("volume"), py::arg("spacing"), py::arg("origin"), py::arg("path"),
-        py::arg("options"), py::arg("label_names"), py::arg("threads") = 0,
+        py::arg("options"), py::arg("label_names"), py::arg("threads") = 0, py::arg("update") = py::none(),
         "Neuroglancer multi-resolution meshes of a label volume; returns the counts. Use keymesh.labels_precomputed.");
   m.def("precomputed_segment_names", [](const py::object& names, std::int64_t background) {
     return segment_names(names, background);

@@ -7,13 +7,13 @@
 // Rank 0 writes the index and the report from every rank's entry.
 #include <algorithm>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "contour_cli.hpp"
 #include "piece_files.hpp"
+#include "rank_entries.hpp"
 #include "keymesh/distributed/coarse_pieces.hpp"
 #include "keymesh/distributed/contour_distributed.hpp"
 #include "keymesh/distributed/gather_pieces.hpp"
@@ -26,9 +26,9 @@ namespace keymesh::cli {
 namespace {
 
 // This rank's entry of the report.
-std::vector<std::byte> rank_entry(const distributed::CoarsePiece& c, const StageTimer& timer) {
+nlohmann::json rank_entry(const distributed::CoarsePiece& c, const StageTimer& timer) {
   const distributed::OwnPiece& w = c.piece;
-  const nlohmann::json e = {{"first_layer", c.first_layer}, {"layers", c.layers},
+  return {{"first_layer", c.first_layer}, {"layers", c.layers},
                             {"halo_layers", c.halo_layers}, {"attempts", c.attempts}, {"slabs", c.slabs},
                             {"fine_points_held", c.fine_points_held},
                             {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
@@ -41,23 +41,16 @@ std::vector<std::byte> rank_entry(const distributed::CoarsePiece& c, const Stage
                             {"keys_requested", w.keys_requested}, {"bytes_sent", w.bytes_sent},
                             {"read", c.read}, {"contour", c.contour}, {"coarsen", c.coarsen},
                             {"number", c.number}, {"seconds", timer.seconds()}, {"peak_rss_mib", peak_rss_mib()}};
-  const std::string s = e.dump();
-  std::vector<std::byte> out(s.size());
-  std::memcpy(out.data(), s.data(), s.size());
-  return out;
 }
 
 // Rank 0: the summary line and the report, the counts summed from every
 // rank's share (each counts its own triangles and the points, edges and
 // vertices it owns).
 void report_coarse_pieces(const ContourCli& o, const ImageGrid& header, long long points,
-                          const std::vector<std::vector<std::byte>>& entries, int threads, const StageTimer& timer) {
-  nlohmann::json per_rank = nlohmann::json::array();
+                          const nlohmann::json& per_rank, int threads, const StageTimer& timer) {
   long long triangles = 0, before = 0, edges = 0, vertices = 0, boundary = 0, halo = 0, attempts = 0;
   double bytes = 0;
-  for (const auto& e : entries) {
-    per_rank.push_back(nlohmann::json::parse(std::string(reinterpret_cast<const char*>(e.data()), e.size())));
-    const nlohmann::json& q = per_rank.back();
+  for (const nlohmann::json& q : per_rank) {
     triangles += q["triangles"].get<long long>();
     before += q["triangles_before"].get<long long>();
     edges += q["nonmanifold_edges"].get<long long>();
@@ -67,7 +60,7 @@ void report_coarse_pieces(const ContourCli& o, const ImageGrid& header, long lon
     attempts = std::max(attempts, q["attempts"].get<long long>());
     bytes += q["bytes_sent"].get<double>();
   }
-  const int ranks = static_cast<int>(entries.size());
+  const int ranks = static_cast<int>(per_rank.size());
   const bool pieces = o.output.ends_with(".pvtp");
   if (!o.common.quiet) {
     std::fprintf(stderr, "keymesh: %lld points, %lld triangles %s %d %s -> %s\n", points, triangles,
@@ -117,8 +110,8 @@ int run_coarse_pieces(const ContourCli& o, const generate::ContourOptions& optio
       if (distributed::rank() == 0) timer.run("write", [&] { write_contour(o, whole, {}); });
     });
   }
-  const auto entries = distributed::gather_bytes(rank_entry(c, timer));
-  if (distributed::rank() == 0) report_coarse_pieces(o, source.header(), c.piece.total_points, entries, threads, timer);
+  const nlohmann::json per_rank = gather_rank_entries(rank_entry(c, timer));
+  if (distributed::rank() == 0) report_coarse_pieces(o, source.header(), c.piece.total_points, per_rank, threads, timer);
   return 0;
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "labels_job.hpp"
+#include "rank_entries.hpp"
 #include "keymesh/distributed/gather_pieces.hpp"
 #include "keymesh/distributed/halo_piece.hpp"
 #include "keymesh/distributed/mpi.hpp"
@@ -57,16 +58,11 @@ std::vector<std::uint32_t> own_groups(const generate::LabelPiece& piece, std::ui
 }
 
 // This rank's entry of the report.
-std::vector<std::byte> rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& slabs,
-                                  const distributed::OwnPiece& w) {
-  const nlohmann::json e = {{"first_row", rows.first}, {"rows", rows.second - rows.first},
-                            {"halo_rows", slabs.stream_stats().halo_rows}, {"slabs", slabs.stream_stats().slabs},
-                            {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
-                            {"triangles", w.own_triangles}, {"peak_rss_mib", peak_rss_mib()}};
-  const std::string s = e.dump();
-  std::vector<std::byte> out(s.size());
-  std::memcpy(out.data(), s.data(), s.size());
-  return out;
+nlohmann::json rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& slabs, const distributed::OwnPiece& w) {
+  return {{"first_row", rows.first}, {"rows", rows.second - rows.first},
+          {"halo_rows", slabs.stream_stats().halo_rows}, {"slabs", slabs.stream_stats().slabs},
+          {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
+          {"triangles", w.own_triangles}, {"peak_rss_mib", peak_rss_mib()}};
 }
 
 }  // namespace
@@ -97,18 +93,15 @@ void write_labels_gathered(const LabelsJob& job, generate::LabelSlabs& slabs, co
       return distributed::gather_pieces(w, group, groups, job.options.history ? &history_key : nullptr);
     });
   });
-  const auto entries = distributed::gather_bytes(rank_entry(rows, slabs, w));
+  const nlohmann::json per_rank = gather_rank_entries(rank_entry(rows, slabs, w));
   distributed::agreed([&] {
     if (distributed::rank() != 0) return;
-    nlohmann::json per_rank = nlohmann::json::array();
-    for (const auto& e : entries)
-      per_rank.push_back(nlohmann::json::parse(std::string(reinterpret_cast<const char*>(e.data()), e.size())));
     nlohmann::json r;
     r["dims"] = header.dims;
     r["scalar_type"] = scalar_type_name(header.type);
     if (job.memory_limit) r["memory_limit"] = job.memory_limit;
-    r["ranks"] = static_cast<int>(entries.size());
-    r["distributed"] = {{"ranks", static_cast<int>(entries.size())}, {"output", "gathered"},
+    r["ranks"] = static_cast<int>(per_rank.size());
+    r["distributed"] = {{"ranks", static_cast<int>(per_rank.size())}, {"output", "gathered"},
                         {"halo_rows", generate::LabelSlabs::halo_rows(job.options)}, {"per_rank", per_rank}};
     // The soup and the fine triangles were never whole on one rank: rank
     // 0's counts hold its halo rows (the fold guard's too), so the report

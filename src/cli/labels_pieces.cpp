@@ -7,13 +7,13 @@
 // report from every rank's entry.
 #include <algorithm>
 #include <cstdio>
-#include <cstring>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "labels_job.hpp"
 #include "piece_files.hpp"
+#include "rank_entries.hpp"
 #include "keymesh/distributed/halo_piece.hpp"
 #include "keymesh/distributed/mpi.hpp"
 #include "keymesh/generate/labels/labels_stream.hpp"
@@ -65,16 +65,14 @@ nlohmann::json summed_pairs(const nlohmann::json& per_rank) {
 
 // Rank 0: the summary line and the report, from every rank's own entry.
 void report_pieces(const LabelsJob& job, const ImageGrid& header, const generate::LabelStats& stats,
-                   long long points, const std::vector<std::vector<std::byte>>& entries, Id halo, StageTimer& timer) {
-  nlohmann::json per_rank = nlohmann::json::array();
+                   long long points, nlohmann::json per_rank, Id halo, StageTimer& timer) {
   long long triangles = 0;
   double bytes = 0;
-  for (const auto& e : entries) {
-    per_rank.push_back(nlohmann::json::parse(std::string(reinterpret_cast<const char*>(e.data()), e.size())));
-    triangles += per_rank.back()["triangles"].get<long long>();
-    bytes += per_rank.back()["bytes_sent"].get<double>();
+  for (const auto& e : per_rank) {
+    triangles += e["triangles"].get<long long>();
+    bytes += e["bytes_sent"].get<double>();
   }
-  const int ranks = static_cast<int>(entries.size());
+  const int ranks = static_cast<int>(per_rank.size());
   if (!job.common.quiet)
     std::fprintf(stderr, "keymesh: %lld labels, %lld points, %lld triangles in %d pieces -> %s\n",
                  static_cast<long long>(stats.surfaces), points, triangles, ranks, printable(job.output).c_str());
@@ -97,20 +95,19 @@ void report_pieces(const LabelsJob& job, const ImageGrid& header, const generate
   write_report(job.common.report_path, r);
 }
 
-// This rank's entry of the report.
-std::vector<std::byte> rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& slabs,
-                                  const distributed::OwnPiece& w, nlohmann::json pairs, const StageTimer& timer) {
-  const nlohmann::json e = {{"pairs", std::move(pairs)}, {"first_row", rows.first}, {"rows", rows.second - rows.first},
-                            {"halo_rows", slabs.stream_stats().halo_rows}, {"slabs", slabs.stream_stats().slabs},
-                            {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
-                            {"triangles", w.own_triangles},
-                            {"ghost_triangles", w.mesh.num_cells() - w.own_triangles},
-                            {"keys_requested", w.keys_requested}, {"bytes_sent", w.bytes_sent},
-                            {"seconds", timer.seconds()}, {"peak_rss_mib", peak_rss_mib()}};
-  const std::string s = e.dump();
-  std::vector<std::byte> out(s.size());
-  std::memcpy(out.data(), s.data(), s.size());
-  return out;
+// This rank's entry of the report. guard_shortened is the rank's own count,
+// its halo rows' moves included: the report has no total, since the ranks'
+// halos overlap (the one process's count is at most their sum).
+nlohmann::json rank_entry(std::pair<Id, Id> rows, const generate::LabelSlabs& slabs, const distributed::OwnPiece& w,
+                          nlohmann::json pairs, const StageTimer& timer) {
+  return {{"pairs", std::move(pairs)}, {"first_row", rows.first}, {"rows", rows.second - rows.first},
+          {"halo_rows", slabs.stream_stats().halo_rows}, {"slabs", slabs.stream_stats().slabs},
+          {"points", w.mesh.num_points()}, {"points_owned", w.points_owned},
+          {"triangles", w.own_triangles},
+          {"ghost_triangles", w.mesh.num_cells() - w.own_triangles},
+          {"keys_requested", w.keys_requested}, {"bytes_sent", w.bytes_sent},
+          {"guard_shortened", slabs.stats().guard_shortened},
+          {"seconds", timer.seconds()}, {"peak_rss_mib", peak_rss_mib()}};
 }
 
 }  // namespace
@@ -140,8 +137,9 @@ void write_labels_pieces(const LabelsJob& job, generate::LabelSlabs& slabs, cons
     write_piece_files(w.mesh, w.ids, io::PieceGhosts{std::move(w.point_ghosts), std::move(w.cell_ghosts)}, job.output,
                       history);
   });
-  const auto entries = distributed::gather_bytes(rank_entry(rows, slabs, w, std::move(pairs), timer));
-  if (distributed::rank() == 0) report_pieces(job, header, slabs.stats(), w.total_points, entries, halo, timer);
+  nlohmann::json per_rank = gather_rank_entries(rank_entry(rows, slabs, w, std::move(pairs), timer));
+  if (distributed::rank() == 0)
+    report_pieces(job, header, slabs.stats(), w.total_points, std::move(per_rank), halo, timer);
 }
 
 }  // namespace keymesh::cli

@@ -33,14 +33,17 @@ class Check {
   std::shared_ptr<const CLI::Validator> validator_;
 };
 
-// CLI::Range(min, max): the value read as the bounds' type, within them.
+// CLI::Range(min, max) as the help shows it: the value read as the bounds'
+// type, within them (a double finite), refused in one short line ("x is not
+// an integer", "-1 is out of range (0 to 64)").
 Check in_range(int min, int max);
 Check in_range(long long min, long long max);
 Check in_range(double min, double max);
-// CLI::IsMember: one of these.
+// CLI::IsMember: one of these ("x not in {5,24}").
 Check member_of(std::vector<std::string> names);
 Check member_of(std::initializer_list<int> values);
-// CLI::NonNegativeNumber: a number, 0 or more.
+// CLI::NonNegativeNumber as the help shows it ("NONNEGATIVE"): an integer,
+// 0 or more ("-1 is out of range (0 or more)").
 Check non_negative();
 // A check of one's own: `check` returns "" to accept the text (which it may
 // rewrite, as a transform), otherwise the reason; `description` goes in the

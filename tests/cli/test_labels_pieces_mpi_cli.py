@@ -10,7 +10,8 @@ written; VTK's reader gives the pieces, and welded by their GlobalPointIds
 they hold the one process's points in its order with the same bits, and its
 triangles with the same cell fields (the pieces' triangles run rank by rank);
 keymesh's own .pvtp reader welds them the same way; the report's label pairs
-(faces, distinct points), summed from the ranks' shares, are one process's; the report says
+(faces, distinct points), summed from the ranks' shares, are one process's; each rank's
+guard_shortened (halo rows included) adds up to at least one process's count; the report says
 "output": "pieces" with every rank's peak memory and bytes sent and no
 gather stage; a rank without rows writes an empty piece; a piece that cannot
 be written ends every rank with one message, and no index. Surface nets and
@@ -55,11 +56,15 @@ def welded_by_vtk(index, P, n_points):
     return pts, merged[np.lexsort(merged.T[::-1])]
 
 
+guard_seen = []  # one process's guard_shortened of each run checked
+
+
 def pieces_equal_one_process(args, ranks=(2, 3), extra=()):
     def fn():
         ref_path = os.path.join(D, "ref.vtp")
         run("labels", VOL, *RAW, *args, "-o", ref_path, "-q", "--report", ref_path + ".json")
         ref_pairs = report(ref_path + ".json")["pairs"]
+        ref_guard = report(ref_path + ".json")["guard_shortened"]
         ref = read_polydata(ref_path)
         ref_pts = ns.vtk_to_numpy(ref.GetPoints().GetData()).astype(np.float32)
         ref_rows = cell_rows(ref, triangles_of(ref))
@@ -81,6 +86,12 @@ def pieces_equal_one_process(args, ranks=(2, 3), extra=()):
             for q in d["per_rank"]:
                 assert q["peak_rss_mib"] > 0 and q["bytes_sent"] >= 0 and q["halo_rows"] > 0, q
             assert sum(q["triangles"] for q in d["per_rank"]) == len(ref_rows)
+            # Each rank's fold guard count, its halo rows included: every point's moves are made by
+            # its owner as by one process, so the ranks' sum is at least one process's count; no total.
+            shortened = [q["guard_shortened"] for q in d["per_rank"]]
+            assert min(shortened) >= 0 and sum(shortened) >= ref_guard, (shortened, ref_guard)
+            assert "guard_shortened" not in r, r.keys()
+            guard_seen.append(ref_guard)
             assert sum(q["points_owned"] for q in d["per_rank"]) <= len(ref_pts)
             assert max(q["rows"] + q["halo_rows"] for q in d["per_rank"]) < SHAPE[2] + 2, "a rank held every row"
             # keymesh's own reader welds the pieces by their ids too.
@@ -101,6 +112,14 @@ for method in ("surfacenets", "discrete-mc"):
     check(f"{' '.join(args)}: -np 3 pieces equal one process", pieces_equal_one_process(args, (3,)))
     args = ["--method", method, "--per-label", "--smooth", "2", "--coarsen"]
     check(f"{' '.join(args)}: -np 2 pieces equal one process", pieces_equal_one_process(args, (2,)))
+
+
+def fold_guard_acted():
+    assert guard_seen and max(guard_seen) > 0, guard_seen
+
+
+check("the fold guard acted in those runs, so the ranks' guard_shortened sums above were checked against a count > 0",
+      fold_guard_acted)
 
 plane = SHAPE[0] * SHAPE[1] * 2 + (SHAPE[0] + 2) * (SHAPE[1] + 2) * 2
 check("--memory-limit on every rank (one row per slab), surface nets per label: pieces equal one process",

@@ -247,15 +247,30 @@ def test_mpirun_uint64():
 
 def test_distinct_label_limit_per_chunk_box():
     """67,032 distinct uint32 ids (every voxel its own segment): one call is
-    refused by the 65,536-label limit; a --chunk task scans only its box
-    (chunk + halo, 13^3 here), so chunk tasks are the workaround."""
+    refused by the 65,536-label limit, the message giving the true count
+    (67,033 with the background) and the limit; streamed (--memory-limit),
+    whose scan stops counting past the limit, it says "at least 65537"; a
+    --chunk task scans only its box (chunk + halo, 13^3 here), so chunk
+    tasks are the workaround."""
     shape = (42, 42, 38)
-    ids = (np.arange(np.prod(shape), dtype=np.uint64) * 58_000 + 5).astype(np.uint32).reshape(shape, order="F")
+    index = np.arange(np.prod(shape), dtype=np.uint64).reshape(shape, order="F")
+    ids = (index * 58_000 + 5).astype(np.uint32)
     assert len(np.unique(ids)) == ids.size
     src = write_nrrd(os.path.join(D, "many.nrrd"), ids, "uint32")
     grid = ["--format", "precomputed", "--lods", "2", "--chunk-shape", "8", "8", "8", "--smooth", "0"]
     p = run("labels", src, "-o", os.path.join(D, "many_one"), *grid, expect=1)
-    assert "67033 distinct labels (background included), more than the supported 65536" in p.stderr, p.stderr
+    said = [line for line in p.stderr.splitlines() if line.strip()]
+    assert len(said) == 1 and said[0].endswith(
+        ": labels: the volume holds 67033 distinct labels (background included), more than the supported 65536"), \
+        p.stderr
+    # A mesh file holds ids under 2^24 only (float32 boundary_labels): the same volume, ids 200 apart.
+    small = write_nrrd(os.path.join(D, "many_small.nrrd"), (index * 200 + 5).astype(np.uint32), "uint32")
+    p = run("labels", small, "-o", os.path.join(D, "many_streamed.vtp"), "--memory-limit", "64K", "-q", expect=1)
+    said = [line for line in p.stderr.splitlines() if line.strip()]
+    assert len(said) == 1 and said[0].endswith(
+        ": labels: the volume holds at least 65537 distinct labels (background included), "
+        "more than the supported 65536"), p.stderr
+    assert not os.path.exists(os.path.join(D, "many_streamed.vtp"))
     tasks = os.path.join(D, "many_tasks")
     run("labels", src, "-o", tasks, *grid, "--chunk", 0, 0, 0)
     assert os.listdir(os.path.join(tasks, "chunks")), "the chunk task kept no pieces"
@@ -277,6 +292,6 @@ check("uint64 chunk tasks + --assemble equal one call; --update equals a full ru
 check("uint64 id past 2^63 - 1: one-line refusal naming it, no output", test_uint64_past_int64_refused)
 check(".vtp of a uint32 volume: boundary_labels exact, streamed too; past 2^24 refused", test_mesh_formats_exact_ids)
 check("mpirun -np 2 on a uint64 volume: byte-identical to one process", test_mpirun_uint64)
-check("67,032 distinct uint32 ids: one call refused, a chunk task runs", test_distinct_label_limit_per_chunk_box)
+check("67,032 distinct uint32 ids: one call refused with the true count (streamed: at least 65537), a chunk task runs", test_distinct_label_limit_per_chunk_box)
 check("contour of a uint64 volume: refused, naming labels", test_contour_refuses_wide_samples)
 finish(skipped="; ".join(SKIPPED) or None)

@@ -238,6 +238,42 @@ def test_dask_update_equals_a_full_run(cli_run, tmp_path):
     assert_same_tree(out, want)
 
 
+def test_in_memory_update_equals_a_full_run(cli_run, tmp_path):
+    """keymesh.labels_precomputed(update=CHUNKS) is `keymesh labels --update`, in memory: after an edit
+    inside chunk (0, 0, 0), re-meshing only the 8 chunks it can reach gives, byte for byte, the
+    directory a full CLI run on the edited volume gives (a numpy array and a keymesh.Volume); an
+    update naming no chunk the edit touched leaves the directory as it was."""
+    volume, runs, _ = cli_run
+    before, _ = runs["plain"]
+    edited = volume.copy()
+    edited[2:10, 3:11, 2:9] = 5  # inside chunk (0, 0, 0): samples [-1, 15) along each axis
+    edited[4:7, 5:8, 4:7] = 0  # a hole: segment 5 gains an inner surface
+    want = str(tmp_path / "full")
+    nrrd = kmtest.write_label_nrrd(str(tmp_path / "edited.nrrd"), edited)
+    subprocess.run([EXE, "labels", nrrd, "-o", want, "--format", "precomputed", *CLI_OPTIONS, "-q"], check=True)
+    for name, given in (("array", edited), ("Volume", keymesh.Volume(np.asfortranarray(edited)))):
+        out = str(tmp_path / name)
+        shutil.copytree(before, out)
+        assert not filecmp.cmp(os.path.join(out, "5"), os.path.join(want, "5"), shallow=False)
+        report = keymesh.labels_precomputed(given, out, **OPTIONS, update=[(0, 0, 0)])
+        assert_same_tree(out, want)
+        assert report["chunks_written"] == 8 and 5 in report["segments"], report
+    # the unedited volume updated at (0, 0, 0): its chunks and segments rewritten as they were
+    out = str(tmp_path / "unchanged")
+    shutil.copytree(before, out)
+    keymesh.labels_precomputed(volume, out, **OPTIONS, update=np.array([[0, 0, 0]]))
+    assert_same_tree(out, before)
+    # refusals, nothing written: no chunk store; a chunk outside the grid; not chunks
+    with pytest.raises(keymesh.Error, match="no chunk store"):
+        keymesh.labels_precomputed(edited, str(tmp_path / "empty"), **OPTIONS, update=[(0, 0, 0)])
+    assert not os.path.exists(tmp_path / "empty" / "info")
+    with pytest.raises(keymesh.Error, match="outside"):
+        keymesh.labels_precomputed(edited, out, **OPTIONS, update=[(9, 0, 0)])
+    with pytest.raises(ValueError, match="update must be chunks"):
+        keymesh.labels_precomputed(edited, out, **OPTIONS, update=[(0, 0)])
+    assert_same_tree(out, before)
+
+
 def test_dask_worker_processes(cli_run, tmp_path):
     """dask.distributed workers in processes of their own (tasks pickled, chunk files written by two
     processes side by side): the same directory."""

@@ -77,6 +77,18 @@ def test_refusals_name_the_label():
         keymesh.contour(relabelled(vol, np.uint64), 0.5)
 
 
+def test_distinct_label_limit_states_the_count():
+    """A volume of 67,032 distinct uint32 ids (every voxel its own label) is
+    refused by the 65,536-label limit, stating the true count (67,033 with
+    the background) and the limit; the interpreter lives on."""
+    shape = (42, 42, 38)
+    many = (np.arange(np.prod(shape), dtype=np.uint32) * 200 + 5).reshape(shape)  # ids under 2^24
+    want = "^labels: the volume holds 67033 distinct labels \\(background included\\), more than the supported 65536$"
+    with pytest.raises(keymesh.Error, match=want):
+        keymesh.contour_labels(many, smoothing_iterations=0)
+    assert keymesh.contour_labels(label_map()).n_cells > 500
+
+
 def test_dask_contour_labels_wide():
     da = pytest.importorskip("dask.array")
     import keymesh.dask

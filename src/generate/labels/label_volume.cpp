@@ -196,12 +196,15 @@ LabelVolume label_table(const ImageGrid& header, std::vector<std::int64_t> value
   // The background joins the values (it pads the grid) if absent.
   if (!std::binary_search(vol.values.begin(), vol.values.end(), opt.background))
     vol.values.insert(vol.values.begin() + index_of(vol.values, opt.background), opt.background);
-  if (static_cast<Id>(vol.values.size()) > kMaxDistinctLabels)
+  if (static_cast<Id>(vol.values.size()) > kMaxDistinctLabels) {
+    // A list merge_distinct capped (kMaxDistinctLabels + 1 values) says only
+    // that there are at least that many; any other list is the true count.
+    const bool capped = vol.distinct_in_grid == kMaxDistinctLabels + 1;
     throw InputError("labels: the volume holds " +
-                     std::string(static_cast<Id>(vol.values.size()) > kMaxDistinctLabels + 1 ? "more than " : "") +
-                     std::to_string(vol.values.size()) +
+                     (capped ? "at least " + std::to_string(kMaxDistinctLabels + 1) : std::to_string(vol.values.size())) +
                      " distinct labels (background included), more than the supported " +
                      std::to_string(kMaxDistinctLabels));
+  }
   vol.background = static_cast<LabelIndex>(index_of(vol.values, opt.background));
 
   // Selection: a label not selected becomes background.
