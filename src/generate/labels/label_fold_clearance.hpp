@@ -1,9 +1,9 @@
 #pragma once
 // The fold guard's clearance (label_fold_clearance.cpp): per triangle and
-// iteration, whether the guard's first try (every corner's full move) is
-// proven to keep the triangle, by a bound cheaper than the guard's own test,
-// so that label_kernels::GuardStep can skip that triangle's test on the first
-// try and give the same bits.
+// iteration, a proof that the guard keeps it on every try (each corner at
+// any fraction of its move), by a bound cheaper than the guard's own test,
+// so that label_kernels::GuardStep can skip that triangle's tests and give
+// the same bits.
 #include <cstdint>
 #include <vector>
 
@@ -25,17 +25,24 @@ struct ClearanceInput {
 
 class FoldClearance {
  public:
-  // Sets clear()[t] to 1 where every orientation GuardStep's first try
-  // computes for triangle t (each moving corner at its full move, the two
-  // others at either end of theirs) is proven >= least[t]; 0 where not
-  // proven (GuardStep then tests it). Sound for any finite input.
+  // Sets clear()[t] to 1 where every orientation GuardStep computes for
+  // triangle t on any try (each moving corner at 1, 1/2, 1/4 or 1/8 of its
+  // move, the two others at either end of theirs) is proven >= least[t]; 0
+  // where not proven (GuardStep then tests it). Sound for any finite input.
   void update(const ClearanceInput& in);
   const std::uint8_t* clear() const { return clear_.data(); }
   // Per point: 1 where clear() holds for every triangle of the point.
   const std::uint8_t* clear_point() const { return clear_point_.data(); }
 
+  // Per point and iteration: its move candidate - x and the move's length,
+  // one record so that a triangle's corner costs one cache line.
+  struct alignas(32) Move {
+    double d[3];
+    double reach;
+  };
+
  private:
-  std::vector<double> reach_;              // per point: |candidate - x|
+  std::vector<Move> move_;                 // per point
   std::vector<std::uint8_t> clear_;        // per triangle
   std::vector<std::uint8_t> clear_point_;  // per point
 };

@@ -1,8 +1,9 @@
 // The fold guard's clearance (src/generate/labels/label_fold_clearance.cpp)
 // proves only what the guard's own test finds, down to the last bit: a
-// triangle it clears passes every orientation GuardStep computes on its first
-// try, even where the bound is tight; and the guard with it moves every
-// point exactly as without it, on jittered meshes with moves small and large.
+// triangle it clears passes every orientation GuardStep computes on any try
+// (the moving corner at 1, 1/2, 1/4 or 1/8 of its move), even where the
+// bound is tight; and the guard with it moves every point exactly as without
+// it, on jittered meshes with moves small and large.
 #include "generate/labels/label_fold_clearance.hpp"
 
 #include <gtest/gtest.h>
@@ -23,12 +24,12 @@ using generate::label_kernels::orientation;
 
 namespace {
 
-// GuardStep's first try for corner k of triangle (a, b, c) (moves da, db,
-// dc): at = x + 1 (candidate - x), the two others at either end; the least
-// of the four orientations it computes.
-double first_try_least(const double pos[3][3], const double cand[3][3], int k, const double* n) {
+// GuardStep's try at fraction f for corner k of triangle (a, b, c) (moves
+// da, db, dc): at = x + f (candidate - x), the two others at either end; the
+// least of the four orientations it computes.
+double try_least(const double pos[3][3], const double cand[3][3], int k, double f, const double* n) {
   double at[3];
-  for (int a = 0; a < 3; ++a) at[a] = pos[k][a] + 1.0 * (cand[k][a] - pos[k][a]);
+  for (int a = 0; a < 3; ++a) at[a] = pos[k][a] + f * (cand[k][a] - pos[k][a]);
   const double* qs[2] = {pos[(k + 1) % 3], cand[(k + 1) % 3]};
   const double* rs[2] = {pos[(k + 2) % 3], cand[(k + 2) % 3]};
   double least = INFINITY;
@@ -45,13 +46,15 @@ double length(const double v[3]) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + 
 // triangle's plane, where the bound is the least orientation itself (up to
 // rounding), far from the origin, with `least` set within a few slack widths
 // of it; and loose ones (every corner moving anywhere). A cleared triangle
-// passes all twelve orientations; both answers occur.
-TEST(LabelFoldClearance, ClearedTrianglesPassEveryFirstTryOrientation) {
+// passes all twelve orientations of every try; both answers occur.
+TEST(LabelFoldClearance, ClearedTrianglesPassEveryOrientationOfEveryTry) {
   std::mt19937_64 rng(29);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   int cleared = 0, refused = 0;
   for (int i = 0; i < 200000; ++i) {
-    const bool tight = i % 2 == 0;
+    // Tight at the full move (towards the opposite side), tight at every
+    // fraction of it (along the opposite side: D stays), or loose.
+    const bool tight = i % 4 < 2, sliding = i % 4 == 1;
     const double far = i % 3 == 0 ? 1000.0 : 50.0;
     double pos[3][3], cand[3][3];
     for (int a = 0; a < 3; ++a) {
@@ -69,11 +72,12 @@ TEST(LabelFoldClearance, ClearedTrianglesPassEveryFirstTryOrientation) {
     double reach[3] = {0, 0, 0};
     if (tight) {
       // Corner 0 towards side (1, 2): along (p2 - p1) x n, the in-plane
-      // normal of that side pointing inwards.
+      // normal of that side pointing inwards; or along that side.
       const double s[3] = {pos[2][0] - pos[1][0], pos[2][1] - pos[1][1], pos[2][2] - pos[1][2]};
       const double in[3] = {s[1] * n[2] - s[2] * n[1], s[2] * n[0] - s[0] * n[2], s[0] * n[1] - s[1] * n[0]};
-      const double step = 0.5 * (unit(rng) + 1.0) / length(in);
-      for (int a = 0; a < 3; ++a) cand[0][a] = pos[0][a] + step * in[a];
+      const double* dir = sliding ? s : in;
+      const double step = 0.5 * (unit(rng) + 1.0) / length(dir);
+      for (int a = 0; a < 3; ++a) cand[0][a] = pos[0][a] + step * dir[a];
     } else {
       const double scale = std::pow(10.0, -3.0 + 3.0 * (unit(rng) + 1.0) / 2.0);
       for (auto& c : cand)
@@ -86,18 +90,24 @@ TEST(LabelFoldClearance, ClearedTrianglesPassEveryFirstTryOrientation) {
     double size = 0;
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 3; ++a) size = std::fmax(size, std::fmax(std::fabs(pos[k][a]), std::fabs(cand[k][a])));
-    double truth = INFINITY;
-    for (int k = 0; k < 3; ++k) truth = std::fmin(truth, first_try_least(pos, cand, k, n));
+    // The first try's least (the tight one: the bound's own case), and the
+    // least over every try.
+    double truth = INFINITY, every = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+      truth = std::fmin(truth, try_least(pos, cand, k, 1.0, n));
+      for (double f : {1.0, 0.5, 0.25, 0.125}) every = std::fmin(every, try_least(pos, cand, k, f, n));
+    }
     // least from 1e-17 to 1e-8 (times the coordinates' size) either side of
     // the truth, across rounding and the clearance's slack (tight), or
     // anywhere below twice the area (loose).
     const double off = std::pow(10.0, -17.0 + 4.5 * (unit(rng) + 1.0)) * (1.0 + size);
-    const double least = tight ? truth + (unit(rng) < 0 ? -off : off) : twice_area * (unit(rng) + 1.0) / 2.0;
+    const double least = tight ? (sliding ? every : truth) + (unit(rng) < 0 ? -off : off)
+                               : twice_area * (unit(rng) + 1.0) / 2.0;
     const double* from[3] = {pos[0], pos[1], pos[2]};
     const double* to[3] = {cand[0], cand[1], cand[2]};
     if (triangle_clear(from, to, reach, n, least, clearance_slack(size))) {
       ++cleared;
-      ASSERT_GE(truth, least) << "case " << i;
+      ASSERT_GE(every, least) << "case " << i;
     } else {
       ++refused;
     }

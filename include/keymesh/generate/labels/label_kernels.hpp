@@ -147,15 +147,17 @@ struct GuardFrame {
 };
 
 // One guarded move of point p: out = x + f (candidate - x), f the largest of
-// 1, 1/2, 1/4, 1/8 for which each of p's triangles keeps its orientation at
-// least at its `least` with each other corner at either end of that
+// 1, 1/2, 1/4, 1/8 for which each of p's triangles keeps its orientation
+// at least at its `least` with each other corner at either end of that
 // corner's own move (D is linear in each corner, so the four combinations
 // bound it whatever fraction the neighbours take), else 0 (p stays). A move
 // shortened or refused counts in shortened[p]. `clear` and `clear_point`
 // (optional, the host's FoldClearance, label_fold_clearance.hpp): per
-// triangle, 1 where the first try's test is proven to pass, so it is skipped
-// there, and per point, 1 where that holds for all its triangles; the same
-// decisions.
+// triangle, 1 where every try's test is proven to pass, so it is skipped,
+// and per point, 1 where that holds for all its triangles; the same
+// decisions. A try fails at the first triangle that fails, and the next try
+// starts at that triangle (most failing moves fail at the same one): a try's
+// answer does not depend on the order of its tests.
 struct GuardStep {
   const std::uint32_t* corners;        // 3 per triangle
   const Id* offsets;                   // per point + 1, into point_corners
@@ -168,19 +170,27 @@ struct GuardStep {
   std::uint32_t* shortened;
   const std::uint8_t* clear = nullptr;
   const std::uint8_t* clear_point = nullptr;
-  KEYMESH_HD bool keeps(Id p, const double at[3], bool first_try) const {
-    if (first_try && clear_point && clear_point[p]) return true;
-    for (Id j = offsets[p]; j < offsets[p + 1]; ++j) {
-      const Id t = point_corners[j] / 3, k = point_corners[j] % 3;
-      if (first_try && clear && clear[t]) continue;
-      const Id q = corners[3 * t + (k + 1) % 3], r = corners[3 * t + (k + 2) % 3];
-      const double* qs[2] = {x + 3 * q, candidate + 3 * q};
-      const double* rs[2] = {x + 3 * r, candidate + 3 * r};
-      for (int i = 0; i < 2; ++i)
-        for (int m = 0; m < 2; ++m)
-          if (!(orientation(at, qs[i], rs[m], normal + 3 * t) >= least[t])) return false;
-    }
+  // Whether triangle t, corner p at `at`, keeps its least orientation at the
+  // four ends of its two other corners' moves.
+  KEYMESH_HD bool keeps_triangle(Id t, Id k, const double at[3]) const {
+    const Id q = corners[3 * t + (k + 1) % 3], r = corners[3 * t + (k + 2) % 3];
+    const double* qs[2] = {x + 3 * q, candidate + 3 * q};
+    const double* rs[2] = {x + 3 * r, candidate + 3 * r};
+    for (int i = 0; i < 2; ++i)
+      for (int m = 0; m < 2; ++m)
+        if (!(orientation(at, qs[i], rs[m], normal + 3 * t) >= least[t])) return false;
     return true;
+  }
+  // The first of p's corners, from `start` round the list, whose triangle
+  // fails with p at `at`; -1 where all keep.
+  KEYMESH_HD Id failing(Id p, const double at[3], Id start) const {
+    const Id b = offsets[p], e = offsets[p + 1];
+    for (Id j = start, n = 0; n < e - b; ++n, j = j + 1 == e ? b : j + 1) {
+      const Id t = point_corners[j] / 3;
+      if (clear && clear[t]) continue;
+      if (!keeps_triangle(t, point_corners[j] % 3, at)) return j;
+    }
+    return -1;
   }
   KEYMESH_HD void operator()(Id p) const {
     const double* from = x + 3 * p;
@@ -189,11 +199,15 @@ struct GuardStep {
     if (to[0] != from[0] || to[1] != from[1] || to[2] != from[2]) {
       bool kept = false;
       int tries = 0;
+      Id start = offsets[p];
       for (double f = 1.0; tries < 4 && !kept; f *= 0.5, ++tries) {  // 1, 1/2, 1/4, 1/8: exact
         for (int a = 0; a < 3; ++a) at[a] = from[a] + f * (to[a] - from[a]);
-        kept = keeps(p, at, tries == 0);
-        if (!kept)
+        const Id fail = clear_point && clear_point[p] ? -1 : failing(p, at, start);
+        kept = fail < 0;
+        if (!kept) {
+          start = fail;
           for (int a = 0; a < 3; ++a) at[a] = from[a];
+        }
       }
       if (tries > 1 || !kept) ++shortened[p];
     }
