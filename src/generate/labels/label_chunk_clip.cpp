@@ -12,8 +12,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/keyreduce/groups.hpp"
@@ -34,6 +37,7 @@ struct ClipPoint {
   double plane[2] = {0, 0};               // their coordinates
   std::uint64_t from[3] = {0, 0, 0};      // keys of the surface points it is made from, increasing
   float p[3] = {0, 0, 0};
+  std::uint32_t index = 0;                // kind 0: the surface point's index
   auto name() const { return std::tie(kind, axis[0], axis[1], plane[0], plane[1], from[0], from[1], from[2]); }
 };
 
@@ -74,6 +78,7 @@ struct Clipper {
   ClipPoint surface_point(std::uint32_t i) const {
     ClipPoint c;
     c.from[0] = s.keys[i];
+    c.index = i;
     std::copy_n(at(i), 3, c.p);
     return c;
   }
@@ -156,33 +161,136 @@ std::uint64_t cell_key(const ClipPoint& c, const MultilodGrid& grid) {
   return key;
 }
 
-// Keys of the corners: a surface point's own; a made point its cell's key
-// and its rank there among the distinct made points by name.
-std::vector<std::uint64_t> corner_keys(const std::vector<ClipPoint>& corners, const MultilodGrid& grid) {
-  std::vector<std::uint64_t> keys(corners.size());
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> made;  // (cell key, corner)
-  for (std::size_t c = 0; c < corners.size(); ++c) {
-    if (corners[c].kind == 0) {
-      keys[c] = corners[c].from[0];
-    } else {
-      made.emplace_back(cell_key(corners[c], grid), static_cast<std::uint32_t>(c));
-    }
+// A corner of the clipped triangles: a surface point (its index in the
+// surface) or a point the clipping made (its index in the made points).
+struct Corner {
+  std::uint32_t index = 0;
+  bool made = false;
+};
+
+// The corners welded by key: each corner's point and the points' keys,
+// increasing.
+struct CornerWeld {
+  std::vector<std::uint32_t> point;
+  std::vector<std::uint64_t> keys;
+};
+
+using KeyedPoint = std::pair<std::uint64_t, std::uint32_t>;
+
+// Sorts pairs that come in a few increasing runs (a surface numbers its
+// points in key order within each kind: surface nets' cell points, then its
+// face points) by merging the runs; many runs: a plain sort. The order is
+// the one sorting gives.
+void sort_increasing_runs(std::vector<KeyedPoint>& v) {
+  std::vector<std::size_t> starts;
+  for (std::size_t k = 1; k < v.size(); ++k)
+    if (v[k] < v[k - 1]) starts.push_back(k);
+  if (starts.size() > 8) {
+    std::sort(v.begin(), v.end());
+    return;
   }
-  std::sort(made.begin(), made.end(), [&](const auto& x, const auto& y) {
-    return x.first != y.first ? x.first < y.first : corners[x.second].name() < corners[y.second].name();
+  for (std::size_t r = 0; r < starts.size(); ++r) {
+    const std::size_t end = r + 1 < starts.size() ? starts[r + 1] : v.size();
+    std::inplace_merge(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(starts[r]), v.begin() + static_cast<std::ptrdiff_t>(end));
+  }
+}
+
+// The surface points among the corners (most of them: ~6 corners a point),
+// deduplicated by their 32-bit index first (KEY-REDUCE, dense plan over the
+// span of indices), so that only the distinct points' 64-bit keys are put
+// in key order. Appends their keys (class 0, below every made point's) to
+// weld.keys.
+void weld_surface_corners(const SegmentSurface& s, const std::vector<Corner>& corners, CornerWeld& weld) {
+  std::uint32_t lo = std::numeric_limits<std::uint32_t>::max(), hi = 0;
+  for (const Corner& c : corners)
+    if (!c.made) lo = std::min(lo, c.index), hi = std::max(hi, c.index);
+  if (lo > hi) return;
+  std::vector<std::uint32_t> local;
+  local.reserve(corners.size());
+  for (const Corner& c : corners)
+    if (!c.made) local.push_back(c.index - lo);
+  const auto g = keyreduce::partition_dense(local.data(), static_cast<Id>(local.size()), hi - lo + 1, keyreduce::Order::Skip);
+  std::vector<KeyedPoint> by_key(g.unique_keys.size());
+  for (std::size_t u = 0; u < by_key.size(); ++u) by_key[u] = {s.keys[lo + g.unique_keys[u]], static_cast<std::uint32_t>(u)};
+  sort_increasing_runs(by_key);
+  std::vector<std::uint32_t> point_of(by_key.size());
+  for (std::size_t k = 0; k < by_key.size(); ++k) {
+    if (k == 0 || by_key[k].first != by_key[k - 1].first) weld.keys.push_back(by_key[k].first);
+    point_of[by_key[k].second] = static_cast<std::uint32_t>(weld.keys.size() - 1);
+  }
+  if (weld.keys.back() >> kClassShift != 0)
+    throw std::logic_error("labels: internal error: a surface point's key has class bits set");
+  std::size_t j = 0;
+  for (std::size_t c = 0; c < corners.size(); ++c)
+    if (!corners[c].made) weld.point[c] = point_of[g.index_map[j++]];
+}
+
+// The made points' keys: the cell's key and the point's rank there among the
+// distinct made points by name (one point per name). Appends them to
+// weld.keys, increasing (their classes put them after the surface points).
+void weld_made_corners(const std::vector<ClipPoint>& made, const std::vector<Corner>& corners, const MultilodGrid& grid,
+                       CornerWeld& weld) {
+  std::vector<KeyedPoint> order;  // (cell key, made point)
+  order.reserve(made.size());
+  for (std::size_t m = 0; m < made.size(); ++m) order.emplace_back(cell_key(made[m], grid), static_cast<std::uint32_t>(m));
+  std::sort(order.begin(), order.end(), [&](const KeyedPoint& x, const KeyedPoint& y) {
+    return x.first != y.first ? x.first < y.first : made[x.second].name() < made[y.second].name();
   });
+  std::vector<std::uint32_t> point_of(made.size());
   std::uint64_t rank = 0;
-  for (std::size_t m = 0; m < made.size(); ++m) {
-    if (m > 0) {
-      const bool same_cell = made[m].first == made[m - 1].first;
-      const bool same_point = same_cell && corners[made[m].second].name() == corners[made[m - 1].second].name();
-      rank = !same_cell ? 0 : same_point ? rank : rank + 1;
-    }
+  for (std::size_t m = 0; m < order.size(); ++m) {
+    const bool same_cell = m > 0 && order[m].first == order[m - 1].first;
+    const bool same_point = same_cell && made[order[m].second].name() == made[order[m - 1].second].name();
+    rank = !same_cell ? 0 : same_point ? rank : rank + 1;
     if (rank >= (1u << kRankBits))
       throw LimitError("labels: more than 128 points made by clipping in one cell of a multilod output");
-    keys[made[m].second] = made[m].first | rank;
+    if (!same_point) weld.keys.push_back(order[m].first | rank);
+    point_of[order[m].second] = static_cast<std::uint32_t>(weld.keys.size() - 1);
   }
-  return keys;
+  for (std::size_t c = 0; c < corners.size(); ++c)
+    if (corners[c].made) weld.point[c] = point_of[corners[c].index];
+}
+
+// The corners of the triangles clipped to the box [lo, hi], 3 a triangle,
+// and the points the clipping made (once per polygon that has them).
+void clip_triangles(const SegmentSurface& s, const MultilodGrid& grid, const double* lo, const double* hi,
+                    const std::uint32_t* triangles, Id count, std::vector<Corner>& corners, std::vector<ClipPoint>& made) {
+  corners.reserve(3 * static_cast<std::size_t>(count));  // most triangles lie inside: 3 corners each
+  std::vector<ClipPoint> poly, clipped;
+  std::vector<Side> sides, clipped_sides;
+  std::vector<Corner> poly_corners;
+  for (Id j = 0; j < count; ++j) {
+    const std::uint32_t* t = s.triangles.data() + 3 * static_cast<std::size_t>(triangles[j]);
+    Clipper clipper{s, grid, {t[0], t[1], t[2]}, lo, hi};
+    bool inside = true;
+    for (int m = 0; m < 3; ++m)
+      for (int d = 0; d < 3; ++d) inside = inside && clipper.at(t[m])[d] > lo[d] && clipper.at(t[m])[d] < hi[d];
+    if (inside) {  // its own corners, as the fan of the unclipped polygon below would give them
+      for (int m = 0; m < 3; ++m) corners.push_back(Corner{t[m], false});
+      continue;
+    }
+    std::sort(clipper.tri, clipper.tri + 3, [&](std::uint32_t a, std::uint32_t b) { return s.keys[a] < s.keys[b]; });
+    poly.clear(), sides.clear();
+    for (int m = 0; m < 3; ++m) {
+      poly.push_back(clipper.surface_point(t[m]));
+      sides.push_back(Side{false, 0, 0, t[m], t[(m + 1) % 3]});
+    }
+    for (int d = 0; d < 3; ++d) {
+      clipper.clip(poly, sides, clipped, clipped_sides, d, lo[d], false);
+      clipper.clip(poly, sides, clipped, clipped_sides, d, hi[d], true);
+    }
+    if (poly.size() < 3) continue;
+    poly_corners.clear();
+    for (const ClipPoint& p : poly) {
+      poly_corners.push_back(p.kind == 0 ? Corner{p.index, false} : Corner{static_cast<std::uint32_t>(made.size()), true});
+      if (p.kind != 0) made.push_back(p);
+    }
+    for (std::size_t m = 1; m + 1 < poly.size(); ++m) {  // a fan from the first point
+      corners.push_back(poly_corners[0]);
+      corners.push_back(poly_corners[m]);
+      corners.push_back(poly_corners[m + 1]);
+    }
+  }
 }
 
 }  // namespace
@@ -243,46 +351,25 @@ MultilodPiece clip_to_chunk(const SegmentSurface& s, const MultilodGrid& grid, c
                          const std::uint32_t* triangles, Id count) {
   double lo[3], hi[3];
   for (int d = 0; d < 3; ++d) lo[d] = grid.plane(d, chunk[d]), hi[d] = grid.plane(d, chunk[d] + 1);
-  std::vector<ClipPoint> corners;
-  corners.reserve(3 * static_cast<std::size_t>(count));  // most triangles lie inside: 3 corners each
-  std::vector<ClipPoint> poly, clipped;
-  std::vector<Side> sides, clipped_sides;
-  for (Id j = 0; j < count; ++j) {
-    const std::uint32_t* t = s.triangles.data() + 3 * static_cast<std::size_t>(triangles[j]);
-    Clipper clipper{s, grid, {t[0], t[1], t[2]}, lo, hi};
-    bool inside = true;
-    for (int m = 0; m < 3; ++m)
-      for (int d = 0; d < 3; ++d) inside = inside && clipper.at(t[m])[d] > lo[d] && clipper.at(t[m])[d] < hi[d];
-    if (inside) {  // its own corners, as the fan of the unclipped polygon below would give them
-      for (int m = 0; m < 3; ++m) corners.push_back(clipper.surface_point(t[m]));
-      continue;
-    }
-    std::sort(clipper.tri, clipper.tri + 3, [&](std::uint32_t a, std::uint32_t b) { return s.keys[a] < s.keys[b]; });
-    poly.clear(), sides.clear();
-    for (int m = 0; m < 3; ++m) {
-      poly.push_back(clipper.surface_point(t[m]));
-      sides.push_back(Side{false, 0, 0, t[m], t[(m + 1) % 3]});
-    }
-    for (int d = 0; d < 3; ++d) {
-      clipper.clip(poly, sides, clipped, clipped_sides, d, lo[d], false);
-      clipper.clip(poly, sides, clipped, clipped_sides, d, hi[d], true);
-    }
-    for (std::size_t m = 1; m + 1 < poly.size(); ++m) {  // a fan from the first point
-      corners.push_back(poly[0]);
-      corners.push_back(poly[m]);
-      corners.push_back(poly[m + 1]);
-    }
-  }
+  std::vector<Corner> corners;
+  std::vector<ClipPoint> made;
+  clip_triangles(s, grid, lo, hi, triangles, count, corners, made);
   MultilodPiece piece;
   piece.segment = s.segment;
   for (int d = 0; d < 3; ++d) piece.chunk[d] = static_cast<std::uint32_t>(chunk[d]);
   if (corners.empty()) return piece;
-  const std::vector<std::uint64_t> keys = corner_keys(corners, grid);
-  const auto g = keyreduce::partition_sort(keys.data(), static_cast<Id>(keys.size()), 64, keyreduce::Order::Skip);
-  piece.point_keys = g.unique_keys;
+  CornerWeld weld;
+  weld.point.resize(corners.size());
+  weld_surface_corners(s, corners, weld);
+  weld_made_corners(made, corners, grid, weld);
+  piece.point_keys = std::move(weld.keys);
   piece.points.resize(3 * piece.point_keys.size());
-  for (std::size_t c = 0; c < corners.size(); ++c) std::copy_n(corners[c].p, 3, piece.points.begin() + 3 * g.index_map[c]);
-  piece.triangles.assign(g.index_map.begin(), g.index_map.end());
+  for (std::size_t c = 0; c < corners.size(); ++c) {
+    const std::uint32_t i = corners[c].index;
+    const float* p = corners[c].made ? made[i].p : s.points.data() + 3 * static_cast<std::size_t>(i);
+    std::copy_n(p, 3, piece.points.begin() + 3 * static_cast<std::ptrdiff_t>(weld.point[c]));
+  }
+  piece.triangles = std::move(weld.point);
   return piece;
 }
 
