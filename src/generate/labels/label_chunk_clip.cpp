@@ -10,8 +10,11 @@
 // moves one float step down), so the chunks on either side of a plane cut a
 // triangle at the same points.
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -195,23 +198,46 @@ void sort_increasing_runs(std::vector<KeyedPoint>& v) {
   }
 }
 
-// The surface points among the corners (most of them: ~6 corners a point),
-// deduplicated by their 32-bit index first (KEY-REDUCE, dense plan over the
-// span of indices), so that only the distinct points' 64-bit keys are put
-// in key order. Appends their keys (class 0, below every made point's) to
-// weld.keys.
-void weld_surface_corners(const SegmentSurface& s, const std::vector<Corner>& corners, CornerWeld& weld) {
+// The distinct surface points among the corners, increasing (a bitmap over
+// the span of their indices), and each corner's rank among them (a lookup
+// table over the span, written only where a point is). Most corners are
+// surface points, ~6 a point: the welding is by their 32-bit index.
+struct DistinctPoints {
+  std::vector<std::uint32_t> points;
+  std::vector<std::uint32_t> rank;  // per surface corner, in corner order
+};
+
+DistinctPoints distinct_surface_points(const std::vector<Corner>& corners) {
+  DistinctPoints out;
   std::uint32_t lo = std::numeric_limits<std::uint32_t>::max(), hi = 0;
   for (const Corner& c : corners)
     if (!c.made) lo = std::min(lo, c.index), hi = std::max(hi, c.index);
-  if (lo > hi) return;
-  std::vector<std::uint32_t> local;
-  local.reserve(corners.size());
+  if (lo > hi) return out;
+  const std::size_t span = static_cast<std::size_t>(hi - lo) + 1;
+  std::vector<std::uint64_t> present((span + 63) / 64, 0);
   for (const Corner& c : corners)
-    if (!c.made) local.push_back(c.index - lo);
-  const auto g = keyreduce::partition_dense(local.data(), static_cast<Id>(local.size()), hi - lo + 1, keyreduce::Order::Skip);
-  std::vector<KeyedPoint> by_key(g.unique_keys.size());
-  for (std::size_t u = 0; u < by_key.size(); ++u) by_key[u] = {s.keys[lo + g.unique_keys[u]], static_cast<std::uint32_t>(u)};
+    if (!c.made) present[(c.index - lo) >> 6] |= std::uint64_t{1} << ((c.index - lo) & 63);
+  const std::unique_ptr<std::uint32_t[]> rank_at(new std::uint32_t[span]);  // read only where written
+  for (std::size_t w = 0; w < present.size(); ++w)
+    for (std::uint64_t bits = present[w]; bits != 0; bits &= bits - 1) {
+      const std::size_t local = 64 * w + static_cast<std::size_t>(std::countr_zero(bits));
+      rank_at[local] = static_cast<std::uint32_t>(out.points.size());
+      out.points.push_back(lo + static_cast<std::uint32_t>(local));
+    }
+  out.rank.reserve(corners.size());
+  for (const Corner& c : corners)
+    if (!c.made) out.rank.push_back(rank_at[c.index - lo]);
+  return out;
+}
+
+// The surface points among the corners, deduplicated by index first, so that
+// only the distinct points' 64-bit keys are put in key order. Appends their
+// keys (class 0, below every made point's) to weld.keys.
+void weld_surface_corners(const SegmentSurface& s, const std::vector<Corner>& corners, CornerWeld& weld) {
+  const DistinctPoints distinct = distinct_surface_points(corners);
+  if (distinct.points.empty()) return;
+  std::vector<KeyedPoint> by_key(distinct.points.size());
+  for (std::size_t u = 0; u < by_key.size(); ++u) by_key[u] = {s.keys[distinct.points[u]], static_cast<std::uint32_t>(u)};
   sort_increasing_runs(by_key);
   std::vector<std::uint32_t> point_of(by_key.size());
   for (std::size_t k = 0; k < by_key.size(); ++k) {
@@ -222,7 +248,7 @@ void weld_surface_corners(const SegmentSurface& s, const std::vector<Corner>& co
     throw std::logic_error("labels: internal error: a surface point's key has class bits set");
   std::size_t j = 0;
   for (std::size_t c = 0; c < corners.size(); ++c)
-    if (!corners[c].made) weld.point[c] = point_of[g.index_map[j++]];
+    if (!corners[c].made) weld.point[c] = point_of[distinct.rank[j++]];
 }
 
 // The made points' keys: the cell's key and the point's rank there among the
@@ -304,29 +330,52 @@ float off_chunk_planes(const MultilodGrid& grid, int axis, float v, double margi
 }
 
 void move_off_chunk_planes(SegmentSurface& surface, const MultilodGrid& grid) {
+  double margin[3], near[3];  // near: a fraction of a chunk that holds the margin twice over
+  for (int a = 0; a < 3; ++a)
+    margin[a] = grid.margin(a, 0), near[a] = 2 * margin[a] / static_cast<double>(grid.chunk_shape[a]);
   for (std::size_t i = 0; i < surface.points.size(); ++i) {
     const int axis = static_cast<int>(i % 3);
-    surface.points[i] = off_chunk_planes(grid, axis, surface.points[i], grid.margin(axis, 0));
+    float& v = surface.points[i];
+    // Most coordinates lie far from every plane: their position in units of
+    // chunks, rounded toward zero, says so without the exact test (which
+    // would leave them as they are).
+    const double q = (static_cast<double>(v) - grid.grid_origin[axis]) / static_cast<double>(grid.chunk_shape[axis]);
+    if (std::abs(q) < 0x1p52) {
+      const double frac = std::abs(q - static_cast<double>(static_cast<std::int64_t>(q)));
+      if (frac > near[axis] && 1 - frac > near[axis]) continue;
+    }
+    v = off_chunk_planes(grid, axis, v, margin[axis]);
   }
 }
 
+namespace {
+
+// The chunk index along `axis` of the coordinate v (clamped to the grid).
+std::uint32_t chunk_along(const MultilodGrid& grid, int axis, float v) {
+  const double c = std::floor((static_cast<double>(v) - grid.grid_origin[axis]) / static_cast<double>(grid.chunk_shape[axis]));
+  return static_cast<std::uint32_t>(std::clamp<Id>(static_cast<Id>(c), 0, grid.chunks[axis] - 1));
+}
+
+}  // namespace
+
 ChunkTriangles triangles_by_chunk(const SegmentSurface& s, const MultilodGrid& grid) {
+  // Each point's chunk along each axis, once: a triangle's chunk range is
+  // then the least and greatest of its corners' (the index is monotone in
+  // the coordinate).
+  std::vector<std::uint32_t> along(s.points.size());
+  for (std::size_t i = 0; i < along.size(); ++i) along[i] = chunk_along(grid, static_cast<int>(i % 3), s.points[i]);
   std::vector<std::uint64_t> chunk_of;  // one pair per (chunk, triangle)
   std::vector<std::uint32_t> triangle_of;
   const Id triangles = static_cast<Id>(s.triangles.size() / 3);
+  chunk_of.reserve(static_cast<std::size_t>(triangles + triangles / 4));
+  triangle_of.reserve(chunk_of.capacity());
   for (Id t = 0; t < triangles; ++t) {
+    const std::uint32_t* corner = s.triangles.data() + 3 * t;
     Id lo[3], hi[3];
     for (int d = 0; d < 3; ++d) {
-      float mn = std::numeric_limits<float>::infinity(), mx = -mn;
-      for (int m = 0; m < 3; ++m) {
-        const float v = s.points[3 * static_cast<std::size_t>(s.triangles[3 * t + m]) + d];
-        mn = std::min(mn, v), mx = std::max(mx, v);
-      }
-      auto index = [&](float v) {
-        const double c = std::floor((static_cast<double>(v) - grid.grid_origin[d]) / static_cast<double>(grid.chunk_shape[d]));
-        return std::clamp<Id>(static_cast<Id>(c), 0, grid.chunks[d] - 1);
-      };
-      lo[d] = index(mn), hi[d] = index(mx);
+      const std::uint32_t a = along[3 * static_cast<std::size_t>(corner[0]) + d], b = along[3 * static_cast<std::size_t>(corner[1]) + d],
+                          c = along[3 * static_cast<std::size_t>(corner[2]) + d];
+      lo[d] = std::min({a, b, c}), hi[d] = std::max({a, b, c});
     }
     for (Id z = lo[2]; z <= hi[2]; ++z)
       for (Id y = lo[1]; y <= hi[1]; ++y)
