@@ -180,24 +180,6 @@ struct CornerWeld {
 
 using KeyedPoint = std::pair<std::uint64_t, std::uint32_t>;
 
-// Sorts pairs that come in a few increasing runs (a surface numbers its
-// points in key order within each kind: surface nets' cell points, then its
-// face points) by merging the runs; many runs: a plain sort. The order is
-// the one sorting gives.
-void sort_increasing_runs(std::vector<KeyedPoint>& v) {
-  std::vector<std::size_t> starts;
-  for (std::size_t k = 1; k < v.size(); ++k)
-    if (v[k] < v[k - 1]) starts.push_back(k);
-  if (starts.size() > 8) {
-    std::sort(v.begin(), v.end());
-    return;
-  }
-  for (std::size_t r = 0; r < starts.size(); ++r) {
-    const std::size_t end = r + 1 < starts.size() ? starts[r + 1] : v.size();
-    std::inplace_merge(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(starts[r]), v.begin() + static_cast<std::ptrdiff_t>(end));
-  }
-}
-
 // The distinct surface points among the corners, increasing (a bitmap over
 // the span of their indices), and each corner's rank among them (a lookup
 // table over the span, written only where a point is). Most corners are
@@ -236,19 +218,18 @@ DistinctPoints distinct_surface_points(const std::vector<Corner>& corners) {
 void weld_surface_corners(const SegmentSurface& s, const std::vector<Corner>& corners, CornerWeld& weld) {
   const DistinctPoints distinct = distinct_surface_points(corners);
   if (distinct.points.empty()) return;
-  std::vector<KeyedPoint> by_key(distinct.points.size());
-  for (std::size_t u = 0; u < by_key.size(); ++u) by_key[u] = {s.keys[distinct.points[u]], static_cast<std::uint32_t>(u)};
-  sort_increasing_runs(by_key);
-  std::vector<std::uint32_t> point_of(by_key.size());
-  for (std::size_t k = 0; k < by_key.size(); ++k) {
-    if (k == 0 || by_key[k].first != by_key[k - 1].first) weld.keys.push_back(by_key[k].first);
-    point_of[by_key[k].second] = static_cast<std::uint32_t>(weld.keys.size() - 1);
-  }
+  // In index order the keys come in a few increasing runs (a surface numbers
+  // its points in key order within each kind: surface nets' cell points,
+  // then its face points): merged, not sorted.
+  std::vector<std::uint64_t> keys(distinct.points.size());
+  for (std::size_t u = 0; u < keys.size(); ++u) keys[u] = s.keys[distinct.points[u]];
+  auto g = keyreduce::partition_runs(keys.data(), static_cast<Id>(keys.size()), keyreduce::Order::Skip);
+  weld.keys = std::move(g.unique_keys);
   if (weld.keys.back() >> kClassShift != 0)
     throw std::logic_error("labels: internal error: a surface point's key has class bits set");
   std::size_t j = 0;
   for (std::size_t c = 0; c < corners.size(); ++c)
-    if (!corners[c].made) weld.point[c] = point_of[distinct.rank[j++]];
+    if (!corners[c].made) weld.point[c] = g.index_map[distinct.rank[j++]];
 }
 
 // The made points' keys: the cell's key and the point's rank there among the
