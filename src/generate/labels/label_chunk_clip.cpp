@@ -132,8 +132,13 @@ struct Clipper {
             std::vector<Side>& out_sides, int axis, double x, bool below) {
     stage = axis;
     auto inside = [&](const ClipPoint& c) { return below ? c.p[axis] <= x : c.p[axis] >= x; };
-    out.clear(), out_sides.clear();
     const std::size_t n = poly.size();
+    // A plane the polygon lies inside (most of the six: a clipped triangle
+    // mostly crosses one) leaves it as it is: no copy.
+    bool all_inside = true;
+    for (std::size_t j = 0; j < n && all_inside; ++j) all_inside = inside(poly[j]);
+    if (all_inside) return;
+    out.clear(), out_sides.clear();
     for (std::size_t j = 0; j < n; ++j) {
       const ClipPoint& P = poly[j];
       const ClipPoint& Q = poly[(j + 1) % n];
