@@ -4,51 +4,38 @@
 #include <array>
 #include <bit>
 #include <cstddef>
+#include <limits>
 #include <numeric>
-#include <tuple>
 #include <utility>
 
 #include "keymesh/core/types.hpp"
 #include "keymesh/keyreduce/groups.hpp"
-#include "keymesh/keyreduce/weld.hpp"
 
 namespace keymesh::io::neuroglancer {
 
 namespace {
 
-// The same by comparing positions (positions too wide to pack in 64 bits).
-std::vector<std::uint32_t> first_at_position_compared(const QuantizedMesh& mesh) {
-  const std::size_t n = mesh.positions.size() / 3;
-  auto at = [&](std::uint32_t i) {
-    return std::tie(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]);
-  };
-  std::vector<std::uint32_t> order(n), first(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return at(a) != at(b) ? at(a) < at(b) : a < b; });
-  for (std::size_t k = 0; k < n; ++k)
-    first[order[k]] = k > 0 && at(order[k]) == at(order[k - 1]) ? first[order[k - 1]] : order[k];
-  return first;
-}
-
-// Each point's representative: the first point with its position.
+// Each point's representative: the first point with its position. One pass
+// in point order over an open-addressing table of positions (at most half
+// full): a position's slot holds the first point seen there, so no sort of
+// the points (most nodes have no two on one position).
 std::vector<std::uint32_t> first_at_position(const QuantizedMesh& mesh) {
   const std::size_t n = mesh.positions.size() / 3;
-  std::int32_t low = 0, high = 0;
-  for (std::int32_t v : mesh.positions) low = std::min(low, v), high = std::max(high, v);
-  const int bits = std::bit_width(static_cast<std::uint32_t>(high));
-  if (low < 0 || 3 * bits > 64) return first_at_position_compared(mesh);
-  // The position packed (x most significant) into one key: grouping the
-  // keys groups the positions, and a group's first pair is its least point.
-  std::vector<std::uint64_t> keys(n);
+  const std::int32_t* at = mesh.positions.data();
+  const int bits = std::max(1, static_cast<int>(std::bit_width(2 * n)));
+  const std::size_t mask = (std::size_t{1} << bits) - 1;
+  constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> slot(mask + 1, kEmpty), first(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const auto* p = mesh.positions.data() + 3 * i;
-    keys[i] = (static_cast<std::uint64_t>(p[0]) << (2 * bits) | static_cast<std::uint64_t>(p[1]) << bits) |
-              static_cast<std::uint64_t>(p[2]);
+    const std::int32_t* p = at + 3 * i;
+    std::uint64_t h = static_cast<std::uint32_t>(p[0]) * 0x9E3779B97F4A7C15ull;
+    h = (h ^ static_cast<std::uint32_t>(p[1])) * 0xC2B2AE3D27D4EB4Full;
+    h = (h ^ static_cast<std::uint32_t>(p[2])) * 0x165667B19E3779F9ull;
+    std::size_t k = static_cast<std::size_t>(h >> (64 - bits));
+    while (slot[k] != kEmpty && !std::equal(p, p + 3, at + 3 * static_cast<std::size_t>(slot[k]))) k = (k + 1) & mask;
+    if (slot[k] == kEmpty) slot[k] = static_cast<std::uint32_t>(i);
+    first[i] = slot[k];
   }
-  const auto groups = keyreduce::partition_sort(std::move(keys), 3 * bits, keyreduce::Order::Skip);
-  std::vector<std::uint32_t> first_pair, first(n);
-  keyreduce::first_pairs(groups, static_cast<Id>(n), first_pair);
-  for (std::size_t i = 0; i < n; ++i) first[i] = first_pair[groups.index_map[i]];
   return first;
 }
 
