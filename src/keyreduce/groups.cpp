@@ -7,6 +7,8 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/for_each.hpp"
@@ -50,6 +52,60 @@ Groups<K> partition_sort(std::vector<K>&& keys, int significant_bits, Order orde
   } else {
     groups.offsets.clear();
   }
+  return groups;
+}
+
+namespace {
+
+// The pairs (key, pair) stably sorted by key: the increasing runs of `keys`
+// merged in rounds, each merging neighbouring runs into the other buffer.
+template <class K>
+std::vector<std::pair<K, std::uint32_t>> merge_runs(const K* keys, Id n) {
+  std::vector<std::pair<K, std::uint32_t>> pairs(static_cast<std::size_t>(n)), merged(pairs.size());
+  std::vector<std::size_t> bounds{0};
+  for (Id i = 0; i < n; ++i) {
+    if (i > 0 && keys[i] < keys[i - 1]) bounds.push_back(static_cast<std::size_t>(i));
+    pairs[static_cast<std::size_t>(i)] = {keys[i], static_cast<std::uint32_t>(i)};
+  }
+  bounds.push_back(pairs.size());
+  const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
+  while (bounds.size() > 2) {
+    std::vector<std::size_t> next{0};
+    for (std::size_t r = 0; r + 1 < bounds.size(); r += 2) {
+      const std::size_t b = bounds[r], m = bounds[r + 1], e = r + 2 < bounds.size() ? bounds[r + 2] : m;
+      std::merge(pairs.begin() + b, pairs.begin() + m, pairs.begin() + m, pairs.begin() + e, merged.begin() + b, by_key);
+      next.push_back(e);
+    }
+    pairs.swap(merged);
+    bounds.swap(next);
+  }
+  return pairs;
+}
+
+}  // namespace
+
+template <class K>
+Groups<K> partition_runs(const K* keys, Id n, Order order) {
+  check_pair_count(n);
+  Groups<K> groups;
+  groups.index_map.resize(n);
+  bool sorted = true;
+  for (Id i = 1; i < n && sorted; ++i) sorted = !(keys[i] < keys[i - 1]);
+  std::vector<std::pair<K, std::uint32_t>> merged;
+  if (!sorted) merged = merge_runs(keys, n);
+  if (order == Order::Build) groups.order.resize(static_cast<std::size_t>(n));
+  for (Id i = 0; i < n; ++i) {
+    const K key = sorted ? keys[i] : merged[static_cast<std::size_t>(i)].first;
+    const std::uint32_t pair = sorted ? static_cast<std::uint32_t>(i) : merged[static_cast<std::size_t>(i)].second;
+    if (groups.unique_keys.empty() || key != groups.unique_keys.back()) {
+      groups.unique_keys.push_back(key);
+      groups.offsets.push_back(i);
+    }
+    groups.index_map[pair] = static_cast<std::uint32_t>(groups.unique_keys.size() - 1);
+    if (order == Order::Build) groups.order[static_cast<std::size_t>(i)] = pair;
+  }
+  groups.offsets.push_back(n);
+  if (order == Order::Skip) groups.offsets.clear();
   return groups;
 }
 
@@ -168,6 +224,8 @@ template Groups<std::uint32_t> partition_sort(const std::uint32_t*, Id, int, Ord
 template Groups<std::uint64_t> partition_sort(const std::uint64_t*, Id, int, Order);
 template Groups<std::uint32_t> partition_sort(std::vector<std::uint32_t>&&, int, Order);
 template Groups<std::uint64_t> partition_sort(std::vector<std::uint64_t>&&, int, Order);
+template Groups<std::uint32_t> partition_runs(const std::uint32_t*, Id, Order);
+template Groups<std::uint64_t> partition_runs(const std::uint64_t*, Id, Order);
 template Groups<std::uint32_t> partition_dense(const std::uint32_t*, Id, std::uint32_t, Order);
 template Groups<std::uint64_t> partition_dense(const std::uint64_t*, Id, std::uint64_t, Order);
 template void build_order(Groups<std::uint32_t>&);

@@ -87,3 +87,25 @@ TEST(NeuroglancerCoincidentPoints, DistinctPointsUnchanged) {
   EXPECT_EQ(m.positions, before.positions);
   EXPECT_EQ(m.triangles, before.triangles);
 }
+
+TEST(NeuroglancerCoincidentPoints, ManyPointsMergeIntoTheirFirst) {
+  // 2001 distinct lattice points in strips of triangles, then three twins of
+  // earlier points (5, 700, 1999), each in a triangle of its own: every twin
+  // becomes its first point, the others keep their numbers.
+  QuantizedMesh m;
+  const std::uint32_t n = 2001;
+  for (std::uint32_t i = 0; i < n; ++i)
+    m.positions.insert(m.positions.end(), {std::int32_t(i % 20 * 3), std::int32_t(i / 20 % 20 * 5), std::int32_t(i / 400 * 7)});
+  for (std::uint32_t i = 0; i + 2 < n; i += 3) m.triangles.insert(m.triangles.end(), {i, i + 1, i + 2});
+  QuantizedMesh expected = m;
+  const std::uint32_t twins[3] = {5, 700, 1999};
+  for (std::uint32_t j = 0; j < 3; ++j) {
+    const std::uint32_t k = twins[j];
+    m.positions.insert(m.positions.end(), m.positions.begin() + 3 * k, m.positions.begin() + 3 * k + 3);
+    m.triangles.insert(m.triangles.end(), {n + j, 1000 + j, 1500 + j});
+    expected.triangles.insert(expected.triangles.end(), {k, 1000 + j, 1500 + j});
+  }
+  merge_coincident_points(m);
+  EXPECT_EQ(m.positions, expected.positions);
+  EXPECT_EQ(m.triangles, expected.triangles);
+}

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <random>
@@ -44,6 +45,8 @@ void expect_both_plans(const std::vector<K>& keys, K range) {
   expect_matches_reference(keys, keyreduce::partition_dense(keys.data(), n, range));
   expect_matches_reference(keys, keyreduce::partition_sort(keys.data(), n, int(sizeof(K) * 8), Order::Skip));
   expect_matches_reference(keys, keyreduce::partition_dense(keys.data(), n, range, Order::Skip));
+  expect_matches_reference(keys, keyreduce::partition_runs(keys.data(), n));
+  expect_matches_reference(keys, keyreduce::partition_runs(keys.data(), n, Order::Skip));
 }
 
 // A weld over keys < range (bits of them), with the pair order built.
@@ -88,6 +91,32 @@ TEST_P(KeyReduceThreads, RandomKeysLikeAContour) {
   std::vector<std::uint64_t> keys(300000);
   for (auto& k : keys) k = rng() % 90000;  // ~3.3 pairs per key
   expect_both_plans<std::uint64_t>(keys, 90000);
+}
+
+// The merge plan on what it is for: pieces' increasing keys, concatenated,
+// sharing keys across pieces (and within none); an odd number of runs, one
+// empty, so a run is left over in a round.
+TEST(KeyReduceRuns, MergesIncreasingRunsLikeTheSortPlan) {
+  std::mt19937_64 rng(11);
+  std::vector<std::uint64_t> keys;
+  for (int piece = 0; piece < 7; ++piece) {
+    std::vector<std::uint64_t> run;
+    for (int j = 0, count = piece == 3 ? 0 : 500 + 300 * piece; j < count; ++j) run.push_back(rng() % 4000);
+    std::sort(run.begin(), run.end());
+    run.erase(std::unique(run.begin(), run.end()), run.end());
+    keys.insert(keys.end(), run.begin(), run.end());
+  }
+  const auto g = keyreduce::partition_runs(keys.data(), Id(keys.size()));
+  ASSERT_LT(g.num_groups(), Id(keys.size()));  // the pieces share keys
+  expect_matches_reference(keys, g);
+  expect_matches_reference(keys, keyreduce::partition_runs(keys.data(), Id(keys.size()), Order::Skip));
+}
+
+TEST(KeyReduceRuns, SortedKeysAndDescendingKeys) {
+  std::vector<std::uint32_t> up{1, 1, 2, 5, 5, 5, 9};
+  expect_matches_reference(up, keyreduce::partition_runs(up.data(), Id(up.size())));
+  std::vector<std::uint32_t> down{9, 7, 7, 4, 2, 2, 0};  // every key its own run but the repeats
+  expect_matches_reference(down, keyreduce::partition_runs(down.data(), Id(down.size())));
 }
 
 TEST_P(KeyReduceThreads, ReduceAveragesInPairOrder) {

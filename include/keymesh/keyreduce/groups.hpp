@@ -52,6 +52,14 @@ Groups<K> partition_sort(const K* keys, Id n, int significant_bits, Order order 
 template <class K>
 Groups<K> partition_sort(std::vector<K>&& keys, int significant_bits, Order order = Order::Build);
 
+// Merge plan, for keys that come as a few increasing runs (the point keys
+// of several welded pieces, each in key order): the runs merged pairwise,
+// stably, with no radix passes; a single run (keys already in order) costs
+// one scan. Any keys are accepted (n keys in r runs: O(n log r)). The same
+// Groups as partition_sort. Serial: meant for one piece's weld inside a task.
+template <class K>
+Groups<K> partition_runs(const K* keys, Id n, Order order = Order::Build);
+
 // Dense plan: every key must be < key_range (checked; InputError otherwise).
 template <class K>
 Groups<K> partition_dense(const K* keys, Id n, K key_range, Order order = Order::Build);

@@ -2,25 +2,40 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstddef>
+#include <limits>
 #include <numeric>
-#include <tuple>
+#include <utility>
+
+#include "keymesh/core/types.hpp"
+#include "keymesh/keyreduce/groups.hpp"
 
 namespace keymesh::io::neuroglancer {
 
 namespace {
 
-// Each point's representative: the first point with its position.
+// Each point's representative: the first point with its position. One pass
+// in point order over an open-addressing table of positions (at most half
+// full): a position's slot holds the first point seen there, so no sort of
+// the points (most nodes have no two on one position).
 std::vector<std::uint32_t> first_at_position(const QuantizedMesh& mesh) {
   const std::size_t n = mesh.positions.size() / 3;
-  auto at = [&](std::uint32_t i) {
-    return std::tie(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]);
-  };
-  std::vector<std::uint32_t> order(n), first(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return at(a) != at(b) ? at(a) < at(b) : a < b; });
-  for (std::size_t k = 0; k < n; ++k)
-    first[order[k]] = k > 0 && at(order[k]) == at(order[k - 1]) ? first[order[k - 1]] : order[k];
+  const std::int32_t* at = mesh.positions.data();
+  const int bits = std::max(1, static_cast<int>(std::bit_width(2 * n)));
+  const std::size_t mask = (std::size_t{1} << bits) - 1;
+  constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> slot(mask + 1, kEmpty), first(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t* p = at + 3 * i;
+    std::uint64_t h = static_cast<std::uint32_t>(p[0]) * 0x9E3779B97F4A7C15ull;
+    h = (h ^ static_cast<std::uint32_t>(p[1])) * 0xC2B2AE3D27D4EB4Full;
+    h = (h ^ static_cast<std::uint32_t>(p[2])) * 0x165667B19E3779F9ull;
+    std::size_t k = static_cast<std::size_t>(h >> (64 - bits));
+    while (slot[k] != kEmpty && !std::equal(p, p + 3, at + 3 * static_cast<std::size_t>(slot[k]))) k = (k + 1) & mask;
+    if (slot[k] == kEmpty) slot[k] = static_cast<std::uint32_t>(i);
+    first[i] = slot[k];
+  }
   return first;
 }
 
@@ -41,22 +56,45 @@ Corners corners(const std::uint32_t* t) {
   return c;
 }
 
-// 1 per triangle to keep: of the triangles on one set of points, the first
-// |net orientation| of the winning orientation.
-std::vector<char> cancel_opposite(const std::vector<Corners>& tris) {
+// 1 per triangle to keep from the triangles grouped by their set of points
+// (`order`: the triangles by set, increasing within a set; `offsets`: where
+// each set's begin): of the triangles on one set, the first |net
+// orientation| of the winning orientation.
+template <class Order, class Offsets>
+std::vector<char> keep_net(const std::vector<Corners>& tris, const Order& order, const Offsets& offsets, std::size_t sets) {
+  std::vector<char> keep(tris.size(), 0);
+  for (std::size_t g = 0; g < sets; ++g) {
+    const std::size_t b = static_cast<std::size_t>(offsets[g]), e = static_cast<std::size_t>(offsets[g + 1]);
+    int net = 0;
+    for (std::size_t j = b; j < e; ++j) net += tris[order[j]].sign;
+    for (std::size_t j = b, left = static_cast<std::size_t>(std::abs(net)); j < e && left > 0; ++j)
+      if ((tris[order[j]].sign > 0) == (net > 0)) keep[order[j]] = 1, --left;
+  }
+  return keep;
+}
+
+// keep_net's grouping: the sets packed into one key when the point numbers
+// fit 21 bits (grouped by KEY-REDUCE), compared otherwise.
+std::vector<char> cancel_opposite(const std::vector<Corners>& tris, std::size_t points) {
+  const int bits = static_cast<int>(std::bit_width(points));
+  if (bits <= 21) {
+    std::vector<std::uint64_t> keys(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const auto& c = tris[t].set;
+      keys[t] = static_cast<std::uint64_t>(c[0]) << (2 * bits) | static_cast<std::uint64_t>(c[1]) << bits | c[2];
+    }
+    const auto groups = keyreduce::partition_sort(std::move(keys), 3 * bits, keyreduce::Order::Build);
+    return keep_net(tris, groups.order, groups.offsets, static_cast<std::size_t>(groups.num_groups()));
+  }
   std::vector<std::uint32_t> order(tris.size());
   std::iota(order.begin(), order.end(), 0u);
   std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
     return tris[a].set != tris[b].set ? tris[a].set < tris[b].set : a < b;
   });
-  std::vector<char> keep(tris.size(), 0);
-  for (std::size_t b = 0, e = 0; b < order.size(); b = e) {
-    int net = 0;
-    for (e = b; e < order.size() && tris[order[e]].set == tris[order[b]].set; ++e) net += tris[order[e]].sign;
-    for (std::size_t j = b, left = static_cast<std::size_t>(std::abs(net)); j < e && left > 0; ++j)
-      if ((tris[order[j]].sign > 0) == (net > 0)) keep[order[j]] = 1, --left;
-  }
-  return keep;
+  std::vector<std::size_t> offsets{0};
+  for (std::size_t j = 1; j <= order.size(); ++j)
+    if (j == order.size() || tris[order[j]].set != tris[order[j - 1]].set) offsets.push_back(j);
+  return keep_net(tris, order, offsets, offsets.size() - 1);
 }
 
 }  // namespace
@@ -80,7 +118,7 @@ std::vector<std::uint8_t> merge_coincident_points(QuantizedMesh& mesh) {
     tris.push_back(c);
     sets.push_back(corners(c.data()));
   }
-  const std::vector<char> keep = cancel_opposite(sets);
+  const std::vector<char> keep = cancel_opposite(sets, first.size());
   std::vector<std::uint32_t> index(first.size(), 0), used(first.size(), 0);
   for (std::size_t t = 0; t < tris.size(); ++t)
     if (keep[t])

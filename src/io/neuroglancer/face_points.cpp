@@ -12,18 +12,20 @@ namespace keymesh::io::neuroglancer {
 namespace {
 
 // The directed edges the triangles leave unpaired, as (from, to), with
-// multiplicity: each undirected edge's net count of one direction.
-std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary_edges(const QuantizedMesh& mesh) {
+// multiplicity: each undirected edge's net count of one direction. Only the
+// edges `wanted` keeps are counted (a property of the two ends, so every
+// copy of an edge is kept alike).
+template <class Wanted>
+std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary_edges(const QuantizedMesh& mesh, Wanted&& wanted) {
   struct Edge {
     std::uint32_t lo, hi;
     int sign;  // +1: lo -> hi
   };
   std::vector<Edge> edges;
-  edges.reserve(mesh.triangles.size());
   for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3)
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = mesh.triangles[t + k], b = mesh.triangles[t + (k + 1) % 3];
-      edges.push_back(a < b ? Edge{a, b, 1} : Edge{b, a, -1});
+      if (wanted(a, b)) edges.push_back(a < b ? Edge{a, b, 1} : Edge{b, a, -1});
     }
   std::sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) { return std::tie(x.lo, x.hi) < std::tie(y.lo, y.hi); });
   std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
@@ -45,13 +47,25 @@ int settle_face_points(QuantizedMesh& mesh, int bits, const std::vector<std::uin
     const std::int32_t q = mesh.positions[3 * p + a];
     return q == 0 ? -1 : q == top ? 1 : 0;
   };
+  // Only a candidate on a face can move: without one, no edge is counted.
+  bool any_on_face = false;
+  for (std::size_t p = 0; p < n && !any_on_face; ++p)
+    any_on_face = candidates[p] && (face_side(p, 0) != 0 || face_side(p, 1) != 0 || face_side(p, 2) != 0);
+  if (!any_on_face) return 0;
+  // The axes along which both ends of u-v lie in one face plane.
+  auto in_face = [&](std::uint32_t u, std::uint32_t v) {
+    int axes = 0;
+    for (int a = 0; a < 3; ++a)
+      if (face_side(u, a) != 0 && face_side(u, a) == face_side(v, a)) axes |= 1 << a;
+    return axes;
+  };
   // held[p] bit a: p ends a boundary edge lying in its face plane along axis a.
   std::vector<std::uint8_t> held(n, 0), used(n, 0);
   for (std::uint32_t c : mesh.triangles) used[c] = 1;
-  for (const auto& [u, v] : boundary_edges(mesh))
-    for (int a = 0; a < 3; ++a)
-      if (face_side(u, a) != 0 && face_side(u, a) == face_side(v, a))
-        held[u] |= static_cast<std::uint8_t>(1 << a), held[v] |= static_cast<std::uint8_t>(1 << a);
+  for (const auto& [u, v] : boundary_edges(mesh, [&](std::uint32_t a, std::uint32_t b) { return in_face(a, b) != 0; })) {
+    const auto axes = static_cast<std::uint8_t>(in_face(u, v));
+    held[u] |= axes, held[v] |= axes;
+  }
   int moved = 0;
   for (std::size_t p = 0; p < n; ++p) {
     if (!used[p] || !candidates[p]) continue;

@@ -28,7 +28,8 @@ Weld weld_keys(const std::vector<const ChunkPiece*>& pieces) {
   for (const ChunkPiece* piece : pieces) keys.insert(keys.end(), piece->point_keys.begin(), piece->point_keys.end());
   const Id n = static_cast<Id>(keys.size());
   Weld weld;
-  weld.groups = keyreduce::partition_sort(keys.data(), n, 64, keyreduce::Order::Skip);
+  // Each piece's keys are increasing: their runs are merged, not sorted.
+  weld.groups = keyreduce::partition_runs(keys.data(), n, keyreduce::Order::Skip);
   keyreduce::first_pairs(weld.groups, n, weld.first);
   return weld;
 }

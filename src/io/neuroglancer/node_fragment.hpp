@@ -1,6 +1,6 @@
 #pragma once
 // One octree node's mesh from the chunk pieces inside it: the pieces welded
-// by their global point keys (KEY-REDUCE: the keys partitioned by a sort, no
+// by their global point keys (KEY-REDUCE: each piece's increasing keys merged, no
 // coordinates compared), each point quantized over the node's box as the
 // format specifies:
 //   x = round((p - node_origin) / node_size * (2^bits - 1)),
