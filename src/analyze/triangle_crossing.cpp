@@ -10,8 +10,6 @@ namespace {
 
 constexpr float kIntegerBound = 524288.0f;  // 2^19: the products below stay under 2^63
 
-std::int64_t integer(float v) { return static_cast<std::int64_t>(v); }
-
 bool same_position(const float* p, const float* q) { return p[0] == q[0] && p[1] == q[1] && p[2] == q[2]; }
 
 // p in the closed triangle t (p in t's plane; t projects with area along drop).
@@ -135,40 +133,12 @@ int orient3d_integer(const float* a, const float* b, const float* c, const float
 
 namespace {
 
-std::int64_t dot(const std::array<std::int64_t, 3>& n, const float* p) {
-  return n[0] * integer(p[0]) + n[1] * integer(p[1]) + n[2] * integer(p[2]);
-}
-
 // A point's position as one key: three coordinates within the bound, each
 // shifted to [0, 2^20] in 21 bits.
 std::uint64_t position_key(const float* p) {
   std::uint64_t key = 0;
   for (int k = 0; k < 3; ++k) key |= static_cast<std::uint64_t>(integer(p[k]) + (std::int64_t{1} << 19)) << (21 * k);
   return key;
-}
-
-int side_of(const IntegerTriangle& t, const float* p) {
-  const std::int64_t v = dot(t.normal, p) - t.offset;
-  return (v > 0) - (v < 0);
-}
-
-// The integer test's shortcut, from t's corners' sides of u's plane, exact,
-// so a common corner is on it at no extra cost: -1 when t meets u's plane
-// only in common corners (the pair does not cross), +1 when all its
-// corners are common (the same triangle twice), 0 undecided. The answers
-// cross_with gives, from three plane sides and keys compared only for the
-// corners on the plane (neighbours' common corners).
-int decide_by_sides(const Tri& t, const IntegerTriangle& t_integer, const IntegerTriangle& u) {
-  int above = 0, below = 0;
-  for (int k = 0; k < 3; ++k) {
-    const int s = side_of(u, t[k]);
-    const std::uint64_t key = t_integer.corner_key[k];
-    if (s == 0 && key != u.corner_key[0] && key != u.corner_key[1] && key != u.corner_key[2]) return 0;
-    above += s > 0;
-    below += s < 0;
-  }
-  if (above == 0 && below == 0) return 1;
-  return above == 0 || below == 0 ? -1 : 0;
 }
 
 }  // namespace
@@ -193,12 +163,10 @@ IntegerTriangle integer_triangle(const Tri& t) {
   }
   IntegerTriangle out;
   out.normal = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  out.offset = dot(out.normal, t[0]);
+  out.offset = out.normal[0] * integer(t[0][0]) + out.normal[1] * integer(t[0][1]) + out.normal[2] * integer(t[0][2]);
   for (int k = 0; k < 3; ++k) out.corner_key[k] = position_key(t[k]);
   return out;
 }
-
-int side(const IntegerTriangle& t, const float* p) { return side_of(t, p); }
 
 bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b) {
   return cross_with(
@@ -208,14 +176,11 @@ bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b) {
       [](const float* p, const float* q, const float* r, const float* s) { return orient3d(p, q, r, s); });
 }
 
-bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b, const IntegerTriangle& integer_a,
+bool cross_undecided(const Tri& a, const Tri& b, int drop_a, int drop_b, const IntegerTriangle& integer_a,
                      const IntegerTriangle& integer_b) {
-  const int b_by_a = decide_by_sides(b, integer_b, integer_a);
-  if (b_by_a != 0) return b_by_a > 0;
-  if (decide_by_sides(a, integer_a, integer_b) < 0) return false;
   return cross_with(
       a, b, drop_a, drop_b, [&](int i, int j) { return integer_a.corner_key[i] == integer_b.corner_key[j]; },
-      [&](const float* p) { return side_of(integer_a, p); }, [&](const float* p) { return side_of(integer_b, p); },
+      [&](const float* p) { return side(integer_a, p); }, [&](const float* p) { return side(integer_b, p); },
       [](const float* p, const float* q, const float* r, const float* s) { return orient3d_integer(p, q, r, s); });
 }
 

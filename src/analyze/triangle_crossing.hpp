@@ -40,14 +40,47 @@ IntegerTriangle integer_triangle(const Tri& t);
 // orient3d for integer coordinates within the bound: differences below
 // 2^21, each of the determinant's six products below 2^60, exact in int64.
 int orient3d_integer(const float* a, const float* b, const float* c, const float* d);
+// The exact integers of a coordinate within the bound.
+inline std::int64_t integer(float v) { return static_cast<std::int64_t>(v); }
+
 // p's side of t's plane: -1, 0, +1 (p's coordinates integers within the bound too).
-int side(const IntegerTriangle& t, const float* p);
+inline int side(const IntegerTriangle& t, const float* p) {
+  const std::int64_t v = t.normal[0] * integer(p[0]) + t.normal[1] * integer(p[1]) + t.normal[2] * integer(p[2]) - t.offset;
+  return (v > 0) - (v < 0);
+}
+
+// The integer test's shortcut, from t's corners' sides of u's plane, exact,
+// so a common corner is on it at no extra cost: -1 when t meets u's plane
+// only in common corners (the pair does not cross), +1 when all its
+// corners are common (the same triangle twice), 0 undecided. The answers
+// the full test gives, from three plane sides and keys compared only for
+// the corners on the plane (neighbours' common corners). Inline: most
+// pairs a broad phase hands over end here.
+inline int decide_by_sides(const Tri& t, const IntegerTriangle& t_integer, const IntegerTriangle& u) {
+  int above = 0, below = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int s = side(u, t[k]);
+    const std::uint64_t key = t_integer.corner_key[k];
+    if (s == 0 && key != u.corner_key[0] && key != u.corner_key[1] && key != u.corner_key[2]) return 0;
+    above += s > 0;
+    below += s < 0;
+  }
+  if (above == 0 && below == 0) return 1;
+  return above == 0 || below == 0 ? -1 : 0;
+}
 
 // The pair test, both triangles with area along their projection axes
 // drop_a, drop_b (projection_axis): with orient3d, or, integer corners
-// within the bound, in 64-bit integers.
+// within the bound, in 64-bit integers (cross_undecided: past the shortcut).
 bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b);
-bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b, const IntegerTriangle& integer_a,
+bool cross_undecided(const Tri& a, const Tri& b, int drop_a, int drop_b, const IntegerTriangle& integer_a,
                      const IntegerTriangle& integer_b);
+inline bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b, const IntegerTriangle& integer_a,
+                            const IntegerTriangle& integer_b) {
+  const int b_by_a = decide_by_sides(b, integer_b, integer_a);
+  if (b_by_a != 0) return b_by_a > 0;
+  if (decide_by_sides(a, integer_a, integer_b) < 0) return false;
+  return cross_undecided(a, b, drop_a, drop_b, integer_a, integer_b);
+}
 
 }  // namespace keymesh::analyze::detail
