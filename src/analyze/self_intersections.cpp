@@ -8,135 +8,30 @@
 
 #include <omp.h>
 
-#include "keymesh/analyze/exact_predicates.hpp"
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
 #include "keymesh/parallel/threads.hpp"
+#include "triangle_crossing.hpp"
 
 namespace keymesh::analyze {
 
 namespace {
 
-using Tri = std::array<const float*, 3>;
+using detail::Tri;
 
-bool same_position(const float* p, const float* q) { return p[0] == q[0] && p[1] == q[1] && p[2] == q[2]; }
-
-// An axis along which the triangle projects with non-zero area (-1: none, the
-// triangle has no area). Any such axis decides 2D tests in its plane exactly.
-int projection_axis(const Tri& t) {
-  for (int drop = 0; drop < 3; ++drop)
-    if (orient2d(t[0], t[1], t[2], drop) != 0) return drop;
-  return -1;
-}
-
-// p in the closed triangle t (p in t's plane; t projects with area along drop).
-bool in_closed_triangle(const float* p, const Tri& t, int drop) {
-  const int s = orient2d(t[0], t[1], t[2], drop);
-  for (int k = 0; k < 3; ++k)
-    if (orient2d(t[k], t[(k + 1) % 3], p, drop) == -s) return false;
-  return true;
-}
-
-// Segments (p, q) and (r, s), in one plane, cross at a point inside both.
-bool cross_properly(const float* p, const float* q, const float* r, const float* s, int drop) {
-  if (orient2d(p, q, r, drop) * orient2d(p, q, s, drop) >= 0) return false;
-  return orient2d(r, s, p, drop) * orient2d(r, s, q, drop) < 0;
-}
-
-// Edge (p, q) of one triangle against the closed triangle u: do they meet
-// outside the corners the two triangles share? side_p, side_q: p's and q's
-// sides of u's plane; *_shared: whether p, q are corners of u too.
-bool edge_meets(const float* p, const float* q, int side_p, int side_q, bool p_shared, bool q_shared, const Tri& u,
-                int drop) {
-  if (p_shared && q_shared) return false;  // a common edge
-  if (side_p * side_q > 0) return false;
-  if (side_p == 0 && side_q == 0) {  // the edge lies in u's plane
-    if (!p_shared && in_closed_triangle(p, u, drop)) return true;
-    if (!q_shared && in_closed_triangle(q, u, drop)) return true;
-    for (int k = 0; k < 3; ++k)
-      if (cross_properly(p, q, u[k], u[(k + 1) % 3], drop)) return true;
-    return false;  // a touch at one of u's corners shows from u's side
-  }
-  if (side_p == 0) return !p_shared && in_closed_triangle(p, u, drop);
-  if (side_q == 0) return !q_shared && in_closed_triangle(q, u, drop);
-  // The edge pierces u's plane at a point inside it: in u when it passes no
-  // edge of u on the outside.
-  bool positive = false, negative = false;
-  for (int k = 0; k < 3; ++k) {
-    const int o = orient3d(p, q, u[k], u[(k + 1) % 3]);
-    positive |= o > 0;
-    negative |= o < 0;
-  }
-  return !(positive && negative);
-}
-
-// triangles_cross with each triangle's projection axis already known.
-bool cross_projected(const Tri& a, const Tri& b, int drop_a, int drop_b) {
-  std::array<bool, 3> a_shared{}, b_shared{};
-  int shared = 0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (same_position(a[i], b[j])) {
-        a_shared[i] = b_shared[j] = true;
-        ++shared;
-      }
-  if (shared >= 3) return true;  // the same triangle twice
-  if (shared == 2) {
-    // A common edge: out of one plane, the triangles meet only along it (most
-    // pairs a mesh's broad phase gives are such neighbours: one predicate).
-    const int other = !b_shared[0] ? 0 : !b_shared[1] ? 1 : 2;
-    if (orient3d(a[0], a[1], a[2], b[other]) != 0) return false;
-  }
-  // When the corners one triangle does not share all lie strictly on one
-  // side of the other's plane, it meets that plane only in the shared
-  // corners (or their edge): no crossing. With one shared corner (a mesh's
-  // broad phase gives many such fan neighbours) this ends the test after two
-  // predicates.
-  const int b_free = static_cast<int>(std::count(b_shared.begin(), b_shared.end(), false));
-  const int a_free = static_cast<int>(std::count(a_shared.begin(), a_shared.end(), false));
-  std::array<int, 3> side_b{}, side_a{};
-  int b_above = 0, b_below = 0, a_above = 0, a_below = 0;
-  for (int j = 0; j < 3; ++j) {
-    // A common corner is on the other's plane: 0 without asking (exactly 0
-    // is what the double filter cannot prove, so it would cost an exact sign).
-    side_b[j] = b_shared[j] ? 0 : orient3d(a[0], a[1], a[2], b[j]);
-    b_above += side_b[j] > 0;
-    b_below += side_b[j] < 0;
-  }
-  if (b_above == b_free || b_below == b_free) return false;
-  for (int i = 0; i < 3; ++i) {
-    side_a[i] = a_shared[i] ? 0 : orient3d(b[0], b[1], b[2], a[i]);
-    a_above += side_a[i] > 0;
-    a_below += side_a[i] < 0;
-  }
-  if (a_above == a_free || a_below == a_free) return false;
-  if (b_above == 0 && b_below == 0) {  // one plane: overlap in 2D
-    for (int i = 0; i < 3; ++i)
-      if (!a_shared[i] && in_closed_triangle(a[i], b, drop_a)) return true;
-    for (int j = 0; j < 3; ++j)
-      if (!b_shared[j] && in_closed_triangle(b[j], a, drop_a)) return true;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (cross_properly(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3], drop_a)) return true;
-    return false;
-  }
-  // Two planes: the triangles meet on their common line, where some edge of
-  // one reaches into the other.
-  for (int i = 0; i < 3; ++i) {
-    const int k = (i + 1) % 3;
-    if (edge_meets(a[i], a[k], side_a[i], side_a[k], a_shared[i], a_shared[k], b, drop_b)) return true;
-    if (edge_meets(b[i], b[k], side_b[i], side_b[k], b_shared[i], b_shared[k], a, drop_a)) return true;
-  }
-  return false;
-}
+// Up to this many triangles with area the automatic broad phase sweeps
+// (serially): parallel::for_each runs such sizes serially too.
+constexpr std::size_t kSweepLimit = 8192;
 
 }  // namespace
 
-bool triangle_has_area(const Tri& t) { return projection_axis(t) >= 0; }
+bool triangle_has_area(const Tri& t) { return detail::projection_axis(t) >= 0; }
 
-bool triangles_cross(const Tri& a, const Tri& b) { return cross_projected(a, b, projection_axis(a), projection_axis(b)); }
+bool triangles_cross(const Tri& a, const Tri& b) {
+  return detail::cross_projected(a, b, detail::projection_axis(a), detail::projection_axis(b));
+}
 
 namespace {
 
@@ -198,7 +93,6 @@ bool boxes_overlap(const Box& a, const Box& b) {
     if (a.hi[k] < b.lo[k] || b.hi[k] < a.lo[k]) return false;
   return true;
 }
-
 
 // The mesh's cells as fan triangles, each with its cell; point ids and
 // coordinates checked.
@@ -269,40 +163,66 @@ CellRuns cell_runs(const Broad& grid, const std::vector<Box>& boxes) {
   return r;
 }
 
-}  // namespace
+// The fan triangles with area, in fan order, with what the pair test and
+// the broad phases read per triangle.
+struct LiveTriangles {
+  std::vector<Tri> corners;
+  std::vector<signed char> axis;  // projection axis
+  std::vector<Id> cell;
+  std::vector<Box> boxes;
+  std::vector<detail::IntegerTriangle> integer;  // when the mesh's coordinates allow (triangle_crossing.hpp)
 
-SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::size_t max_listed) {
-  SelfIntersectionReport report;
-  const FanTriangles fan = fan_triangles(mesh);
-  report.triangles = static_cast<Id>(fan.tris.size());
-  std::vector<signed char> axis(fan.tris.size());  // projection axis, -1 without area
+  std::size_t size() const { return corners.size(); }
+  // Fan triangles of one polygon are not tested against each other.
+  bool candidates(std::uint32_t u, std::uint32_t v) const {
+    return cell[u] != cell[v] && boxes_overlap(boxes[u], boxes[v]);
+  }
+  bool cross(std::uint32_t u, std::uint32_t v) const {
+    if (integer.empty()) return detail::cross_projected(corners[u], corners[v], axis[u], axis[v]);
+    return detail::cross_projected(corners[u], corners[v], axis[u], axis[v], integer[u], integer[v]);
+  }
+  std::array<Id, 2> pair(std::uint32_t u, std::uint32_t v) const {
+    return {std::min(cell[u], cell[v]), std::max(cell[u], cell[v])};
+  }
+};
+
+LiveTriangles live_triangles(const FanTriangles& fan, const SurfaceMesh& mesh) {
+  std::vector<signed char> axis(fan.tris.size());  // -1 without area
   parallel::for_each(static_cast<Id>(fan.tris.size()),
-                     [&](Id t) { axis[t] = static_cast<signed char>(projection_axis(fan.corners(t))); });
-  std::vector<std::uint32_t> live;
+                     [&](Id t) { axis[t] = static_cast<signed char>(detail::projection_axis(fan.corners(t))); });
+  LiveTriangles live;
   for (std::size_t t = 0; t < fan.tris.size(); ++t)
-    if (axis[t] >= 0) live.push_back(static_cast<std::uint32_t>(t));
-  report.zero_area_triangles = report.triangles - static_cast<Id>(live.size());
-  if (fan.tris.size() > std::numeric_limits<std::uint32_t>::max())
-    throw LimitError("self-intersection check: more than 2^32 - 1 triangles");
-
-  std::vector<Box> boxes(live.size());
+    if (axis[t] >= 0) {
+      live.corners.push_back(fan.corners(t));
+      live.axis.push_back(axis[t]);
+      live.cell.push_back(fan.cell[t]);
+    }
+  live.boxes.resize(live.size());
   parallel::for_each(static_cast<Id>(live.size()), [&](Id i) {
-    const Tri t = fan.corners(live[i]);
+    const Tri& t = live.corners[i];
     for (int k = 0; k < 3; ++k) {
-      boxes[i].lo[k] = std::min({t[0][k], t[1][k], t[2][k]});
-      boxes[i].hi[k] = std::max({t[0][k], t[1][k], t[2][k]});
+      live.boxes[i].lo[k] = std::min({t[0][k], t[1][k], t[2][k]});
+      live.boxes[i].hi[k] = std::max({t[0][k], t[1][k], t[2][k]});
     }
   });
-  const Broad grid = make_broad(boxes);
-  const CellRuns runs = cell_runs(grid, boxes);
+  if (detail::integer_coordinates(mesh.points.data(), mesh.points.size())) {
+    live.integer.resize(live.size());
+    parallel::for_each(static_cast<Id>(live.size()),
+                       [&](Id i) { live.integer[i] = detail::integer_triangle(live.corners[i]); });
+  }
+  return live;
+}
+
+// Threaded: each pair of overlapping boxes is tested once, in the grid cell
+// holding the low corner of their overlap.
+std::vector<std::array<Id, 2>> grid_crossings(const LiveTriangles& live) {
+  const Broad grid = make_broad(live.boxes);
+  const CellRuns runs = cell_runs(grid, live.boxes);
   // Each box's low grid cell: cell_of is monotone along every axis, so the
   // cell of two boxes' overlap's low corner is the larger of theirs, axis by
   // axis (no floor or division per pair).
-  std::vector<std::array<std::int64_t, 3>> low_cell(boxes.size());
-  parallel::for_each(static_cast<Id>(boxes.size()), [&](Id i) { low_cell[i] = grid.cell_of(boxes[i].lo); });
-
-  // Each pair of boxes is tested once, in the grid cell holding the low
-  // corner of their overlap.
+  std::vector<std::array<std::int64_t, 3>> low_cell(live.size());
+  parallel::for_each(static_cast<Id>(live.size()), [&](Id i) { low_cell[i] = grid.cell_of(live.boxes[i].lo); });
   const int threads = parallel::thread_count();
   std::vector<std::vector<std::array<Id, 2>>> found(static_cast<std::size_t>(threads));
   const Id run_count = static_cast<Id>(runs.run_start.size()) - 1;
@@ -313,17 +233,82 @@ SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::siz
     for (std::uint64_t i = b; i < e; ++i)
       for (std::uint64_t j = i + 1; j < e; ++j) {
         const std::uint32_t u = runs.members[i], v = runs.members[j];
-        const Id cu = fan.cell[live[u]], cv = fan.cell[live[v]];
-        if (cu == cv || !boxes_overlap(boxes[u], boxes[v])) continue;
+        if (!live.candidates(u, v)) continue;
         std::array<std::int64_t, 3> low{};
         for (int k = 0; k < 3; ++k) low[k] = std::max(low_cell[u][k], low_cell[v][k]);
         if (grid.key(low) != runs.keys[b]) continue;  // tested in another grid cell
-        if (cross_projected(fan.corners(live[u]), fan.corners(live[v]), axis[live[u]], axis[live[v]]))
-          mine.push_back({std::min(cu, cv), std::max(cu, cv)});
+        if (live.cross(u, v)) mine.push_back(live.pair(u, v));
       }
   }
   std::vector<std::array<Id, 2>> all;
   for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  return all;
+}
+
+// The axis along which a sweep meets the fewest boxes per box: the largest
+// spread of the boxes' low ends against the boxes' summed extents.
+int sweep_axis(const std::vector<Box>& boxes) {
+  std::array<double, 3> lo{}, hi{}, extent{};
+  lo.fill(std::numeric_limits<double>::max());
+  hi.fill(std::numeric_limits<double>::lowest());
+  for (const Box& b : boxes)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], double(b.lo[k]));
+      hi[k] = std::max(hi[k], double(b.lo[k]));
+      extent[k] += double(b.hi[k]) - b.lo[k];
+    }
+  int best = 0;
+  for (int k = 1; k < 3; ++k)  // spread[k] / extent[k] > spread[best] / extent[best]
+    if ((hi[k] - lo[k]) * extent[best] > (hi[best] - lo[best]) * extent[k]) best = k;
+  return best;
+}
+
+// A box in sweep order: its extent along the sweep axis, then along the other two.
+struct SweepBox {
+  float start, end;
+  std::array<float, 2> lo, hi;
+};
+
+// Serial sort and sweep: boxes in order of their low ends along one axis,
+// each checked against those that start before it ends. For small meshes,
+// where the grid's sort and thread start cost more than the pairs.
+std::vector<std::array<Id, 2>> sweep_crossings(const LiveTriangles& live) {
+  const std::size_t n = live.size();
+  const int axis = sweep_axis(live.boxes), p = (axis + 1) % 3, q = (axis + 2) % 3;
+  std::vector<std::uint32_t> order(n);
+  for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return live.boxes[a].lo[axis] < live.boxes[b].lo[axis]; });
+  std::vector<SweepBox> boxes(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Box& b = live.boxes[order[i]];
+    boxes[i] = {b.lo[axis], b.hi[axis], {b.lo[p], b.lo[q]}, {b.hi[p], b.hi[q]}};
+  }
+  std::vector<std::array<Id, 2>> found;
+  for (std::size_t i = 0; i < n; ++i) {
+    const SweepBox b = boxes[i];
+    for (std::size_t j = i + 1; j < n && boxes[j].start <= b.end; ++j) {
+      const SweepBox& c = boxes[j];
+      if (c.lo[0] > b.hi[0] || b.lo[0] > c.hi[0] || c.lo[1] > b.hi[1] || b.lo[1] > c.hi[1]) continue;
+      const std::uint32_t u = order[i], v = order[j];
+      if (live.cell[u] != live.cell[v] && live.cross(u, v)) found.push_back(live.pair(u, v));
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::size_t max_listed, BroadPhase broad) {
+  SelfIntersectionReport report;
+  const FanTriangles fan = fan_triangles(mesh);
+  if (fan.tris.size() > std::numeric_limits<std::uint32_t>::max())
+    throw LimitError("self-intersection check: more than 2^32 - 1 triangles");
+  report.triangles = static_cast<Id>(fan.tris.size());
+  const LiveTriangles live = live_triangles(fan, mesh);
+  report.zero_area_triangles = report.triangles - static_cast<Id>(live.size());
+  if (broad == BroadPhase::automatic) broad = live.size() <= kSweepLimit ? BroadPhase::sweep : BroadPhase::grid;
+  std::vector<std::array<Id, 2>> all = broad == BroadPhase::sweep ? sweep_crossings(live) : grid_crossings(live);
   std::sort(all.begin(), all.end());
   all.erase(std::unique(all.begin(), all.end()), all.end());
   report.self_intersections = static_cast<Id>(all.size());

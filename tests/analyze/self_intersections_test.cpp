@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "analyze/triangle_crossing.hpp"
 #include "keymesh/analyze/exact_predicates.hpp"
 #include "keymesh/generate/contour/contour.hpp"
 #include "keymesh/generate/spherical_distance.hpp"
@@ -127,30 +128,134 @@ TEST(SelfIntersections, ClosedSphereHasNoneAndAPlantedTriangleIsFound) {
   for (const auto& pair : planted.pairs) EXPECT_EQ(pair[1], m.num_cells() - 1);
 }
 
-// The broad phase finds what testing every pair finds, at any thread count.
-TEST(SelfIntersections, GridEqualsEveryPairOnARandomSoup) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<float> at(0, 10), step(-1.5f, 1.5f);
-  std::vector<std::array<P, 3>> tris(600);
+namespace {
+
+bool has_area(const std::array<P, 3>& t) { return analyze::triangle_has_area({t[0].data(), t[1].data(), t[2].data()}); }
+
+// Every pair of a soup's triangles with area that cross, by the public pair
+// test alone.
+std::vector<std::array<Id, 2>> every_crossing_pair(const std::vector<std::array<P, 3>>& tris) {
+  std::vector<std::array<Id, 2>> out;
+  for (std::size_t a = 0; a < tris.size(); ++a)
+    for (std::size_t b = a + 1; b < tris.size(); ++b)
+      if (has_area(tris[a]) && has_area(tris[b]) && cross(tris[a], tris[b])) out.push_back({Id(a), Id(b)});
+  return out;
+}
+
+// Both broad phases, at several thread counts, find what testing every pair finds.
+void expect_every_broad_phase_finds(const SurfaceMesh& m, const std::vector<std::array<Id, 2>>& brute) {
+  for (const auto broad : {analyze::BroadPhase::automatic, analyze::BroadPhase::sweep, analyze::BroadPhase::grid})
+    for (int threads : {1, 2, 5}) {
+      parallel::set_thread_count(threads);
+      const auto r = find_self_intersections(m, brute.size(), broad);
+      EXPECT_EQ(r.self_intersections, static_cast<Id>(brute.size())) << threads << " " << static_cast<int>(broad);
+      EXPECT_EQ(r.pairs, brute) << threads << " " << static_cast<int>(broad);
+    }
+  parallel::set_thread_count(0);
+}
+
+std::vector<std::array<P, 3>> random_soup(std::uint32_t seed, int count, float extent, float size) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> at(0, extent), step(-size, size);
+  std::vector<std::array<P, 3>> tris(static_cast<std::size_t>(count));
   for (auto& t : tris) {
     const P o{at(rng), at(rng), at(rng)};
     t = {o, P{o[0] + step(rng), o[1] + step(rng), o[2] + step(rng)}, P{o[0] + step(rng), o[1] + step(rng), o[2] + step(rng)}};
   }
+  return tris;
+}
+
+// The corners of an integer soup rounded: many coincident corners,
+// coplanar and collinear triangles, as a quantized mesh has.
+std::vector<std::array<P, 3>> rounded(std::vector<std::array<P, 3>> tris, float offset) {
+  for (auto& t : tris)
+    for (auto& p : t)
+      for (float& c : p) c = std::round(c) + offset;
+  return tris;
+}
+
+}  // namespace
+
+TEST(SelfIntersections, EveryBroadPhaseEqualsEveryPairOnARandomSoup) {
+  std::vector<std::array<P, 3>> tris = random_soup(7, 600, 10, 1.5f);
   tris.push_back(tris[5]);                               // a duplicate
   tris.push_back({tris[9][0], tris[9][1], P{20, 20, 20}});  // a neighbour by an edge's positions
-  const SurfaceMesh m = soup(tris);
-  std::vector<std::array<Id, 2>> brute;
-  for (std::size_t a = 0; a < tris.size(); ++a)
-    for (std::size_t b = a + 1; b < tris.size(); ++b)
-      if (cross(tris[a], tris[b])) brute.push_back({Id(a), Id(b)});
+  const auto brute = every_crossing_pair(tris);
   ASSERT_GT(brute.size(), 50u);
-  for (int threads : {1, 2, 5}) {
-    parallel::set_thread_count(threads);
-    const auto r = find_self_intersections(m, brute.size());
-    EXPECT_EQ(r.self_intersections, static_cast<Id>(brute.size())) << threads;
-    EXPECT_EQ(r.pairs, brute) << threads;
+  expect_every_broad_phase_finds(soup(tris), brute);
+}
+
+// Integer corners (a quantized mesh's) are judged with integer planes:
+// the same pairs as orient3d finds, degenerate contacts included, up to
+// the bound 2^19 and past it (where orient3d judges again).
+TEST(SelfIntersections, IntegerCornersEqualEveryPair) {
+  for (const float offset : {0.0f, 524288.0f - 16, -524288.0f + 16, 524288.0f + 16, 0.5f}) {
+    const auto tris = rounded(random_soup(11, 700, 8, 2.5f), offset);
+    const auto brute = every_crossing_pair(tris);
+    ASSERT_GT(brute.size(), 200u) << offset;
+    std::size_t coplanar = 0;  // a crossing in one plane
+    for (const auto& p : brute) {
+      const auto& a = tris[static_cast<std::size_t>(p[0])];
+      const auto& b = tris[static_cast<std::size_t>(p[1])];
+      coplanar += analyze::orient3d(a[0].data(), a[1].data(), a[2].data(), b[0].data()) == 0 &&
+                  analyze::orient3d(a[0].data(), a[1].data(), a[2].data(), b[1].data()) == 0 &&
+                  analyze::orient3d(a[0].data(), a[1].data(), a[2].data(), b[2].data()) == 0;
+    }
+    EXPECT_GT(coplanar, 5u) << offset;
+    expect_every_broad_phase_finds(soup(tris), brute);
   }
-  parallel::set_thread_count(0);
+}
+
+// The integer plane's side and orient3d_integer are orient3d's sign, out to
+// the bound 2^19 where their products are largest (and they are only used
+// within that bound).
+TEST(TriangleCrossing, IntegerPlaneSidesEqualOrient3d) {
+  const float bound = 524288.0f;
+  EXPECT_TRUE(analyze::detail::integer_coordinates(std::array<float, 3>{bound, -bound, 0}.data(), 3));
+  EXPECT_FALSE(analyze::detail::integer_coordinates(std::array<float, 3>{bound + 1, 0, 0}.data(), 3));
+  EXPECT_FALSE(analyze::detail::integer_coordinates(std::array<float, 3>{-bound - 1, 0, 0}.data(), 3));
+  EXPECT_FALSE(analyze::detail::integer_coordinates(std::array<float, 3>{3, 0.5f, 0}.data(), 3));
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> any(-524288, 524288), corner(0, 1), inward(0, 3);
+  // Anywhere, at the extremes, or a little inside them.
+  auto coordinate = [&](int kind) {
+    if (kind == 0) return static_cast<float>(any(rng));
+    const int extreme = corner(rng) ? 524288 : -524288;
+    const int in = kind == 1 ? 0 : inward(rng);
+    return static_cast<float>(extreme > 0 ? extreme - in : extreme + in);
+  };
+  int nonzero = 0, zero = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::array<P, 4> p{};
+    for (auto& q : p)
+      for (float& c : q) c = coordinate(trial % 3);
+    if (trial % 5 == 0) p[3] = p[trial % 3];  // on the plane
+    const std::array<const float*, 3> t{p[0].data(), p[1].data(), p[2].data()};
+    const int expected = analyze::orient3d(p[0].data(), p[1].data(), p[2].data(), p[3].data());
+    EXPECT_EQ(analyze::detail::side(analyze::detail::integer_triangle(t), p[3].data()), expected) << trial;
+    EXPECT_EQ(analyze::detail::orient3d_integer(p[0].data(), p[1].data(), p[2].data(), p[3].data()), expected) << trial;
+    (expected ? nonzero : zero)++;
+  }
+  EXPECT_GT(nonzero, 5000);
+  EXPECT_GT(zero, 2000);
+}
+
+// A welded mesh (corners shared by point id) with integer corners: the
+// pairs of the same triangles as a soup.
+TEST(SelfIntersections, WeldedIntegerMeshEqualsItsSoup) {
+  const ImageGrid g = generate::spherical_distance(20);
+  generate::ContourOptions opt;
+  opt.isovalues = {7.3};
+  SurfaceMesh m = generate::contour(g, opt);
+  for (float& c : m.points) c = std::round(c * 2);  // coarse integers: many folds and coincident points
+  std::vector<std::array<P, 3>> tris(static_cast<std::size_t>(m.num_cells()));
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) tris[t][k][c] = m.points[3 * m.connectivity[3 * t + k] + c];
+  const auto brute = every_crossing_pair(tris);
+  ASSERT_GT(brute.size(), 20u);
+  expect_every_broad_phase_finds(m, brute);
+  EXPECT_EQ(find_self_intersections(soup(tris), brute.size()).pairs, brute);
 }
 
 TEST(SelfIntersections, PolygonsZeroAreaAndBadInput) {

@@ -14,10 +14,13 @@
 // surface to cross. Polygon cells are fanned from their first point; a
 // polygon's own fan triangles are not tested against each other.
 //
-// Broad phase: a uniform grid of cells about twice the mean triangle's
-// extent; each pair of triangles whose boxes overlap is tested once, in the
-// grid cell holding the low corner of the boxes' overlap. Threaded; the result
-// (pairs sorted) does not depend on the thread count.
+// Broad phase: each pair of triangles whose boxes overlap is tested once.
+// Up to 8192 triangles (such as a multilod chunk piece, checked once per
+// fold-guard round) by a serial sort and sweep along one axis; above that by
+// a uniform grid of cells about twice the mean triangle's extent, each pair
+// tested in the grid cell holding the low corner of the boxes' overlap,
+// threaded. The result (pairs sorted) depends on neither the broad phase nor
+// the thread count.
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -34,8 +37,13 @@ struct SelfIntersectionReport {
   std::vector<std::array<Id, 2>> pairs;  // the first max_listed pairs (cell ids, smaller first), sorted
 };
 
+// Which broad phase finds the candidate pairs: automatic (by size, above), or
+// one of them forced (for tests: both give the same report).
+enum class BroadPhase { automatic, sweep, grid };
+
 // Throws InputError when a cell refers to a point id out of range.
-SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::size_t max_listed = 16);
+SelfIntersectionReport find_self_intersections(const SurfaceMesh& mesh, std::size_t max_listed = 16,
+                                               BroadPhase broad = BroadPhase::automatic);
 
 // The exact pair test: do triangles a and b (three xyz points each) meet
 // outside the convex hull of their common corners? Both must have non-zero
