@@ -85,11 +85,12 @@ struct Box {
   Id cells() const { return cxy() * (dims[2] - 1); }
 };
 
-// Everything one run of the generator writes, before welding.
+// Everything one run of the generator writes, before welding. Arrays: sized
+// without a fill, as every element is written.
 template <class K>
 struct Soup {
-  std::vector<K> keys;                // 3 per triangle (a quad: (C00, C10, C11), (C00, C11, C01))
-  std::vector<std::uint32_t> pair;    // per triangle: first << 16 | second
+  Array<K> keys;                // 3 per triangle (a quad: (C00, C10, C11), (C00, C11, C01))
+  Array<std::uint32_t> pair;    // per triangle: first << 16 | second
 };
 
 // Labels of the 8 corners of the cell whose first corner is padded point p.
@@ -132,8 +133,32 @@ template <class K>
 class EdgePolygons {
  public:
   EdgePolygons(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange)
-      : vol_(vol), box_(box), only_(only), krange_(krange), loops_(cell_loops()), corners_(vol),
-        cstride_{1, box.cx(), box.cxy()}, pstride_{1, vol.dims[0], vol.nxy}, cells_(box.cells()) {}
+      : vol_(vol), box_(box), only_(only), krange_(krange), loops_(cell_loops()),
+        cstride_{1, box.cx(), box.cxy()}, pstride_{1, vol.dims[0], vol.nxy}, cells_(box.cells()) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (int da = 0; da < 2; ++da)
+        for (int dv = -1; dv <= 1; ++dv)
+          for (int du = -1; du <= 1; ++du)
+            around_[axis][around_bit(da, du, dv)] = da * pstride_[axis] + du * pstride_[u] + dv * pstride_[v];
+      for (int m = 0; m < 4; ++m)
+        for (int c = 0; c < 8; ++c)
+          corner_bit_[axis][m][c] = static_cast<std::uint8_t>(
+              around_bit((c >> axis) & 1, ((c >> u) & 1) - kAround[m][0], ((c >> v) & 1) - kAround[m][1]));
+      // A face's corners relative to p: its lower corner (face_between at
+      // p = 0) plus oa along axis and ow along w.
+      const Id origin[3] = {0, 0, 0};
+      for (int m = 0; m < 4; ++m) {
+        const Face face = face_between(origin, axis, m);
+        for (int corner = 0; corner < 4; ++corner) {
+          Id q[3] = {face.f[0], face.f[1], face.f[2]};
+          q[axis] += corner & 1, q[face.w] += corner >> 1;
+          face_bit_[axis][m][corner] =
+              static_cast<std::uint8_t>(around_bit(static_cast<int>(q[axis]), static_cast<int>(q[u]), static_cast<int>(q[v])));
+        }
+      }
+    }
+  }
 
   // Rows of the box the edges are visited in (y fastest, then z).
   Id rows() const { return box_.dims[1] * (krange_.second - krange_.first); }
@@ -229,10 +254,11 @@ class EdgePolygons {
   LabelIndex label(Id p) const { return vol_.label(p); }
 
   // Whether none of the kRun points from `row` on starts an edge visit_row
-  // visits (the row needs kRun + 1 points): with `only`, none of them nor
-  // their ends along x, y, z has that label; else each equals its three
-  // ends. Eight labels a comparison (GCC vector extensions: SSE2 lanes on
-  // x86-64, plain code elsewhere).
+  // visits (the row needs kRun + 1 points): with `only`, each has that
+  // label exactly when its ends along x, y, z have it (outside the label
+  // or inside it); else each equals its three ends. Eight labels a
+  // comparison (GCC vector extensions: SSE2 lanes on x86-64, plain code
+  // elsewhere).
   static constexpr Id kRun = 8;
   bool quiet_run(const LabelIndex* row, const LabelIndex* y_row, const LabelIndex* z_row) const {
     using Lanes = LabelIndex __attribute__((vector_size(kRun * sizeof(LabelIndex))));
@@ -242,7 +268,9 @@ class EdgePolygons {
     std::memcpy(&y, y_row, sizeof y);
     std::memcpy(&z, z_row, sizeof z);
     const Lanes l = Lanes{} + static_cast<LabelIndex>(only_);
-    const auto hit = only_ >= 0 ? (a == l) | (x == l) | (y == l) | (z == l) : (a != x) | (a != y) | (a != z);
+    const auto in = a == l;
+    const auto hit = only_ >= 0 ? (in != (x == l)) | (in != (y == l)) | (in != (z == l))
+                                : (a != x) | (a != y) | (a != z);
     std::uint64_t words[sizeof hit / sizeof(std::uint64_t)];
     std::memcpy(words, &hit, sizeof hit);
     std::uint64_t any = 0;
@@ -257,23 +285,14 @@ class EdgePolygons {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const Id cell = i + j * cstride_[1] + k * cstride_[2];
     const Id lp[3] = {i, j, k};  // p in box coordinates
-    const Id p = vol_.at(box_.lo[0] + i, box_.lo[1] + j, box_.lo[2] + k);
-    const auto l = static_cast<LabelIndex>(only_);
-    // The faces between the cells that may pinch; the cells' cases only
-    // where read (the corners written, or a face to check further).
-    Face faces[4];
-    bool ambiguous_face[4], any_ambiguous = false;
+    // The 18 labels of the four cells, read once: the cells' cases and
+    // their faces' corners are bits of them.
+    const std::uint32_t near = around(vol_.at(box_.lo[0] + i, box_.lo[1] + j, box_.lo[2] + k), axis);
+    unsigned cube[4];
     for (int m = 0; m < 4; ++m) {
-      faces[m] = face_between(lp, axis, m);
-      ambiguous_face[m] = ambiguous(faces[m], axis);
-      any_ambiguous = any_ambiguous || ambiguous_face[m];
+      cube[m] = 0;
+      for (int c = 0; c < 8; ++c) cube[m] |= ((near >> corner_bit_[axis][m][c]) & 1u) << c;
     }
-    unsigned cube[4] = {0, 0, 0, 0};
-    if (out || any_ambiguous)
-      for (int m = 0; m < 4; ++m) {
-        const Id first = p - kAround[m][0] * pstride_[u] - kAround[m][1] * pstride_[v];
-        cube[m] = corners_.case_of(first, l);
-      }
     int n = 0;
     for (int m = 0; m < 4; ++m) {
       const int corner0 = (kAround[m][0] << u) | (kAround[m][1] << v);
@@ -281,8 +300,8 @@ class EdgePolygons {
         out[n] = static_cast<K>(4 * (cell - kAround[m][0] * cstride_[u] - kAround[m][1] * cstride_[v]) +
                                 loops_.loop_of[cube[m]][loops_.edge_at[corner0][axis]]);
       ++n;
-      if (!ambiguous_face[m]) continue;
-      const Id face_key = face_point(lp, faces[m], axis, a == l ? 0 : 1, m, cube);
+      if (!ambiguous(near, axis, m)) continue;
+      const Id face_key = face_point(lp, face_between(lp, axis, m), axis, a == only_ ? 0 : 1, m, cube);
       if (face_key < 0) continue;
       if (out) out[n] = static_cast<K>(face_key);
       ++n;
@@ -304,15 +323,25 @@ class EdgePolygons {
     return face;
   }
 
-  // Whether the label sits on one diagonal of the face (spanning axis and w).
-  bool ambiguous(const Face& face, int axis) const {
-    // Inside-ness of the face's corners (axis offset oa, w offset ow).
-    auto inside = [&](int oa, int ow) {
-      Id q[3] = {face.f[0], face.f[1], face.f[2]};
-      q[axis] += oa, q[face.w] += ow;
-      return label(vol_.at(box_.lo[0] + q[0], box_.lo[1] + q[1], box_.lo[2] + q[2])) == only_;
-    };
-    const bool c00 = inside(0, 0), c10 = inside(1, 0), c01 = inside(0, 1), c11 = inside(1, 1);
+  // The bit of `around` for the point p + da along axis, du along u and dv
+  // along v (each of du, dv in -1..1): the four cells' 3 x 3 x 2 points.
+  static constexpr int around_bit(int da, int du, int dv) { return 9 * da + 3 * (dv + 1) + (du + 1); }
+
+  // Inside-ness (label `only`) of the points around the edge from padded
+  // point p along axis, as bits (around_bit).
+  std::uint32_t around(Id p, int axis) const {
+    const LabelIndex* at = vol_.row(p);
+    const auto l = static_cast<LabelIndex>(only_);
+    std::uint32_t bits = 0;
+    for (int b = 0; b < 18; ++b) bits |= static_cast<std::uint32_t>(at[around_[axis][b]] == l) << b;
+    return bits;
+  }
+
+  // Whether the label sits on one diagonal of the face between cells m and
+  // m + 1 around the edge (spanning axis and w; `near` from around).
+  bool ambiguous(std::uint32_t near, int axis, int m) const {
+    const auto in = [&](int corner) { return ((near >> face_bit_[axis][m][corner]) & 1u) != 0; };
+    const bool c00 = in(0), c10 = in(1), c01 = in(2), c11 = in(3);
     return c00 == c11 && c10 == c01 && c00 != c10;
   }
 
@@ -360,9 +389,11 @@ class EdgePolygons {
   int only_;
   std::pair<Id, Id> krange_;
   const CellLoops& loops_;
-  CellCorners corners_;
   Id cstride_[3], pstride_[3];
   Id cells_;
+  Id around_[3][18];                        // per axis: offsets of around's points from p
+  std::uint8_t corner_bit_[3][4][8];       // per axis, cell m and cube corner: its bit of around
+  std::uint8_t face_bit_[3][4][4];         // per axis, face after cell m, corner (oa + 2 ow): its bit
 };
 
 // The polygons of every visited edge, counted per row, then written as
