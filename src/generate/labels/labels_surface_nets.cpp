@@ -9,6 +9,8 @@
 #include <chrono>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <string>
 
 #include "keymesh/core/error.hpp"
@@ -396,11 +398,14 @@ class EdgePolygons {
   std::uint8_t face_bit_[3][4][4];         // per axis, face after cell m, corner (oa + 2 ow): its bit
 };
 
-// The polygons of every visited edge, counted per row, then written as
-// triangles at each row's offset: grid order whatever the thread count.
+// The most triangles a soup holds: 3 corners each in the 32-bit index map.
+constexpr Id kMaxTriangles = Id{std::numeric_limits<std::uint32_t>::max()} / 3;
+
+// The network's quads of every visited edge, counted per row, then written
+// as triangles at each row's offset: grid order whatever the thread count.
 template <class K>
-void generate_quads(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange, Soup<K>& soup) {
-  const EdgePolygons<K> edges(vol, box, only, krange);
+void generate_quads(const LabelVolume& vol, const Box& box, std::pair<Id, Id> krange, Soup<K>& soup) {
+  const EdgePolygons<K> edges(vol, box, -1, krange);
   const Id rows = edges.rows();
   std::vector<Id> row_offsets(static_cast<std::size_t>(rows + 1), 0);
   parallel::for_each_dynamic(rows, [&](Id r) {
@@ -411,24 +416,72 @@ void generate_quads(const LabelVolume& vol, const Box& box, int only, std::pair<
     row_offsets[r] = count;
   }, 16);
   const Id triangles = parallel::exclusive_scan(row_offsets.data(), row_offsets.data(), rows + 1);
-  if (3 * triangles > Id{std::numeric_limits<std::uint32_t>::max()})
+  if (triangles > kMaxTriangles)
     throw LimitError("labels: " + std::to_string(triangles) + " triangles exceed the supported 1431655765");
   soup.keys.resize(static_cast<std::size_t>(3 * triangles));
   soup.pair.resize(static_cast<std::size_t>(triangles));
   parallel::for_each_dynamic(rows, [&](Id r) {
     Id t = row_offsets[r];
     edges.visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b) {
-      if (only < 0) {
-        edges.write_network_quad(i, j, k, axis, a, b, t, soup);
-        t += 2;
-        return;
-      }
-      K poly[8];
-      const int n = edges.polygon(i, j, k, axis, a, poly);
-      edges.write_fan(poly, n, a, b, t, soup);
-      t += n - 2;
+      edges.write_network_quad(i, j, k, axis, a, b, t, soup);
+      t += 2;
     });
   }, 16);
+}
+
+// Appends the triangles of the polygons of rows [r0, r1) to `soup`, in
+// grid order; false once it holds more than kMaxTriangles.
+template <class K>
+bool append_label_rows(const EdgePolygons<K>& edges, Id r0, Id r1, Soup<K>& soup) {
+  for (Id r = r0; r < r1; ++r) {
+    edges.visit_row(r, [&](Id i, Id j, Id k, int axis, LabelIndex a, LabelIndex b) {
+      K poly[8];
+      const int n = edges.polygon(i, j, k, axis, a, poly);
+      const Id t = static_cast<Id>(soup.pair.size());
+      soup.keys.resize(static_cast<std::size_t>(3 * (t + n - 2)));
+      soup.pair.resize(static_cast<std::size_t>(t + n - 2));
+      edges.write_fan(poly, n, a, b, t, soup);
+    });
+    if (static_cast<Id>(soup.pair.size()) > kMaxTriangles) return false;
+  }
+  return true;
+}
+
+// Label `only`'s polygons in one pass (a polygon costs more than the visit
+// that finds it, so counting first would nearly double the work): blocks
+// of rows each append to their own soup, joined in row order, so the soup
+// is the same for any block count. One block writes `soup` itself, reusing
+// its storage.
+template <class K>
+void generate_label_polygons(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange, Id blocks,
+                             Soup<K>& soup) {
+  const EdgePolygons<K> edges(vol, box, only, krange);
+  const Id rows = edges.rows();
+  soup.keys.clear();
+  soup.pair.clear();
+  bool fits = true;
+  if (blocks <= 1) {
+    fits = append_label_rows(edges, 0, rows, soup);
+  } else {
+    std::vector<Soup<K>> part(static_cast<std::size_t>(blocks));
+    std::vector<Id> offset(static_cast<std::size_t>(blocks + 1), 0);
+    std::vector<std::uint8_t> block_fits(static_cast<std::size_t>(blocks), 1);
+    parallel::for_each_dynamic(blocks, [&](Id b) {
+      block_fits[b] = append_label_rows(edges, rows * b / blocks, rows * (b + 1) / blocks, part[b]);
+      offset[b] = static_cast<Id>(part[b].pair.size());
+    }, 1);
+    const Id triangles = parallel::exclusive_scan(offset.data(), offset.data(), blocks + 1);
+    fits = triangles <= kMaxTriangles && std::all_of(block_fits.begin(), block_fits.end(), [](auto f) { return f != 0; });
+    if (fits) {
+      soup.keys.resize(static_cast<std::size_t>(3 * triangles));
+      soup.pair.resize(static_cast<std::size_t>(triangles));
+      parallel::for_each_dynamic(blocks, [&](Id b) {
+        std::copy(part[b].keys.begin(), part[b].keys.end(), soup.keys.begin() + 3 * offset[b]);
+        std::copy(part[b].pair.begin(), part[b].pair.end(), soup.pair.begin() + offset[b]);
+      }, 1);
+    }
+  }
+  if (!fits) throw LimitError("labels: a label's surface has more than the supported 1431655765 triangles");
 }
 
 // Appends the welded points of one run: positions, junction and border
@@ -520,9 +573,14 @@ void weld_and_append(const LabelVolume& vol, const Box& box, int only, Soup<K>& 
                            : keyreduce::partition_dense(soup.keys.data(), n, range, keyreduce::Order::Skip);
   const std::uint32_t base = static_cast<std::uint32_t>(out.junction.size());
   const std::size_t c0 = out.mesh.connectivity.size();
-  out.mesh.connectivity.resize(c0 + groups.index_map.size());
-  parallel::for_each(static_cast<Id>(groups.index_map.size()),
-                     [&](Id i) { out.mesh.connectivity[c0 + static_cast<std::size_t>(i)] = base + groups.index_map[i]; });
+  if (c0 == 0 && base == 0) {
+    out.mesh.connectivity = std::move(groups.index_map);  // the first run: the index map is the connectivity
+  } else {
+    out.mesh.connectivity.resize(c0 + groups.index_map.size());
+    parallel::for_each(static_cast<Id>(groups.index_map.size()), [&](Id i) {
+      out.mesh.connectivity[c0 + static_cast<std::size_t>(i)] = base + groups.index_map[i];
+    });
+  }
   out.pair.insert(out.pair.end(), soup.pair.begin(), soup.pair.end());
   append_points(vol, box, only, groups.unique_keys, out);
   if (vol.window || vol.keep_keys) out.keys.insert(out.keys.end(), groups.unique_keys.begin(), groups.unique_keys.end());
@@ -553,7 +611,7 @@ void network(const LabelVolume& vol, std::pair<Id, Id> rows, LabelSurface& out, 
   Soup<K> soup;
   const Box box = whole(vol);
   auto t0 = Clock::now();
-  generate_quads<K>(vol, box, -1, rows, soup);
+  generate_quads<K>(vol, box, rows, soup);
   st.generate += seconds_since(t0);
   st.soup_corners += static_cast<Id>(soup.keys.size());
   t0 = Clock::now();
@@ -561,19 +619,59 @@ void network(const LabelVolume& vol, std::pair<Id, Id> rows, LabelSurface& out, 
   st.weld += seconds_since(t0);
 }
 
+// Soups the labels' runs take in turn: a run's buffers keep the capacity,
+// and the pages, that an earlier label's run faulted in.
+template <class K>
+class SoupPool {
+ public:
+  std::unique_ptr<Soup<K>> take() {
+    const std::lock_guard lock(mutex_);
+    if (free_.empty()) return std::make_unique<Soup<K>>();
+    std::unique_ptr<Soup<K>> soup = std::move(free_.back());
+    free_.pop_back();
+    return soup;
+  }
+  void give(std::unique_ptr<Soup<K>> soup) {
+    const std::lock_guard lock(mutex_);
+    free_.push_back(std::move(soup));
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<Soup<K>>> free_;
+};
+
+// Label part s's closed surface on its box into `out`, with key type K
+// (32 bits where the box's keys fit: half the soup).
+template <class K>
+void label_surface(const LabelVolume& vol, std::size_t s, std::pair<Id, Id> rows, Id blocks, SoupPool<K>& pool,
+                   LabelSurface& out) {
+  const Box box = box_of(vol, s);
+  const int label = vol.selected[s];
+  std::unique_ptr<Soup<K>> soup = pool.take();
+  generate_label_polygons(vol, box, label, rows_in(box, rows), blocks, *soup);
+  weld_and_append(vol, box, label, *soup, out);
+  out.mesh.cell_fields.push_back(Field{"label", 1, Array<float>(soup->pair.size(), static_cast<float>(vol.values[label]))});
+  pool.give(std::move(soup));
+}
+
 // One closed surface per selected label, each welded on its own box; the
-// labels run in parallel.
+// labels run in parallel (a single label: its blocks of rows do).
 std::vector<LabelSurface> per_label(const LabelVolume& vol, std::pair<Id, Id> rows, LabelStats& st) {
   const std::size_t n = vol.selected.size();
   std::vector<LabelSurface> parts(n);
+  const int threads = parallel::thread_count();
+  const Id blocks = n > 1 || threads <= 1 ? 1 : 4 * threads;
+  SoupPool<std::uint32_t> narrow;
+  SoupPool<std::uint64_t> wide;
   auto t0 = Clock::now();
   parallel::for_each_dynamic(static_cast<Id>(n), [&](Id s) {
-    const Box box = box_of(vol, static_cast<std::size_t>(s));
-    Soup<std::uint64_t> soup;
-    generate_quads(vol, box, vol.selected[static_cast<std::size_t>(s)], rows_in(box, rows), soup);
-    weld_and_append(vol, box, vol.selected[static_cast<std::size_t>(s)], soup, parts[static_cast<std::size_t>(s)]);
-    parts[static_cast<std::size_t>(s)].mesh.cell_fields.push_back(
-        Field{"label", 1, Array<float>(soup.pair.size(), static_cast<float>(vol.values[vol.selected[s]]))});
+    const auto at = static_cast<std::size_t>(s);
+    const Id keys = (4 + kFaceKeysPerCell) * box_of(vol, at).cells();
+    if (keys <= Id{std::numeric_limits<std::uint32_t>::max()})
+      label_surface(vol, at, rows, blocks, narrow, parts[at]);
+    else
+      label_surface(vol, at, rows, blocks, wide, parts[at]);
   }, 1);
   st.generate += seconds_since(t0);
   for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());
