@@ -102,13 +102,18 @@ struct CellCorners {
   explicit CellCorners(const LabelVolume& vol) : v(vol) {
     for (int c = 0; c < 8; ++c) offset[c] = (c & 1) + ((c >> 1) & 1) * vol.dims[0] + ((c >> 2) & 1) * vol.nxy;
   }
-  unsigned case_of(Id p, LabelIndex l) const {
+  std::array<LabelIndex, 8> labels(Id p) const {
+    std::array<LabelIndex, 8> out;
+    for (int c = 0; c < 8; ++c) out[c] = v.label(p + offset[c]);
+    return out;
+  }
+  static unsigned case_of(const std::array<LabelIndex, 8>& corner, LabelIndex l) {
     unsigned m = 0;
-    for (int c = 0; c < 8; ++c) m |= static_cast<unsigned>(v.label(p + offset[c]) == l) << c;
+    for (int c = 0; c < 8; ++c) m |= static_cast<unsigned>(corner[c] == l) << c;
     return m;
   }
-  int distinct(Id p) const {
-    return label_kernels::distinct_corner_labels([&](int c) { return v.label(p + offset[c]); });
+  static int distinct(const std::array<LabelIndex, 8>& corner) {
+    return label_kernels::distinct_corner_labels([&](int c) { return corner[c]; });
   }
 };
 
@@ -143,10 +148,11 @@ class EdgePolygons {
         for (int dv = -1; dv <= 1; ++dv)
           for (int du = -1; du <= 1; ++du)
             around_[axis][around_bit(da, du, dv)] = da * pstride_[axis] + du * pstride_[u] + dv * pstride_[v];
-      for (int m = 0; m < 4; ++m)
-        for (int c = 0; c < 8; ++c)
-          corner_bit_[axis][m][c] = static_cast<std::uint8_t>(
-              around_bit((c >> axis) & 1, ((c >> u) & 1) - kAround[m][0], ((c >> v) & 1) - kAround[m][1]));
+      for (unsigned g = 0; g < 256; ++g) {
+        unsigned cube = 0;
+        for (int c = 0; c < 8; ++c) cube |= ((g >> (((c >> u) & 1) + 2 * ((c >> v) & 1) + 4 * ((c >> axis) & 1))) & 1u) << c;
+        case_of_[axis][g] = static_cast<std::uint8_t>(cube);
+      }
       // A face's corners relative to p: its lower corner (face_between at
       // p = 0) plus oa along axis and ow along w.
       const Id origin[3] = {0, 0, 0};
@@ -291,10 +297,7 @@ class EdgePolygons {
     // their faces' corners are bits of them.
     const std::uint32_t near = around(vol_.at(box_.lo[0] + i, box_.lo[1] + j, box_.lo[2] + k), axis);
     unsigned cube[4];
-    for (int m = 0; m < 4; ++m) {
-      cube[m] = 0;
-      for (int c = 0; c < 8; ++c) cube[m] |= ((near >> corner_bit_[axis][m][c]) & 1u) << c;
-    }
+    for (int m = 0; m < 4; ++m) cube[m] = cell_case(near, axis, m);
     int n = 0;
     for (int m = 0; m < 4; ++m) {
       const int corner0 = (kAround[m][0] << u) | (kAround[m][1] << v);
@@ -337,6 +340,15 @@ class EdgePolygons {
     std::uint32_t bits = 0;
     for (int b = 0; b < 18; ++b) bits |= static_cast<std::uint32_t>(at[around_[axis][b]] == l) << b;
     return bits;
+  }
+
+  // The case of cell m around the edge from its 8 bits of `near`: at
+  // du + 3 dv + 9 da past its first corner's bit, gathered to du + 2 dv +
+  // 4 da, then ordered as cube corners (x, y, z) by case_of_.
+  unsigned cell_case(std::uint32_t near, int axis, int m) const {
+    const std::uint32_t b = near >> around_bit(0, -kAround[m][0], -kAround[m][1]);
+    const std::uint32_t gathered = (b & 0x3u) | ((b >> 1) & 0xcu) | ((b >> 5) & 0x30u) | ((b >> 6) & 0xc0u);
+    return case_of_[axis][gathered];
   }
 
   // Whether the label sits on one diagonal of the face between cells m and
@@ -394,7 +406,7 @@ class EdgePolygons {
   Id cstride_[3], pstride_[3];
   Id cells_;
   Id around_[3][18];                        // per axis: offsets of around's points from p
-  std::uint8_t corner_bit_[3][4][8];       // per axis, cell m and cube corner: its bit of around
+  std::uint8_t case_of_[3][256];           // per axis: a cell's case from its gathered bits (cell_case)
   std::uint8_t face_bit_[3][4][4];         // per axis, face after cell m, corner (oa + 2 ow): its bit
 };
 
@@ -525,7 +537,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
         out.cell_centre[3 * at + a] = static_cast<float>(x);
       }
       out.border_axes[at] = 0;
-      out.junction[at] = corners.distinct(vol.at(f[0], f[1], f[2])) >= 3;  // the cell whose first corner is f
+      out.junction[at] = CellCorners::distinct(corners.labels(vol.at(f[0], f[1], f[2]))) >= 3;  // the cell at f
       if (vol.coarse_keys)
         out.coarse[at] = vol.part_key(vol.block_key(f[0], f[1], f[2]), static_cast<LabelIndex>(only));
       return;
@@ -533,13 +545,13 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
     const Id cell = only < 0 ? key : key / 4;
     const Id local[3] = {cell % box.cx(), (cell / box.cx()) % (box.dims[1] - 1), cell / box.cxy()};
     const Id g[3] = {box.lo[0] + local[0], box.lo[1] + local[1], box.lo[2] + local[2]};
-    const Id first = vol.at(g[0], g[1], g[2]);
+    const std::array<LabelIndex, 8> corner = corners.labels(vol.at(g[0], g[1], g[2]));
     double offset[3] = {0, 0, 0};
     if (only >= 0) {
       // A cell with several loops: each loop's point sits at the centroid
       // of its cut edges' midpoints (its marching cubes polygon), so the
       // points do not coincide; a single loop keeps the cell centre.
-      const unsigned cube = corners.case_of(first, static_cast<LabelIndex>(only));
+      const unsigned cube = CellCorners::case_of(corner, static_cast<LabelIndex>(only));
       if (loops.loops[cube] > 1) {
         const int loop = static_cast<int>(key % 4);
         int count = 0;
@@ -556,7 +568,7 @@ void append_points(const LabelVolume& vol, const Box& box, int only, const std::
       }
     }
     out.border_axes[at] = place.cell_point(g, offset, &out.mesh.points[3 * at], &out.cell_centre[3 * at]);
-    out.junction[at] = corners.distinct(first) >= 3;
+    out.junction[at] = CellCorners::distinct(corner) >= 3;
     if (vol.coarse_keys) out.coarse[at] = vol.part_key(vol.block_key(g[0], g[1], g[2]), static_cast<LabelIndex>(only));
   }, 1024);
 }
