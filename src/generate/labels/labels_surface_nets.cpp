@@ -9,8 +9,6 @@
 #include <chrono>
 #include <cstring>
 #include <limits>
-#include <memory>
-#include <mutex>
 #include <string>
 
 #include "keymesh/core/error.hpp"
@@ -462,8 +460,7 @@ bool append_label_rows(const EdgePolygons<K>& edges, Id r0, Id r1, Soup<K>& soup
 // Label `only`'s polygons in one pass (a polygon costs more than the visit
 // that finds it, so counting first would nearly double the work): blocks
 // of rows each append to their own soup, joined in row order, so the soup
-// is the same for any block count. One block writes `soup` itself, reusing
-// its storage.
+// is the same for any block count. One block writes `soup` itself.
 template <class K>
 void generate_label_polygons(const LabelVolume& vol, const Box& box, int only, std::pair<Id, Id> krange, Id blocks,
                              Soup<K>& soup) {
@@ -631,40 +628,16 @@ void network(const LabelVolume& vol, std::pair<Id, Id> rows, LabelSurface& out, 
   st.weld += seconds_since(t0);
 }
 
-// Soups the labels' runs take in turn: a run's buffers keep the capacity,
-// and the pages, that an earlier label's run faulted in.
-template <class K>
-class SoupPool {
- public:
-  std::unique_ptr<Soup<K>> take() {
-    const std::lock_guard lock(mutex_);
-    if (free_.empty()) return std::make_unique<Soup<K>>();
-    std::unique_ptr<Soup<K>> soup = std::move(free_.back());
-    free_.pop_back();
-    return soup;
-  }
-  void give(std::unique_ptr<Soup<K>> soup) {
-    const std::lock_guard lock(mutex_);
-    free_.push_back(std::move(soup));
-  }
-
- private:
-  std::mutex mutex_;
-  std::vector<std::unique_ptr<Soup<K>>> free_;
-};
-
 // Label part s's closed surface on its box into `out`, with key type K
 // (32 bits where the box's keys fit: half the soup).
 template <class K>
-void label_surface(const LabelVolume& vol, std::size_t s, std::pair<Id, Id> rows, Id blocks, SoupPool<K>& pool,
-                   LabelSurface& out) {
+void label_surface(const LabelVolume& vol, std::size_t s, std::pair<Id, Id> rows, Id blocks, LabelSurface& out) {
   const Box box = box_of(vol, s);
   const int label = vol.selected[s];
-  std::unique_ptr<Soup<K>> soup = pool.take();
-  generate_label_polygons(vol, box, label, rows_in(box, rows), blocks, *soup);
-  weld_and_append(vol, box, label, *soup, out);
-  out.mesh.cell_fields.push_back(Field{"label", 1, Array<float>(soup->pair.size(), static_cast<float>(vol.values[label]))});
-  pool.give(std::move(soup));
+  Soup<K> soup;
+  generate_label_polygons(vol, box, label, rows_in(box, rows), blocks, soup);
+  weld_and_append(vol, box, label, soup, out);
+  out.mesh.cell_fields.push_back(Field{"label", 1, Array<float>(soup.pair.size(), static_cast<float>(vol.values[label]))});
 }
 
 // One closed surface per selected label, each welded on its own box; the
@@ -674,16 +647,14 @@ std::vector<LabelSurface> per_label(const LabelVolume& vol, std::pair<Id, Id> ro
   std::vector<LabelSurface> parts(n);
   const int threads = parallel::thread_count();
   const Id blocks = n > 1 || threads <= 1 ? 1 : 4 * threads;
-  SoupPool<std::uint32_t> narrow;
-  SoupPool<std::uint64_t> wide;
   auto t0 = Clock::now();
   parallel::for_each_dynamic(static_cast<Id>(n), [&](Id s) {
     const auto at = static_cast<std::size_t>(s);
     const Id keys = (4 + kFaceKeysPerCell) * box_of(vol, at).cells();
     if (keys <= Id{std::numeric_limits<std::uint32_t>::max()})
-      label_surface(vol, at, rows, blocks, narrow, parts[at]);
+      label_surface<std::uint32_t>(vol, at, rows, blocks, parts[at]);
     else
-      label_surface(vol, at, rows, blocks, wide, parts[at]);
+      label_surface<std::uint64_t>(vol, at, rows, blocks, parts[at]);
   }, 1);
   st.generate += seconds_since(t0);
   for (const LabelSurface& p : parts) st.soup_corners += static_cast<Id>(p.mesh.connectivity.size());

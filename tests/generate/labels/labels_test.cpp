@@ -24,6 +24,15 @@ generate::LabelOptions unsmoothed(generate::LabelMethod method = generate::Label
   return o;
 }
 
+// The mesh contour_labels makes with `threads` worker threads (the count put
+// back to every core after).
+SurfaceMesh contour_with_threads(const ImageGrid& g, const generate::LabelOptions& o, int threads) {
+  parallel::set_thread_count(threads);
+  SurfaceMesh mesh = generate::contour_labels(g, o);
+  parallel::set_thread_count(0);
+  return mesh;
+}
+
 }  // namespace
 
 // One voxel: surface nets gives its cube (8 cell centres, 6 quads), closed,
@@ -84,11 +93,8 @@ TEST(Labels, SmoothingSameBitsAtAnyThreadCount) {
   for (auto method : {generate::LabelMethod::SurfaceNets, generate::LabelMethod::DiscreteMarchingCubes}) {
     generate::LabelOptions o;
     o.method = method;
-    parallel::set_thread_count(1);
-    const SurfaceMesh a = generate::contour_labels(g, o);
-    parallel::set_thread_count(2);
-    const SurfaceMesh b = generate::contour_labels(g, o);
-    parallel::set_thread_count(0);
+    const SurfaceMesh a = contour_with_threads(g, o, 1);
+    const SurfaceMesh b = contour_with_threads(g, o, 2);
     ASSERT_EQ(a.points.size(), b.points.size());
     EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), 4 * a.points.size()), 0);
     EXPECT_EQ(a.connectivity, b.connectivity);
@@ -111,13 +117,9 @@ TEST(Labels, OneLabelInBlocksOfRowsEqualsItsPartOfEveryLabel) {
   one.labels = {1};
   generate::LabelOptions every = unsmoothed();
   every.per_label = true;
-  parallel::set_thread_count(4);
-  const SurfaceMesh blocks = generate::contour_labels(g, one);
-  parallel::set_thread_count(1);
-  const SurfaceMesh single = generate::contour_labels(g, one);
-  parallel::set_thread_count(3);
-  const SurfaceMesh all = generate::contour_labels(g, every);
-  parallel::set_thread_count(0);
+  const SurfaceMesh blocks = contour_with_threads(g, one, 4);
+  const SurfaceMesh single = contour_with_threads(g, one, 1);
+  const SurfaceMesh all = contour_with_threads(g, every, 3);
   ASSERT_GT(single.num_cells(), 100);
   ASSERT_EQ(blocks.points.size(), single.points.size());
   EXPECT_EQ(std::memcmp(blocks.points.data(), single.points.data(), 4 * single.points.size()), 0);
