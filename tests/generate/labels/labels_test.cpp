@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "keymesh/analyze/topology.hpp"
@@ -21,6 +22,15 @@ generate::LabelOptions unsmoothed(generate::LabelMethod method = generate::Label
   o.method = method;
   o.smooth_iterations = 0;
   return o;
+}
+
+// The mesh contour_labels makes with `threads` worker threads (the count put
+// back to every core after).
+SurfaceMesh contour_with_threads(const ImageGrid& g, const generate::LabelOptions& o, int threads) {
+  parallel::set_thread_count(threads);
+  SurfaceMesh mesh = generate::contour_labels(g, o);
+  parallel::set_thread_count(0);
+  return mesh;
 }
 
 }  // namespace
@@ -83,15 +93,41 @@ TEST(Labels, SmoothingSameBitsAtAnyThreadCount) {
   for (auto method : {generate::LabelMethod::SurfaceNets, generate::LabelMethod::DiscreteMarchingCubes}) {
     generate::LabelOptions o;
     o.method = method;
-    parallel::set_thread_count(1);
-    const SurfaceMesh a = generate::contour_labels(g, o);
-    parallel::set_thread_count(2);
-    const SurfaceMesh b = generate::contour_labels(g, o);
-    parallel::set_thread_count(0);
+    const SurfaceMesh a = contour_with_threads(g, o, 1);
+    const SurfaceMesh b = contour_with_threads(g, o, 2);
     ASSERT_EQ(a.points.size(), b.points.size());
     EXPECT_EQ(std::memcmp(a.points.data(), b.points.data(), 4 * a.points.size()), 0);
     EXPECT_EQ(a.connectivity, b.connectivity);
   }
+}
+
+// Per label, one selected label's surface is made in blocks of rows joined
+// in row order when threads are spare (labels_surface_nets.cpp), several
+// labels' in one block each: the label's surface must be the same bits
+// either way, and the first part of the several labels' run.
+TEST(Labels, OneLabelInBlocksOfRowsEqualsItsPartOfEveryLabel) {
+  // Blobs of three labels touching along edges and corners (ambiguous faces,
+  // face points) and a tunnel through label 1.
+  const ImageGrid g = label_map({23, 19, 17}, [](Id i, Id j, Id k) -> Id {
+    if (i > 3 && i < 18 && j > 3 && j < 15 && k > 2 && k < 14) return (i == 10 && j == 9) ? 0 : 1;
+    return (i * 5 + j * 3 + k * 7) % 13 < 5 ? 2 + (i + j + k) % 2 : 0;
+  });
+  generate::LabelOptions one = unsmoothed();
+  one.per_label = true;
+  one.labels = {1};
+  generate::LabelOptions every = unsmoothed();
+  every.per_label = true;
+  const SurfaceMesh blocks = contour_with_threads(g, one, 4);
+  const SurfaceMesh single = contour_with_threads(g, one, 1);
+  const SurfaceMesh all = contour_with_threads(g, every, 3);
+  ASSERT_GT(single.num_cells(), 100);
+  ASSERT_EQ(blocks.points.size(), single.points.size());
+  EXPECT_EQ(std::memcmp(blocks.points.data(), single.points.data(), 4 * single.points.size()), 0);
+  EXPECT_EQ(blocks.connectivity, single.connectivity);
+  ASSERT_GT(all.connectivity.size(), single.connectivity.size());
+  EXPECT_EQ(std::memcmp(all.points.data(), single.points.data(), 4 * single.points.size()), 0);
+  EXPECT_TRUE(std::equal(single.connectivity.begin(), single.connectivity.end(), all.connectivity.begin()));
+  EXPECT_TRUE(analyze::check_topology(single).closed_manifold);
 }
 
 TEST(Labels, RefusesFloatsAndTooManyLabels) {
