@@ -6,11 +6,13 @@
 
 #include <algorithm>
 #include <cstring>
+#include <exception>
 #include <string>
 #include <tuple>
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/for_each_task.hpp"
+#include "keymesh/parallel/task_pipeline.hpp"
 #include "label_chunks.hpp"
 #include "label_volume.hpp"
 
@@ -80,14 +82,21 @@ std::vector<std::uint64_t> global_keys(const LabelSurface& part, const LabelVolu
   return out;
 }
 
-// Every selected label's closed surface, welded and smoothed as
-// contour_labels(per_label) makes it, with global keys.
-std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelOptions& options,
-                                             const std::array<Id, 3>& offset) {
-  LabelOptions opt = options;
-  opt.per_label = true;
+// Every selected label's closed surface as surface nets or discrete MC
+// makes it, before smoothing, with the label table it was made from.
+struct LabelParts {
+  LabelOptions options;
+  LabelVolume vol;
+  std::vector<LabelSurface> parts;
+};
+
+LabelParts label_parts(const ImageGrid& view, const LabelOptions& options) {
+  LabelParts out;
+  out.options = options;
+  out.options.per_label = true;
+  const LabelOptions& opt = out.options;
   // Segment ids come from the label table, never a float32 field: exact.
-  LabelVolume vol = detail::scan_labels(view, opt, detail::LabelRange::Int64Table);
+  LabelVolume& vol = out.vol = detail::scan_labels(view, opt, detail::LabelRange::Int64Table);
   vol.per_label = true;
   vol.keep_keys = true;
   for (detail::LabelIndex l : vol.selected)
@@ -96,22 +105,36 @@ std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelO
                        " is negative; Neuroglancer segment ids are unsigned");
   LabelStats stats;
   const std::pair<Id, Id> rows{0, vol.dims[2]};
-  std::vector<LabelSurface> parts = opt.method == LabelMethod::SurfaceNets
-                                        ? detail::surface_nets_rows(vol, true, rows, stats)
-                                        : detail::discrete_marching_cubes_rows(vol, rows, stats);
+  out.parts = opt.method == LabelMethod::SurfaceNets ? detail::surface_nets_rows(vol, true, rows, stats)
+                                                     : detail::discrete_marching_cubes_rows(vol, rows, stats);
+  return out;
+}
+
+// Label part s welded and smoothed as contour_labels(per_label) makes it,
+// with global keys (the part itself is released).
+SegmentSurface smoothed_segment(LabelParts& made, std::size_t s, const std::array<Id, 3>& offset) {
+  const LabelOptions& opt = made.options;
+  LabelSurface& part = made.parts[s];
+  detail::smooth_label_surface(part, made.vol, opt.method, opt.smooth_iterations, opt.relaxation);
+  SegmentSurface out;
+  out.segment = static_cast<std::uint64_t>(made.vol.values[made.vol.selected[s]]);
+  out.keys = global_keys(part, made.vol, s, opt.method, offset);
+  out.points.assign(part.mesh.points.begin(), part.mesh.points.end());
+  out.triangles.assign(part.mesh.connectivity.begin(), part.mesh.connectivity.end());
+  part = LabelSurface{};
+  return out;
+}
+
+// Every selected label's closed surface, smoothed, with global keys.
+std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelOptions& options,
+                                             const std::array<Id, 3>& offset) {
+  LabelParts made = label_parts(view, options);
   // A task per segment: most are too small for a parallel loop's threads to
   // pay (smoothing's loops run 16 times per segment), and each segment's
   // result is its own.
-  std::vector<SegmentSurface> out(parts.size());
-  parallel::for_each_task(static_cast<Id>(parts.size()), [&](Id i) {
-    const std::size_t s = static_cast<std::size_t>(i);
-    detail::smooth_label_surface(parts[s], vol, opt.method, opt.smooth_iterations, opt.relaxation);
-    out[s].segment = static_cast<std::uint64_t>(vol.values[vol.selected[s]]);
-    out[s].keys = global_keys(parts[s], vol, s, opt.method, offset);
-    out[s].points.assign(parts[s].mesh.points.begin(), parts[s].mesh.points.end());
-    out[s].triangles.assign(parts[s].mesh.connectivity.begin(), parts[s].mesh.connectivity.end());
-    parts[s] = LabelSurface{};
-  });
+  std::vector<SegmentSurface> out(made.parts.size());
+  parallel::for_each_task(static_cast<Id>(made.parts.size()),
+                          [&](Id s) { out[s] = smoothed_segment(made, static_cast<std::size_t>(s), offset); });
   return out;
 }
 
@@ -178,31 +201,56 @@ std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const Multilod
   view.type = grid.type;
   view.name = grid.name;
   view.external = static_cast<const std::byte*>(grid.data());
-  std::vector<SegmentSurface> segments = segment_surfaces(view, options.labels, {0, 0, 0});
-  struct Task {
-    std::size_t segment;
-    Id chunk, first, count;
-  };
-  std::vector<Task> tasks;
-  std::vector<detail::ChunkTriangles> by_chunk(segments.size());
-  parallel::for_each_task(static_cast<Id>(segments.size()), [&](Id s) {
-    detail::move_off_chunk_planes(segments[s], mg);
-    by_chunk[s] = detail::triangles_by_chunk(segments[s], mg);
-  });
-  for (std::size_t s = 0; s < segments.size(); ++s) {
-    for (std::size_t c = 0; c < by_chunk[s].chunk.size(); ++c)
-      tasks.push_back({s, by_chunk[s].chunk[c], by_chunk[s].offsets[c], by_chunk[s].offsets[c + 1] - by_chunk[s].offsets[c]});
-  }
-  std::vector<std::vector<MultilodPiece>> results(tasks.size());
-  parallel::for_each_task(static_cast<Id>(tasks.size()), [&](Id t) {  // a LimitError reaches the caller
-    const Task& task = tasks[static_cast<std::size_t>(t)];
-    results[static_cast<std::size_t>(t)] =
-        chunk_levels(segments[task.segment], mg, chunk_index(mg, task.chunk),
-                     by_chunk[task.segment].triangles.data() + task.first, task.count);
-  });
+  LabelParts made = label_parts(view, options.labels);
+  const std::size_t n = made.parts.size();
+  std::vector<SegmentSurface> segments(n);
+  std::vector<detail::ChunkTriangles> by_chunk(n);
+  std::vector<std::vector<std::vector<MultilodPiece>>> results(n);  // per segment, per chunk
+  // A segment's chunks start as soon as it is smoothed and cut, not after
+  // every segment is: no thread waits between the stages. A stage's error
+  // comes before a later stage's, each the first by index, as when the
+  // stages ran one after the other.
+  std::vector<std::exception_ptr> smoothing_errors(n), cutting_errors(n);
+  std::vector<std::vector<std::exception_ptr>> chunk_errors(n);
+  parallel::for_each_task_pipeline(
+      static_cast<Id>(n),
+      [&](Id s) -> Id {
+        try {
+          segments[s] = smoothed_segment(made, static_cast<std::size_t>(s), {0, 0, 0});
+        } catch (...) {
+          smoothing_errors[s] = std::current_exception();
+          return 0;
+        }
+        try {
+          detail::move_off_chunk_planes(segments[s], mg);
+          by_chunk[s] = detail::triangles_by_chunk(segments[s], mg);
+        } catch (...) {
+          cutting_errors[s] = std::current_exception();
+          return 0;
+        }
+        results[s].resize(by_chunk[s].chunk.size());
+        chunk_errors[s].resize(by_chunk[s].chunk.size());
+        return static_cast<Id>(by_chunk[s].chunk.size());
+      },
+      [&](Id s, Id c) {  // a LimitError reaches the caller
+        const detail::ChunkTriangles& in = by_chunk[s];
+        try {
+          results[s][c] = chunk_levels(segments[s], mg, chunk_index(mg, in.chunk[c]),
+                                       in.triangles.data() + in.offsets[c], in.offsets[c + 1] - in.offsets[c]);
+        } catch (...) {
+          chunk_errors[s][c] = std::current_exception();
+        }
+      });
+  for (const auto* errors : {&smoothing_errors, &cutting_errors})
+    for (const std::exception_ptr& e : *errors)
+      if (e) std::rethrow_exception(e);
+  for (const auto& errors : chunk_errors)
+    for (const std::exception_ptr& e : errors)
+      if (e) std::rethrow_exception(e);
   std::vector<MultilodPiece> pieces;
-  for (auto& r : results)
-    for (auto& p : r) pieces.push_back(std::move(p));
+  for (auto& segment : results)
+    for (auto& chunk : segment)
+      for (auto& p : chunk) pieces.push_back(std::move(p));
   sort_pieces(pieces);
   return pieces;
 }
