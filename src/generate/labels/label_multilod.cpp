@@ -5,6 +5,7 @@
 #include "keymesh/generate/labels/labels_multilod.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <exception>
 #include <optional>
@@ -173,6 +174,7 @@ std::vector<MultilodPiece> chunk_pieces(LabelParts& made, const MultilodGrid& mg
   std::vector<std::vector<std::vector<MultilodPiece>>> results(n);  // per segment, per chunk
   std::vector<std::exception_ptr> smoothing_errors(n), cutting_errors(n);
   std::vector<std::vector<std::exception_ptr>> chunk_errors(n);
+  std::vector<std::atomic<std::size_t>> chunks_left(n);  // a segment's surface is released after its last chunk
   parallel::for_each_task_pipeline(
       static_cast<Id>(n),
       [&](Id s) -> Id {
@@ -192,6 +194,8 @@ std::vector<MultilodPiece> chunk_pieces(LabelParts& made, const MultilodGrid& mg
         chunks[s] = chunk_positions(by_chunk[s], only);
         results[s].resize(chunks[s].size());
         chunk_errors[s].resize(chunks[s].size());
+        chunks_left[s] = chunks[s].size();
+        if (chunks[s].empty()) segments[s] = SegmentSurface{}, by_chunk[s] = detail::ChunkTriangles{};
         return static_cast<Id>(chunks[s].size());
       },
       [&](Id s, Id j) {  // a LimitError reaches the caller
@@ -203,6 +207,7 @@ std::vector<MultilodPiece> chunk_pieces(LabelParts& made, const MultilodGrid& mg
         } catch (...) {
           chunk_errors[s][j] = std::current_exception();
         }
+        if (--chunks_left[s] == 0) segments[s] = SegmentSurface{}, by_chunk[s] = detail::ChunkTriangles{};
       });
   for (const auto* errors : {&smoothing_errors, &cutting_errors})
     for (const std::exception_ptr& e : *errors)
