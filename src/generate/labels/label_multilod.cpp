@@ -5,12 +5,15 @@
 #include "keymesh/generate/labels/labels_multilod.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
+#include <exception>
+#include <optional>
 #include <string>
 #include <tuple>
 
 #include "keymesh/core/error.hpp"
-#include "keymesh/parallel/for_each_task.hpp"
+#include "keymesh/parallel/task_pipeline.hpp"
 #include "label_chunks.hpp"
 #include "label_volume.hpp"
 
@@ -80,14 +83,21 @@ std::vector<std::uint64_t> global_keys(const LabelSurface& part, const LabelVolu
   return out;
 }
 
-// Every selected label's closed surface, welded and smoothed as
-// contour_labels(per_label) makes it, with global keys.
-std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelOptions& options,
-                                             const std::array<Id, 3>& offset) {
-  LabelOptions opt = options;
-  opt.per_label = true;
+// Every selected label's closed surface as surface nets or discrete MC
+// makes it, before smoothing, with the label table it was made from.
+struct LabelParts {
+  LabelOptions options;
+  LabelVolume vol;
+  std::vector<LabelSurface> parts;
+};
+
+LabelParts label_parts(const ImageGrid& view, const LabelOptions& options) {
+  LabelParts out;
+  out.options = options;
+  out.options.per_label = true;
+  const LabelOptions& opt = out.options;
   // Segment ids come from the label table, never a float32 field: exact.
-  LabelVolume vol = detail::scan_labels(view, opt, detail::LabelRange::Int64Table);
+  LabelVolume& vol = out.vol = detail::scan_labels(view, opt, detail::LabelRange::Int64Table);
   vol.per_label = true;
   vol.keep_keys = true;
   for (detail::LabelIndex l : vol.selected)
@@ -96,22 +106,23 @@ std::vector<SegmentSurface> segment_surfaces(const ImageGrid& view, const LabelO
                        " is negative; Neuroglancer segment ids are unsigned");
   LabelStats stats;
   const std::pair<Id, Id> rows{0, vol.dims[2]};
-  std::vector<LabelSurface> parts = opt.method == LabelMethod::SurfaceNets
-                                        ? detail::surface_nets_rows(vol, true, rows, stats)
-                                        : detail::discrete_marching_cubes_rows(vol, rows, stats);
-  // A task per segment: most are too small for a parallel loop's threads to
-  // pay (smoothing's loops run 16 times per segment), and each segment's
-  // result is its own.
-  std::vector<SegmentSurface> out(parts.size());
-  parallel::for_each_task(static_cast<Id>(parts.size()), [&](Id i) {
-    const std::size_t s = static_cast<std::size_t>(i);
-    detail::smooth_label_surface(parts[s], vol, opt.method, opt.smooth_iterations, opt.relaxation);
-    out[s].segment = static_cast<std::uint64_t>(vol.values[vol.selected[s]]);
-    out[s].keys = global_keys(parts[s], vol, s, opt.method, offset);
-    out[s].points.assign(parts[s].mesh.points.begin(), parts[s].mesh.points.end());
-    out[s].triangles.assign(parts[s].mesh.connectivity.begin(), parts[s].mesh.connectivity.end());
-    parts[s] = LabelSurface{};
-  });
+  out.parts = opt.method == LabelMethod::SurfaceNets ? detail::surface_nets_rows(vol, true, rows, stats)
+                                                     : detail::discrete_marching_cubes_rows(vol, rows, stats);
+  return out;
+}
+
+// Label part s welded and smoothed as contour_labels(per_label) makes it,
+// with global keys (the part itself is released).
+SegmentSurface smoothed_segment(LabelParts& made, std::size_t s, const std::array<Id, 3>& offset) {
+  const LabelOptions& opt = made.options;
+  LabelSurface& part = made.parts[s];
+  detail::smooth_label_surface(part, made.vol, opt.method, opt.smooth_iterations, opt.relaxation);
+  SegmentSurface out;
+  out.segment = static_cast<std::uint64_t>(made.vol.values[made.vol.selected[s]]);
+  out.keys = global_keys(part, made.vol, s, opt.method, offset);
+  out.points.assign(part.mesh.points.begin(), part.mesh.points.end());
+  out.triangles.assign(part.mesh.connectivity.begin(), part.mesh.connectivity.end());
+  part = LabelSurface{};
   return out;
 }
 
@@ -134,6 +145,82 @@ void sort_pieces(std::vector<MultilodPiece>& pieces) {
   std::sort(pieces.begin(), pieces.end(), [&](const MultilodPiece& a, const MultilodPiece& b) { return order(a) < order(b); });
   pieces.erase(std::remove_if(pieces.begin(), pieces.end(), [](const MultilodPiece& p) { return p.point_keys.empty(); }),
                pieces.end());
+}
+
+// The positions in `by_chunk` of the chunks wanted: every one, or `only`'s
+// (none when the segment does not reach it).
+std::vector<std::size_t> chunk_positions(const detail::ChunkTriangles& by_chunk, std::optional<Id> only) {
+  std::vector<std::size_t> out;
+  if (!only) {
+    for (std::size_t c = 0; c < by_chunk.chunk.size(); ++c) out.push_back(c);
+    return out;
+  }
+  const auto at = std::lower_bound(by_chunk.chunk.begin(), by_chunk.chunk.end(), *only);
+  if (at != by_chunk.chunk.end() && *at == *only) out.push_back(static_cast<std::size_t>(at - by_chunk.chunk.begin()));
+  return out;
+}
+
+// The pieces of every segment of `made` (`offset`: its view's padded point 0
+// in the volume's padded grid) in every chunk, or in `only` (a chunk id).
+// A segment's chunks start as soon as it is smoothed and cut, not after
+// every segment is: no thread waits between the stages. A stage's error
+// comes before a later stage's, each the first by index.
+std::vector<MultilodPiece> chunk_pieces(LabelParts& made, const MultilodGrid& mg, const std::array<Id, 3>& offset,
+                                        std::optional<Id> only) {
+  const std::size_t n = made.parts.size();
+  std::vector<SegmentSurface> segments(n);
+  std::vector<detail::ChunkTriangles> by_chunk(n);
+  std::vector<std::vector<std::size_t>> chunks(n);                   // per segment: positions in by_chunk
+  std::vector<std::vector<std::vector<MultilodPiece>>> results(n);  // per segment, per chunk
+  std::vector<std::exception_ptr> smoothing_errors(n), cutting_errors(n);
+  std::vector<std::vector<std::exception_ptr>> chunk_errors(n);
+  std::vector<std::atomic<std::size_t>> chunks_left(n);  // a segment's surface is released after its last chunk
+  parallel::for_each_task_pipeline(
+      static_cast<Id>(n),
+      [&](Id s) -> Id {
+        try {
+          segments[s] = smoothed_segment(made, static_cast<std::size_t>(s), offset);
+        } catch (...) {
+          smoothing_errors[s] = std::current_exception();
+          return 0;
+        }
+        try {
+          detail::move_off_chunk_planes(segments[s], mg);
+          by_chunk[s] = detail::triangles_by_chunk(segments[s], mg);
+        } catch (...) {
+          cutting_errors[s] = std::current_exception();
+          return 0;
+        }
+        chunks[s] = chunk_positions(by_chunk[s], only);
+        results[s].resize(chunks[s].size());
+        chunk_errors[s].resize(chunks[s].size());
+        chunks_left[s] = chunks[s].size();
+        if (chunks[s].empty()) segments[s] = SegmentSurface{}, by_chunk[s] = detail::ChunkTriangles{};
+        return static_cast<Id>(chunks[s].size());
+      },
+      [&](Id s, Id j) {  // a LimitError reaches the caller
+        const detail::ChunkTriangles& in = by_chunk[s];
+        const std::size_t c = chunks[s][j];
+        try {
+          results[s][j] = chunk_levels(segments[s], mg, chunk_index(mg, in.chunk[c]),
+                                       in.triangles.data() + in.offsets[c], in.offsets[c + 1] - in.offsets[c]);
+        } catch (...) {
+          chunk_errors[s][j] = std::current_exception();
+        }
+        if (--chunks_left[s] == 0) segments[s] = SegmentSurface{}, by_chunk[s] = detail::ChunkTriangles{};
+      });
+  for (const auto* errors : {&smoothing_errors, &cutting_errors})
+    for (const std::exception_ptr& e : *errors)
+      if (e) std::rethrow_exception(e);
+  for (const auto& errors : chunk_errors)
+    for (const std::exception_ptr& e : errors)
+      if (e) std::rethrow_exception(e);
+  std::vector<MultilodPiece> pieces;
+  for (auto& segment : results)
+    for (auto& chunk : segment)
+      for (auto& p : chunk) pieces.push_back(std::move(p));
+  sort_pieces(pieces);
+  return pieces;
 }
 
 // A copy of the samples [lo, lo + dims) of `grid`, placed in index space
@@ -172,39 +259,13 @@ Id multilod_halo(const MultilodOptions& options) {
 }
 
 std::vector<MultilodPiece> multilod_pieces(const ImageGrid& grid, const MultilodOptions& options) {
-  const MultilodGrid mg = multilod_grid(grid.dims, options);
   ImageGrid view;
   view.dims = grid.dims;
   view.type = grid.type;
   view.name = grid.name;
   view.external = static_cast<const std::byte*>(grid.data());
-  std::vector<SegmentSurface> segments = segment_surfaces(view, options.labels, {0, 0, 0});
-  struct Task {
-    std::size_t segment;
-    Id chunk, first, count;
-  };
-  std::vector<Task> tasks;
-  std::vector<detail::ChunkTriangles> by_chunk(segments.size());
-  parallel::for_each_task(static_cast<Id>(segments.size()), [&](Id s) {
-    detail::move_off_chunk_planes(segments[s], mg);
-    by_chunk[s] = detail::triangles_by_chunk(segments[s], mg);
-  });
-  for (std::size_t s = 0; s < segments.size(); ++s) {
-    for (std::size_t c = 0; c < by_chunk[s].chunk.size(); ++c)
-      tasks.push_back({s, by_chunk[s].chunk[c], by_chunk[s].offsets[c], by_chunk[s].offsets[c + 1] - by_chunk[s].offsets[c]});
-  }
-  std::vector<std::vector<MultilodPiece>> results(tasks.size());
-  parallel::for_each_task(static_cast<Id>(tasks.size()), [&](Id t) {  // a LimitError reaches the caller
-    const Task& task = tasks[static_cast<std::size_t>(t)];
-    results[static_cast<std::size_t>(t)] =
-        chunk_levels(segments[task.segment], mg, chunk_index(mg, task.chunk),
-                     by_chunk[task.segment].triangles.data() + task.first, task.count);
-  });
-  std::vector<MultilodPiece> pieces;
-  for (auto& r : results)
-    for (auto& p : r) pieces.push_back(std::move(p));
-  sort_pieces(pieces);
-  return pieces;
+  LabelParts made = label_parts(view, options.labels);
+  return chunk_pieces(made, multilod_grid(grid.dims, options), {0, 0, 0}, std::nullopt);
 }
 
 MultilodBox multilod_chunk_box(const std::array<Id, 3>& whole_dims, const MultilodOptions& options,
@@ -250,21 +311,8 @@ std::vector<MultilodPiece> multilod_box_pieces(const ImageGrid& box_samples, con
     std::erase_if(opt.labels, [&](std::int64_t v) { return !std::binary_search(held.begin(), held.end(), v); });
     if (opt.labels.empty()) return {};
   }
-  std::vector<SegmentSurface> segments = segment_surfaces(sub, opt, lo);
-  const Id id = chunk[0] + mg.chunks[0] * (chunk[1] + mg.chunks[1] * chunk[2]);
-  std::vector<MultilodPiece> pieces;
-  for (SegmentSurface& s : segments) {
-    detail::move_off_chunk_planes(s, mg);
-    const detail::ChunkTriangles by_chunk = detail::triangles_by_chunk(s, mg);
-    const auto at = std::lower_bound(by_chunk.chunk.begin(), by_chunk.chunk.end(), id);
-    if (at == by_chunk.chunk.end() || *at != id) continue;
-    const std::size_t c = static_cast<std::size_t>(at - by_chunk.chunk.begin());
-    for (auto& p : chunk_levels(s, mg, chunk, by_chunk.triangles.data() + by_chunk.offsets[c],
-                                by_chunk.offsets[c + 1] - by_chunk.offsets[c]))
-      pieces.push_back(std::move(p));
-  }
-  sort_pieces(pieces);
-  return pieces;
+  LabelParts made = label_parts(sub, opt);
+  return chunk_pieces(made, mg, lo, chunk[0] + mg.chunks[0] * (chunk[1] + mg.chunks[1] * chunk[2]));
 }
 
 std::vector<std::array<Id, 3>> multilod_affected_chunks(const MultilodGrid& grid, const MultilodOptions& options,

@@ -1,6 +1,6 @@
 #include "chunk_store.hpp"
 
-#include <zlib.h>
+#include <libdeflate.h>
 
 #include <bit>
 #include <cstring>
@@ -31,15 +31,11 @@ void put(std::string& out, T value) {
   put(out, &value, 1);
 }
 
-std::uint32_t crc(const char* data, std::size_t size) {
-  uLong c = crc32(0L, Z_NULL, 0);
-  while (size > 0) {
-    const uInt n = static_cast<uInt>(std::min<std::size_t>(size, 1u << 30));
-    c = crc32(c, reinterpret_cast<const Bytef*>(data), n);
-    data += n, size -= n;
-  }
-  return static_cast<std::uint32_t>(c);
-}
+// The payload's CRC-32 (gzip's polynomial: zlib's crc32 gives the same
+// value). libdeflate's folds with carry-less multiplies, about 10 times
+// fewer instructions than zlib's: the one-call run checksums every chunk's
+// pieces (48 MB for AAL at 3 levels) on one thread.
+std::uint32_t crc(const char* data, std::size_t size) { return libdeflate_crc32(0, data, size); }
 
 // Reads the container's fields in order, refusing to pass its end.
 class Reader {
@@ -116,10 +112,10 @@ std::string chunk_pieces_path(const std::string& dir, const std::array<std::uint
 
 std::string layout_record_path(const std::string& dir) { return (std::filesystem::path(dir) / "chunks" / "layout.json").string(); }
 
-std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const std::vector<ChunkPiece>& pieces) {
+std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const std::vector<const ChunkPiece*>& pieces) {
   std::size_t bytes = 0;  // the payload's size: grown once, not by doubling
-  for (const ChunkPiece& p : pieces)
-    bytes += 8 + 4 + 8 + 8 + 8 * p.point_keys.size() + 4 * p.points.size() + 4 * p.triangles.size();
+  for (const ChunkPiece* p : pieces)
+    bytes += 8 + 4 + 8 + 8 + 8 * p->point_keys.size() + 4 * p->points.size() + 4 * p->triangles.size();
   // The header, its last two fields (payload size, checksum) filled in once
   // the payload follows it in the same string (no second copy of the payload).
   std::string out(kMagic, sizeof kMagic);
@@ -129,14 +125,14 @@ std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const
   put<std::uint64_t>(out, pieces.size());
   put<std::uint64_t>(out, 0);
   put<std::uint32_t>(out, 0);
-  for (const ChunkPiece& p : pieces) {
-    put(out, p.segment);
-    put(out, p.lod);
-    put<std::uint64_t>(out, p.point_keys.size());
-    put<std::uint64_t>(out, p.triangles.size() / 3);
-    put(out, p.point_keys.data(), p.point_keys.size());
-    put(out, p.points.data(), p.points.size());
-    put(out, p.triangles.data(), p.triangles.size());
+  for (const ChunkPiece* p : pieces) {
+    put(out, p->segment);
+    put(out, p->lod);
+    put<std::uint64_t>(out, p->point_keys.size());
+    put<std::uint64_t>(out, p->triangles.size() / 3);
+    put(out, p->point_keys.data(), p->point_keys.size());
+    put(out, p->points.data(), p->points.size());
+    put(out, p->triangles.data(), p->triangles.size());
   }
   const std::uint64_t payload = out.size() - kHeaderBytes;
   const std::uint32_t checksum = crc(out.data() + kHeaderBytes, payload);

@@ -28,7 +28,7 @@ std::string layout_record(const MultilodLayout& layout);
 // the first field that differs (or saying that no chunk task has run).
 void check_layout_record(const std::string& dir, const MultilodLayout& layout);
 
-std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const std::vector<ChunkPiece>& pieces);
+std::string encode_chunk_pieces(const std::array<std::uint32_t, 3>& chunk, const std::vector<const ChunkPiece*>& pieces);
 
 // Which pieces to decode: keep(segment, triangles); the others are skipped
 // (their bytes still checked by the CRC).

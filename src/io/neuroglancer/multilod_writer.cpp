@@ -1,6 +1,9 @@
-// The entry points of keymesh/io/neuroglancer.hpp: the one-call write, the
-// chunk tasks' piece store, and the final step (whole or `--update`).
+// The entry points of keymesh/io/neuroglancer.hpp: the one-call write (with
+// its chunk store: neuroglancer_runs.hpp), the chunk tasks' piece store, and
+// the final step (whole or `--update`).
+#include <exception>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -11,7 +14,9 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/neuroglancer.hpp"
+#include "keymesh/io/neuroglancer_runs.hpp"
 #include "keymesh/io/output_transaction.hpp"
+#include "keymesh/parallel/for_each_task.hpp"
 #include "output_files.hpp"
 
 namespace keymesh::io::neuroglancer {
@@ -64,11 +69,60 @@ std::vector<ChunkPiece> read_kept_pieces(const std::string& dir, const MultilodL
   return pieces;
 }
 
-// The whole output from `pieces`.
+// The pieces' checks, in parallel: the first bad piece's error whatever the
+// thread count.
+void check_pieces(const MultilodLayout& layout, const std::vector<ChunkPiece>& pieces) {
+  parallel::for_each_task(static_cast<Id>(pieces.size()), [&](Id i) { check_piece(layout, pieces[i]); });
+}
+
+// The whole output from `pieces`; `beside` (encode_segments) runs on this
+// thread while the segments are encoded, its error kept to be thrown after
+// the output's own.
 void write_all(const std::string& dir, const MultilodLayout& layout, const std::vector<ChunkPiece>& pieces,
-               const SegmentNames& names) {
-  const std::vector<SegmentFiles> files = encode_segments(layout, pieces_by_segment(pieces));
+               const SegmentNames& names, const std::function<void()>& beside = {}) {
+  std::exception_ptr beside_error;
+  const std::vector<SegmentFiles> files = encode_segments(layout, pieces_by_segment(pieces), [&] {
+    try {
+      if (beside) beside();
+    } catch (...) {
+      beside_error = std::current_exception();
+    }
+  });
   write_output(dir, layout, files, names, sharding_of(layout, files.size()), OutputScope{});
+  if (beside_error) std::rethrow_exception(beside_error);
+}
+
+// A checked chunk's pieces kept: the layout record (once per command) and
+// the chunk's file, staged in the caller's transaction.
+void keep_chunk_pieces(const std::string& dir, const MultilodLayout& layout, const std::array<std::uint32_t, 3>& chunk,
+                       const std::vector<const ChunkPiece*>& pieces) {
+  OutputTransaction outputs;
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "chunks", ec);
+  if (ec) throw InputError((fs::path(dir) / "chunks").string() + ": cannot create it: " + ec.message());
+  // One command may keep several chunks (the one-call run and --update keep
+  // theirs): the record it staged reaches the disk only when it commits.
+  const OutputTransaction* command = OutputTransaction::current();
+  if (fs::exists(layout_record_path(dir), ec))
+    check_layout_record(dir, layout);
+  else if (!(command && command->staged(layout_record_path(dir))))
+    write_file(layout_record_path(dir), layout_record(layout));
+  write_file(chunk_pieces_path(dir, chunk), encode_chunk_pieces(chunk, pieces));
+  outputs.commit();
+}
+
+// Every chunk's checked pieces kept, empty chunks too: the store is complete.
+// Each chunk's pieces in the order `pieces` holds them.
+void keep_every_chunk(const std::string& dir, const MultilodLayout& layout, const std::vector<ChunkPiece>& pieces) {
+  std::map<std::array<std::uint32_t, 3>, std::vector<const ChunkPiece*>> chunks;
+  for (const ChunkPiece& p : pieces) chunks[p.chunk].push_back(&p);
+  const std::vector<const ChunkPiece*> none;
+  for (std::uint32_t z = 0; z < layout.chunks[2]; ++z)
+    for (std::uint32_t y = 0; y < layout.chunks[1]; ++y)
+      for (std::uint32_t x = 0; x < layout.chunks[0]; ++x) {
+        const auto at = chunks.find({x, y, z});
+        keep_chunk_pieces(dir, layout, {x, y, z}, at == chunks.end() ? none : at->second);
+      }
 }
 
 // The pieces' memory per triangle, for batching: a triangle's three corners
@@ -158,9 +212,21 @@ void update(const std::string& dir, const MultilodLayout& layout, const std::vec
 void write_multilod(const std::string& dir, const MultilodLayout& layout, const std::vector<ChunkPiece>& pieces,
                     const SegmentNames& names) {
   check_layout(layout);
-  for (const ChunkPiece& piece : pieces) check_piece(layout, piece);
+  check_pieces(layout, pieces);
   OutputTransaction outputs;
   write_all(dir, layout, pieces, names);
+  outputs.commit();
+}
+
+void write_multilod_and_chunks(const std::string& dir, const MultilodLayout& layout, std::vector<ChunkPiece>&& pieces,
+                               const SegmentNames& names) {
+  check_layout(layout);
+  check_pieces(layout, pieces);
+  OutputTransaction outputs;  // inside the CLI's own: its files join the command's
+  // The chunk store is written on this thread while the other threads encode
+  // the segments (it needs none of their results); its error, if any, comes
+  // after the output's, as when it was written after the output.
+  write_all(dir, layout, pieces, names, [&] { keep_every_chunk(dir, layout, pieces); });
   outputs.commit();
 }
 
@@ -174,19 +240,9 @@ void write_chunk_pieces(const std::string& dir, const MultilodLayout& layout, co
                                                std::to_string(chunk[1]) + " " + std::to_string(chunk[2]));
   }
   pieces_by_segment(pieces);  // refuses a piece given twice
-  OutputTransaction outputs;
-  std::error_code ec;
-  fs::create_directories(fs::path(dir) / "chunks", ec);
-  if (ec) throw InputError((fs::path(dir) / "chunks").string() + ": cannot create it: " + ec.message());
-  // One command may keep several chunks (the one-call run and --update keep
-  // theirs): the record it staged reaches the disk only when it commits.
-  const OutputTransaction* command = OutputTransaction::current();
-  if (fs::exists(layout_record_path(dir), ec))
-    check_layout_record(dir, layout);
-  else if (!(command && command->staged(layout_record_path(dir))))
-    write_file(layout_record_path(dir), layout_record(layout));
-  write_file(chunk_pieces_path(dir, chunk), encode_chunk_pieces(chunk, pieces));
-  outputs.commit();
+  std::vector<const ChunkPiece*> kept;
+  for (const ChunkPiece& piece : pieces) kept.push_back(&piece);
+  keep_chunk_pieces(dir, layout, chunk, kept);
 }
 
 std::vector<ChunkPiece> read_chunk_pieces(const std::string& dir, const std::array<std::uint32_t, 3>& chunk) {

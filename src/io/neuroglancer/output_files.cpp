@@ -10,7 +10,7 @@
 #include "keymesh/core/error.hpp"
 #include "keymesh/io/atomic_file.hpp"
 #include "keymesh/io/output_transaction.hpp"
-#include "keymesh/parallel/for_each_task.hpp"
+#include "keymesh/parallel/for_each_task_beside.hpp"
 
 namespace keymesh::io::neuroglancer {
 
@@ -69,11 +69,15 @@ void write_sharded(const fs::path& dir, const ShardingSpec& spec, const std::vec
 }  // namespace
 
 std::vector<SegmentFiles> encode_segments(const MultilodLayout& layout,
-                                          const std::vector<std::pair<std::uint64_t, std::vector<const ChunkPiece*>>>& groups) {
+                                          const std::vector<std::pair<std::uint64_t, std::vector<const ChunkPiece*>>>& groups,
+                                          const std::function<void()>& beside) {
   std::vector<SegmentFiles> files(groups.size());
   // The first segment's error, whatever the thread count.
-  parallel::for_each_task(static_cast<Id>(groups.size()),
-                          [&](Id i) { files[i] = encode_segment(layout, groups[i].first, groups[i].second); });
+  parallel::for_each_task_beside(
+      static_cast<Id>(groups.size()), [&](Id i) { files[i] = encode_segment(layout, groups[i].first, groups[i].second); },
+      [&] {
+        if (beside) beside();
+      });
   std::erase_if(files, [](const SegmentFiles& f) { return f.manifest.empty(); });
   return files;
 }

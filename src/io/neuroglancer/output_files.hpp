@@ -11,6 +11,7 @@
 // (`--update`) rewrites only the segments or shards it is given, removing
 // those that became empty.
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <set>
 #include <string>
@@ -29,9 +30,12 @@ struct OutputScope {
 };
 
 // Every group's segment encoded (in parallel; the result does not depend on
-// the thread count), the segments without a mesh left out.
+// the thread count), the segments without a mesh left out. `beside`, when
+// given, runs on the calling thread meanwhile (parallel/for_each_task_beside.hpp):
+// the first segment's error is thrown before its own.
 std::vector<SegmentFiles> encode_segments(const MultilodLayout& layout,
-                                          const std::vector<std::pair<std::uint64_t, std::vector<const ChunkPiece*>>>& groups);
+                                          const std::vector<std::pair<std::uint64_t, std::vector<const ChunkPiece*>>>& groups,
+                                          const std::function<void()>& beside = {});
 
 // The sharding of a layout whose output holds `segments` meshes (nullopt: unsharded).
 std::optional<ShardingSpec> sharding_of(const MultilodLayout& layout, std::size_t segments);

@@ -1,10 +1,7 @@
 // The steps around the multilod writer that the CLI's and Python's runs
 // share (keymesh/io/neuroglancer_runs.hpp).
-#include <map>
-
 #include "keymesh/io/label_table.hpp"
 #include "keymesh/io/neuroglancer_runs.hpp"
-#include "keymesh/io/output_transaction.hpp"
 
 namespace keymesh::io::neuroglancer {
 
@@ -34,23 +31,6 @@ SegmentNames table_segment_names(const std::string& path, std::int64_t backgroun
 
 std::array<std::uint32_t, 3> chunk_index(const std::array<Id, 3>& c) {
   return {static_cast<std::uint32_t>(c[0]), static_cast<std::uint32_t>(c[1]), static_cast<std::uint32_t>(c[2])};
-}
-
-void write_multilod_and_chunks(const std::string& dir, const MultilodLayout& layout,
-                               std::vector<ChunkPiece>&& pieces, const SegmentNames& names) {
-  OutputTransaction outputs;  // inside the CLI's own: its files join the command's
-  write_multilod(dir, layout, pieces, names);
-  // The pieces grouped by chunk (they come sorted by segment first).
-  std::map<std::array<std::uint32_t, 3>, std::vector<ChunkPiece>> chunks;
-  for (ChunkPiece& p : pieces) chunks[p.chunk].push_back(std::move(p));
-  const std::vector<ChunkPiece> none;
-  for (std::uint32_t z = 0; z < layout.chunks[2]; ++z)  // every chunk, empty ones too: the store is complete
-    for (std::uint32_t y = 0; y < layout.chunks[1]; ++y)
-      for (std::uint32_t x = 0; x < layout.chunks[0]; ++x) {
-        const auto at = chunks.find({x, y, z});
-        write_chunk_pieces(dir, layout, {x, y, z}, at == chunks.end() ? none : at->second);
-      }
-  outputs.commit();
 }
 
 void PieceCounts::add(const std::vector<ChunkPiece>& made) {
