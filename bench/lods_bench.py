@@ -15,7 +15,8 @@ VTK (in this process, vtkSMPTools at --threads): vtkDiscreteFlyingEdges3D over
 every label (level 0), then vtkQuadricDecimation of that mesh to keymesh's
 triangle count at each coarser level (equal triangle counts), no smoothing,
 no file written: the peer's cost is a lower bound of the same job.
-Medians of --repeat runs after one warm-up; the load average beside them.
+Medians of --repeat rounds (one run of each keymesh case per round, so drift
+falls on every case alike) after one warm-up; the load average beside them.
 """
 import argparse
 import json
@@ -114,14 +115,28 @@ def main():
     load = round(os.getloadavg()[0], 2)
     with tempfile.TemporaryDirectory(prefix="keymesh-lods-") as work:
         out = os.path.join(work, "ng")
-        for name, extra in (("keymesh --lods 1 (level 0 only)", ["--lods", "1"]),
-                            ("keymesh --lods 3", ["--lods", "3"]),
-                            ("keymesh --lods 3 --smooth 0", ["--lods", "3", "--smooth", "0"])):
-            keymesh_run(a.keymesh, a.input, out, a.threads, extra)  # warm-up
-            runs = [keymesh_run(a.keymesh, a.input, out, a.threads, extra) for _ in range(a.repeat)]
-            rows.append({"case": name, "seconds": median_of(runs, "wall"), "labels_stage": median_of(runs, "labels"),
-                         "write_stage": median_of(runs, "write"), "triangles": runs[0]["triangles_per_lod"],
-                         "peak_rss_mib": runs[0]["peak_rss_mib"], "mvox_per_s": voxels / median_of(runs, "wall") / 1e6})
+        cases = (("keymesh --lods 1 (level 0 only)", ["--lods", "1"]),
+                 ("keymesh --lods 3", ["--lods", "3"]),
+                 ("keymesh --lods 3 --smooth 0", ["--lods", "3", "--smooth", "0"]))
+        for _, extra in cases:  # warm-up
+            keymesh_run(a.keymesh, a.input, out, a.threads, extra)
+        # Rounds of one run per case, so that the machine's drift (other
+        # tenants of a shared VM) falls on every case alike; each round's
+        # (--lods 3 - --lods 1) / 2 / --lods 1 is a per-level ratio from runs
+        # seconds apart.
+        runs = {name: [] for name, _ in cases}
+        for _ in range(a.repeat):
+            for name, extra in cases:
+                runs[name].append(keymesh_run(a.keymesh, a.input, out, a.threads, extra))
+        for name, _ in cases:
+            rs = runs[name]
+            rows.append({"case": name, "seconds": median_of(rs, "wall"), "labels_stage": median_of(rs, "labels"),
+                         "write_stage": median_of(rs, "write"), "triangles": rs[0]["triangles_per_lod"],
+                         "peak_rss_mib": rs[0]["peak_rss_mib"], "mvox_per_s": voxels / median_of(rs, "wall") / 1e6})
+        level0, all3 = runs[cases[0][0]], runs[cases[1][0]]
+        ratios = sorted((b["wall"] - a0["wall"]) / 2 / a0["wall"] for a0, b in zip(level0, all3))
+        rows[1]["per_level_ratio_median"] = statistics.median(ratios)
+        rows[1]["per_level_ratio_range"] = [ratios[0], ratios[-1]]
     targets = rows[1]["triangles"]
     rows += vtk_rows(a.input, a.threads, a.repeat, targets, voxels)
     for r in rows:
@@ -139,7 +154,9 @@ def main():
         print(f"| {r['case']} | {r['seconds']:.3f} | {r['mvox_per_s']:.1f} | {r['triangles']} | "
               f"{r.get('labels_stage', float('nan')):.3f} | {r.get('write_stage', float('nan')):.3f} |")
     extra = (l3["seconds"] - l1["seconds"]) / 2
-    print(f"each coarser level: {extra:.3f} s = {100 * extra / l1['seconds']:.0f} % of level 0's run")
+    lo, hi = l3["per_level_ratio_range"]
+    print(f"each coarser level: {extra:.3f} s = {100 * extra / l1['seconds']:.1f} % of level 0's run (medians); "
+          f"per round: median {100 * l3['per_level_ratio_median']:.1f} %, {100 * lo:.1f}-{100 * hi:.1f} %")
     return 0
 
 

@@ -650,7 +650,19 @@ class Report:
                 "vtkDiscreteFlyingEdges3D and vtkQuadricDecimation to keymesh's per-level triangle counts in one "
                 "process (no smoothing, no file). Medians after a warm-up.", "",
                 table(["case", "thr", "seconds", "Mvox/s", "triangles per level", "labels stage s", "write stage s",
-                       "load"], body), ""]
+                       "load"], body), ""] + self.lods_per_level(rows)
+
+    @staticmethod
+    def lods_per_level(rows):
+        level0 = next((r for r in rows if r["case"].startswith("keymesh --lods 1")), None)
+        all3 = next((r for r in rows if r["case"] == "keymesh --lods 3"), None)
+        if not level0 or not all3 or "per_level_ratio_median" not in all3:
+            return []
+        extra = (all3["seconds"] - level0["seconds"]) / 2
+        lo, hi = all3["per_level_ratio_range"]
+        return [f"Each coarser level: {extra:.3f} s, {100 * extra / level0['seconds']:.1f} % of level 0's run "
+                f"(medians); per round (runs of both seconds apart): median {100 * all3['per_level_ratio_median']:.1f} %, "
+                f"{100 * lo:.1f} to {100 * hi:.1f} %.", ""]
 
     def dense_table(self):
         rows = [r for r in self.rows if r.get("bench") == "dense" and "median" in r]
