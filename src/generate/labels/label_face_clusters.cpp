@@ -30,6 +30,7 @@
 #include <tuple>
 #include <vector>
 
+#include "first_seen_keys.hpp"
 #include "label_chunks.hpp"
 
 namespace keymesh::generate::detail {
@@ -117,13 +118,8 @@ Clusters cluster(const FaceCut& cut, const std::vector<std::uint64_t>& grid_key,
   const std::size_t n = cut.points.size();
   Clusters c;
   c.root.resize(n), c.size.assign(n, 0), c.at.resize(n);
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(n);  // by key, then index (a stable order)
-  for (std::uint32_t k = 0; k < n; ++k) sorted[k] = {grid_key[k], k};
-  std::sort(sorted.begin(), sorted.end());
-  for (std::size_t k = 0; k < n; ++k) {
-    const bool joins = k > 0 && sorted[k].first == sorted[k - 1].first;
-    c.root[sorted[k].second] = joins ? c.root[sorted[k - 1].second] : sorted[k].second;
-  }
+  const FirstSeenKeys f = first_seen_keys(grid_key.data(), static_cast<Id>(n));  // a key's first point: its least
+  for (std::size_t k = 0; k < n; ++k) c.root[k] = f.first[f.of_point[k]];
   const int lod = static_cast<int>(finer.lod + 1);
   const double top = std::ldexp(1.0, grid.vertex_quantization_bits) - 1;
   const auto top_step = static_cast<std::int64_t>(top);
