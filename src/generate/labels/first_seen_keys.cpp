@@ -8,7 +8,9 @@ namespace keymesh::generate::detail {
 
 FirstSeenKeys first_seen_keys(const std::uint64_t* keys, Id n) {
   FirstSeenKeys f;
-  f.of_point.resize(static_cast<std::size_t>(n));
+  const auto points = static_cast<std::size_t>(n);
+  f.of_point.resize(points);
+  f.keys.reserve(points), f.count.reserve(points), f.first.reserve(points);  // no regrowth
   // A power of two at least twice the points: probes stay short.
   const int bits = std::max(4, static_cast<int>(std::bit_width(static_cast<std::uint64_t>(2 * n))));
   const std::uint64_t mask = (std::uint64_t{1} << bits) - 1;
