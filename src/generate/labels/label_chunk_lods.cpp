@@ -33,23 +33,40 @@ constexpr int kFieldBits = 19;
 
 void join_box_points(MultilodPiece& piece, const MultilodGrid& grid);  // below
 
-// The coarse key of inner point p of a piece of `chunk` at spacing `step`
-// (class 0).
-std::uint64_t coarse_key(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk,
-                         double step) {
-  std::uint64_t fields = 0;
-  for (int d = 0; d < 3; ++d) {
-    const Id c = chunk[d];
-    const Id per_chunk = static_cast<Id>(std::ceil(static_cast<double>(grid.chunk_shape[d]) / step)) + 1;
-    const Id field = c * per_chunk + round_half_away((static_cast<double>(p[d]) - grid.plane(d, c)) / step);
-    if (field >= (Id{1} << kFieldBits))
-      throw LimitError("labels: " + std::to_string(grid.chunks[d]) + " chunks of " +
-                       std::to_string(grid.chunk_shape[d]) + " samples along an axis are past what a multilod "
-                       "output's point keys hold at level spacing " + std::to_string(step));
-    fields |= static_cast<std::uint64_t>(field) << (kFieldBits * d);
+// The coarse keys of the inner points of a piece of `chunk` at spacing
+// `step` (class 0): what does not depend on the point (each axis's grid
+// points per chunk, the chunk's lower plane) computed once per piece.
+class CoarseKeys {
+ public:
+  CoarseKeys(const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk, double step)
+      : grid_(grid), step_(step) {
+    for (int d = 0; d < 3; ++d) {
+      const Id per_chunk = static_cast<Id>(std::ceil(static_cast<double>(grid.chunk_shape[d]) / step)) + 1;
+      first_[d] = chunk[d] * per_chunk;
+      plane_[d] = grid.plane(d, chunk[d]);
+    }
   }
-  return fields;
-}
+  std::uint64_t operator()(const float* p) const {
+    std::uint64_t fields = 0;
+    for (int d = 0; d < 3; ++d) {
+      const Id field = first_[d] + round_half_away((static_cast<double>(p[d]) - plane_[d]) / step_);
+      if (field >= (Id{1} << kFieldBits)) too_many_chunks(d);
+      fields |= static_cast<std::uint64_t>(field) << (kFieldBits * d);
+    }
+    return fields;
+  }
+
+ private:
+  [[noreturn]] void too_many_chunks(int d) const {
+    throw LimitError("labels: " + std::to_string(grid_.chunks[d]) + " chunks of " +
+                     std::to_string(grid_.chunk_shape[d]) + " samples along an axis are past what a multilod "
+                     "output's point keys hold at level spacing " + std::to_string(step_));
+  }
+  const MultilodGrid& grid_;
+  double step_;
+  Id first_[3];
+  double plane_[3];
+};
 
 // The piece of `finer` coarsened by the given keys (one per finer point),
 // every coordinate of a point off the chunk planes (all of an inner point's,
@@ -142,9 +159,11 @@ void join_box_points(MultilodPiece& piece, const MultilodGrid& grid) {
 MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid) {
   const double step = std::ldexp(1.0, static_cast<int>(finer.lod + 1));
   std::vector<std::uint64_t> keys(finer.point_keys.size());
+  const ChunkBox box(grid, finer.chunk);
+  const CoarseKeys coarse_key(grid, finer.chunk, step);
   for (std::size_t i = 0; i < keys.size(); ++i) {
     const float* p = finer.points.data() + 3 * i;
-    keys[i] = on_box(p, grid, finer.chunk).axes ? finer.point_keys[i] : coarse_key(p, grid, finer.chunk, step);
+    keys[i] = box.at(p).axes ? finer.point_keys[i] : coarse_key(p);
   }
   cluster_face_points(finer, grid, keys);
   // Each round splits at least one cluster for good (a split point is never

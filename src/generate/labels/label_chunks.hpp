@@ -59,8 +59,9 @@ MultilodPiece coarser_piece(const MultilodPiece& finer, const MultilodGrid& grid
 // Writes out's points, point_keys (the coarse keys kept, increasing) and
 // triangles.
 //
-// Inputs with fewer than `serial_below` points (or faces) group by one
-// serial comparison or counting sort: a chunk piece (hundreds of points,
+// Inputs with fewer than `serial_below` points (or faces) group serially (the
+// points by a hash of their keys, first_seen_keys.hpp, and a sort of the
+// distinct keys; the faces by a counting sort): a chunk piece (hundreds of points,
 // coarsened every level and fold-guard round) would spend more on the
 // parallel KEY-REDUCE plans' set-up (radix digits, bitmaps, per-chunk
 // counts) than on its points; larger ones use those plans. Both give the

@@ -5,15 +5,18 @@
 // of one label pair (and label) on the same three points cancel by
 // orientation, keeping every label's faces a closed 2-cycle. The same steps
 // coarsen a multilod chunk piece (merge_piece_points), read in place; small
-// inputs group by serial sorts, large ones by the parallel plans, with the
-// same result (label_chunks.hpp, kCoarsenSerialBelow).
+// inputs group serially (a hash of the keys, first_seen_keys.hpp, and a sort
+// of the distinct ones), large ones by the parallel plans, with the same
+// result (label_chunks.hpp, kCoarsenSerialBelow).
 #include <algorithm>
 #include <chrono>
+#include <numeric>
 
 #include "keymesh/keyreduce/groups.hpp"
 #include "keymesh/parallel/for_each.hpp"
 #include "keymesh/parallel/radix_sort.hpp"
 #include "keymesh/parallel/scan.hpp"
+#include "first_seen_keys.hpp"
 #include "label_chunks.hpp"
 #include "label_volume.hpp"
 
@@ -42,28 +45,41 @@ struct CoarsenInput {
   Id serial_below = kCoarsenSerialBelow;
 };
 
-// The points grouped by coarse key (keyreduce::Groups with Order::Build).
+// The points grouped by coarse key (keyreduce::Groups with Order::Build):
+// groups in increasing key, each group's points in increasing index.
 keyreduce::Groups<std::uint64_t> group_points(const std::uint64_t* coarse, Id n, Id serial_below) {
   if (n >= serial_below) {
     const std::uint64_t top = n == 0 ? 0 : *std::max_element(coarse, coarse + n);
     return keyreduce::partition_sort(coarse, n, parallel::bits_needed<std::uint64_t>(top), keyreduce::Order::Build);
   }
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(static_cast<std::size_t>(n));
-  for (Id i = 0; i < n; ++i) sorted[static_cast<std::size_t>(i)] = {coarse[i], static_cast<std::uint32_t>(i)};
-  std::sort(sorted.begin(), sorted.end());  // by key, then index: the stable order
+  // Only the distinct keys are sorted; the points then fall into their
+  // groups by a counting sort over increasing index (stable).
+  const FirstSeenKeys f = first_seen_keys(coarse, n);
+  const std::size_t m = f.keys.size();
+  std::vector<std::uint32_t> by_key(m);
+  std::iota(by_key.begin(), by_key.end(), 0u);
+  std::sort(by_key.begin(), by_key.end(), [&](std::uint32_t x, std::uint32_t y) { return f.keys[x] < f.keys[y]; });
   keyreduce::Groups<std::uint64_t> g;
+  g.unique_keys.resize(m);
+  g.offsets.resize(m + 1);
+  std::vector<std::uint32_t> rank(f.count.size()), next(f.count.size());
+  Id at = 0;
+  for (std::size_t r = 0; r < m; ++r) {
+    const std::uint32_t s = by_key[r];
+    rank[s] = static_cast<std::uint32_t>(r);
+    g.unique_keys[r] = f.keys[s];
+    g.offsets[r] = at;
+    next[r] = static_cast<std::uint32_t>(at);
+    at += f.count[s];
+  }
+  g.offsets[m] = n;
   g.index_map.resize(static_cast<std::size_t>(n));
   g.order.resize(static_cast<std::size_t>(n));
-  for (Id k = 0; k < n; ++k) {
-    const auto [key, i] = sorted[static_cast<std::size_t>(k)];
-    if (k == 0 || key != sorted[static_cast<std::size_t>(k - 1)].first) {
-      g.unique_keys.push_back(key);
-      g.offsets.push_back(k);
-    }
-    g.order[static_cast<std::size_t>(k)] = i;
-    g.index_map[i] = static_cast<std::uint32_t>(g.unique_keys.size() - 1);
+  for (Id i = 0; i < n; ++i) {
+    const std::uint32_t r = rank[f.of_point[static_cast<std::size_t>(i)]];
+    g.index_map[static_cast<std::size_t>(i)] = r;
+    g.order[next[r]++] = static_cast<std::uint32_t>(i);
   }
-  g.offsets.push_back(n);
   return g;
 }
 

@@ -30,6 +30,7 @@
 #include <tuple>
 #include <vector>
 
+#include "first_seen_keys.hpp"
 #include "label_chunks.hpp"
 
 namespace keymesh::generate::detail {
@@ -51,8 +52,10 @@ struct FaceCut {
 std::array<std::vector<std::array<std::uint32_t, 2>>, 6> face_edges(const MultilodPiece& finer,
                                                                   const std::vector<OnBox>& box) {
   std::vector<std::tuple<std::uint32_t, std::uint32_t, int>> e;
-  for (std::size_t t = 0; t < finer.triangles.size(); t += 3) {
-    const std::uint32_t c[3] = {finer.triangles[t], finer.triangles[t + 1], finer.triangles[t + 2]};
+  const std::uint32_t* triangles = finer.triangles.data();
+  const std::size_t corners = finer.triangles.size();  // read once: the emplace_backs below may alias it
+  for (std::size_t t = 0; t < corners; t += 3) {
+    const std::uint32_t c[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
     const int axes[3] = {box[c[0]].axes, box[c[1]].axes, box[c[2]].axes};
     if (!((axes[0] & axes[1]) | (axes[1] & axes[2]) | (axes[2] & axes[0]))) continue;  // most: no edge on a plane
     for (int m = 0; m < 3; ++m) {
@@ -117,13 +120,8 @@ Clusters cluster(const FaceCut& cut, const std::vector<std::uint64_t>& grid_key,
   const std::size_t n = cut.points.size();
   Clusters c;
   c.root.resize(n), c.size.assign(n, 0), c.at.resize(n);
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(n);  // by key, then index (a stable order)
-  for (std::uint32_t k = 0; k < n; ++k) sorted[k] = {grid_key[k], k};
-  std::sort(sorted.begin(), sorted.end());
-  for (std::size_t k = 0; k < n; ++k) {
-    const bool joins = k > 0 && sorted[k].first == sorted[k - 1].first;
-    c.root[sorted[k].second] = joins ? c.root[sorted[k - 1].second] : sorted[k].second;
-  }
+  const FirstSeenKeys f = first_seen_keys(grid_key.data(), static_cast<Id>(n));  // a key's first point: its least
+  for (std::size_t k = 0; k < n; ++k) c.root[k] = f.first[f.of_point[k]];
   const int lod = static_cast<int>(finer.lod + 1);
   const double top = std::ldexp(1.0, grid.vertex_quantization_bits) - 1;
   const auto top_step = static_cast<std::int64_t>(top);
@@ -243,34 +241,46 @@ void flag_clashes(const FaceCut& cut, const Clusters& c, std::vector<char>& bad)
         bad[roots[i]] = bad[roots[j]] = 1;
 }
 
-// The grid key of a movable cut point at the level's spacing: its in-plane
-// grid point (relative to the chunk's corner, which both chunks of the face
-// share along those axes).
-std::uint64_t face_grid_key(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk,
-                            int axis, double step) {
-  std::uint64_t key = 0;
-  for (int j = 1; j < 3; ++j) {
-    const int a = (axis + j) % 3;
-    const std::int64_t local = round_half_away((static_cast<double>(p[a]) - grid.plane(a, chunk[a])) / step);
-    key = key << 32 | static_cast<std::uint32_t>(local);
+// A face's in-plane frame at the level's spacing: its two in-plane axes and
+// the chunk's planes along them, computed once per face.
+class FaceFrame {
+ public:
+  FaceFrame(const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk, int axis, double step) : step_(step) {
+    for (int j = 0; j < 2; ++j) {
+      axes_[j] = (axis + j + 1) % 3;
+      lo_[j] = grid.plane(axes_[j], chunk[static_cast<std::size_t>(axes_[j])]);
+      hi_[j] = grid.plane(axes_[j], chunk[static_cast<std::size_t>(axes_[j])] + 1);
+    }
   }
-  return key;
-}
+  // The grid key of a movable cut point: its in-plane grid point (relative
+  // to the chunk's corner, which both chunks of the face share along those
+  // axes).
+  std::uint64_t grid_key(const float* p) const {
+    std::uint64_t key = 0;
+    for (int j = 0; j < 2; ++j) {
+      const std::int64_t local = round_half_away((static_cast<double>(p[axes_[j]]) - lo_[j]) / step_);
+      key = key << 32 | static_cast<std::uint32_t>(local);
+    }
+    return key;
+  }
+  // Within half a grid step of the face's border (a chunk edge line): such a
+  // point stays fine, as the line points do. The triangles there join this
+  // face's cut to the neighbouring face's, each coarsened by its own face's
+  // rule; merged near the line they folded over each other (measured), and
+  // no split of an inner point mends that.
+  bool near_border(const float* p) const {
+    for (int j = 0; j < 2; ++j) {
+      const double v = p[axes_[j]];
+      if (v - lo_[j] < step_ / 2 || hi_[j] - v < step_ / 2) return true;
+    }
+    return false;
+  }
 
-// Within half a grid step of the face's border (a chunk edge line): such a
-// point stays fine, as the line points do. The triangles there join this
-// face's cut to the neighbouring face's, each coarsened by its own face's
-// rule; merged near the line they folded over each other (measured), and no
-// split of an inner point mends that.
-bool near_border(const float* p, const MultilodGrid& grid, const std::array<std::uint32_t, 3>& chunk, int axis,
-                 double step) {
-  for (int j = 1; j < 3; ++j) {
-    const int a = (axis + j) % 3;
-    const double v = p[a], lo = grid.plane(a, chunk[a]), hi = grid.plane(a, chunk[a] + 1);
-    if (v - lo < step / 2 || hi - v < step / 2) return true;
-  }
-  return false;
-}
+ private:
+  double step_;
+  int axes_[2];
+  double lo_[2], hi_[2];
+};
 
 // Clusters of one face, merged where the checks allow; writes the merged
 // points' coarse keys (their cluster's least key) into `keys`.
@@ -280,11 +290,10 @@ void cluster_face(const FaceCut& cut, const MultilodPiece& finer, const Multilod
   const double step = std::ldexp(1.0, static_cast<int>(finer.lod + 1));
   std::vector<std::uint64_t> grid_key(n);
   constexpr std::uint64_t kFine = std::uint64_t{1} << 63;  // then the point's index: a cluster of its own
+  const FaceFrame frame(grid, finer.chunk, cut.axis, step);
   for (std::size_t k = 0; k < n; ++k) {
     const float* p = finer.points.data() + 3 * static_cast<std::size_t>(cut.points[k]);
-    grid_key[k] = cut.movable[k] && !near_border(p, grid, finer.chunk, cut.axis, step)
-                      ? face_grid_key(p, grid, finer.chunk, cut.axis, step)
-                      : kFine | k;
+    grid_key[k] = cut.movable[k] && !frame.near_border(p) ? frame.grid_key(p) : kFine | k;
   }
   for (;;) {
     const Clusters c = cluster(cut, grid_key, finer, grid);
