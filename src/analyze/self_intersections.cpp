@@ -1,12 +1,16 @@
 #include "keymesh/analyze/self_intersections.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
 
 #include <omp.h>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 #include "keymesh/core/error.hpp"
 #include "keymesh/parallel/for_each.hpp"
@@ -186,16 +190,41 @@ struct LiveTriangles {
   }
 };
 
+// The projection axis (-1 without area) of each fan triangle; with integer
+// coordinates also its integer triangle, whose normal gives the axis at no
+// further cost: orient2d dropping axis k is the sign of normal[k].
+void fan_axes(const FanTriangles& fan, bool integer, std::vector<signed char>& axis,
+              std::vector<detail::IntegerTriangle>& integer_fan) {
+  axis.resize(fan.tris.size());
+  if (!integer) {
+    parallel::for_each(static_cast<Id>(fan.tris.size()),
+                       [&](Id t) { axis[t] = static_cast<signed char>(detail::projection_axis(fan.corners(t))); });
+    return;
+  }
+  integer_fan.resize(fan.tris.size());
+  parallel::for_each(static_cast<Id>(fan.tris.size()), [&](Id t) {
+    integer_fan[t] = detail::integer_triangle(fan.corners(t));
+    const auto& normal = integer_fan[t].normal;
+    axis[t] = static_cast<signed char>(normal[0] != 0 ? 0 : normal[1] != 0 ? 1 : normal[2] != 0 ? 2 : -1);
+  });
+}
+
 LiveTriangles live_triangles(const FanTriangles& fan, const SurfaceMesh& mesh) {
-  std::vector<signed char> axis(fan.tris.size());  // -1 without area
-  parallel::for_each(static_cast<Id>(fan.tris.size()),
-                     [&](Id t) { axis[t] = static_cast<signed char>(detail::projection_axis(fan.corners(t))); });
+  std::vector<signed char> axis;
+  std::vector<detail::IntegerTriangle> integer_fan;
+  fan_axes(fan, detail::integer_coordinates(mesh.points.data(), mesh.points.size()), axis, integer_fan);
   LiveTriangles live;
+  const std::size_t with_area = fan.tris.size() - static_cast<std::size_t>(std::count(axis.begin(), axis.end(), -1));
+  live.corners.reserve(with_area);
+  live.axis.reserve(with_area);
+  live.cell.reserve(with_area);
+  live.integer.reserve(integer_fan.empty() ? 0 : with_area);
   for (std::size_t t = 0; t < fan.tris.size(); ++t)
     if (axis[t] >= 0) {
       live.corners.push_back(fan.corners(t));
       live.axis.push_back(axis[t]);
       live.cell.push_back(fan.cell[t]);
+      if (!integer_fan.empty()) live.integer.push_back(integer_fan[t]);
     }
   live.boxes.resize(live.size());
   parallel::for_each(static_cast<Id>(live.size()), [&](Id i) {
@@ -205,11 +234,6 @@ LiveTriangles live_triangles(const FanTriangles& fan, const SurfaceMesh& mesh) {
       live.boxes[i].hi[k] = std::max({t[0][k], t[1][k], t[2][k]});
     }
   });
-  if (detail::integer_coordinates(mesh.points.data(), mesh.points.size())) {
-    live.integer.resize(live.size());
-    parallel::for_each(static_cast<Id>(live.size()),
-                       [&](Id i) { live.integer[i] = detail::integer_triangle(live.corners[i]); });
-  }
   return live;
 }
 
@@ -263,35 +287,101 @@ int sweep_axis(const std::vector<Box>& boxes) {
   return best;
 }
 
-// A box in sweep order: its extent along the sweep axis, then along the other two.
-struct SweepBox {
-  float start, end;
-  std::array<float, 2> lo, hi;
+// Boxes the sweep compares with one box at a time.
+constexpr std::size_t kLanes = 4;
+
+// The boxes in sweep order, apart (structure of arrays): the sweep finds
+// where the boxes starting before a box ends stop by bisecting start, then
+// compares kLanes of them at a time along the other two axes p, q. across
+// holds lo_p, lo_q, -hi_p, -hi_q (padded with +inf by kLanes - 1), reach
+// each box's hi_p, hi_q, -lo_p, -lo_q: boxes i and j overlap across when
+// across[k][j] <= reach[i][k] for all four k (negation is exact, so the
+// answers are the plain comparisons').
+struct SweepBoxes {
+  std::vector<float> start, end;
+  std::array<std::vector<float>, 4> across;
+  std::vector<std::array<float, 4>> reach;
+  std::vector<std::uint32_t> triangle;  // the live triangle
+  std::vector<Id> cell;                 // its cell
 };
+
+SweepBoxes sweep_boxes(const LiveTriangles& live) {
+  const std::size_t n = live.size();
+  const int axis = sweep_axis(live.boxes), p = (axis + 1) % 3, q = (axis + 2) % 3;
+  SweepBoxes s;
+  s.triangle.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) s.triangle[i] = i;
+  std::sort(s.triangle.begin(), s.triangle.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return live.boxes[a].lo[axis] < live.boxes[b].lo[axis]; });
+  s.start.resize(n);
+  s.end.resize(n);
+  for (auto& lane : s.across) lane.assign(n + kLanes - 1, std::numeric_limits<float>::infinity());
+  s.reach.resize(n);
+  s.cell.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Box& b = live.boxes[s.triangle[i]];
+    s.start[i] = b.lo[axis];
+    s.end[i] = b.hi[axis];
+    const std::array<float, 4> across{b.lo[p], b.lo[q], -b.hi[p], -b.hi[q]};
+    for (std::size_t k = 0; k < 4; ++k) s.across[k][i] = across[k];
+    s.reach[i] = {b.hi[p], b.hi[q], -b.lo[p], -b.lo[q]};
+    s.cell[i] = live.cell[s.triangle[i]];
+  }
+  return s;
+}
+
+// Which of the boxes j to j + kLanes - 1 overlap a box across (bit l: box
+// j + l), given that box's reach.
+#if defined(__SSE__)
+struct Reach {
+  __m128 lanes[4];  // a plain array: std::array drops __m128's alignment attributes
+  explicit Reach(const std::array<float, 4>& r) {
+    for (std::size_t k = 0; k < 4; ++k) lanes[k] = _mm_set1_ps(r[k]);
+  }
+};
+unsigned overlap_lanes(const SweepBoxes& s, std::size_t j, const Reach& reach) {
+  __m128 in = _mm_cmple_ps(_mm_loadu_ps(&s.across[0][j]), reach.lanes[0]);
+  for (std::size_t k = 1; k < 4; ++k) in = _mm_and_ps(in, _mm_cmple_ps(_mm_loadu_ps(&s.across[k][j]), reach.lanes[k]));
+  return static_cast<unsigned>(_mm_movemask_ps(in));
+}
+#else
+struct Reach {
+  std::array<float, 4> r;
+  explicit Reach(const std::array<float, 4>& v) : r(v) {}
+};
+unsigned overlap_lanes(const SweepBoxes& s, std::size_t j, const Reach& reach) {
+  unsigned mask = 0;
+  for (std::size_t l = 0; l < kLanes; ++l) {
+    bool in = true;
+    for (std::size_t k = 0; k < 4; ++k) in = in && s.across[k][j + l] <= reach.r[k];
+    mask |= unsigned(in) << l;
+  }
+  return mask;
+}
+#endif
 
 // Serial sort and sweep: boxes in order of their low ends along one axis,
 // each checked against those that start before it ends. For small meshes,
 // where the grid's sort and thread start cost more than the pairs.
 std::vector<std::array<Id, 2>> sweep_crossings(const LiveTriangles& live) {
-  const std::size_t n = live.size();
-  const int axis = sweep_axis(live.boxes), p = (axis + 1) % 3, q = (axis + 2) % 3;
-  std::vector<std::uint32_t> order(n);
-  for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(),
-            [&](std::uint32_t a, std::uint32_t b) { return live.boxes[a].lo[axis] < live.boxes[b].lo[axis]; });
-  std::vector<SweepBox> boxes(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Box& b = live.boxes[order[i]];
-    boxes[i] = {b.lo[axis], b.hi[axis], {b.lo[p], b.lo[q]}, {b.hi[p], b.hi[q]}};
-  }
+  const SweepBoxes s = sweep_boxes(live);
+  const std::size_t n = s.start.size();
   std::vector<std::array<Id, 2>> found;
   for (std::size_t i = 0; i < n; ++i) {
-    const SweepBox b = boxes[i];
-    for (std::size_t j = i + 1; j < n && boxes[j].start <= b.end; ++j) {
-      const SweepBox& c = boxes[j];
-      if (c.lo[0] > b.hi[0] || b.lo[0] > c.hi[0] || c.lo[1] > b.hi[1] || b.lo[1] > c.hi[1]) continue;
-      const std::uint32_t u = order[i], v = order[j];
-      if (live.cell[u] != live.cell[v] && live.cross(u, v)) found.push_back(live.pair(u, v));
+    // The boxes from i + 1 to stop start before box i ends.
+    const std::size_t stop = static_cast<std::size_t>(
+        std::upper_bound(s.start.begin() + static_cast<std::ptrdiff_t>(i + 1), s.start.end(), s.end[i]) -
+        s.start.begin());
+    const Reach reach(s.reach[i]);
+    for (std::size_t j = i + 1; j < stop; j += kLanes) {
+      unsigned mask = overlap_lanes(s, j, reach);
+      if (stop - j < kLanes) mask &= (1u << (stop - j)) - 1;
+      for (; mask != 0; mask &= mask - 1) {
+        const std::size_t k = j + static_cast<std::size_t>(std::countr_zero(mask));
+        if (s.cell[k] == s.cell[i]) continue;
+        const std::uint32_t u = s.triangle[i], v = s.triangle[k];
+        if (live.cross(u, v)) found.push_back(live.pair(u, v));
+      }
     }
   }
   return found;

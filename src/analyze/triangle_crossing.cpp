@@ -45,14 +45,16 @@ bool edge_meets(const float* p, const float* q, int side_p, int side_q, bool p_s
   if (side_p == 0) return !p_shared && in_closed_triangle(p, u, drop);
   if (side_q == 0) return !q_shared && in_closed_triangle(q, u, drop);
   // The edge pierces u's plane at a point inside it: in u when it passes no
-  // edge of u on the outside.
+  // edge of u on the outside (it passes one once it passes u's edges on
+  // both sides, with no need to ask the third).
   bool positive = false, negative = false;
   for (int k = 0; k < 3; ++k) {
     const int o = orient(p, q, u[k], u[(k + 1) % 3]);
     positive |= o > 0;
     negative |= o < 0;
+    if (positive && negative) return false;
   }
-  return !(positive && negative);
+  return true;
 }
 
 // Coplanar triangles (a projects with area along drop): do they overlap

@@ -17,6 +17,7 @@
 // triangle collapsed that way is left to it.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "keymesh/analyze/self_intersections.hpp"
@@ -52,6 +53,20 @@ Array<float> quantized_points(const MultilodPiece& piece, const MultilodGrid& gr
 
 bool same_point(const float* a, const float* b) { return a[0] == b[0] && a[1] == b[1] && a[2] == b[2]; }
 
+// analyze::triangle_has_area for quantized corners: integers below
+// 2^kExactAreaBits, so the edges' cross product is exact in 64-bit integers
+// and is zero exactly when the triangle has no area (no exact fallback to
+// pay for, as orient2d has for collinear corners).
+constexpr int kExactAreaBits = 30;
+bool quantized_has_area(const float* a, const float* b, const float* c) {
+  std::int64_t u[3], v[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = static_cast<std::int64_t>(b[k]) - static_cast<std::int64_t>(a[k]);
+    v[k] = static_cast<std::int64_t>(c[k]) - static_cast<std::int64_t>(a[k]);
+  }
+  return u[1] * v[2] != u[2] * v[1] || u[2] * v[0] != u[0] * v[2] || u[0] * v[1] != u[1] * v[0];
+}
+
 }  // namespace
 
 std::vector<char> crossing_triangles(const MultilodPiece& piece, const MultilodGrid& grid) {
@@ -64,11 +79,13 @@ std::vector<char> crossing_triangles(const MultilodPiece& piece, const MultilodG
       analyze::find_self_intersections(mesh, std::numeric_limits<std::size_t>::max());
   for (const auto& pair : r.pairs) bad[static_cast<std::size_t>(pair[0])] = bad[static_cast<std::size_t>(pair[1])] = 1;
   if (r.zero_area_triangles == 0) return bad;
+  const bool exact = grid.vertex_quantization_bits <= kExactAreaBits;
   for (std::size_t t = 0; t < n; ++t) {
     const std::uint32_t* v = piece.triangles.data() + 3 * t;
     const float *a = &mesh.points[3 * v[0]], *b = &mesh.points[3 * v[1]], *c = &mesh.points[3 * v[2]];
-    if (!analyze::triangle_has_area({a, b, c}) && !same_point(a, b) && !same_point(b, c) && !same_point(a, c))
-      bad[t] = 1;
+    // Cheap position compares first: most triangles without area are collapsed ones.
+    if (same_point(a, b) || same_point(b, c) || same_point(a, c)) continue;
+    if (!(exact ? quantized_has_area(a, b, c) : analyze::triangle_has_area({a, b, c}))) bad[t] = 1;
   }
   return bad;
 }
