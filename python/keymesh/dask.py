@@ -38,7 +38,6 @@ or a ``dask.distributed`` cluster (the client in force).
 """
 from __future__ import annotations
 
-import numbers
 from typing import Any, Optional, Sequence
 
 import numpy as np
