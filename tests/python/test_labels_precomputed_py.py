@@ -210,6 +210,17 @@ def test_dask_bad_arguments(tmp_path):
     assert not os.path.exists(tmp_path / "neg" / "info")
 
 
+def edited_and_full_run(volume, tmp_path):
+    """The update tests' edit inside chunk (0, 0, 0), and the directory a full CLI run on it writes."""
+    edited = volume.copy()
+    edited[2:10, 3:11, 2:9] = 5  # inside chunk (0, 0, 0): samples [-1, 15) along each axis
+    edited[4:7, 5:8, 4:7] = 0  # a hole: segment 5 gains an inner surface
+    want = str(tmp_path / "full")
+    nrrd = kmtest.write_label_nrrd(str(tmp_path / "edited.nrrd"), edited)
+    subprocess.run([EXE, "labels", nrrd, "-o", want, "--format", "precomputed", *CLI_OPTIONS, "-q"], check=True)
+    return edited, want
+
+
 def test_dask_update_equals_a_full_run(cli_run, tmp_path):
     """update=CHUNKS (keymesh labels --update): after an edit inside chunk (0, 0, 0), re-meshing only
     the 8 chunks it can reach (the halo, 8 samples, is under a chunk) gives the directory a full CLI
@@ -218,12 +229,7 @@ def test_dask_update_equals_a_full_run(cli_run, tmp_path):
     import keymesh.dask
     volume, runs, _ = cli_run
     before, _ = runs["plain"]
-    edited = volume.copy()
-    edited[2:10, 3:11, 2:9] = 5  # inside chunk (0, 0, 0): samples [-1, 15) along each axis
-    edited[4:7, 5:8, 4:7] = 0  # a hole: segment 5 gains an inner surface
-    want = str(tmp_path / "full")
-    nrrd = kmtest.write_label_nrrd(str(tmp_path / "edited.nrrd"), edited)
-    subprocess.run([EXE, "labels", nrrd, "-o", want, "--format", "precomputed", *CLI_OPTIONS, "-q"], check=True)
+    edited, want = edited_and_full_run(volume, tmp_path)
     out = str(tmp_path / "updated")
     shutil.copytree(before, out)
     report = keymesh.dask.labels_precomputed(da.from_array(edited, chunks=(9, 10, 11)), out, **OPTIONS,
@@ -245,12 +251,7 @@ def test_in_memory_update_equals_a_full_run(cli_run, tmp_path):
     update naming no chunk the edit touched leaves the directory as it was."""
     volume, runs, _ = cli_run
     before, _ = runs["plain"]
-    edited = volume.copy()
-    edited[2:10, 3:11, 2:9] = 5  # inside chunk (0, 0, 0): samples [-1, 15) along each axis
-    edited[4:7, 5:8, 4:7] = 0  # a hole: segment 5 gains an inner surface
-    want = str(tmp_path / "full")
-    nrrd = kmtest.write_label_nrrd(str(tmp_path / "edited.nrrd"), edited)
-    subprocess.run([EXE, "labels", nrrd, "-o", want, "--format", "precomputed", *CLI_OPTIONS, "-q"], check=True)
+    edited, want = edited_and_full_run(volume, tmp_path)
     for name, given in (("array", edited), ("Volume", keymesh.Volume(np.asfortranarray(edited)))):
         out = str(tmp_path / name)
         shutil.copytree(before, out)
